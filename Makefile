@@ -1,0 +1,33 @@
+# The two commands a new user runs: `make demo` and `make test`.
+VENV   ?= .venv
+PY     := $(VENV)/bin/python
+PIP    := $(PY) -m pip
+STAMP  := $(VENV)/.installed-stamp
+export PIP_DISABLE_PIP_VERSION_CHECK := 1
+
+.PHONY: install demo test bench sysdeps clean
+
+$(STAMP): pyproject.toml
+	@test -x $(PY) || python3 -m venv $(VENV)
+	$(PIP) install -q -e '.[dev]'
+	@touch $(STAMP)
+
+install: $(STAMP)
+
+# System tools the checks use (PrusaSlicer, urdfdom's check_urdf): Debian packages,
+# installed when missing and we are root (as on CI); otherwise the tests that need
+# them say so and skip.
+sysdeps:
+	@bash .ci/sysdeps
+
+demo: install
+	$(VENV)/bin/phantom-cad demo
+
+test: install sysdeps
+	$(PY) -m pytest
+
+bench: install
+	$(PY) bench/run.py
+
+clean:
+	rm -rf $(VENV) build *.egg-info .pytest_cache

@@ -1,0 +1,59 @@
+"""Load and dump parameter files (TOML)."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+from typing import Any, Mapping
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python < 3.11
+    import tomli as tomllib
+
+from .errors import ParamError
+from .schema import HandParams, _plain, parse
+
+#: the default hand shipped with the package's source tree
+DEFAULT_PARAMS = Path(__file__).resolve().parents[2] / "params" / "phantom.toml"
+
+
+def load_document(path: str | os.PathLike) -> dict[str, Any]:
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ParamError("<file>", str(path), "no such parameter file") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ParamError("<file>", str(path), f"is not valid TOML: {exc}", str(path)) from None
+
+
+def load_params(path: str | os.PathLike | None = None) -> HandParams:
+    """Read and validate a parameter file (default: params/phantom.toml)."""
+    path = Path(path) if path is not None else DEFAULT_PARAMS
+    return parse(load_document(path), source=str(path))
+
+
+def dumps(document: Mapping[str, Any]) -> str:
+    import tomli_w
+
+    return tomli_w.dumps(_plain(document))
+
+
+def dump_params(document: Mapping[str, Any], path: str | os.PathLike, header: str = "") -> None:
+    """Validate ``document`` and write it atomically to ``path`` (nothing is written if invalid)."""
+    parse(document, source=str(path))
+    text = header + dumps(document)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise

@@ -1,0 +1,443 @@
+"""The validated, frozen description of one hand.
+
+Values inside these objects are SI (metres, radians, N/m, N); the TOML file carries
+the unit in each key name and is converted once, here. Every rule a parameter file
+must satisfy is checked in :func:`parse`, which either returns a complete
+:class:`HandParams` or raises :class:`ParamError` naming the field, the value and the rule.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any, Mapping
+
+import numpy as np
+
+from ..kinematics import closed_form as cf
+from ..kinematics.topology import FINGERS
+from .errors import ParamError
+from .reader import Table
+
+MM = 1e-3
+DEG = math.pi / 180.0
+SCHEMA_VERSION = 1
+
+
+@dataclass(frozen=True)
+class Guide:
+    """MCP (or thumb MP) tendon guides: distances d1 (metacarpal side), d2 (phalanx side)
+    from the joint axis, and their included angle alpha at full extension."""
+
+    d1: float
+    d2: float
+    alpha: float
+
+    @property
+    def L0(self) -> float:
+        """Eq. (4): chord between the guides at full extension."""
+        return float(cf.chord_rest(self.d1, self.d2, self.alpha))
+
+    @property
+    def chord_range(self) -> tuple[float, float]:
+        """Chord lengths the cosine law admits: [|d1 - d2|, d1 + d2]."""
+        return abs(self.d1 - self.d2), self.d1 + self.d2
+
+
+@dataclass(frozen=True)
+class Chain:
+    """What the model needs of one tendon-driven digit (reference joint first)."""
+
+    digit: str
+    joints: tuple[str, ...]            # ("mcp", "pip", "dip") or ("mp", "ip")
+    radii: tuple[float, ...]           # joint pulley radii R, same order
+    path_lengths: tuple[float, ...]    # tendon path between consecutive joints
+    limits: tuple[tuple[float, float], ...]
+    guide: Guide
+    servo_radius: float                # r_j
+    travel: tuple[float, float]        # servo travel (rad)
+
+    @property
+    def ideal_coupling(self) -> np.ndarray:
+        """A: q_i = A_i q_ref from the radii (eq. 2; the thumb erratum is fixed by construction)."""
+        return cf.ideal_coupling(self.radii)
+
+
+@dataclass(frozen=True)
+class Finger:
+    name: str
+    metacarpal: float
+    proximal: float
+    middle: float
+    distal: float
+    width: float
+    thickness: float
+    chain: Chain
+
+    @property
+    def R(self) -> Mapping[str, float]:
+        return dict(zip(self.chain.joints, self.chain.radii))
+
+
+@dataclass(frozen=True)
+class Thumb:
+    metacarpal: float
+    proximal: float
+    distal: float
+    width: float
+    thickness: float
+    chain: Chain
+    cmc_gain: float
+    cmc_limits: tuple[float, float]
+    cmc_travel: tuple[float, float]
+    cmc_horn_radius: float
+
+
+@dataclass(frozen=True)
+class Mechanics:
+    spring_k: float   # k_s, N/m
+    tendon_EA: float  # EA, N
+
+
+@dataclass(frozen=True)
+class Palm:
+    arc_offset: float        # rad between adjacent fingers
+    finger_pitch: float      # m
+    thickness: float
+    wall: float
+    thumb_cmc_offset: tuple[float, float, float]
+    thumb_cmc_axis: tuple[float, float, float]   # roll, pitch, yaw (rad)
+
+    @property
+    def arc_radius(self) -> float:
+        """Radius of the arc on which adjacent MCPs, finger_pitch apart, turn by arc_offset."""
+        return self.finger_pitch / (2.0 * math.sin(self.arc_offset / 2.0))
+
+
+@dataclass(frozen=True)
+class Servo:
+    body: tuple[float, float, float]
+    flange_span: float
+    screw_diameter: float
+
+
+@dataclass(frozen=True)
+class Hardware:
+    bearing_bore: float
+    bearing_outer: float
+    bearing_width: float
+    axle_diameter: float
+    magnet_diameter: float
+    magnet_thickness: float
+    screw_diameter: float
+    tendon_diameter: float
+
+
+@dataclass(frozen=True)
+class Print:
+    hole_clearance: float
+    press_fit_interference: float
+    magnet_clearance: float
+    stl_tolerance: float
+    density: float      # kg/m^3
+    infill: float
+
+
+@dataclass(frozen=True)
+class HandParams:
+    name: str
+    side: str
+    hand_length: float
+    fingers: Mapping[str, Finger]
+    thumb: Thumb
+    mechanics: Mechanics
+    palm: Palm
+    servo: Servo
+    hardware: Hardware
+    print: Print
+    #: fitted effect parameters, ``{effect_name: {param: value}}`` (see phantom_cad.calibration)
+    effects: Mapping[str, Mapping[str, Any]]
+    #: the validated document, as parsed (units as in the file); dump() writes it back
+    document: Mapping[str, Any] = field(repr=False)
+    source: str | None = None
+
+    @property
+    def chains(self) -> tuple[Chain, ...]:
+        """The five tendon chains in servo order: thumb, index, middle, ring, pinky."""
+        return (self.thumb.chain,) + tuple(self.fingers[n].chain for n in FINGERS)
+
+    @property
+    def digest(self) -> str:
+        """SHA-256 of the canonical document: same parameters, same digest."""
+        return digest(self.document)
+
+
+def digest(document: Mapping[str, Any]) -> str:
+    canon = json.dumps(_plain(document), sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(canon.encode()).hexdigest()
+
+
+def _plain(obj):
+    if isinstance(obj, Mapping):
+        return {k: _plain(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_plain(v) for v in obj]
+    return obj
+
+
+def _freeze(obj):
+    if isinstance(obj, Mapping):
+        return MappingProxyType({k: _freeze(v) for k, v in obj.items()})
+    if isinstance(obj, list):
+        return tuple(_freeze(v) for v in obj)
+    return obj
+
+
+# ---------------------------------------------------------------------------
+# parsing and validation
+# ---------------------------------------------------------------------------
+
+def _guide(t: Table) -> Guide:
+    g = t.table("guide")
+    d1 = g.number("d1_mm", gt=0) * MM
+    d2 = g.number("d2_mm", gt=0) * MM
+    alpha = g.number("alpha_deg", gt=0, le=180) * DEG
+    g.done()
+    return Guide(d1, d2, alpha)
+
+
+def _limits(t: Table, joints: tuple[str, ...]) -> dict[str, tuple[float, float]]:
+    lt = t.table("limits_rad")
+    out = {}
+    for j in joints:
+        lo, hi = lt.interval(j)
+        if lo > 0:
+            raise lt.error(j, [lo, hi], "low must be <= 0 (the rest pose q = 0 must lie in the workspace)")
+        out[j] = (lo, hi)
+    lt.done()
+    return out
+
+
+def _radii(t: Table, joints: tuple[str, ...]) -> dict[str, float]:
+    rt = t.table("pulley_radius_mm")
+    out = {j: rt.number(j, gt=0) * MM for j in joints}
+    rt.done()
+    return out
+
+
+def _check_chain(t: Table, chain: Chain, ref_limit_key: str) -> None:
+    """Rules linking guides, servo pulley, travel and limits of one chain."""
+    g = chain.guide
+    ref = chain.joints[0]
+    ref_hi = chain.limits[0][1]
+    if not g.alpha > ref_hi:
+        raise ParamError(
+            f"{t.field('guide')}.alpha_deg", round(g.alpha / DEG, 6),
+            f"must exceed the {ref.upper()} upper limit {ref_limit_key}.{ref} = {ref_hi:g} rad "
+            f"({ref_hi / DEG:.2f} deg): eq. (6) gives q_{ref.upper()} <= alpha", t.source)
+    lo_u, hi_u = chain.travel
+    travel_field = t.field("servo_travel_deg")
+    travel_val = [round(lo_u / DEG, 6), round(hi_u / DEG, 6)]
+    for u in (lo_u, hi_u):
+        x = float(cf.cosine_argument(u, g.d1, g.d2, g.alpha, chain.servo_radius))
+        if not -1.0 <= x <= 1.0:
+            L = g.L0 - chain.servo_radius * u
+            raise ParamError(
+                travel_field, travel_val,
+                f"the cosine-law argument (d1^2 + d2^2 - L^2) / (2 d1 d2) is {x:.4f} at u = {u / DEG:g} deg, "
+                f"outside [-1, 1] (chord L = L0 - r u = {L / MM:.3f} mm must stay in "
+                f"[{g.chord_range[0] / MM:.3f}, {g.chord_range[1] / MM:.3f}] mm)", t.source)
+    # the image of the whole travel must lie inside the admissible workspace (analytic model;
+    # compensation only reduces the distal joints)
+    coupling = chain.ideal_coupling
+    for u in (lo_u, hi_u):
+        q_ref = float(cf.reference_angle(u, g.d1, g.d2, g.alpha, chain.servo_radius))
+        for joint, c, (lo, hi) in zip(chain.joints, coupling, chain.limits):
+            q = c * q_ref
+            if q > hi + 1e-12 or q < lo - 1e-12:
+                raise ParamError(
+                    travel_field, travel_val,
+                    f"at u = {u / DEG:g} deg the model puts {chain.digit} {joint.upper()} at {q:.4f} rad, "
+                    f"outside its limits {ref_limit_key}.{joint} = [{lo:g}, {hi:g}]: "
+                    f"the servo travel must map inside the workspace", t.source)
+
+
+def _check_path(t: Table, key: str, length: float, segment: float, r_a: float, r_b: float, segname: str):
+    """A figure-eight tendon crossing between two pulleys is at least the internal tangent."""
+    span_sq = segment ** 2 - (r_a + r_b) ** 2
+    if span_sq <= 0:
+        raise ParamError(t.field(segname), round(segment / MM, 4),
+                         f"the segment must be longer than the sum of its two pulley radii "
+                         f"({(r_a + r_b) / MM:g} mm) for the tendons to cross", t.source)
+    minimum = math.sqrt(span_sq)
+    if length < minimum:
+        raise ParamError(t.field(f"path_length_mm.{key}"), round(length / MM, 6),
+                         f"must be >= {minimum / MM:.2f} mm, the crossed-tendon span of the "
+                         f"{segname.split('.')[-1]} segment between its pulleys", t.source)
+
+
+def _fractions(t: Table, names: tuple[str, ...], hand_length: float) -> dict[str, float]:
+    ft = t.table("length_fraction")
+    out = {n: ft.number(n, gt=0, lt=1) * hand_length for n in names}
+    ft.done()
+    return out
+
+
+def _finger(t: Table, name: str, hand_length: float) -> Finger:
+    seg = _fractions(t, ("metacarpal", "proximal", "middle", "distal"), hand_length)
+    width = t.number("width_mm", gt=0) * MM
+    thickness = t.number("thickness_mm", gt=0) * MM
+    R = _radii(t, ("dip", "pip", "mcp"))
+    guide = _guide(t)
+    r = t.number("servo_pulley_radius_mm", gt=0) * MM
+    travel = tuple(v * DEG for v in t.interval("servo_travel_deg"))
+    limits = _limits(t, ("dip", "pip", "mcp"))
+    pt = t.table("path_length_mm")
+    L1 = pt.number("mcp_pip", gt=0) * MM
+    L2 = pt.number("pip_dip", gt=0) * MM
+    pt.done()
+    order = ("mcp", "pip", "dip")
+    chain = Chain(name, order, tuple(R[j] for j in order), (L1, L2),
+                  tuple(limits[j] for j in order), guide, r, travel)
+    _check_chain(t, chain, t.field("limits_rad"))
+    _check_path(t, "mcp_pip", L1, seg["proximal"], R["mcp"], R["pip"], "length_fraction.proximal")
+    _check_path(t, "pip_dip", L2, seg["middle"], R["pip"], R["dip"], "length_fraction.middle")
+    t.done()
+    return Finger(name, seg["metacarpal"], seg["proximal"], seg["middle"], seg["distal"],
+                  width, thickness, chain)
+
+
+def _thumb(t: Table, hand_length: float) -> Thumb:
+    seg = _fractions(t, ("metacarpal", "proximal", "distal"), hand_length)
+    width = t.number("width_mm", gt=0) * MM
+    thickness = t.number("thickness_mm", gt=0) * MM
+    R = _radii(t, ("ip", "mp"))
+    guide = _guide(t)
+    r = t.number("servo_pulley_radius_mm", gt=0) * MM
+    travel = tuple(v * DEG for v in t.interval("servo_travel_deg"))
+    limits = _limits(t, ("ip", "mp", "cmc"))
+    pt = t.table("path_length_mm")
+    L = pt.number("mp_ip", gt=0) * MM
+    pt.done()
+    gain = t.number("cmc_gain", gt=0)
+    cmc_travel = tuple(v * DEG for v in t.interval("cmc_servo_travel_deg"))
+    horn = t.number("cmc_horn_radius_mm", gt=0) * MM
+    chain = Chain("thumb", ("mp", "ip"), (R["mp"], R["ip"]), (L,),
+                  (limits["mp"], limits["ip"]), guide, r, travel)
+    _check_chain(t, chain, t.field("limits_rad"))
+    _check_path(t, "mp_ip", L, seg["proximal"], R["mp"], R["ip"], "length_fraction.proximal")
+    lo, hi = limits["cmc"]
+    for u in cmc_travel:
+        if not lo - 1e-12 <= gain * u <= hi + 1e-12:
+            raise t.error("cmc_servo_travel_deg", [round(v / DEG, 6) for v in cmc_travel],
+                          f"q15 = cmc_gain * u6 = {gain * u:.4f} rad at u6 = {u / DEG:g} deg is outside "
+                          f"the CMC limits [{lo:g}, {hi:g}]: the servo travel must map inside the workspace")
+    t.done()
+    return Thumb(seg["metacarpal"], seg["proximal"], seg["distal"], width, thickness, chain,
+                 gain, limits["cmc"], cmc_travel, horn)
+
+
+def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
+    """Validate a parsed parameter document and build the frozen :class:`HandParams`."""
+    root = Table(dict(document), "", source)
+    version = root.number("schema_version")
+    if version != SCHEMA_VERSION:
+        raise root.error("schema_version", version, f"must be {SCHEMA_VERSION}")
+
+    h = root.table("hand")
+    name = h.string("name")
+    if not name or not all(c.isalnum() or c in "-_" for c in name):
+        raise h.error("name", name, "must be a non-empty name of letters, digits, '-' and '_'")
+    side = h.string("side", ("right", "left"))
+    hand_length = h.number("hand_length_mm", gt=0) * MM
+    h.done()
+
+    ft = root.table("fingers")
+    for key in ft.keys():
+        if key not in FINGERS:
+            raise ft.error(key, "{...}", f"unknown finger '{key}' (allowed: {', '.join(FINGERS)})")
+    fingers = {n: _finger(ft.table(n), n, hand_length) for n in FINGERS}
+    ft.done()
+
+    thumb = _thumb(root.table("thumb"), hand_length)
+
+    m = root.table("mechanics")
+    mechanics = Mechanics(m.number("spring_k_N_per_m", ge=0), m.number("tendon_EA_N", gt=0))
+    m.done()
+
+    p = root.table("palm")
+    palm = Palm(
+        arc_offset=p.number("arc_offset_deg", ge=0, lt=30) * DEG,
+        finger_pitch=p.number("finger_pitch_mm", gt=0) * MM,
+        thickness=p.number("thickness_mm", gt=0) * MM,
+        wall=p.number("wall_mm", gt=0) * MM,
+        thumb_cmc_offset=tuple(v * MM for v in p.vector("thumb_cmc_offset_mm", 3)),
+        thumb_cmc_axis=tuple(v * DEG for v in p.vector("thumb_cmc_axis_deg", 3, ge=-180, le=180)),
+    )
+    p.done()
+    for n in FINGERS:
+        if fingers[n].width >= palm.finger_pitch + 1e-12:
+            raise ParamError(f"fingers.{n}.width_mm", fingers[n].width / MM,
+                             f"must be < palm.finger_pitch_mm = {palm.finger_pitch / MM:g} "
+                             "(adjacent fingers would overlap)", source)
+
+    s = root.table("servo")
+    servo = Servo(tuple(v * MM for v in s.vector("body_mm", 3, gt=0)),
+                  s.number("flange_span_mm", gt=0) * MM, s.number("screw_diameter_mm", gt=0) * MM)
+    s.done()
+    if servo.flange_span <= servo.body[0]:
+        raise ParamError("servo.flange_span_mm", servo.flange_span / MM,
+                         f"must exceed the body length servo.body_mm[0] = {servo.body[0] / MM:g}", source)
+
+    hw = root.table("hardware")
+    b = hw.table("bearing")
+    bore, outer, bw = b.number("bore_mm", gt=0) * MM, b.number("outer_mm", gt=0) * MM, b.number("width_mm", gt=0) * MM
+    if outer <= bore:
+        raise b.error("outer_mm", outer / MM, f"must exceed bore_mm = {bore / MM:g}")
+    b.done()
+    axle = hw.number("axle_diameter_mm", gt=0) * MM
+    if axle > bore + 1e-12:
+        raise hw.error("axle_diameter_mm", axle / MM, f"must be <= hardware.bearing.bore_mm = {bore / MM:g}")
+    mg = hw.table("magnet")
+    magnet_d, magnet_t = mg.number("diameter_mm", gt=0) * MM, mg.number("thickness_mm", gt=0) * MM
+    mg.done()
+    hardware = Hardware(bore, outer, bw, axle, magnet_d, magnet_t,
+                        hw.number("screw_diameter_mm", gt=0) * MM, hw.number("tendon_diameter_mm", gt=0) * MM)
+    hw.done()
+    for n in FINGERS:
+        f = fingers[n]
+        if 2 * hardware.bearing_width >= f.width:
+            raise ParamError("hardware.bearing.width_mm", bw / MM,
+                             f"two bearings per joint must fit in fingers.{n}.width_mm = {f.width / MM:g}", source)
+        if hardware.bearing_outer >= f.thickness:
+            raise ParamError("hardware.bearing.outer_mm", outer / MM,
+                             f"must be < fingers.{n}.thickness_mm = {f.thickness / MM:g}", source)
+
+    pr = root.table("print")
+    printing = Print(
+        hole_clearance=pr.number("hole_clearance_mm", ge=0, lt=1) * MM,
+        press_fit_interference=pr.number("press_fit_interference_mm", ge=0, lt=0.5) * MM,
+        magnet_clearance=pr.number("magnet_clearance_mm", ge=0, lt=1) * MM,
+        stl_tolerance=pr.number("stl_tolerance_mm", gt=0, le=1) * MM,
+        density=pr.number("density_g_per_cm3", gt=0, lt=25) * 1000.0,
+        infill=pr.number("infill", gt=0, le=1),
+    )
+    pr.done()
+
+    effects = root.table("effects", default={})
+    effect_params = {}
+    for key in effects.keys():
+        et = effects.table(key)
+        effect_params[key] = dict(et.data)
+    effects.done()
+
+    root.done()
+    return HandParams(
+        name=name, side=side, hand_length=hand_length,
+        fingers=MappingProxyType(fingers), thumb=thumb, mechanics=mechanics, palm=palm,
+        servo=servo, hardware=hardware, print=printing,
+        effects=_freeze(effect_params), document=_freeze(dict(document)), source=source,
+    )
