@@ -1,0 +1,245 @@
+"""The measurement CSV format (docs/measurements.md).
+
+UTF-8, a header row, one row per sample, angles in radians (``degrees=True`` converts):
+``u1``..``u6`` commanded servo angles, any subset of ``q1``..``q15`` measured joint
+angles (an empty cell means not measured), optional ``sweep`` (rows with the same id
+form one sweep, in row order) and ``t`` (seconds). Lines starting with ``#`` are
+comments. Every refusal names the line and the column.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterable, Mapping, Sequence
+
+import numpy as np
+
+from ..kinematics.topology import N_JOINTS, Q_COLUMNS, U_COLUMNS
+
+ANGLE_COLUMNS = frozenset(U_COLUMNS + Q_COLUMNS)
+#: an angle beyond this in a radian file is taken for degrees
+RADIAN_LIMIT = 2.0 * math.pi
+
+
+class DataError(ValueError):
+    """A measurement file breaks the format; ``line`` and ``column`` say where."""
+
+    def __init__(self, path, line: int | None, column: str | None, message: str):
+        self.path, self.line, self.column = str(path), line, column
+        where = str(path)
+        if line is not None:
+            where += f", line {line}"
+        if column is not None:
+            where += f", column {column}"
+        super().__init__(f"{where}: {message}")
+
+
+@dataclass(frozen=True)
+class Table:
+    """A parsed CSV: float columns (NaN = empty cell) and the file line of every row."""
+
+    path: str
+    columns: tuple[str, ...]
+    values: Mapping[str, np.ndarray]
+    text: Mapping[str, tuple[str, ...]]
+    lines: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.lines)
+
+
+def read_table(path, *, required: Sequence[str], optional: Sequence[str] = (),
+               text_columns: Sequence[str] = (), degrees: bool = False,
+               allow_empty: Sequence[str] = ()) -> Table:
+    """Read a CSV strictly.
+
+    ``required`` columns must be present; ``optional`` may be; any other column is refused.
+    Number cells must parse as finite floats; empty cells are allowed only in ``allow_empty``
+    columns (as NaN). Angle columns (u*, q*) are converted from degrees when ``degrees``;
+    in radians, a magnitude above 2 pi is refused as "looks like degrees".
+    """
+    path = Path(path)
+    try:
+        raw = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise DataError(path, None, None, "no such file") from None
+    except UnicodeDecodeError as exc:
+        raise DataError(path, None, None, f"is not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+
+    rows: list[tuple[int, list[str]]] = []
+    for lineno, line in enumerate(raw.splitlines(), start=1):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        rows.append((lineno, line))
+    if not rows:
+        raise DataError(path, None, None, "is empty: expected a header row and at least one data row")
+    parsed = list(csv.reader([line for _, line in rows]))
+    header_line = rows[0][0]
+    header = [h.strip() for h in parsed[0]]
+    allowed = list(required) + list(optional) + list(text_columns)
+    seen: set[str] = set()
+    for name in header:
+        if name in seen:
+            raise DataError(path, header_line, name, "duplicate column")
+        if name not in allowed:
+            raise DataError(path, header_line, name or "<empty>",
+                            f"unknown column (allowed: {', '.join(allowed)})")
+        seen.add(name)
+    for name in required:
+        if name not in seen:
+            raise DataError(path, header_line, name, "required column is missing")
+    if len(rows) < 2:
+        raise DataError(path, None, None, "has a header but no data rows")
+
+    n = len(rows) - 1
+    values = {c: np.empty(n) for c in header if c not in text_columns}
+    text = {c: [] for c in header if c in text_columns}
+    lines = np.empty(n, dtype=int)
+    for k, ((lineno, _), cells) in enumerate(zip(rows[1:], parsed[1:])):
+        lines[k] = lineno
+        if len(cells) != len(header):
+            raise DataError(path, lineno, None, f"has {len(cells)} cells, the header has {len(header)}")
+        for name, cell in zip(header, cells):
+            cell = cell.strip()
+            if name in text:
+                if not cell:
+                    raise DataError(path, lineno, name, "empty cell")
+                text[name].append(cell)
+                continue
+            if cell == "":
+                if name not in allow_empty:
+                    raise DataError(path, lineno, name, "empty cell (this column is required on every row)")
+                values[name][k] = np.nan
+                continue
+            try:
+                v = float(cell)
+            except ValueError:
+                raise DataError(path, lineno, name, f"'{cell}' is not a number") from None
+            if not math.isfinite(v):
+                raise DataError(path, lineno, name, f"'{cell}' is not a finite number")
+            if name in ANGLE_COLUMNS:
+                if degrees:
+                    v = math.radians(v)
+                elif abs(v) > RADIAN_LIMIT:
+                    raise DataError(path, lineno, name,
+                                    f"{v:g} looks like degrees (angles are radians, |angle| <= 2 pi); "
+                                    "convert it or pass --degrees")
+            values[name][k] = v
+    return Table(str(path), tuple(header), values, {c: tuple(v) for c, v in text.items()}, lines)
+
+
+@dataclass(frozen=True)
+class Measurements:
+    """Servo commands and measured joint angles.
+
+    ``u`` (N, 6); ``q`` (N, 15) with NaN where a joint was not measured;
+    ``measured`` (15,) which q columns the file has; ``sweep`` (N,) integer sweep codes
+    (0..S-1, in order of first appearance) and ``sweep_ids`` their labels; ``t`` (N,) or None;
+    ``lines`` the file line of each row.
+    """
+
+    u: np.ndarray
+    q: np.ndarray
+    measured: np.ndarray
+    sweep: np.ndarray
+    sweep_ids: tuple[str, ...]
+    t: np.ndarray | None
+    lines: np.ndarray
+    source: str = "<memory>"
+    #: whether the file had a ``sweep`` column (without it the file is one sweep)
+    has_sweep_column: bool = False
+
+    def __len__(self) -> int:
+        return len(self.u)
+
+    def sweeps(self) -> list[np.ndarray]:
+        """Row indices of each sweep, in row order."""
+        return [np.flatnonzero(self.sweep == k) for k in range(len(self.sweep_ids))]
+
+    @property
+    def q_columns(self) -> tuple[str, ...]:
+        return tuple(c for c, m in zip(Q_COLUMNS, self.measured) if m)
+
+
+def read_measurements(path, degrees: bool = False) -> Measurements:
+    table = read_table(path, required=U_COLUMNS, optional=Q_COLUMNS + ("t",),
+                       text_columns=("sweep",), degrees=degrees, allow_empty=Q_COLUMNS)
+    n = len(table)
+    u = np.column_stack([table.values[c] for c in U_COLUMNS])
+    q = np.full((n, N_JOINTS), np.nan)
+    measured = np.zeros(N_JOINTS, dtype=bool)
+    for i, c in enumerate(Q_COLUMNS):
+        if c in table.values:
+            q[:, i] = table.values[c]
+            measured[i] = True
+    if "sweep" in table.text:
+        labels = table.text["sweep"]
+        ids = tuple(dict.fromkeys(labels))
+        code = {s: k for k, s in enumerate(ids)}
+        sweep = np.array([code[s] for s in labels], dtype=int)
+    else:
+        ids, sweep = ("0",), np.zeros(n, dtype=int)
+    for k, sid in enumerate(ids):
+        rows = np.flatnonzero(sweep == k)
+        if rows.size < 2:
+            raise DataError(path, int(table.lines[rows[0]]), "sweep",
+                            f"sweep '{sid}' has a single row; a sweep needs at least two")
+    t = table.values.get("t")
+    return Measurements(u, q, measured, sweep, ids, t, table.lines, str(path), "sweep" in table.text)
+
+
+def write_table(path, columns: Mapping[str, Iterable], comments: Sequence[str] = ()) -> None:
+    """Write columns to a CSV atomically. Floats with 12 significant digits; NaN as an empty cell."""
+    path = Path(path)
+    names = list(columns)
+    data = [list(columns[c]) for c in names]
+    n = len(data[0]) if data else 0
+    if any(len(col) != n for col in data):
+        raise ValueError("all columns must have the same length")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+            for c in comments:
+                fh.write(f"# {c}\n")
+            w = csv.writer(fh, lineterminator="\n")
+            w.writerow(names)
+            for k in range(n):
+                w.writerow([_cell(col[k]) for col in data])
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _cell(v) -> str:
+    if isinstance(v, str):
+        return v
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    v = float(v)
+    return "" if math.isnan(v) else f"{v:.12g}"
+
+
+def write_measurements(path, u, q=None, sweep=None, t=None, q_columns: Sequence[str] | None = None,
+                       comments: Sequence[str] = ()) -> None:
+    """Write the measurement format: u1..u6, then the q columns (all 15 unless ``q_columns``)."""
+    u = np.asarray(u, dtype=float)
+    cols: dict[str, Iterable] = {}
+    if sweep is not None:
+        cols["sweep"] = [str(s) for s in sweep]
+    if t is not None:
+        cols["t"] = np.asarray(t, dtype=float)
+    for i, c in enumerate(U_COLUMNS):
+        cols[c] = u[:, i]
+    if q is not None:
+        q = np.asarray(q, dtype=float)
+        for i, c in enumerate(Q_COLUMNS):
+            if q_columns is None or c in q_columns:
+                cols[c] = q[:, i]
+    write_table(path, cols, comments)
