@@ -168,26 +168,15 @@ _demo_hooks: list = []
 
 
 def main() -> None:
+    """Entry point: click handles usage errors and exit codes; our errors print one line, exit 2."""
     from .calibration.data import DataError
     from .params import ParamError
 
     try:
-        app(standalone_mode=False)
+        app()
     except (ParamError, DataError, UserError) as exc:
         typer.echo(f"error: {exc}", err=True)
         sys.exit(2)
-    except typer.Exit as exc:
-        sys.exit(exc.exit_code)
-    except typer.Abort:
-        typer.echo("aborted", err=True)
-        sys.exit(1)
-    except Exception as exc:  # click usage errors
-        import click
-
-        if isinstance(exc, click.ClickException):
-            exc.show()
-            sys.exit(exc.exit_code)
-        raise
 
 
 if __name__ == "__main__":

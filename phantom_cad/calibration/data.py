@@ -184,7 +184,7 @@ def read_measurements(path, degrees: bool = False) -> Measurements:
         sweep = np.array([code[s] for s in labels], dtype=int)
     else:
         ids, sweep = ("0",), np.zeros(n, dtype=int)
-    for k, sid in enumerate(ids):
+    for k, sid in enumerate(ids if "sweep" in table.text else ()):
         rows = np.flatnonzero(sweep == k)
         if rows.size < 2:
             raise DataError(path, int(table.lines[rows[0]]), "sweep",

@@ -49,17 +49,17 @@ class Table:
     def check_number(self, key, value, *, gt=None, ge=None, lt=None, le=None) -> float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise self.error(key, value, "must be a number")
-        value = float(value)
+        raw, value = value, float(value)   # errors show the value as written
         if not math.isfinite(value):
-            raise self.error(key, value, "must be finite")
+            raise self.error(key, raw, "must be finite")
         if gt is not None and not value > gt:
-            raise self.error(key, value, f"must be > {gt:g}")
+            raise self.error(key, raw, f"must be > {gt:g}")
         if ge is not None and not value >= ge:
-            raise self.error(key, value, f"must be >= {ge:g}")
+            raise self.error(key, raw, f"must be >= {ge:g}")
         if lt is not None and not value < lt:
-            raise self.error(key, value, f"must be < {lt:g}")
+            raise self.error(key, raw, f"must be < {lt:g}")
         if le is not None and not value <= le:
-            raise self.error(key, value, f"must be <= {le:g}")
+            raise self.error(key, raw, f"must be <= {le:g}")
         return value
 
     def string(self, key: str, choices: tuple[str, ...] | None = None, default=_MISSING) -> str:

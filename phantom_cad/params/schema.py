@@ -345,7 +345,7 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
     root = Table(dict(document), "", source)
     version = root.number("schema_version")
     if version != SCHEMA_VERSION:
-        raise root.error("schema_version", version, f"must be {SCHEMA_VERSION}")
+        raise root.error("schema_version", root.data["schema_version"], f"must be {SCHEMA_VERSION}")
 
     h = root.table("hand")
     name = h.string("name")

@@ -1,0 +1,142 @@
+"""The command line, run as a user runs it (a subprocess)."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+import textwrap
+
+import pytest
+import tomli_w
+
+from tests.test_model import Q_REF_STAR, U_STAR, easy_document
+
+
+def cli(*args, check=True):
+    proc = subprocess.run([sys.executable, "-m", "phantom_cad", *map(str, args)],
+                          capture_output=True, text=True)
+    if check:
+        assert proc.returncode == 0, proc.stderr
+    return proc
+
+
+def read_csv(path):
+    import csv
+
+    lines = [line for line in path.read_text().splitlines() if not line.startswith("#")]
+    return list(csv.DictReader(lines))
+
+
+def test_help_everywhere():
+    for args in ([], ["params"], ["model"], ["model", "forward"], ["model", "inverse"], ["params", "show"]):
+        proc = cli(*args, "--help")
+        assert "Usage" in proc.stdout
+
+
+def test_model_forward_known_answer(tmp_path, document):
+    params = tmp_path / "easy.toml"
+    params.write_text(tomli_w.dumps(easy_document(document)))
+    inp = tmp_path / "u.csv"
+    inp.write_text(f"# one pose\nu1,u2,u3,u4,u5,u6\n0,{U_STAR!r},0,0,0,0.25\n")
+    out = tmp_path / "q.csv"
+    cli("model", "forward", "--in", inp, "--out", out, "--params", params)
+    row = read_csv(out)[0]
+    assert float(row["u2"]) == pytest.approx(U_STAR)
+    assert float(row["q5"]) == pytest.approx(Q_REF_STAR, abs=1e-11)       # index MCP, 30 deg
+    assert float(row["q4"]) == pytest.approx(1.25 * Q_REF_STAR, abs=1e-11)
+    assert float(row["q15"]) == pytest.approx(0.25)
+    assert float(row["q1"]) == 0.0
+
+
+def test_model_forward_degrees(tmp_path, document):
+    params = tmp_path / "easy.toml"
+    params.write_text(tomli_w.dumps(easy_document(document)))
+    inp = tmp_path / "u.csv"
+    inp.write_text(f"u1,u2,u3,u4,u5,u6\n0,{math.degrees(U_STAR)!r},0,0,0,0\n")
+    out = tmp_path / "q.csv"
+    cli("model", "forward", "--in", inp, "--out", out, "--params", params, "--degrees")
+    assert float(read_csv(out)[0]["q5"]) == pytest.approx(30.0, abs=1e-9)
+
+
+def test_model_round_trip_through_files(tmp_path):
+    inp = tmp_path / "u.csv"
+    rows = ["sweep,u1,u2,u3,u4,u5,u6"]
+    for k in range(11):
+        v = 0.1 * k
+        rows.append(f"{'a' if k < 6 else 'b'},{v},{v},{v},{v},{v},{min(v, 1.5)}")
+    inp.write_text("\n".join(rows) + "\n")
+    q = tmp_path / "q.csv"
+    u = tmp_path / "u_back.csv"
+    cli("model", "forward", "--in", inp, "--out", q, "--compensated")
+    cli("model", "inverse", "--in", q, "--out", u)
+    back = read_csv(u)
+    assert [r["sweep"] for r in back] == ["a"] * 6 + ["b"] * 5
+    for k, r in enumerate(back):
+        for j in range(1, 7):
+            assert float(r[f"u{j}"]) == pytest.approx(min(0.1 * k, 1.5) if j == 6 else 0.1 * k, abs=1e-9)
+
+
+def test_bad_input_file_names_line_and_column(tmp_path):
+    inp = tmp_path / "u.csv"
+    inp.write_text("u1,u2,u3,u4,u5,u6\n0,0,0,0,0,0\n0,abc,0,0,0,0\n")
+    proc = cli("model", "forward", "--in", inp, "--out", tmp_path / "q.csv", check=False)
+    assert proc.returncode == 2
+    assert proc.stderr.strip() == f"error: {inp}, line 3, column u2: 'abc' is not a number"
+    assert not (tmp_path / "q.csv").exists()
+
+
+def test_degrees_in_a_radian_file(tmp_path):
+    inp = tmp_path / "u.csv"
+    inp.write_text("u1,u2,u3,u4,u5,u6\n0,45,0,0,0,0\n")
+    proc = cli("model", "forward", "--in", inp, "--out", tmp_path / "q.csv", check=False)
+    assert proc.returncode == 2
+    assert proc.stderr.strip() == (f"error: {inp}, line 2, column u2: 45 looks like degrees "
+                                   "(angles are radians, |angle| <= 2 pi); convert it or pass --degrees")
+
+
+def test_inverse_needs_all_joints(tmp_path):
+    inp = tmp_path / "q.csv"
+    inp.write_text("q1,q2\n0,0\n")
+    proc = cli("model", "inverse", "--in", inp, "--out", tmp_path / "u.csv", check=False)
+    assert proc.returncode == 2
+    assert proc.stderr.strip() == f"error: {inp}, line 1, column q3: required column is missing"
+
+
+def test_params_validate_good_and_bad(tmp_path, document):
+    proc = cli("params", "validate")
+    assert proc.stdout.startswith("OK ")
+    document["fingers"]["index"]["pulley_radius_mm"]["dip"] = 0
+    bad = tmp_path / "bad.toml"
+    bad.write_text(tomli_w.dumps(document))
+    proc = cli("params", "validate", bad, check=False)
+    assert proc.returncode == 2
+    assert proc.stderr.strip() == f"FAIL {bad}: fingers.index.pulley_radius_mm.dip = 0: must be > 0"
+
+
+def test_params_show_prints_derived_quantities():
+    out = cli("params", "show").stdout
+    assert "ip: 0.8000 / 0.7915" in out or "ip: 0.8000 /" in out   # thumb coupling from 5:4 radii
+    assert "pip: 1.2500 /" in out
+    assert "q15  thumb_cmc" in out
+
+
+def test_model_commands_never_import_cad(tmp_path):
+    inp = tmp_path / "u.csv"
+    inp.write_text("u1,u2,u3,u4,u5,u6\n0,0.5,0,0,0,0\n")
+    code = textwrap.dedent(f"""
+        import sys
+        from phantom_cad.cli import app
+        import phantom_cad
+        phantom_cad.load_hand().inverse([0.1] * 15)
+        try:
+            app(["model", "forward", "--in", {str(inp)!r}, "--out", {str(tmp_path / 'q.csv')!r}],
+                standalone_mode=False)
+            app(["params", "show"], standalone_mode=False)
+        finally:
+            heavy = sorted(m for m in sys.modules if m.split(".")[0] in ("OCP", "build123d", "cadquery"))
+            print("HEAVY", heavy)
+    """)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert "HEAVY []" in proc.stdout

@@ -1,0 +1,228 @@
+"""Parameter files: every rule gives its own clear message (field, value, rule)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from phantom_cad.params import ParamError, dump_params, load_params, parse
+
+
+def refuse(document, message):
+    with pytest.raises(ParamError) as info:
+        parse(document)
+    assert str(info.value) == message
+    return info.value
+
+
+def test_default_file_is_valid():
+    p = load_params()
+    assert p.name == "phantom" and p.side == "right"
+    assert set(p.fingers) == {"index", "middle", "ring", "pinky"}
+    # Buchholz et al. 1992: index proximal = 0.245 HL, HL = 189 mm
+    assert p.fingers["index"].proximal == pytest.approx(0.245 * 0.189)
+    # 5:4:5 radii; the thumb's 5:4
+    assert p.fingers["middle"].chain.radii == pytest.approx((0.005, 0.004, 0.005))
+    assert p.thumb.chain.radii == pytest.approx((0.004, 0.005))  # (MP, IP)
+    assert p.palm.arc_offset == pytest.approx(math.radians(5.0))
+
+
+def test_derived_quantities_from_parameters():
+    p = load_params()
+    g = p.fingers["index"].chain.guide
+    # eq. (4), by hand: d1 = 12, d2 = 10 mm, alpha = 100 deg
+    assert g.L0 == pytest.approx(math.sqrt(144 + 100 - 240 * math.cos(math.radians(100))) * 1e-3)
+    assert tuple(p.thumb.chain.ideal_coupling) == pytest.approx((1.0, 0.8))  # not 1.25 (erratum)
+    assert tuple(p.fingers["ring"].chain.ideal_coupling) == pytest.approx((1.0, 1.25, 1.0))
+    # palm arc: adjacent MCPs finger_pitch apart turning by 5 deg lie on radius pitch / (2 sin 2.5 deg)
+    assert p.palm.arc_radius == pytest.approx(0.0195 / (2 * math.sin(math.radians(2.5))))
+
+
+def test_digest_is_stable_and_sensitive(document):
+    a = parse(document).digest
+    assert parse(document).digest == a
+    document["fingers"]["index"]["width_mm"] = 17.5
+    assert parse(document).digest != a
+
+
+def test_dump_and_reload(tmp_path, document):
+    path = tmp_path / "copy.toml"
+    dump_params(document, path)
+    assert load_params(path).digest == parse(document).digest
+
+
+def test_dump_refuses_invalid_and_writes_nothing(tmp_path, document):
+    document["hand"]["side"] = "up"
+    path = tmp_path / "bad.toml"
+    with pytest.raises(ParamError):
+        dump_params(document, path)
+    assert not path.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_unknown_top_level_key(document):
+    document["colour"] = 1
+    refuse(document, "colour = 1: unknown key 'colour' (allowed: schema_version, hand, fingers, "
+                     "thumb, mechanics, palm, servo, hardware, print, effects)")
+
+
+def test_finger_name_typo(document):
+    document["fingers"]["indx"] = document["fingers"].pop("index")
+    refuse(document, "fingers.indx = '{...}': unknown finger 'indx' (allowed: index, middle, ring, pinky)")
+
+
+def test_missing_finger(document):
+    del document["fingers"]["pinky"]
+    refuse(document, "fingers.pinky = None: is required but missing")
+
+
+def test_unknown_key_in_finger_lists_allowed(document):
+    document["fingers"]["ring"]["colour"] = "red"
+    refuse(document, "fingers.ring.colour = 'red': unknown key 'colour' (allowed: length_fraction, "
+                     "width_mm, thickness_mm, pulley_radius_mm, guide, servo_pulley_radius_mm, "
+                     "servo_travel_deg, limits_rad, path_length_mm)")
+
+
+def test_radius_not_positive(document):
+    document["fingers"]["index"]["pulley_radius_mm"]["pip"] = -4.0
+    refuse(document, "fingers.index.pulley_radius_mm.pip = -4.0: must be > 0")
+
+
+def test_text_in_a_number(document):
+    document["hand"]["hand_length_mm"] = "189"
+    refuse(document, "hand.hand_length_mm = '189': must be a number")
+
+
+def test_boolean_is_not_a_number(document):
+    document["print"]["infill"] = True
+    refuse(document, "print.infill = True: must be a number")
+
+
+def test_side(document):
+    document["hand"]["side"] = "middle"
+    refuse(document, "hand.side = 'middle': must be one of: right, left")
+
+
+def test_schema_version(document):
+    document["schema_version"] = 2
+    refuse(document, "schema_version = 2: must be 1")
+
+
+def test_alpha_below_mcp_limit(document):
+    document["fingers"]["middle"]["guide"]["alpha_deg"] = 70.0
+    refuse(document, "fingers.middle.guide.alpha_deg = 70.0: must exceed the MCP upper limit "
+                     "fingers.middle.limits_rad.mcp = 1.24 rad (71.05 deg): eq. (6) gives q_MCP <= alpha")
+
+
+def test_cosine_law_argument_leaves_its_domain(document):
+    document["fingers"]["index"]["servo_travel_deg"] = [0.0, 150.0]
+    # by hand: L0 = sqrt(144 + 100 - 240 cos 100 deg) = 16.902 mm, L = L0 - 7 mm * 2.61799 = -1.424 mm,
+    # argument = (244 - 2.0278) / 240 = 1.0082; admissible chords [|12 - 10|, 12 + 10] = [2, 22] mm
+    refuse(document, "fingers.index.servo_travel_deg = [0.0, 150.0]: the cosine-law argument "
+                     "(d1^2 + d2^2 - L^2) / (2 d1 d2) is 1.0082 at u = 150 deg, outside [-1, 1] "
+                     "(chord L = L0 - r u = -1.424 mm must stay in [2.000, 22.000] mm)")
+
+
+def test_travel_image_outside_limits(document):
+    document["fingers"]["index"]["limits_rad"]["mcp"] = [0.0, 1.0]
+    # eq. (6) by hand at u = 93 deg: L = L0 - 7 mm * 93 pi / 180
+    L = math.sqrt(144 + 100 - 240 * math.cos(math.radians(100))) - 7 * math.radians(93)
+    q = math.radians(100) - math.acos((244 - L * L) / 240)
+    refuse(document, f"fingers.index.servo_travel_deg = [0.0, 93.0]: at u = 93 deg the model puts index MCP "
+                     f"at {q:.4f} rad, outside its limits fingers.index.limits_rad.mcp = [0, 1]: "
+                     "the servo travel must map inside the workspace")
+
+
+def test_thumb_travel_image_uses_the_5_4_ratio(document):
+    # eq. (8) by hand: d1 = 11, d2 = 9 mm, alpha = 100 deg, r1 = 7 mm, u = 81.5 deg; q_IP = 0.8 q_MP
+    document["thumb"]["limits_rad"]["ip"] = [0.0, 0.9]
+    L = math.sqrt(121 + 81 - 198 * math.cos(math.radians(100))) - 7 * math.radians(81.5)
+    q_ip = 0.8 * (math.radians(100) - math.acos((202 - L * L) / 198))
+    refuse(document, f"thumb.servo_travel_deg = [0.0, 81.5]: at u = 81.5 deg the model puts thumb IP at "
+                     f"{q_ip:.4f} rad, outside its limits thumb.limits_rad.ip = [0, 0.9]: "
+                     "the servo travel must map inside the workspace")
+
+
+def test_cmc_travel_outside_limits(document):
+    document["thumb"]["cmc_servo_travel_deg"] = [0.0, 90.0]
+    refuse(document, "thumb.cmc_servo_travel_deg = [0.0, 90.0]: q15 = cmc_gain * u6 = 1.5708 rad at "
+                     "u6 = 90 deg is outside the CMC limits [0, 1.57]: the servo travel must map inside the workspace")
+
+
+def test_interval_order(document):
+    document["fingers"]["ring"]["limits_rad"]["dip"] = [1.29, 0.0]
+    refuse(document, "fingers.ring.limits_rad.dip = [1.29, 0.0]: low must be < high")
+
+
+def test_rest_pose_inside_limits(document):
+    document["fingers"]["ring"]["limits_rad"]["dip"] = [0.1, 1.29]
+    refuse(document, "fingers.ring.limits_rad.dip = [0.1, 1.29]: low must be <= 0 "
+                     "(the rest pose q = 0 must lie in the workspace)")
+
+
+def test_missing_key(document):
+    del document["fingers"]["ring"]["guide"]
+    refuse(document, "fingers.ring.guide = None: is required but missing")
+
+
+def test_path_length_shorter_than_the_phalanx(document):
+    document["fingers"]["index"]["path_length_mm"]["mcp_pip"] = 30.0
+    # proximal = 0.245 * 189 = 46.305 mm, crossing between R = 5 and 4 mm: sqrt(46.305^2 - 9^2) = 45.42 mm
+    refuse(document, "fingers.index.path_length_mm.mcp_pip = 30.0: must be >= 45.42 mm, the crossed-tendon "
+                     "span of the proximal segment between its pulleys")
+
+
+def test_finger_wider_than_pitch(document):
+    document["fingers"]["middle"]["width_mm"] = 25.0
+    refuse(document, "fingers.middle.width_mm = 25.0: must be < palm.finger_pitch_mm = 19.5 "
+                     "(adjacent fingers would overlap)")
+
+
+def test_axle_larger_than_bearing_bore(document):
+    document["hardware"]["axle_diameter_mm"] = 4.0
+    refuse(document, "hardware.axle_diameter_mm = 4.0: must be <= hardware.bearing.bore_mm = 3")
+
+
+def test_fraction_out_of_range(document):
+    document["fingers"]["pinky"]["length_fraction"]["distal"] = 1.5
+    refuse(document, "fingers.pinky.length_fraction.distal = 1.5: must be < 1")
+
+
+def test_not_finite(document):
+    document["mechanics"]["tendon_EA_N"] = float("inf")
+    refuse(document, "mechanics.tendon_EA_N = inf: must be finite")
+
+
+def test_invalid_toml_file(tmp_path):
+    path = tmp_path / "broken.toml"
+    path.write_text("[hand\nname = 'x'\n")
+    with pytest.raises(ParamError) as info:
+        load_params(path)
+    assert str(info.value).startswith(f"{path}: <file> = '{path}': is not valid TOML: ")
+
+
+def test_missing_file(tmp_path):
+    path = tmp_path / "nope.toml"
+    with pytest.raises(ParamError) as info:
+        load_params(path)
+    assert str(info.value) == f"<file> = '{path}': no such parameter file"
+
+
+def test_error_names_the_file(tmp_path, document):
+    import tomli_w
+
+    document["fingers"]["index"]["guide"]["d1_mm"] = 0
+    path = tmp_path / "hand.toml"
+    path.write_text(tomli_w.dumps(document))
+    with pytest.raises(ParamError) as info:
+        load_params(path)
+    assert str(info.value) == f"{path}: fingers.index.guide.d1_mm = 0: must be > 0"
+    assert info.value.field == "fingers.index.guide.d1_mm" and info.value.rule == "must be > 0"
+
+
+def test_params_are_frozen():
+    p = load_params()
+    with pytest.raises(Exception):
+        p.name = "x"
+    with pytest.raises(TypeError):
+        p.fingers["index"] = None
