@@ -1,0 +1,46 @@
+"""Benchmark of the kinematic model (not a test: figures go to docs/performance.md).
+
+- single-call latency of hand.inverse(q_d, compensated=True) for one pose;
+- throughput of hand.forward(u, compensated=True) on 1,000,000 poses.
+Targets: < 20 us per single call; > 10 million poses per second batched.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from phantom_cad import load_hand
+
+
+def best_of(fn, repeat, number):
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        for _ in range(number):
+            fn()
+        times.append((time.perf_counter() - t0) / number)
+    return min(times), float(np.median(times))
+
+
+def main() -> dict:
+    hand = load_hand()
+    rng = np.random.default_rng(0)
+    u1 = rng.uniform(hand.u_min, hand.u_max)
+    q1 = hand.forward(u1, compensated=True)
+    best, median = best_of(lambda: hand.inverse(q1, compensated=True), repeat=7, number=20000)
+    print(f"inverse(q_d, compensated=True), one pose: best {best * 1e6:.2f} us, median {median * 1e6:.2f} us "
+          f"per call (target < 20 us)")
+
+    U = rng.uniform(hand.u_min, hand.u_max, size=(1_000_000, 6))
+    hand.forward(U[:1000], compensated=True)
+    fbest, fmedian = best_of(lambda: hand.forward(U, compensated=True), repeat=7, number=1)
+    print(f"forward(u, compensated=True), 1,000,000 poses: best {fbest * 1e3:.1f} ms "
+          f"({1e6 / fbest:.3g} poses/s), median {fmedian * 1e3:.1f} ms ({1e6 / fmedian:.3g} poses/s) "
+          f"(target > 1e7 poses/s)")
+    return {"inverse_single_us": best * 1e6, "forward_batch_poses_per_s": 1e6 / fbest}
+
+
+if __name__ == "__main__":
+    main()
