@@ -167,6 +167,15 @@ def demo(params: Optional[Path] = ParamsOpt,
 _demo_hooks: list = []
 
 
+# -- calibration (phantom_cad/calibration/cli.py) -------------------------------
+from .calibration import cli as _calibration_cli  # noqa: E402  (numpy-free at import; no CAD)
+
+app.command("simulate")(_calibration_cli.simulate)
+app.command("compare")(_calibration_cli.compare)
+app.command("diagnose")(_calibration_cli.diagnose)
+app.command("fit")(_calibration_cli.fit)
+
+
 def main() -> None:
     from .calibration.data import DataError
     from .params import ParamError
