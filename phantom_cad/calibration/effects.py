@@ -147,12 +147,12 @@ def unregister_effect(name: str) -> None:
     REGISTRY.pop(name, None)
 
 
-def get_effect(name: str, field_name: str | None = None) -> Effect:
+def get_effect(name: str, field_name: str | None = None, source: str | None = None) -> Effect:
     try:
         return REGISTRY[name]
     except KeyError:
         raise ParamError(field_name or "effects", name,
-                         f"unknown effect (known: {', '.join(REGISTRY)})") from None
+                         f"unknown effect (known: {', '.join(REGISTRY)})", source) from None
 
 
 def _chain_constants(params):
@@ -385,8 +385,8 @@ def _constants(hand):
 
 def effect_values(name: str, table: Mapping, hand=None, source: str | None = None) -> np.ndarray:
     """Check one ``[effects.<name>]`` table and return its parameter vector (missing keys are 0)."""
-    eff = get_effect(name, "effects")
     base = f"effects.{name}"
+    eff = get_effect(name, base, source)
     if not isinstance(table, Mapping):
         raise ParamError(base, table, "must be a table of parameter values", source)
     plist = eff.parameters(hand)
