@@ -191,12 +191,14 @@ def fit(model: Model, problem: Problem, x0=None, uncertainty: bool = True) -> Fi
     r = res.fun
     std = np.full(model.p, np.nan)
     if uncertainty:
-        J = res.jac.toarray() if sparse.issparse(res.jac) else np.asarray(res.jac)
+        # J^T J through scipy.sparse (no BLAS call: multithreaded BLAS wake-up costs more than the product)
+        J = sparse.csr_matrix(res.jac)
+        JTJ = (J.T @ J).toarray()
         dof = max(r.size - model.p, 1)
         s2 = float(r @ r) / dof
         out = FitResult(model, res.x, std, r, problem)
         inflate = r.size / max(out.n_eff, 1.0)
-        cov = np.linalg.pinv(J.T @ J) * s2 * inflate
+        cov = np.linalg.pinv(JTJ) * s2 * inflate
         out.std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
         return out
     return FitResult(model, res.x, std, r, problem)
