@@ -7,7 +7,8 @@ computed with an effective sample size,
     dIC = n_eff ln(RSS_with / RSS_without) + (p_with - p_without) ln(n_eff),
 
 (BIC with n replaced by n_eff, because residuals within a sweep are correlated; n_eff from the
-lag-1 autocorrelation of the candidate's residuals), and must also lower the *held-out* error:
+lag-1 autocorrelation of the residuals of the round's best-fitting candidate, one value per round
+so that candidates are compared on one scale), and must also lower the *held-out* error:
 the sweeps are cut into contiguous blocks assigned alternately to two folds, the model is fitted
 on one fold and evaluated on the other, both ways; the candidate passes only if the held-out sum
 of squares falls below HELDOUT_RATIO times the model's without it. The best passing candidate
@@ -37,7 +38,7 @@ MAX_ROUNDS = 8
 SEPARATING_EXPERIMENTS = {
     frozenset({"tendon_elasticity", "pulley_radius_error"}):
         "measure the MCP of the same finger (a pulley radius error moves the MCP, elasticity leaves it at "
-        "the model) or sweep the full travel (elasticity grows with tension, a radius error with the servo angle)",
+        "the model), or the PIP and DIP together (a radius error keeps the 4:5:4 joint ratio, elasticity bends it)",
     frozenset({"tendon_elasticity", "friction_hysteresis"}):
         "sweep in both directions: friction flips sign with the direction of motion, elasticity does not",
     frozenset({"tendon_slack", "joint_offset"}):
@@ -137,10 +138,10 @@ def mae_per_joint(fr: FitResult) -> dict[str, float]:
     return out
 
 
-def delta_ic(base: FitResult, cand: FitResult) -> tuple[float, float]:
-    n_eff = max(cand.n_eff, 2.0)
+def delta_ic(base: FitResult, cand: FitResult, n_eff: float) -> float:
+    """n_eff ln(RSS_cand / RSS_base) + (p_cand - p_base) ln(n_eff); < 0 favours the candidate."""
     ratio = cand.rss / base.rss if base.rss > 0 else 1.0
-    return n_eff * np.log(max(ratio, 1e-300)) + (cand.model.p - base.model.p) * np.log(n_eff), n_eff
+    return float(n_eff * np.log(max(ratio, 1e-300)) + (cand.model.p - base.model.p) * np.log(n_eff))
 
 
 def diagnose(hand, m: Measurements, candidates=None, start=()) -> Diagnosis:
@@ -176,14 +177,21 @@ def diagnose(hand, m: Measurements, candidates=None, start=()) -> Diagnosis:
         pool = [n for n in names if n not in current]
         scored: list[Candidate] = []
         base_held = held(base.model, base) if pool else 0.0
+        fits = []
         for n in pool:
             model = Model(hand, current + [n], problem)
             if model.p == base.model.p:
-                notes.append(f"{n}: no parameter is identifiable from these data (not scored)") \
-                    if not rounds else None
+                if not rounds:
+                    notes.append(f"{n}: no parameter is identifiable from these data (not scored)")
                 continue
-            res = fit(model, problem, model.start(base))
-            dic, n_eff = delta_ic(base, res)
+            fits.append((n, model, fit(model, problem, model.start(base))))
+        if not fits:
+            rounds.append([])
+            break
+        # one effective sample size for the whole round: that of the best-fitting candidate's residuals
+        n_eff = max(min(fits, key=lambda f: f[2].rss)[2].n_eff, 2.0)
+        for n, model, res in fits:
+            dic = delta_ic(base, res, n_eff)
             h = held(model, base)
             ratio_h = h / base_held if base_held > 0 else 1.0
             passes = bool(dic < 0 and ratio_h < HELDOUT_RATIO)
@@ -221,7 +229,7 @@ def _prune(hand, problem, current: list[str], base: FitResult, keep: int):
             model = Model(hand, names, problem)
             res = fit(model, problem, model.start(base))
             n_eff = max(base.n_eff, 2.0)
-            dic = n_eff * np.log(max(res.rss / base.rss, 1e-300)) + (model.p - base.model.p) * np.log(n_eff)
+            dic = -delta_ic(res, base, n_eff)   # IC(without) - IC(with)
             trials.append((dic, name, res))
         dic, name, res = min(trials, key=lambda t: t[0])
         if dic >= 0:
