@@ -151,9 +151,9 @@ def compare(
             plot_mae(tmp / "mae.png", bm, am, ("analytic", label or ""), "MAE per joint")
             if q_after is not None:
                 plot_residuals(tmp / "residual_after.png", m, q_after, f"residual, {label}")
-                plot_hysteresis(tmp / "hysteresis.png", m, q_after, f"measured vs {label}")
+                plot_hysteresis(tmp / "hysteresis.png", m, q_after, q_before, f"deviation from the analytic model: measured, {label}")
             else:
-                plot_hysteresis(tmp / "hysteresis.png", m, q_before, "measured vs analytic")
+                plot_hysteresis(tmp / "hysteresis.png", m, q_before, q_before, "deviation from the analytic model")
             _write_json(tmp / "metrics.json", {"before": mb, "after": ma, "after_model": label})
             md = ["# phantom-cad compare", "", f"data: `{m.source}`, {len(m)} rows, params digest "
                   f"{hand.params.digest[:12]}", "", "```", *lines, "```", "",
@@ -232,7 +232,8 @@ def diagnose(
             plot_residuals(tmp / "residual_before.png", m, q_before, "residual of the analytic model")
             plot_residuals(tmp / "residual_after.png", m, q_after, f"residual with {label}")
             plot_mae(tmp / "mae.png", before, after, ("analytic", f"with {label}"), "MAE per joint")
-            plot_hysteresis(tmp / "hysteresis.png", m, q_after, f"measured vs model with {label}")
+            plot_hysteresis(tmp / "hysteresis.png", m, q_after, q_before,
+                            f"deviation from the analytic model: measured, and modelled with {label}")
             _write_json(tmp / "diagnosis.json", result)
             md = ["# phantom-cad diagnose", "", f"data: `{m.source}`, {len(m)} rows, params digest "
                   f"{hand.params.digest[:12]}", "", "```", *text, "```", "",
@@ -286,7 +287,10 @@ def fit(
     params: Optional[Path] = ParamsOpt,
     degrees: bool = DegreesOpt,
 ):
-    """Fit effect parameters and write a parameter file whose model (forward / inverse) uses them."""
+    """Fit effect parameters and write a parameter file whose model (forward / inverse) uses them.
+
+    The fit starts from the analytic model; the written file is the input file with its [effects]
+    replaced by the fitted ones (tendon_elasticity always written, 0 when not fitted)."""
     from .. import load_hand
     from ..params import dump_params
     from ..params.schema import _plain

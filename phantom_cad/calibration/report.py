@@ -5,8 +5,8 @@ complete. Pictures:
   residual_<label>.png  residual (measured - model) against the joint's servo angle, coloured by
                         direction (the paper's residual figure), one panel per measured joint;
   mae.png               per-joint MAE, before and after (the paper's MAE figure);
-  hysteresis.png        measured joint angle against the servo angle, flexing and extending,
-                        with the model's curves: hysteresis loops show as two branches.
+  hysteresis.png        measured and modelled deviation from the analytic model against the servo
+                        angle, flexing and extending: hysteresis loops show as two branches.
 """
 
 from __future__ import annotations
@@ -103,7 +103,9 @@ def plot_mae(path, before: dict, after: dict | None, labels=("before", "after"),
     plt.close(fig)
 
 
-def plot_hysteresis(path, m: Measurements, q_model: np.ndarray, title: str) -> None:
+def plot_hysteresis(path, m: Measurements, q_model: np.ndarray, q_analytic: np.ndarray, title: str) -> None:
+    """Deviation from the analytic model (measured and modelled) against the servo angle, per
+    direction: a direction-dependent effect opens a loop between the two branches."""
     plt = _plt()
     joints = [j for j in range(len(Q_COLUMNS)) if m.measured[j]]
     rows, cols = _grid(len(joints))
@@ -117,16 +119,16 @@ def plot_hysteresis(path, m: Measurements, q_model: np.ndarray, title: str) -> N
             if not sel.any():
                 continue
             order = np.argsort(m.u[sel, s], kind="stable")
-            ax.plot(m.u[sel, s] * RAD2DEG, m.q[sel, j] * RAD2DEG, "o", ms=2, color=colour, alpha=0.6,
-                    label=f"measured, {label}")
-            ax.plot(m.u[sel, s][order] * RAD2DEG, q_model[sel, j][order] * RAD2DEG, "-", lw=1, color=colour,
-                    label=f"model, {label}")
+            ax.plot(m.u[sel, s] * RAD2DEG, (m.q[sel, j] - q_analytic[sel, j]) * RAD2DEG, "o", ms=2,
+                    color=colour, alpha=0.6, label=f"measured, {label}")
+            ax.plot(m.u[sel, s][order] * RAD2DEG, (q_model[sel, j] - q_analytic[sel, j])[order] * RAD2DEG, "-",
+                    lw=1, color=colour, label=f"model, {label}")
         ax.set_title(f"{Q_COLUMNS[j]} {JOINT_NAMES[j]}", fontsize=9)
         ax.set_xlabel(f"u{s + 1} (deg)", fontsize=8)
         ax.tick_params(labelsize=7)
     for ax in list(axes.flat)[len(joints):]:
         ax.axis("off")
-    axes[0, 0].set_ylabel("q (deg)", fontsize=8)
+    axes[0, 0].set_ylabel("q - q_analytic (deg)", fontsize=8)
     axes[0, 0].legend(fontsize=6)
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()

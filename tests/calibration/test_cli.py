@@ -117,3 +117,14 @@ def test_calibration_commands_do_not_import_cad():
             "print(any(m.split('.')[0] in ('OCP', 'build123d', 'cadquery') for m in sys.modules))")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert r.stdout.strip() == "False"
+
+
+def test_simulate_is_deterministic(tmp_path):
+    for name in ("a.csv", "b.csv"):
+        r = run("simulate", "--effects", "friction_hysteresis,joint_offset", "--seed", "5", "--points", "4",
+                "--out", tmp_path / name)
+        assert r.returncode == 0, r.stderr
+    assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
+    r = run("simulate", "--effects", "friction_hysteresis,joint_offset", "--seed", "6", "--points", "4",
+            "--out", tmp_path / "c.csv")
+    assert (tmp_path / "a.csv").read_bytes() != (tmp_path / "c.csv").read_bytes()
