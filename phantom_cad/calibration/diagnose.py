@@ -26,7 +26,7 @@ import numpy as np
 from ..kinematics.topology import Q_COLUMNS
 from .data import Measurements
 from .effects import REGISTRY, get_effect
-from .fitting import RAD2DEG, FitResult, Model, Problem, fit, folds, heldout_sse
+from .fitting import FitResult, Model, Problem, fit, folds, heldout_sse, single_threaded_blas
 
 #: a candidate must bring the held-out sum of squares below this fraction of the model's without it
 HELDOUT_RATIO = 0.99
@@ -146,6 +146,11 @@ def delta_ic(base: FitResult, cand: FitResult, n_eff: float) -> float:
 
 def diagnose(hand, m: Measurements, candidates=None, start=()) -> Diagnosis:
     """Forward selection of effects (module docstring). ``candidates`` default: the whole library."""
+    with single_threaded_blas():
+        return _diagnose(hand, m, candidates, start)
+
+
+def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
     names = list(REGISTRY) if candidates is None else list(candidates)
     for n in names:
         get_effect(n, "--effects")

@@ -268,7 +268,7 @@ class FrictionHysteresis(Effect):
             return
         if ctx.s is None:
             raise RuntimeError("friction_hysteresis needs the reference angles")
-        theta = ctx.s[:, :5] * _sum_coupling(ctx.params)
+        theta = ctx.s[:, :5] * _sum_coupling(ctx.hand)
         f = np.exp(ctx.direction[:, :5] * x[0] * theta)
         ctx.compliance += ctx.compliance_ref * (f - 1.0)
 
@@ -297,15 +297,9 @@ class JointOffset(Effect):
         return q - x * DEG
 
 
-def _sum_coupling(params) -> np.ndarray:
-    cache = _SUM_A.get(id(params))
-    if cache is None or cache[0] is not params:
-        cache = (params, np.array([c.ideal_coupling.sum() for c in params.chains]))
-        _SUM_A[id(params)] = cache
-    return cache[1]
-
-
-_SUM_A: dict = {}
+def _sum_coupling(hand) -> np.ndarray:
+    """Per chain: the sum of the ideal coupling vector (Theta = s * sum(A) = sum of the chain's joint angles)."""
+    return np.array([A.sum() for A, *_ in _constants(hand)])
 
 
 # ---------------------------------------------------------------------------

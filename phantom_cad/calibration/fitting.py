@@ -9,6 +9,8 @@ the residuals within a sweep are correlated (see :func:`effective_size`).
 
 from __future__ import annotations
 
+import contextlib
+
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -19,6 +21,17 @@ from .data import Measurements
 from .effects import JOINT_SERVO, Effect, Param, get_effect, run_pipeline
 
 RAD2DEG = 180.0 / np.pi
+
+
+def single_threaded_blas():
+    """Context: BLAS on one thread. The fits multiply small matrices thousands of times; a
+    multithreaded BLAS spends more in waking and (on a loaded 2-core machine) fighting for cores
+    than in arithmetic: measured 18 s instead of 2 s for bench_diagnose's largest case under load."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # optional at run time: only slower
+        return contextlib.nullcontext()
+    return threadpool_limits(limits=1, user_api="blas")
 
 
 class Problem:
@@ -206,7 +219,8 @@ def fit(model: Model, problem: Problem, x0=None, uncertainty: bool = True) -> Fi
 
 def fit_effects(hand, m: Measurements, names) -> FitResult:
     problem = Problem(hand, m)
-    return fit(Model(hand, names, problem), problem)
+    with single_threaded_blas():
+        return fit(Model(hand, names, problem), problem)
 
 
 def predict(hand, m: Measurements, effects: dict | None = None) -> np.ndarray:
