@@ -455,12 +455,11 @@ class EffectStack:
         for eff, x in reversed(items):
             if eff.stage == "joint" and eff.invertible:
                 q = eff.invert(hand, q, x)
-        # tension stage with unknown direction: a constant compliance per chain
+        # reference stage (effective radius), then the tension stage with unknown direction:
+        # a constant compliance per chain, so each digit's reachable set is a line q = c s
         ctx = Context(hand, np.zeros((1, N_SERVOS)), None, self._base(hand, compensated))
         for eff, x in items:
-            if eff.stage == "servo":
-                pass
-            elif eff.stage == "reference":
+            if eff.stage == "reference":
                 eff.apply(ctx, x)
         radius_scale = ctx.radius_scale
         ctx.s = np.zeros((1, N_SERVOS))
@@ -474,14 +473,11 @@ class EffectStack:
             s[:, spec.servo] = q[:, list(spec.q_index)] @ c / (c @ c)
         s[:, CMC_SERVO] = q[:, CMC_Q]
         # the travel's image in reference-angle space, with the effects of the servo and reference stages
-        ends = np.vstack([hand.u_min, hand.u_max])
-        ends_eff = ends.copy()
-        ctx2 = Context(hand, ends, None, 0.0)
+        ends = Context(hand, np.vstack([hand.u_min, hand.u_max]), None, 0.0)
         for eff, x in items:
             if eff.stage == "servo":
-                eff.apply(ctx2, x)
-        ends_eff = ctx2.u_eff
-        s_ends = reference_angles(hand, ends_eff, radius_scale)
+                eff.apply(ends, x)
+        s_ends = reference_angles(hand, ends.u_eff, radius_scale)
         np.clip(s, s_ends.min(axis=0), s_ends.max(axis=0), out=s)
         # invert the cosine law with the effective radius
         u = np.empty_like(s)
