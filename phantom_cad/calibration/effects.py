@@ -21,8 +21,8 @@ Add your own effect with :func:`register_effect` (see docs/effects.md). numpy on
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Mapping, Sequence
 
 import numpy as np
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kinematics.topology import N_JOINTS, N_SERVOS, Q_COLUMNS
-from .data import DataError, Measurements
+from .data import Measurements
 from .effects import REGISTRY, DEG, chain_joints, effect_values, get_effect, run_pipeline
 
 
@@ -142,4 +142,4 @@ def parse_effect_params(items) -> dict[str, dict[str, float]]:
 
 
 __all__ = ["simulate", "Simulation", "draw_hidden", "sweep_commands", "parse_effect_params",
-           "SimulationError", "DataError"]
+           "SimulationError"]
