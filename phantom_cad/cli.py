@@ -98,7 +98,7 @@ def model_forward(
     from .calibration.data import read_measurements, write_measurements
 
     hand = load_hand(params)
-    m = read_measurements(inp, degrees=degrees)
+    m = read_measurements(inp, degrees=degrees, sweeps=False)
     q = hand.forward(m.u, compensated=compensated)
     scale = np.degrees if degrees else (lambda x: x)
     sweep = [m.sweep_ids[k] for k in m.sweep] if m.has_sweep_column else None
@@ -165,6 +165,15 @@ def demo(params: Optional[Path] = ParamsOpt,
 
 #: later stages of the demo (parts build, ...) register here
 _demo_hooks: list = []
+
+
+# -- calibration (phantom_cad/calibration/cli.py) -------------------------------
+from .calibration import cli as _calibration_cli  # noqa: E402  (numpy-free at import; no CAD)
+
+app.command("simulate")(_calibration_cli.simulate)
+app.command("compare")(_calibration_cli.compare)
+app.command("diagnose")(_calibration_cli.diagnose)
+app.command("fit")(_calibration_cli.fit)
 
 
 def main() -> None:

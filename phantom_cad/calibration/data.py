@@ -165,8 +165,48 @@ class Measurements:
     def q_columns(self) -> tuple[str, ...]:
         return tuple(c for c, m in zip(Q_COLUMNS, self.measured) if m)
 
+    @property
+    def direction(self) -> np.ndarray:
+        """(N, 6) direction of motion of every servo: +1 flexing, -1 extending, 0 never moved
+        (see :func:`motion_direction`)."""
+        return motion_direction(self.u, self.sweep)
 
-def read_measurements(path, degrees: bool = False) -> Measurements:
+
+def motion_direction(u, sweep=None) -> np.ndarray:
+    """Direction of motion per row and servo, from the commanded servo angle within each sweep.
+
+    The sign of u[k] - u[k-1]; at flat steps (and turning points reached by a flat step) the
+    previous sign is held; rows before the first move of a sweep take the sign of that first move;
+    a servo that never moves within a sweep gets 0. Sweeps are independent (no sign carries over).
+    """
+    u = np.asarray(u, dtype=float)
+    n = u.shape[0]
+    sweep = np.zeros(n, dtype=int) if sweep is None else np.asarray(sweep)
+    out = np.zeros(u.shape)
+    for k in np.unique(sweep):
+        rows = np.flatnonzero(sweep == k)
+        step = np.sign(np.diff(u[rows], axis=0))
+        d = np.zeros((rows.size, u.shape[1]))
+        for j in range(u.shape[1]):
+            moves = np.flatnonzero(step[:, j])
+            if moves.size == 0:
+                continue
+            # row i+1 gets the sign of step i; hold through zeros (forward fill)
+            idx = np.zeros(rows.size - 1, dtype=int)
+            idx[moves] = moves
+            np.maximum.accumulate(idx, out=idx)
+            col = step[idx, j]
+            col[: moves[0]] = step[moves[0], j]
+            d[1:, j] = col
+            d[0, j] = step[moves[0], j]
+        out[rows] = d
+    return out
+
+
+def read_measurements(path, degrees: bool = False, sweeps: bool = True) -> Measurements:
+    """Read the measurement format. With ``sweeps`` (calibration) every sweep, or the whole
+    file when it has no ``sweep`` column, needs at least two rows; without it (the model
+    commands, which map poses one by one) a single row is fine."""
     table = read_table(path, required=U_COLUMNS, optional=Q_COLUMNS + ("t",),
                        text_columns=("sweep",), degrees=degrees, allow_empty=Q_COLUMNS)
     n = len(table)
@@ -184,9 +224,12 @@ def read_measurements(path, degrees: bool = False) -> Measurements:
         sweep = np.array([code[s] for s in labels], dtype=int)
     else:
         ids, sweep = ("0",), np.zeros(n, dtype=int)
-    for k, sid in enumerate(ids if "sweep" in table.text else ()):
+    for k, sid in enumerate(ids if sweeps else ()):
         rows = np.flatnonzero(sweep == k)
         if rows.size < 2:
+            if "sweep" not in table.text:
+                raise DataError(path, int(table.lines[rows[0]]), None,
+                                "the file has a single data row; a sweep needs at least two")
             raise DataError(path, int(table.lines[rows[0]]), "sweep",
                             f"sweep '{sid}' has a single row; a sweep needs at least two")
     t = table.values.get("t")

@@ -107,10 +107,9 @@ class Hand:
     def forward(self, u, compensated: bool = False) -> np.ndarray:
         """Joint angles q (..., 15) for servo angles u (..., 6), radians."""
         u = _as_batch(u, N_SERVOS, "u")
-        q = self._reference(u) @ self.coupling(compensated)
-        if self.effects:
-            q = self.effects.apply_forward(self, u, q, compensated)
-        return q
+        if self.effects:  # fitted effects (phantom_cad.calibration.effects.EffectStack)
+            return self.effects.forward(self, u, compensated)
+        return self._reference(u) @ self.coupling(compensated)
 
     def inverse(self, q_d, compensated: bool = True) -> np.ndarray:
         """Control law (eq. 15): servo angles u* (..., 6) for target joint angles q_d (..., 15).
@@ -120,8 +119,8 @@ class Hand:
         """
         q = _as_batch(q_d, N_JOINTS, "q_d")
         q = np.clip(q, self.q_min, self.q_max)
-        if self.effects:
-            q = self.effects.apply_inverse_target(self, q, compensated)
+        if self.effects:  # the control law with the fitted effects inverted (docs/effects.md)
+            return self.effects.inverse(self, q, compensated)
         s = q @ self._project[compensated]
         np.clip(s, self._s_min, self._s_max, out=s)
         u = self._servo(s)

@@ -433,6 +433,11 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
         et = effects.table(key)
         effect_params[key] = dict(et.data)
     effects.done()
+    if effect_params:
+        # the effect library knows each effect's parameters and bounds (numpy only)
+        from ..calibration.effects import validate_effects
+
+        validate_effects(effect_params, source)
 
     root.done()
     return HandParams(

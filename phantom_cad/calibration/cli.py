@@ -1,0 +1,329 @@
+"""Command functions of the calibration workflow: simulate, compare, diagnose, fit.
+
+Registered in phantom_cad/cli.py. None imports a CAD library. Bad input raises DataError,
+ParamError or cli.UserError (printed as ``error: ...``, exit code 2).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from pathlib import Path
+from typing import List, Optional
+
+import typer
+
+ParamsOpt = typer.Option(None, "--params", "-p", help="Parameter file (default: params/phantom.toml).",
+                         dir_okay=False)
+DegreesOpt = typer.Option(False, "--degrees", help="Angles in the CSV are degrees.")
+
+
+def _user_error(msg: str):
+    from ..cli import UserError
+
+    return UserError(msg)
+
+
+def _effect_names(text: Optional[str], option: str = "--effects") -> list[str]:
+    from .effects import REGISTRY
+
+    if text is None or text.strip().lower() in ("", "none"):
+        return []
+    names = [t.strip() for t in text.split(",") if t.strip()]
+    for n in names:
+        if n not in REGISTRY:
+            raise _user_error(f"{option} {text}: unknown effect '{n}' (known: {', '.join(REGISTRY)}, or none)")
+    if len(set(names)) != len(names):
+        raise _user_error(f"{option} {text}: an effect is listed twice")
+    return names
+
+
+def _write_json(path: Path, obj) -> None:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            json.dump(obj, fh, indent=2, sort_keys=False)
+            fh.write("\n")
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+# -- simulate ---------------------------------------------------------------------
+
+def simulate(
+    out: Path = typer.Option(..., "--out", help="Measurement CSV to write.", dir_okay=False),
+    params: Optional[Path] = ParamsOpt,
+    effects: str = typer.Option("none", "--effects", help="Hidden effects, comma separated, or none."),
+    noise_deg: float = typer.Option(0.1, "--noise-deg", help="Gaussian noise on every measured angle, degrees (sd)."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the hidden magnitudes and of the noise."),
+    points: int = typer.Option(50, "--points", help="Samples per direction per servo."),
+    effect_param: Optional[List[str]] = typer.Option(
+        None, "--effect-param", help="Explicit hidden value EFFECT.PARAM=VALUE (file units), repeatable; the "
+                                     "effect's other parameters are then 0."),
+    travel: float = typer.Option(1.0, "--travel", help="Fraction of each servo's travel to sweep."),
+    measure: str = typer.Option("chain", "--measure", help="chain: record the swept servo's joints only; all: every joint."),
+    joints: Optional[str] = typer.Option(None, "--joints", help="q columns to record, e.g. q3,q4,q5 (default all)."),
+    degrees: bool = typer.Option(False, "--degrees", help="Write degrees instead of radians."),
+):
+    """Sweep every servo (flex, then extend, others at 0) and write what a hand with hidden effects would measure."""
+    import numpy as np
+
+    from .. import load_hand
+    from .data import write_measurements
+    from .simulate import SimulationError, parse_effect_params, simulate as run
+
+    hand = load_hand(params)
+    names = _effect_names(effects)
+    cols = None if joints is None else [c.strip() for c in joints.split(",") if c.strip()]
+    try:
+        sim = run(hand, names, noise_deg=noise_deg, seed=seed, points=points,
+                  explicit=parse_effect_params(effect_param), travel=travel, measure=measure, joints=cols)
+    except SimulationError as exc:
+        raise _user_error(str(exc)) from None
+    m = sim.measurements
+    scale = np.degrees if degrees else (lambda x: x)
+    hidden = "; ".join(f"{n}: " + ", ".join(f"{k}={v:.6g}" for k, v in kv.items()) for n, kv in sim.hidden.items())
+    write_measurements(out, scale(m.u), scale(m.q), sweep=[m.sweep_ids[k] for k in m.sweep],
+                       q_columns=m.q_columns,
+                       comments=[f"phantom-cad simulate --effects {','.join(names) or 'none'} --noise-deg {noise_deg:g} "
+                                 f"--seed {seed} --points {points}, params digest {hand.params.digest[:12]}, "
+                                 f"{'degrees' if degrees else 'radians'}",
+                                 f"hidden: {hidden or 'nothing (the analytic model)'}",
+                                 f"noise floor (MAE of the noise alone): {sim.noise_mae_deg:.4f} deg"])
+    typer.echo(f"wrote {len(m)} rows ({len(m.sweep_ids)} sweeps) to {out}")
+    typer.echo(f"hidden: {hidden or 'nothing'}; noise floor {sim.noise_mae_deg:.4f} deg MAE")
+
+
+# -- compare ----------------------------------------------------------------------
+
+def compare(
+    data: Path = typer.Argument(..., help="Measurement CSV.", dir_okay=False),
+    params: Optional[Path] = ParamsOpt,
+    effects: Optional[str] = typer.Option(
+        None, "--effects", help="Effects to fit and add to the analytic model (comma separated); none: the analytic "
+                                "model alone. Default: the parameter file's fitted effects, or else the paper's "
+                                "compensated model."),
+    report: Optional[Path] = typer.Option(None, "--report", help="Folder for report.md, metrics.json and PNGs.",
+                                          file_okay=False),
+    degrees: bool = DegreesOpt,
+):
+    """Residual = measured - model per joint: MAE / RMS / max before (analytic) and after (with the effects)."""
+    from .. import load_hand
+    from .data import read_measurements
+    from .effects import run_pipeline
+    from .fitting import fit_effects
+    from .report import metrics
+
+    hand = load_hand(params)
+    m = read_measurements(data, degrees=degrees)
+    q_before = run_pipeline(hand, [], m.u, None, 0.0)
+    fitted = None
+    if effects is not None:
+        names = _effect_names(effects)
+        if names:
+            fitted = fit_effects(hand, m, names)
+            q_after = fitted.model.predict(fitted.theta, m.u, m.direction)
+            label = "fitted " + " + ".join(names)
+        else:
+            q_after, label = None, None
+    elif hand.effects:
+        q_after = hand.effects.forward(hand, m.u, True, m.direction)
+        label = "calibrated (" + " + ".join(hand.effects.names) + ")"
+    else:
+        q_after = hand.forward(m.u, compensated=True)
+        label = "compensated (eq. 11-14)"
+    mb = metrics(m, q_before)
+    ma = metrics(m, q_after) if q_after is not None else None
+    lines = _compare_text(m, mb, ma, label, fitted)
+    typer.echo("\n".join(lines))
+    if report:
+        from .report import ReportDir, mae_table, plot_hysteresis, plot_mae, plot_residuals
+
+        with ReportDir(report) as tmp:
+            plot_residuals(tmp / "residual_before.png", m, q_before, "residual of the analytic model")
+            bm = {c: v["mae"] for c, v in mb["per_joint"].items()}
+            am = {c: v["mae"] for c, v in ma["per_joint"].items()} if ma else None
+            plot_mae(tmp / "mae.png", bm, am, ("analytic", label or ""), "MAE per joint")
+            if q_after is not None:
+                plot_residuals(tmp / "residual_after.png", m, q_after, f"residual, {label}")
+                plot_hysteresis(tmp / "hysteresis.png", m, q_after, q_before, f"deviation from the analytic model: measured, {label}")
+            else:
+                plot_hysteresis(tmp / "hysteresis.png", m, q_before, q_before, "deviation from the analytic model")
+            _write_json(tmp / "metrics.json", {"before": mb, "after": ma, "after_model": label})
+            md = ["# phantom-cad compare", "", f"data: `{m.source}`, {len(m)} rows, params digest "
+                  f"{hand.params.digest[:12]}", "", "```", *lines, "```", "",
+                  *mae_table(bm, am, ("analytic", label or "")), "",
+                  "![residual before](residual_before.png)", ""]
+            if q_after is not None:
+                md += ["![residual after](residual_after.png)", ""]
+            md += ["![MAE](mae.png)", "", "![hysteresis](hysteresis.png)", ""]
+            (tmp / "report.md").write_text("\n".join(md), encoding="utf-8")
+        typer.echo(f"report in {report}")
+
+
+def _compare_text(m, mb, ma, label, fitted) -> list[str]:
+    from ..kinematics.topology import JOINT_NAMES, Q_COLUMNS
+
+    out = [f"{len(m)} rows, {mb['overall']['n']} measured angles; residual = measured - model, degrees",
+           f"{'joint':18s} {'analytic MAE':>12s} {'RMS':>7s} {'max':>7s}" +
+           (f"   {'after MAE':>10s} {'RMS':>7s} {'max':>7s}" if ma else "")]
+    for c, v in mb["per_joint"].items():
+        name = f"{c} {JOINT_NAMES[Q_COLUMNS.index(c)]}"
+        row = f"{name:18s} {v['mae']:12.3f} {v['rms']:7.3f} {v['max']:7.3f}"
+        if ma:
+            a = ma["per_joint"][c]
+            row += f"   {a['mae']:10.3f} {a['rms']:7.3f} {a['max']:7.3f}"
+        out.append(row)
+    o = mb["overall"]
+    row = f"{'overall':18s} {o['mae']:12.3f} {o['rms']:7.3f} {o['max']:7.3f}"
+    if ma:
+        a = ma["overall"]
+        row += f"   {a['mae']:10.3f} {a['rms']:7.3f} {a['max']:7.3f}"
+    out.append(row)
+    if ma:
+        out.append(f"after = {label}")
+    if fitted is not None:
+        vals, errs = fitted.values(), fitted.uncertainties()
+        for n in vals:
+            for k, v in vals[n].items():
+                out.append(f"  {n}.{k} = {v:.5g} +- {errs[n][k]:.2g}")
+    return out
+
+
+# -- diagnose ---------------------------------------------------------------------
+
+def diagnose(
+    data: Path = typer.Argument(..., help="Measurement CSV.", dir_okay=False),
+    params: Optional[Path] = ParamsOpt,
+    report: Optional[Path] = typer.Option(None, "--report", help="Folder for report.md and PNGs.", file_okay=False),
+    json_out: Optional[Path] = typer.Option(None, "--json", help="Write the result as JSON.", dir_okay=False),
+    candidates: Optional[str] = typer.Option(None, "--candidates", help="Restrict the candidate effects (comma separated)."),
+    degrees: bool = DegreesOpt,
+):
+    """Which effect is missing? Score every effect of the library, add the ones the held-out data confirm."""
+    from .. import load_hand
+    from .data import read_measurements
+    from .diagnose import diagnose as run
+
+    hand = load_hand(params)
+    m = read_measurements(data, degrees=degrees)
+    names = _effect_names(candidates, "--candidates") if candidates else None
+    d = run(hand, m, names)
+    result = d.to_json()
+    text = diagnosis_text(d, result)
+    typer.echo("\n".join(text))
+    if json_out:
+        _write_json(json_out, result)
+        typer.echo(f"wrote {json_out}")
+    if report:
+        from .report import ReportDir, mae_table, plot_hysteresis, plot_mae, plot_residuals
+
+        before = {c: v["before"] for c, v in result["per_joint"].items()}
+        after = {c: v["after"] for c, v in result["per_joint"].items()}
+        q_before = d.before.model.predict(d.before.theta, m.u, m.direction)
+        q_after = d.after.model.predict(d.after.theta, m.u, m.direction)
+        label = " + ".join(d.selected) or "analytic"
+        with ReportDir(report) as tmp:
+            plot_residuals(tmp / "residual_before.png", m, q_before, "residual of the analytic model")
+            plot_residuals(tmp / "residual_after.png", m, q_after, f"residual with {label}")
+            plot_mae(tmp / "mae.png", before, after, ("analytic", f"with {label}"), "MAE per joint")
+            plot_hysteresis(tmp / "hysteresis.png", m, q_after, q_before,
+                            f"deviation from the analytic model: measured, and modelled with {label}")
+            _write_json(tmp / "diagnosis.json", result)
+            md = ["# phantom-cad diagnose", "", f"data: `{m.source}`, {len(m)} rows, params digest "
+                  f"{hand.params.digest[:12]}", "", "```", *text, "```", "",
+                  *mae_table(before, after, ("analytic", f"with {label}")), "",
+                  "![residual before](residual_before.png)", "", "![residual after](residual_after.png)", "",
+                  "![MAE](mae.png)", "", "![hysteresis](hysteresis.png)", ""]
+            (tmp / "report.md").write_text("\n".join(md), encoding="utf-8")
+        typer.echo(f"report in {report}")
+
+
+def diagnosis_text(d, result) -> list[str]:
+    from ..kinematics.topology import JOINT_NAMES, Q_COLUMNS
+    from .effects import get_effect
+
+    out = [f"{result['rows']} rows, {result['measured_cells']} measured angles",
+           f"MAE of the analytic model: {result['mae_deg_before']:.3f} deg; with the selected effects: "
+           f"{result['mae_deg_after']:.3f} deg", ""]
+    out.append("candidates, first round (dIC < 0 and held-out ratio < 0.99 pass):")
+    out.append(f"  {'effect':22s} {'dIC':>10s} {'RSS ratio':>10s} {'held-out':>9s} {'n_eff':>8s} {'pass':>5s}")
+    for c in d.ranking:
+        out.append(f"  {c.effect:22s} {c.delta_ic:10.1f} {c.rss_ratio:10.4f} {c.heldout_ratio:9.4f} "
+                   f"{c.n_eff:8.0f} {'yes' if c.passes else 'no':>5s}")
+    out.append("")
+    if not d.selected:
+        out.append("selected: nothing - the analytic model explains these data down to their noise")
+    for name in d.selected:
+        eff = get_effect(name)
+        out.append(f"selected: {name}")
+        out.append(f"  why: {eff.explanation}")
+        for k, v in result["effects"][name]["parameters"].items():
+            out.append(f"  {name}.{k} = {v['value']:.5g} +- {v['std']:.2g}")
+    for a in d.ambiguities:
+        out.append(f"ambiguous (round {a['round']}): {a['effects'][0]} and {a['effects'][1]} explain the residual "
+                   f"equally well (dIC {a['delta_ic'][0]:.1f} vs {a['delta_ic'][1]:.1f}); kept {a['effects'][0]}. "
+                   f"To separate them: {a['experiment']}")
+    for n in d.notes:
+        out.append(f"note: {n}")
+    out.append("")
+    out.append(f"{'joint':18s} {'MAE before':>10s} {'after':>8s}  (deg)")
+    for c, v in result["per_joint"].items():
+        out.append(f"{c + ' ' + JOINT_NAMES[Q_COLUMNS.index(c)]:18s} {v['before']:10.3f} {v['after']:8.3f}")
+    return out
+
+
+# -- fit --------------------------------------------------------------------------
+
+def fit(
+    data: Path = typer.Argument(..., help="Measurement CSV.", dir_okay=False),
+    effects: str = typer.Option(..., "--effects", help="Effects to fit, comma separated."),
+    out: Path = typer.Option(..., "--out", help="Parameter file to write (e.g. params/calibrated.toml).", dir_okay=False),
+    params: Optional[Path] = ParamsOpt,
+    degrees: bool = DegreesOpt,
+):
+    """Fit effect parameters and write a parameter file whose model (forward / inverse) uses them.
+
+    The fit starts from the analytic model; the written file is the input file with its [effects]
+    replaced by the fitted ones (tendon_elasticity always written, 0 when not fitted)."""
+    from .. import load_hand
+    from ..params import dump_params
+    from ..params.schema import _plain
+    from .data import read_measurements
+    from .diagnose import mae
+    from .effects import validate_effects
+    from .fitting import Model, Problem, fit as run_fit
+
+    names = _effect_names(effects)
+    if not names:
+        raise _user_error("--effects: name at least one effect to fit")
+    hand = load_hand(params)
+    m = read_measurements(data, degrees=degrees)
+    problem = Problem(hand, m)
+    before = run_fit(Model(hand, [], problem), problem)
+    res = run_fit(Model(hand, names, problem), problem)
+    vals, errs = res.values(), res.uncertainties()
+    table = {n: {k: round(v, 9) for k, v in vals[n].items()} for n in names}
+    if "tendon_elasticity" not in table:
+        # the fit starts from the analytic model: a zero compliance keeps compensated=True consistent with it
+        table["tendon_elasticity"] = {"compliance_per_m": 0.0}
+    validate_effects(table, str(out))
+    doc = _plain(hand.params.document)
+    doc["effects"] = table
+    header = [f"# Calibrated by `phantom-cad fit {data} --effects {','.join(names)}`",
+              f"# from {hand.params.source} (digest {hand.params.digest[:12]}), {len(m)} rows.",
+              f"# MAE {mae(before):.4f} deg (analytic) -> {mae(res):.4f} deg (with the effects).",
+              "# Fitted on the analytic model; [effects.tendon_elasticity] compliance_per_m replaces k_s/EA",
+              "# in the compensated model (0 when not fitted). Uncertainties (1 sd):"]
+    for n in names:
+        for k, v in vals[n].items():
+            header.append(f"#   {n}.{k} = {v:.6g} +- {errs[n][k]:.2g}")
+    dump_params(doc, out, header="\n".join(header) + "\n\n")
+    load_hand(out)  # the written file must load, effects included
+    typer.echo("\n".join(h[2:] for h in header))
+    typer.echo(f"wrote {out}")

@@ -1,0 +1,245 @@
+"""Which physical effect is missing? Forward selection with held-out evidence (``phantom-cad diagnose``).
+
+Start from the analytic model. Each round, every effect of the library not yet in the model is
+added in turn and all parameters are refitted; a candidate is scored by an information criterion
+computed with an effective sample size,
+
+    dIC = n_eff ln(RSS_with / RSS_without) + (p_with - p_without) ln(n_eff),
+
+(BIC with n replaced by n_eff, because residuals within a sweep are correlated; n_eff from the
+lag-1 autocorrelation of the residuals of the round's best-fitting candidate, one value per round
+so that candidates are compared on one scale), and must also lower the *held-out* error:
+the sweeps are cut into contiguous blocks assigned alternately to two folds, the model is fitted
+on one fold and evaluated on the other, both ways; the candidate passes only if the held-out sum
+of squares falls below HELDOUT_RATIO times the model's without it. The best passing candidate
+(lowest dIC) is added; the loop stops when none passes. Candidates whose dIC is within
+AMBIGUITY_IC of the winner's are reported as indistinguishable on these data, with the experiment
+that separates them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..kinematics.topology import Q_COLUMNS
+from .data import Measurements
+from .effects import REGISTRY, get_effect
+from .fitting import FitResult, Model, Problem, fit, folds, heldout_sse, single_threaded_blas
+
+#: a candidate must bring the held-out sum of squares below this fraction of the model's without it
+HELDOUT_RATIO = 0.99
+#: |dIC| differences below this are "equally well" (Kass & Raftery 1995: > 10 is very strong evidence)
+AMBIGUITY_IC = 10.0
+MAX_ROUNDS = 8
+
+#: the measurement that separates two effects that explain a residual equally well
+SEPARATING_EXPERIMENTS = {
+    frozenset({"tendon_elasticity", "pulley_radius_error"}):
+        "measure the MCP of the same finger (a pulley radius error moves the MCP, elasticity leaves it at "
+        "the model), or the PIP and DIP together (a radius error keeps the 4:5:4 joint ratio, elasticity bends it)",
+    frozenset({"tendon_elasticity", "friction_hysteresis"}):
+        "sweep in both directions: friction flips sign with the direction of motion, elasticity does not",
+    frozenset({"tendon_slack", "joint_offset"}):
+        "record the rest pose and the first degrees of travel in fine steps: slack is a dead band that starts "
+        "at q = 0, an offset is already there at rest",
+    frozenset({"tendon_slack", "pulley_radius_error"}):
+        "sweep from the very start of the travel in fine steps: slack is a dead band near u = 0, a radius "
+        "error grows in proportion to u",
+    frozenset({"joint_offset", "pulley_radius_error"}):
+        "record the rest pose: an offset is there at u = 0, a radius error is not",
+    frozenset({"friction_hysteresis", "tendon_slack"}):
+        "reverse the direction in the middle of the travel: friction opens a loop at every reversal, slack "
+        "only near the start",
+}
+DEFAULT_EXPERIMENT = ("sweep the whole travel in both directions in fine steps and measure every joint of the "
+                      "chain (MCP included)")
+
+
+def separating_experiment(a: str, b: str) -> str:
+    return SEPARATING_EXPERIMENTS.get(frozenset({a, b}), DEFAULT_EXPERIMENT)
+
+
+@dataclass
+class Candidate:
+    effect: str
+    delta_ic: float
+    rss_ratio: float
+    heldout_ratio: float
+    passes: bool
+    n_eff: float
+    n_params: int
+    mae_deg: float
+    result: FitResult = field(repr=False, default=None)
+
+    def to_json(self):
+        return {"effect": self.effect, "delta_ic": round(self.delta_ic, 3), "rss_ratio": round(self.rss_ratio, 6),
+                "heldout_ratio": round(self.heldout_ratio, 6), "passes": self.passes,
+                "n_eff": round(self.n_eff, 1), "n_params": self.n_params, "mae_deg": round(self.mae_deg, 5)}
+
+
+@dataclass
+class Diagnosis:
+    measurements: Measurements
+    before: FitResult
+    after: FitResult
+    selected: list[str]
+    rounds: list[list[Candidate]]
+    ambiguities: list[dict]
+    notes: list[str]
+
+    @property
+    def ranking(self) -> list[Candidate]:
+        return self.rounds[0] if self.rounds else []
+
+    def per_joint(self) -> dict[str, dict[str, float]]:
+        b = mae_per_joint(self.before)
+        a = mae_per_joint(self.after)
+        return {c: {"before": round(b[c], 5), "after": round(a[c], 5)} for c in b}
+
+    def to_json(self) -> dict:
+        vals, errs = self.after.values(), self.after.uncertainties()
+        effects = {}
+        for name in self.selected:
+            eff = get_effect(name)
+            effects[name] = {
+                "explanation": eff.explanation,
+                "parameters": {k: {"value": round(v, 6), "std": round(errs[name][k], 6)}
+                               for k, v in vals[name].items()},
+            }
+        return {
+            "source": self.measurements.source,
+            "rows": len(self.measurements),
+            "measured_cells": int(self.before.m),
+            "mae_deg_before": round(mae(self.before), 5),
+            "mae_deg_after": round(mae(self.after), 5),
+            "selected": list(self.selected),
+            "effects": effects,
+            "ranking": [c.to_json() for c in self.ranking],
+            "rounds": [[c.to_json() for c in r] for r in self.rounds],
+            "ambiguities": self.ambiguities,
+            "per_joint": self.per_joint(),
+            "notes": self.notes,
+        }
+
+
+def mae(fr: FitResult) -> float:
+    return float(np.mean(np.abs(fr.residual))) if fr.m else float("nan")
+
+
+def mae_per_joint(fr: FitResult) -> dict[str, float]:
+    p = fr.problem
+    out = {}
+    for j, c in enumerate(Q_COLUMNS):
+        sel = p.j_idx == j
+        if sel.any():
+            out[c] = float(np.mean(np.abs(fr.residual[sel])))
+    return out
+
+
+def delta_ic(base: FitResult, cand: FitResult, n_eff: float) -> float:
+    """n_eff ln(RSS_cand / RSS_base) + (p_cand - p_base) ln(n_eff); < 0 favours the candidate."""
+    ratio = cand.rss / base.rss if base.rss > 0 else 1.0
+    return float(n_eff * np.log(max(ratio, 1e-300)) + (cand.model.p - base.model.p) * np.log(n_eff))
+
+
+def diagnose(hand, m: Measurements, candidates=None, start=()) -> Diagnosis:
+    """Forward selection of effects (module docstring). ``candidates`` default: the whole library."""
+    with single_threaded_blas():
+        return _diagnose(hand, m, candidates, start)
+
+
+def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
+    names = list(REGISTRY) if candidates is None else list(candidates)
+    for n in names:
+        get_effect(n, "--effects")
+    problem = Problem(hand, m)
+    parts = folds(problem)
+    notes: list[str] = []
+    if problem.m == 0:
+        from .data import DataError
+
+        raise DataError(m.source, None, None, "no joint angle was measured (every q cell is empty)")
+    current = list(start)
+    base = fit(Model(hand, current, problem), problem)
+    before = fit(Model(hand, [], problem), problem)
+    heldout_cache: dict[tuple, float] = {}
+
+    def held(model: Model, previous):
+        key = model.names
+        if key not in heldout_cache:
+            heldout_cache[key] = heldout_sse(model, problem, parts, previous)
+        return heldout_cache[key]
+
+    rounds: list[list[Candidate]] = []
+    ambiguities: list[dict] = []
+    directions_seen = {int(v) for v in np.unique(m.direction)}
+    if not ({1, -1} <= directions_seen):
+        notes.append("the data move in one direction only: direction-dependent effects (friction) cannot be "
+                     "told from direction-independent ones")
+    for _ in range(MAX_ROUNDS):
+        pool = [n for n in names if n not in current]
+        scored: list[Candidate] = []
+        base_held = held(base.model, base) if pool else 0.0
+        fits = []
+        for n in pool:
+            model = Model(hand, current + [n], problem)
+            if model.p == base.model.p:
+                if not rounds:
+                    notes.append(f"{n}: no parameter is identifiable from these data (not scored)")
+                continue
+            fits.append((n, model, fit(model, problem, model.start(base))))
+        if not fits:
+            rounds.append([])
+            break
+        # one effective sample size for the whole round: that of the best-fitting candidate's residuals
+        n_eff = max(min(fits, key=lambda f: f[2].rss)[2].n_eff, 2.0)
+        for n, model, res in fits:
+            dic = delta_ic(base, res, n_eff)
+            h = held(model, base)
+            ratio_h = h / base_held if base_held > 0 else 1.0
+            passes = bool(dic < 0 and ratio_h < HELDOUT_RATIO)
+            scored.append(Candidate(n, float(dic), res.rss / base.rss if base.rss > 0 else 1.0, float(ratio_h),
+                                    passes, float(n_eff), model.p - base.model.p, mae(res), res))
+        scored.sort(key=lambda c: c.delta_ic)
+        rounds.append(scored)
+        passing = [c for c in scored if c.passes]
+        if not passing:
+            break
+        best = passing[0]
+        for other in passing[1:]:
+            if other.delta_ic - best.delta_ic < AMBIGUITY_IC:
+                ambiguities.append({
+                    "round": len(rounds), "effects": [best.effect, other.effect],
+                    "delta_ic": [round(best.delta_ic, 3), round(other.delta_ic, 3)],
+                    "experiment": separating_experiment(best.effect, other.effect),
+                })
+        current.append(best.effect)
+        base = best.result
+        base, dropped = _prune(hand, problem, current, base, len(start))
+        for name, dic in dropped:
+            notes.append(f"{name} was dropped after {best.effect} was added: the model without it scores "
+                         f"better (dIC {dic:+.1f}); what it explained is explained by the others")
+    return Diagnosis(m, before, base, current[len(start):], rounds, ambiguities, [n for n in notes if n])
+
+
+def _prune(hand, problem, current: list[str], base: FitResult, keep: int):
+    """Backward step: drop a selected effect whose removal lowers the information criterion."""
+    dropped = []
+    while len(current) - keep > 1:
+        trials = []
+        for name in current[keep:-1]:          # the effect just added stays
+            names = [n for n in current if n != name]
+            model = Model(hand, names, problem)
+            res = fit(model, problem, model.start(base))
+            n_eff = max(base.n_eff, 2.0)
+            dic = -delta_ic(res, base, n_eff)   # IC(without) - IC(with)
+            trials.append((dic, name, res))
+        dic, name, res = min(trials, key=lambda t: t[0])
+        if dic >= 0:
+            break
+        current.remove(name)
+        base = res
+        dropped.append((name, float(dic)))
+    return base, dropped

@@ -1,0 +1,497 @@
+"""The library of physical effects the paper's analytic model leaves out (docs/effects.md).
+
+An effect is a small, documented unit: a formula, parameters with physical bounds, the
+residual signature it leaves, and a reference. Effects plug into one pipeline that turns
+servo angles ``u`` (N, 6) into joint angles ``q`` (N, 15), stage by stage:
+
+    servo      u_eff = f(u)                 e.g. tendon slack (dead band)
+    reference  r_eff = r * radius_scale     e.g. pulley radius error; then s = cosine law (eq. 6, 8)
+    tension    kappa = k_s / EA felt by the chain's elastic tendon segments
+               (tendon elasticity, eq. 11-14; friction along the tendon path)
+    coupling   q_chain = s * M(kappa)^-1 A  (eq. 13-14, per sample, closed form)
+    joint      q += delta                   e.g. joint zero offsets
+
+The analytic model is the pipeline with no effect (kappa = 0). ``Hand.forward(u, compensated=True)``
+is the pipeline with kappa = the parameter file's k_s / EA. Parameters are held in *file units*
+(the unit is in the key, as everywhere in a parameter file: ``u2_deg``, ``compliance_per_m``).
+
+Add your own effect with :func:`register_effect` (see docs/effects.md). numpy only.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from ..kinematics.topology import CHAINS, CMC_Q, CMC_SERVO, N_JOINTS, N_SERVOS, Q_COLUMNS, U_COLUMNS
+from ..params.errors import ParamError
+
+DEG = math.pi / 180.0
+STAGES = ("servo", "reference", "tension", "joint")
+
+#: servo of every joint (0-based), the CMC's is the direct-drive servo
+JOINT_SERVO = np.empty(N_JOINTS, dtype=int)
+for _c in CHAINS:
+    JOINT_SERVO[list(_c.q_index)] = _c.servo
+JOINT_SERVO[CMC_Q] = CMC_SERVO
+#: joints that carry a tendon deviation (PIP, DIP, thumb IP): every chain joint but the reference one
+DISTAL_JOINTS = tuple(sorted(i for c in CHAINS for i in c.q_index[1:]))
+ALL_JOINTS = tuple(range(N_JOINTS))
+
+
+def chain_joints(servo: int) -> tuple[int, ...]:
+    """q indices driven by ``servo`` (0-based)."""
+    if servo == CMC_SERVO:
+        return (CMC_Q,)
+    return CHAINS[servo].q_index
+
+
+@dataclass(frozen=True)
+class Param:
+    """One parameter of an effect, in file units.
+
+    ``key``: the key in ``[effects.<name>]`` (unit in the name). ``lower``/``upper``: physical
+    bounds (a parameter file outside them is refused). ``typical``: the magnitude range a real
+    hand shows (``simulate`` draws from it; with ``signed`` the sign is random too).
+    ``joints``: q indices the parameter can move (for identifiability and the fit's sparsity).
+    ``moving``: the parameter shows only when the servo of those joints moves.
+    """
+
+    key: str
+    lower: float
+    upper: float
+    typical: tuple[float, float]
+    signed: bool = False
+    joints: tuple[int, ...] = ALL_JOINTS
+    moving: bool = True
+    doc: str = ""
+
+
+class Context:
+    """What the pipeline carries from stage to stage (all arrays batch-first)."""
+
+    def __init__(self, hand, u: np.ndarray, direction: np.ndarray | None, compliance: float):
+        n = u.shape[0]
+        self.hand = hand
+        self.params = hand.params
+        self.u = u                                  # commanded servo angles (N, 6), rad
+        #: +1 flexing, -1 extending, 0 unknown, per row and servo (N, 6); None = unknown everywhere
+        self.direction = direction
+        self.u_eff = u.copy()                       # servo stage output
+        self.radius_scale = np.ones(5)              # reference stage: r_eff = r * radius_scale
+        self.s: np.ndarray | None = None            # reference angles (N, 6), after the reference stage
+        #: k_s / EA (1/m) felt by each chain's elastic segments (N, 5); 0 = analytic model
+        self.compliance = np.full((n, 5), float(compliance))
+        #: the tendon's compliance k_s / EA (1/m) that converts a tension change into a deviation
+        mech = hand.params.mechanics
+        self.compliance_ref = mech.spring_k / mech.tendon_EA
+        self.q: np.ndarray | None = None            # joint angles (N, 15), after the coupling
+
+    @property
+    def n(self) -> int:
+        return self.u.shape[0]
+
+
+class Effect:
+    """Base class of an effect. Subclasses set the class attributes and implement :meth:`apply`.
+
+    ``stage`` is one of ``STAGES``; ``order`` sorts effects within a stage. ``explanation`` is the
+    one-line physical reading of the residual the effect explains (printed in reports).
+    For the control law (``Hand.inverse``), servo- and joint-stage effects implement
+    :meth:`invert` (reference- and tension-stage effects are inverted by the pipeline itself);
+    an effect without it is ignored by the inverse (documented limitation).
+    """
+
+    name: str = ""
+    stage: str = "joint"
+    order: int = 50
+    explanation: str = ""
+    formula: str = ""
+    signature: str = ""
+    reference: str = ""
+    #: depends on the direction of motion (needs a sweep to be identified)
+    directional: bool = False
+
+    def parameters(self, hand) -> list[Param]:
+        raise NotImplementedError
+
+    def apply(self, ctx: Context, x: np.ndarray) -> None:
+        """Modify ``ctx`` in place with parameter values ``x`` (file units, order of parameters())."""
+        raise NotImplementedError
+
+    def invert(self, hand, value: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """Servo stage: commanded u from u_eff; joint stage: model q from a target q."""
+        return value
+
+    invertible = False
+
+
+REGISTRY: dict[str, Effect] = {}
+
+
+def register_effect(cls):
+    """Class decorator: add an :class:`Effect` subclass to the library under ``cls.name``."""
+    eff = cls()
+    if not eff.name or not eff.name.isidentifier():
+        raise ValueError(f"effect name {eff.name!r} must be a Python identifier")
+    if eff.stage not in STAGES:
+        raise ValueError(f"effect {eff.name}: stage {eff.stage!r} is not one of {STAGES}")
+    REGISTRY[eff.name] = eff
+    return cls
+
+
+def unregister_effect(name: str) -> None:
+    REGISTRY.pop(name, None)
+
+
+def get_effect(name: str, field_name: str | None = None, source: str | None = None) -> Effect:
+    try:
+        return REGISTRY[name]
+    except KeyError:
+        raise ParamError(field_name or "effects", name,
+                         f"unknown effect (known: {', '.join(REGISTRY)})", source) from None
+
+
+def _chain_constants(params):
+    """Per chain: ideal coupling A, radii R, v = cumulative path / R, R.A, R.v (eq. 13 pieces)."""
+    out = []
+    for chain in params.chains:
+        R = np.asarray(chain.radii, dtype=float)
+        A = R[0] / R
+        cum = np.concatenate(([0.0], np.cumsum(chain.path_lengths)))
+        v = cum / R
+        out.append((A, R, v, float(R @ A), float(R @ v)))
+    return out
+
+
+# ---------------------------------------------------------------------------
+# the built-in effects
+# ---------------------------------------------------------------------------
+
+@register_effect
+class TendonSlack(Effect):
+    name = "tendon_slack"
+    stage = "servo"
+    order = 10
+    explanation = ("joints lag by a constant servo angle from the start of travel, the same in both "
+                   "directions, and stay at rest for the first degrees: slack in the tendon (a dead band "
+                   "before it pulls)")
+    formula = "u_eff = u_min + max(u - u_min - delta_j, 0) for the tendon servos u1..u5"
+    signature = ("zero in a band at the start of travel, then a lag of about delta_j * dq/du on every joint "
+                 "of the chain (MCP included); independent of the direction")
+    reference = "dead-zone / backlash models of cable drives, e.g. Kaneko et al., IEEE T-RA 7(3), 1991"
+
+    def parameters(self, hand):
+        return [Param(f"{U_COLUMNS[j]}_deg", 0.0, 15.0, (1.0, 4.0), False, chain_joints(j), True,
+                      f"dead band of servo {U_COLUMNS[j]} before its tendon pulls, degrees")
+                for j in range(5)]
+
+    def apply(self, ctx, x):
+        lo = ctx.hand.u_min[:5]
+        d = x * DEG
+        ctx.u_eff[:, :5] = lo + np.maximum(ctx.u_eff[:, :5] - lo - d, 0.0)
+
+    invertible = True
+
+    def invert(self, hand, u_eff, x):
+        u = u_eff.copy()
+        u[..., :5] = u_eff[..., :5] + x * DEG
+        return u
+
+
+@register_effect
+class PulleyRadiusError(Effect):
+    name = "pulley_radius_error"
+    stage = "reference"
+    order = 20
+    explanation = ("every joint of the chain, MCP included, drifts in proportion to the servo angle, the same "
+                   "in both directions: the servo pulley's effective radius differs from nominal")
+    formula = "r_eff,j = r_j (1 + e_j) in eq. (5)-(6): L = L0 - r_eff u"
+    signature = ("grows with u (about e_j * u * dq/du), on the MCP as much as on PIP/DIP; zero at rest; "
+                 "independent of the direction")
+    reference = "eq. (5)-(6) of the paper; effective radius = pulley radius + half the tendon diameter"
+
+    def parameters(self, hand):
+        return [Param(f"{U_COLUMNS[j]}_relative", -0.2, 0.2, (0.015, 0.04), True, chain_joints(j), True,
+                      f"relative error of servo {U_COLUMNS[j]}'s effective pulley radius")
+                for j in range(5)]
+
+    def apply(self, ctx, x):
+        ctx.radius_scale = ctx.radius_scale * (1.0 + x)
+
+
+@register_effect
+class TendonElasticity(Effect):
+    name = "tendon_elasticity"
+    stage = "tension"
+    order = 30
+    explanation = ("distal joints (PIP, DIP, thumb IP) lag in proportion to flexion, the MCP does not, the same "
+                   "in both directions: the return spring's tension stretches the tendon (eq. 11-14)")
+    formula = ("T = k_s sum_i R_i q_i, b_j = T l_j / (EA R_j); M q = A q_MCP with C_j = (k_s/EA) l_j / R_j; "
+               "fitted: the compliance ratio c = k_s / EA (1/m), one for the whole hand")
+    signature = "negative on PIP/DIP/IP, growing with flexion, zero on MCP/MP/CMC; no direction dependence"
+    reference = "the paper's mechanics-based compensation, eq. (11)-(14)"
+
+    def parameters(self, hand):
+        return [Param("compliance_per_m", 0.0, 5.0, (0.07, 0.27), False, DISTAL_JOINTS, True,
+                      "k_s / EA: spring rate over tendon axial stiffness, 1/m (only the ratio is identifiable)")]
+
+    def apply(self, ctx, x):
+        ctx.compliance[:] = x[0]
+        ctx.compliance_ref = float(x[0])
+
+
+@register_effect
+class FrictionHysteresis(Effect):
+    name = "friction_hysteresis"
+    stage = "tension"
+    order = 31
+    directional = True
+    explanation = ("residual flips sign with the direction of motion and grows with tension: friction in the "
+                   "tendon path (capstan)")
+    formula = ("capstan: the elastic segments carry T exp(d mu Theta), Theta = sum of the chain's joint angles "
+               "(the tendon's wrap on the joint pulleys), d = +1 flexing / -1 extending; the extra stretch "
+               "T (exp(d mu Theta) - 1) l_j / (EA R_j) enters eq. (13) as a compliance k_s/EA (exp(d mu Theta) - 1)")
+    signature = ("PIP/DIP/IP lag when flexing and lead when extending (a hysteresis loop), the gap grows with "
+                 "flexion; MCP untouched; zero when the direction is unknown")
+    reference = "capstan equation T2 = T1 exp(mu theta) (Euler-Eytelwein); Kaneko et al., IEEE T-RA 7(3), 1991"
+
+    def parameters(self, hand):
+        return [Param("mu", 0.0, 1.0, (0.08, 0.25), False, DISTAL_JOINTS, True,
+                      "friction coefficient of the tendon on its pulleys and guides")]
+
+    def apply(self, ctx, x):
+        if ctx.direction is None or x[0] == 0.0:
+            return
+        if ctx.s is None:
+            raise RuntimeError("friction_hysteresis needs the reference angles")
+        theta = ctx.s[:, :5] * _sum_coupling(ctx.hand)
+        f = np.exp(ctx.direction[:, :5] * x[0] * theta)
+        ctx.compliance += ctx.compliance_ref * (f - 1.0)
+
+
+@register_effect
+class JointOffset(Effect):
+    name = "joint_offset"
+    stage = "joint"
+    order = 90
+    explanation = ("a constant per joint, present at rest and in both directions: a zero offset "
+                   "(assembly or the measurement's reference)")
+    formula = "q_i = q_model,i + o_i"
+    signature = "constant per joint over the whole sweep, nonzero at rest, independent of direction and servo"
+    reference = "standard zero-offset calibration of joint encoders (e.g. Hollerbach & Wampler 1996)"
+
+    def parameters(self, hand):
+        return [Param(f"{Q_COLUMNS[i]}_deg", -10.0, 10.0, (0.5, 2.0), True, (i,), False,
+                      f"zero offset of joint {Q_COLUMNS[i]}, degrees") for i in range(N_JOINTS)]
+
+    def apply(self, ctx, x):
+        ctx.q += x * DEG
+
+    invertible = True
+
+    def invert(self, hand, q, x):
+        return q - x * DEG
+
+
+def _sum_coupling(hand) -> np.ndarray:
+    """Per chain: the sum of the ideal coupling vector (Theta = s * sum(A) = sum of the chain's joint angles)."""
+    return np.array([A.sum() for A, *_ in _constants(hand)])
+
+
+# ---------------------------------------------------------------------------
+# the pipeline
+# ---------------------------------------------------------------------------
+
+def run_pipeline(hand, items: Sequence[tuple[Effect, np.ndarray]], u, direction=None,
+                 compliance: float = 0.0) -> np.ndarray:
+    """q (N, 15) for servo angles u (N, 6) with the effects ``items`` ((effect, x) pairs).
+
+    ``compliance``: the base k_s / EA (0 = the analytic model); a ``tendon_elasticity`` item
+    replaces it. ``direction`` (N, 6) of +1/-1/0, or None (unknown: friction is not applied).
+    """
+    u = np.asarray(u, dtype=float)
+    ctx = Context(hand, u, direction, compliance)
+    items = sorted(items, key=lambda it: (STAGES.index(it[0].stage), it[0].order))
+    stage_of = [it[0].stage for it in items]
+    for eff, x in items:
+        if eff.stage == "servo":
+            eff.apply(ctx, x)
+    for eff, x in items:
+        if eff.stage == "reference":
+            eff.apply(ctx, x)
+    ctx.s = reference_angles(hand, ctx.u_eff, ctx.radius_scale)
+    for eff, x in items:
+        if eff.stage == "tension":
+            eff.apply(ctx, x)
+    ctx.q = couple(hand, ctx.s, ctx.compliance)
+    if "joint" in stage_of:
+        for eff, x in items:
+            if eff.stage == "joint":
+                eff.apply(ctx, x)
+    return ctx.q
+
+
+def reference_angles(hand, u_eff: np.ndarray, radius_scale) -> np.ndarray:
+    """Eq. (6)/(8) with the effective servo radius; s6 = g u6. The cosine argument is clipped to [-1, 1]."""
+    s = np.empty(u_eff.shape)
+    r = hand._r * radius_scale
+    L = hand._L0 - r * u_eff[..., :5]
+    x = (hand._sumsq - L * L) / hand._two_d1d2
+    s[..., :5] = hand._alpha - np.arccos(np.clip(x, -1.0, 1.0))
+    s[..., 5] = u_eff[..., 5] * hand._cmc_gain
+    return s
+
+
+def coupling_vectors(hand, compliance: np.ndarray) -> list[np.ndarray]:
+    """Per chain: M(kappa)^-1 A by Sherman-Morrison, M = I + kappa v R^T (eq. 13): (N, n_joints)."""
+    consts = _constants(hand)
+    out = []
+    for k, (A, R, v, RA, Rv) in enumerate(consts):
+        kap = compliance[:, k]
+        g = kap * RA / (1.0 + kap * Rv)
+        out.append(A[None, :] - g[:, None] * v[None, :])
+    return out
+
+
+def couple(hand, s: np.ndarray, compliance: np.ndarray) -> np.ndarray:
+    q = np.empty(s.shape[:-1] + (N_JOINTS,))
+    for spec, c in zip(CHAINS, coupling_vectors(hand, compliance)):
+        q[:, list(spec.q_index)] = s[:, spec.servo, None] * c
+    q[:, CMC_Q] = s[:, CMC_SERVO]
+    return q
+
+
+def _constants(hand):
+    c = getattr(hand, "_effect_constants", None)
+    if c is None:
+        c = _chain_constants(hand.params)
+        hand._effect_constants = c
+    return c
+
+
+# ---------------------------------------------------------------------------
+# effects read from a parameter file: the hook of Hand.forward / Hand.inverse
+# ---------------------------------------------------------------------------
+
+def effect_values(name: str, table: Mapping, hand=None, source: str | None = None) -> np.ndarray:
+    """Check one ``[effects.<name>]`` table and return its parameter vector (missing keys are 0)."""
+    base = f"effects.{name}"
+    eff = get_effect(name, base, source)
+    if not isinstance(table, Mapping):
+        raise ParamError(base, table, "must be a table of parameter values", source)
+    plist = eff.parameters(hand)
+    keys = {p.key: k for k, p in enumerate(plist)}
+    x = np.zeros(len(plist))
+    for key, value in table.items():
+        if key not in keys:
+            raise ParamError(f"{base}.{key}", value,
+                             f"unknown parameter of {name} (allowed: {', '.join(keys)})", source)
+        p = plist[keys[key]]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ParamError(f"{base}.{key}", value, "must be a finite number", source)
+        if not p.lower <= value <= p.upper:
+            raise ParamError(f"{base}.{key}", value,
+                             f"must lie in [{p.lower:g}, {p.upper:g}] (physical bounds: {p.doc})", source)
+        x[keys[key]] = float(value)
+    return x
+
+
+def validate_effects(effects: Mapping, source: str | None = None) -> None:
+    """Raise :class:`ParamError` naming the field if an ``[effects]`` table is not valid."""
+    for name, table in effects.items():
+        effect_values(name, table, None, source)
+
+
+class EffectStack:
+    """The fitted effects of a parameter file, applied by :class:`~phantom_cad.kinematics.model.Hand`.
+
+    Semantics (docs/effects.md): every fitted effect applies to ``forward`` and ``inverse``; the
+    ``compensated`` flag selects the spring/elasticity compensation, whose compliance is the fitted
+    ``tendon_elasticity`` one when present (``fit`` always writes it, 0 when the data show none),
+    else the [mechanics] k_s / EA. The direction of motion is unknown to ``Hand``: friction is left
+    out (the control law aims at the middle of the hysteresis band).
+    """
+
+    def __init__(self, params):
+        self.params = params
+        self.items: list[tuple[Effect, np.ndarray]] = []
+        for name, table in params.effects.items():
+            x = effect_values(name, table, None, params.source)
+            self.items.append((get_effect(name), x))
+        self.items.sort(key=lambda it: (STAGES.index(it[0].stage), it[0].order))
+        self.names = tuple(e.name for e, _ in self.items)
+
+    def __bool__(self) -> bool:
+        return bool(self.items)
+
+    def _items(self, compensated: bool):
+        if compensated:
+            return self.items
+        return [it for it in self.items if it[0].name != "tendon_elasticity"]
+
+    def _base(self, hand, compensated: bool) -> float:
+        m = hand.params.mechanics
+        return m.spring_k / m.tendon_EA if compensated else 0.0
+
+    def forward(self, hand, u, compensated: bool, direction=None) -> np.ndarray:
+        u = np.asarray(u, dtype=float)
+        flat = u.reshape(-1, N_SERVOS)
+        d = None if direction is None else np.broadcast_to(direction, u.shape).reshape(-1, N_SERVOS)
+        q = run_pipeline(hand, self._items(compensated), flat, d, self._base(hand, compensated))
+        return q.reshape(u.shape[:-1] + (N_JOINTS,))
+
+    def inverse(self, hand, q, compensated: bool) -> np.ndarray:
+        """Control law with the effects: q (clipped) -> u. Joint- and servo-stage effects are inverted
+        exactly, the radius and compliance enter the projection and the cosine law; friction is not
+        applied (unknown direction)."""
+        q = np.asarray(q, dtype=float)
+        shape = q.shape
+        q = q.reshape(-1, N_JOINTS)
+        items = self._items(compensated)
+        for eff, x in reversed(items):
+            if eff.stage == "joint" and eff.invertible:
+                q = eff.invert(hand, q, x)
+        # reference stage (effective radius), then the tension stage with unknown direction:
+        # a constant compliance per chain, so each digit's reachable set is a line q = c s
+        ctx = Context(hand, np.zeros((1, N_SERVOS)), None, self._base(hand, compensated))
+        for eff, x in items:
+            if eff.stage == "reference":
+                eff.apply(ctx, x)
+        radius_scale = ctx.radius_scale
+        ctx.s = np.zeros((1, N_SERVOS))
+        for eff, x in items:
+            if eff.stage == "tension":
+                eff.apply(ctx, x)
+        vectors = coupling_vectors(hand, ctx.compliance)
+        s = np.empty((q.shape[0], N_SERVOS))
+        for spec, c in zip(CHAINS, vectors):
+            c = c[0]
+            s[:, spec.servo] = q[:, list(spec.q_index)] @ c / (c @ c)
+        s[:, CMC_SERVO] = q[:, CMC_Q]
+        # the travel's image in reference-angle space, with the effects of the servo and reference stages
+        ends = Context(hand, np.vstack([hand.u_min, hand.u_max]), None, 0.0)
+        for eff, x in items:
+            if eff.stage == "servo":
+                eff.apply(ends, x)
+        s_ends = reference_angles(hand, ends.u_eff, radius_scale)
+        np.clip(s, s_ends.min(axis=0), s_ends.max(axis=0), out=s)
+        # invert the cosine law with the effective radius
+        u = np.empty_like(s)
+        r = hand._r * radius_scale
+        L = np.sqrt(hand._sumsq - hand._two_d1d2 * np.cos(hand._alpha - s[:, :5]))
+        u[:, :5] = (hand._L0 - L) / r
+        u[:, 5] = s[:, 5] / hand._cmc_gain
+        for eff, x in reversed(items):
+            if eff.stage == "servo" and eff.invertible:
+                u = eff.invert(hand, u, x)
+        u = np.clip(u, hand.u_min, hand.u_max)
+        return u.reshape(shape[:-1] + (N_SERVOS,))
+
+
+def build_effect_stack(params) -> EffectStack:
+    """Called by the kinematics hook when ``params.effects`` is non-empty; raises ParamError on bad tables."""
+    return EffectStack(params)

@@ -1,0 +1,256 @@
+"""Fit effect parameters to measurements (scipy.optimize.least_squares) and predict with them.
+
+A :class:`Model` is the analytic model plus a list of effects; only the parameters the data
+can identify are free (a joint that was never measured, a servo that never moved: fixed at 0).
+Residuals are measured - model in degrees over every measured cell. Parameter uncertainties come
+from the Jacobian at the solution, cov = (J^T J)^-1 * RSS / (m - p), inflated by m / n_eff because
+the residuals within a sweep are correlated (see :func:`effective_size`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import sparse
+from scipy.optimize import least_squares
+
+from .data import Measurements
+from .effects import JOINT_SERVO, Effect, Param, get_effect, run_pipeline
+
+RAD2DEG = 180.0 / np.pi
+
+
+def single_threaded_blas():
+    """Context: BLAS on one thread. The fits multiply small matrices thousands of times; a
+    multithreaded BLAS spends more in waking and (on a loaded 2-core machine) fighting for cores
+    than in arithmetic: measured 18 s instead of 2 s for bench_diagnose's largest case under load."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # optional at run time: only slower
+        return contextlib.nullcontext()
+    return threadpool_limits(limits=1, user_api="blas")
+
+
+class Problem:
+    """Data prepared for fitting: rows, measured cells, directions."""
+
+    def __init__(self, hand, m: Measurements, rows: np.ndarray | None = None):
+        self.hand = hand
+        self.data = m
+        rows = np.arange(len(m)) if rows is None else np.asarray(rows)
+        self.rows = rows
+        self.u = m.u[rows]
+        self.direction = m.direction[rows]
+        self.q = m.q[rows]
+        self.sweep = m.sweep[rows]
+        self.mask = np.isfinite(self.q)
+        self.r_idx, self.j_idx = np.nonzero(self.mask)
+        self.meas = self.q[self.mask]
+
+    def subset(self, rows) -> "Problem":
+        return Problem(self.hand, self.data, self.rows[np.asarray(rows)])
+
+    @property
+    def m(self) -> int:
+        return self.meas.size
+
+
+class Model:
+    """The analytic model plus effects, with the data-identifiable parameters free."""
+
+    def __init__(self, hand, names, problem: Problem):
+        self.hand = hand
+        self.names = tuple(names)
+        self.effects: list[Effect] = [get_effect(n) for n in self.names]
+        self.plists: list[list[Param]] = [e.parameters(hand) for e in self.effects]
+        self.active = [np.array([identifiable(p, problem) for p in pl], dtype=bool) for pl in self.plists]
+        self.free: list[tuple[int, int, Param]] = [
+            (k, i, p) for k, pl in enumerate(self.plists) for i, p in enumerate(pl) if self.active[k][i]]
+        self.lower = np.array([p.lower for _, _, p in self.free])
+        self.upper = np.array([p.upper for _, _, p in self.free])
+
+    @property
+    def p(self) -> int:
+        return len(self.free)
+
+    def items(self, theta):
+        xs = [np.zeros(len(pl)) for pl in self.plists]
+        for (k, i, _), v in zip(self.free, theta):
+            xs[k][i] = v
+        return list(zip(self.effects, xs))
+
+    def predict(self, theta, u, direction) -> np.ndarray:
+        return run_pipeline(self.hand, self.items(theta), u, direction, 0.0)
+
+    def values(self, theta) -> dict[str, dict[str, float]]:
+        """{effect: {key: value}} of the free parameters (file units)."""
+        out: dict[str, dict[str, float]] = {n: {} for n in self.names}
+        for (k, _, p), v in zip(self.free, theta):
+            out[self.names[k]][p.key] = float(v)
+        return out
+
+    def start(self, previous: "FitResult | None" = None) -> np.ndarray:
+        x0 = np.clip(np.zeros(self.p), self.lower, self.upper)
+        if previous is not None:
+            old = {(previous.model.names[k], p.key): v for (k, _, p), v in zip(previous.model.free, previous.theta)}
+            for n, (k, _, p) in enumerate(self.free):
+                x0[n] = old.get((self.names[k], p.key), x0[n])
+        return x0
+
+
+def identifiable(p: Param, problem: Problem) -> bool:
+    """A parameter is free when one of its joints was measured (while its servo moved, if it needs motion)."""
+    for j in p.joints:
+        rows = problem.mask[:, j]
+        if not rows.any():
+            continue
+        if not p.moving:
+            return True
+        uj = problem.u[rows, JOINT_SERVO[j]]
+        if np.ptp(uj) > 1e-9:
+            return True
+    return False
+
+
+@dataclass
+class FitResult:
+    model: Model
+    theta: np.ndarray
+    std: np.ndarray
+    residual: np.ndarray          # degrees, over the problem's measured cells
+    problem: Problem
+    rss: float = field(init=False)
+    n_eff: float = field(init=False)
+
+    def __post_init__(self):
+        self.rss = float(self.residual @ self.residual)
+        self.n_eff = effective_size(self.problem, self.residual)
+
+    @property
+    def m(self) -> int:
+        return self.residual.size
+
+    def values(self):
+        return self.model.values(self.theta)
+
+    def uncertainties(self):
+        return self.model.values(self.std)
+
+
+def residual_matrix(problem: Problem, residual: np.ndarray) -> np.ndarray:
+    R = np.full(problem.q.shape, np.nan)
+    R[problem.mask] = residual
+    return R
+
+
+def effective_size(problem: Problem, residual: np.ndarray) -> float:
+    """Effective number of independent residuals, n_eff = m (1 - rho) / (1 + rho).
+
+    rho is the lag-1 autocorrelation of the residuals along the rows of each sweep, pooled over
+    sweeps and joints (an AR(1) reading of the correlation a smooth unmodelled error leaves),
+    clipped to [0, 0.95].
+    """
+    m = residual.size
+    if m < 3:
+        return float(m)
+    R = residual_matrix(problem, residual)
+    same = problem.sweep[1:] == problem.sweep[:-1]
+    a, b = R[:-1][same], R[1:][same]
+    ok = np.isfinite(a) & np.isfinite(b)
+    den = float(residual @ residual)
+    if den <= 0 or not ok.any():
+        return float(m)
+    rho = float(np.sum(a[ok] * b[ok])) / den
+    rho = min(max(rho, 0.0), 0.95)
+    return m * (1.0 - rho) / (1.0 + rho)
+
+
+def _residual_fn(model: Model, problem: Problem):
+    def fun(theta):
+        q = model.predict(theta, problem.u, problem.direction)
+        return (problem.meas - q[problem.mask]) * RAD2DEG
+    return fun
+
+
+def _sparsity(model: Model, problem: Problem):
+    cols = []
+    for _, _, p in model.free:
+        cols.append(np.isin(problem.j_idx, p.joints))
+    S = np.column_stack(cols) if cols else np.zeros((problem.m, 0), dtype=bool)
+    return sparse.csr_matrix(S.astype(np.int8))
+
+
+def fit(model: Model, problem: Problem, x0=None, uncertainty: bool = True) -> FitResult:
+    """Least-squares fit of the model's free parameters (trust region reflective, physical bounds)."""
+    fun = _residual_fn(model, problem)
+    if model.p == 0:
+        r = fun(np.zeros(0))
+        return FitResult(model, np.zeros(0), np.zeros(0), r, problem)
+    x0 = model.start() if x0 is None else np.clip(x0, model.lower, model.upper)
+    width = model.upper - model.lower
+    eps = 1e-9 * width
+    x0 = np.minimum(np.maximum(x0, model.lower + eps), model.upper - eps)
+    S = _sparsity(model, problem)
+    dense = S.nnz > 0.5 * S.shape[0] * S.shape[1] or model.p <= 2
+    kw = dict(jac="2-point", bounds=(model.lower, model.upper), method="trf", x_scale="jac",
+              xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200)
+    if not dense:
+        kw["jac_sparsity"] = S
+        kw["tr_solver"] = "lsmr"
+    res = least_squares(fun, x0, **kw)
+    r = res.fun
+    std = np.full(model.p, np.nan)
+    if uncertainty:
+        # J^T J through scipy.sparse (no BLAS call: multithreaded BLAS wake-up costs more than the product)
+        J = sparse.csr_matrix(res.jac)
+        JTJ = (J.T @ J).toarray()
+        dof = max(r.size - model.p, 1)
+        s2 = float(r @ r) / dof
+        out = FitResult(model, res.x, std, r, problem)
+        inflate = r.size / max(out.n_eff, 1.0)
+        cov = np.linalg.pinv(JTJ) * s2 * inflate
+        out.std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+        return out
+    return FitResult(model, res.x, std, r, problem)
+
+
+def fit_effects(hand, m: Measurements, names) -> FitResult:
+    problem = Problem(hand, m)
+    with single_threaded_blas():
+        return fit(Model(hand, names, problem), problem)
+
+
+def predict(hand, m: Measurements, effects: dict | None = None) -> np.ndarray:
+    """q (N, 15) the analytic model + ``effects`` ({name: {key: value}}, file units) predicts for the
+    rows of ``m``, with the direction of motion derived from the sweeps."""
+    from .effects import effect_values
+
+    items = [(get_effect(n), effect_values(n, v, hand)) for n, v in (effects or {}).items()]
+    return run_pipeline(hand, items, m.u, m.direction, 0.0)
+
+
+def folds(problem: Problem, blocks: int = 6) -> list[np.ndarray]:
+    """Two folds of contiguous blocks: each sweep is cut into ``blocks`` runs of rows, alternately
+    assigned; each fold holds both directions and both ends of the travel. Returns row positions
+    (into the problem) of fold 0 and fold 1."""
+    fold = np.zeros(len(problem.rows), dtype=int)
+    for k in np.unique(problem.sweep):
+        idx = np.flatnonzero(problem.sweep == k)
+        pos = np.arange(idx.size) * blocks // idx.size
+        fold[idx] = pos % 2
+    return [np.flatnonzero(fold == 0), np.flatnonzero(fold == 1)]
+
+
+def heldout_sse(model: Model, problem: Problem, parts, previous=None) -> float:
+    """Sum of squared residuals (deg^2) on each fold of a model fitted on the other fold."""
+    sse = 0.0
+    for k in range(2):
+        train, test = problem.subset(parts[1 - k]), problem.subset(parts[k])
+        fr = fit(model, train, model.start(previous), uncertainty=False)
+        fun = _residual_fn(model, test)
+        r = fun(fr.theta)
+        sse += float(r @ r)
+    return sse

@@ -1,0 +1,174 @@
+"""Metrics, pictures (matplotlib, Agg) and markdown reports of compare and diagnose.
+
+Reports are written into a temporary folder next to the target and moved into place when
+complete. Pictures:
+  residual_<label>.png  residual (measured - model) against the joint's servo angle, coloured by
+                        direction (the paper's residual figure), one panel per measured joint;
+  mae.png               per-joint MAE, before and after (the paper's MAE figure);
+  hysteresis.png        measured and modelled deviation from the analytic model against the servo
+                        angle, flexing and extending: hysteresis loops show as two branches.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from ..kinematics.topology import JOINT_NAMES, Q_COLUMNS
+from .data import Measurements
+from .effects import JOINT_SERVO
+
+RAD2DEG = 180.0 / np.pi
+FLEX, EXTEND = "tab:red", "tab:blue"
+
+
+def metrics(m: Measurements, q_model: np.ndarray) -> dict:
+    """MAE / RMS / max |residual| (degrees) per measured joint and overall."""
+    r = (m.q - q_model) * RAD2DEG
+    out = {"per_joint": {}, "overall": {}}
+    for j, c in enumerate(Q_COLUMNS):
+        x = r[:, j][np.isfinite(r[:, j])]
+        if x.size:
+            out["per_joint"][c] = {"mae": float(np.mean(np.abs(x))), "rms": float(np.sqrt(np.mean(x * x))),
+                                   "max": float(np.max(np.abs(x))), "n": int(x.size)}
+    x = r[np.isfinite(r)]
+    out["overall"] = {"mae": float(np.mean(np.abs(x))), "rms": float(np.sqrt(np.mean(x * x))),
+                      "max": float(np.max(np.abs(x))), "n": int(x.size)}
+    return out
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _grid(n):
+    cols = min(5, max(n, 1))
+    rows = (n + cols - 1) // cols
+    return rows, cols
+
+
+def plot_residuals(path, m: Measurements, q_model: np.ndarray, title: str) -> None:
+    plt = _plt()
+    joints = [j for j in range(len(Q_COLUMNS)) if m.measured[j]]
+    rows, cols = _grid(len(joints))
+    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.6 * rows), squeeze=False, sharey=True)
+    d = m.direction
+    r = (m.q - q_model) * RAD2DEG
+    for ax, j in zip(axes.flat, joints):
+        s = JOINT_SERVO[j]
+        ok = np.isfinite(r[:, j])
+        for sign, colour, label in ((1, FLEX, "flexing"), (-1, EXTEND, "extending"), (0, "0.5", "at rest")):
+            sel = ok & (d[:, s] == sign)
+            if sel.any():
+                ax.plot(m.u[sel, s] * RAD2DEG, r[sel, j], "o", ms=2.5, color=colour, label=label)
+        ax.axhline(0, color="k", lw=0.6)
+        ax.set_title(f"{Q_COLUMNS[j]} {JOINT_NAMES[j]}", fontsize=9)
+        ax.set_xlabel(f"u{s + 1} (deg)", fontsize=8)
+        ax.tick_params(labelsize=7)
+    for ax in list(axes.flat)[len(joints):]:
+        ax.axis("off")
+    axes[0, 0].set_ylabel("residual (deg)", fontsize=8)
+    axes[0, 0].legend(fontsize=7)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def plot_mae(path, before: dict, after: dict | None, labels=("before", "after"), title="") -> None:
+    plt = _plt()
+    cols = list(before)
+    x = np.arange(len(cols))
+    fig, ax = plt.subplots(figsize=(max(5.0, 0.55 * len(cols) + 2), 3.2))
+    w = 0.38 if after else 0.7
+    ax.bar(x - (w / 2 if after else 0), [before[c] for c in cols], w, color="tab:red", label=labels[0])
+    if after:
+        ax.bar(x + w / 2, [after[c] for c in cols], w, color="tab:green", label=labels[1])
+    ax.set_xticks(x)
+    ax.set_xticklabels(cols, fontsize=8)
+    ax.set_ylabel("MAE (deg)")
+    ax.legend(fontsize=8)
+    ax.set_title(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def plot_hysteresis(path, m: Measurements, q_model: np.ndarray, q_analytic: np.ndarray, title: str) -> None:
+    """Deviation from the analytic model (measured and modelled) against the servo angle, per
+    direction: a direction-dependent effect opens a loop between the two branches."""
+    plt = _plt()
+    joints = [j for j in range(len(Q_COLUMNS)) if m.measured[j]]
+    rows, cols = _grid(len(joints))
+    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.6 * rows), squeeze=False)
+    d = m.direction
+    for ax, j in zip(axes.flat, joints):
+        s = JOINT_SERVO[j]
+        ok = np.isfinite(m.q[:, j])
+        for sign, colour, label in ((1, FLEX, "flexing"), (-1, EXTEND, "extending")):
+            sel = ok & (d[:, s] == sign)
+            if not sel.any():
+                continue
+            order = np.argsort(m.u[sel, s], kind="stable")
+            ax.plot(m.u[sel, s] * RAD2DEG, (m.q[sel, j] - q_analytic[sel, j]) * RAD2DEG, "o", ms=2,
+                    color=colour, alpha=0.6, label=f"measured, {label}")
+            ax.plot(m.u[sel, s][order] * RAD2DEG, (q_model[sel, j] - q_analytic[sel, j])[order] * RAD2DEG, "-",
+                    lw=1, color=colour, label=f"model, {label}")
+        ax.set_title(f"{Q_COLUMNS[j]} {JOINT_NAMES[j]}", fontsize=9)
+        ax.set_xlabel(f"u{s + 1} (deg)", fontsize=8)
+        ax.tick_params(labelsize=7)
+    for ax in list(axes.flat)[len(joints):]:
+        ax.axis("off")
+    axes[0, 0].set_ylabel("q - q_analytic (deg)", fontsize=8)
+    axes[0, 0].legend(fontsize=6)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+class ReportDir:
+    """Build a report folder in a temporary sibling, move it into place on success."""
+
+    def __init__(self, target):
+        self.target = Path(target)
+
+    def __enter__(self) -> Path:
+        self.target.parent.mkdir(parents=True, exist_ok=True)
+        self.tmp = Path(tempfile.mkdtemp(prefix=f".{self.target.name}.", dir=self.target.parent))
+        return self.tmp
+
+    def __exit__(self, exc_type, exc, tb):
+        if exc_type is not None:
+            shutil.rmtree(self.tmp, ignore_errors=True)
+            return False
+        if self.target.exists():
+            old = Path(tempfile.mkdtemp(prefix=f".{self.target.name}.old.", dir=self.target.parent))
+            os.replace(self.target, old / "x")
+            os.replace(self.tmp, self.target)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(self.tmp, self.target)
+        return False
+
+
+def mae_table(before: dict, after: dict | None, labels=("before", "after")) -> list[str]:
+    head = f"| joint | {labels[0]} MAE (deg) |" + (f" {labels[1]} MAE (deg) |" if after else "")
+    sep = "|---|---:|" + ("---:|" if after else "")
+    lines = [head, sep]
+    for c in before:
+        j = Q_COLUMNS.index(c)
+        row = f"| {c} {JOINT_NAMES[j]} | {before[c]:.3f} |"
+        if after:
+            row += f" {after[c]:.3f} |"
+        lines.append(row)
+    return lines

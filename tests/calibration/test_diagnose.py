@@ -1,0 +1,119 @@
+"""diagnose on data from simulate with hidden effects: the right effect is found, the error falls to the
+noise floor, nothing is found in pure noise, ambiguities are reported."""
+
+import pytest
+
+from phantom_cad.calibration.diagnose import diagnose, mae
+from phantom_cad.calibration.effects import Effect, Param, register_effect, unregister_effect
+from phantom_cad.calibration.simulate import simulate
+
+NOISE = 0.1
+POINTS = 20
+LIBRARY = ["tendon_elasticity", "friction_hysteresis", "tendon_slack", "joint_offset", "pulley_radius_error"]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize("effect", LIBRARY)
+def test_hidden_effect_is_found_first(hand, effect, seed):
+    sim = simulate(hand, [effect], noise_deg=NOISE, seed=seed, points=POINTS)
+    floor = sim.noise_mae_deg
+    d = diagnose(hand, sim.measurements)
+    assert mae(d.before) > 2.0 * floor, "the analytic model must be clearly worse than the noise"
+    assert d.selected[0] == effect
+    assert d.ranking[0].effect == effect
+    assert mae(d.after) <= 1.5 * floor
+
+
+def test_nothing_hidden_nothing_selected_in_19_of_20_seeds(hand):
+    empty = 0
+    for seed in range(20):
+        sim = simulate(hand, [], noise_deg=NOISE, seed=100 + seed, points=POINTS)
+        d = diagnose(hand, sim.measurements)
+        empty += d.selected == []
+        assert mae(d.after) <= 1.5 * sim.noise_mae_deg
+    assert empty >= 19
+
+
+@pytest.mark.parametrize("pair, seed", [
+    (("friction_hysteresis", "joint_offset"), 3),
+    (("tendon_slack", "tendon_elasticity"), 4),
+    (("pulley_radius_error", "friction_hysteresis"), 5),
+])
+def test_two_hidden_effects_are_both_found(hand, pair, seed):
+    sim = simulate(hand, list(pair), noise_deg=NOISE, seed=seed, points=POINTS)
+    d = diagnose(hand, sim.measurements)
+    assert mae(d.before) > 2.0 * sim.noise_mae_deg
+    assert set(d.selected) == set(pair)
+    assert mae(d.after) <= 1.5 * sim.noise_mae_deg
+
+
+def test_fitted_parameters_match_the_hidden_ones(hand):
+    sim = simulate(hand, ["friction_hysteresis"], noise_deg=NOISE, seed=7, points=POINTS)
+    d = diagnose(hand, sim.measurements)
+    mu = d.after.values()["friction_hysteresis"]["mu"]
+    sd = d.after.uncertainties()["friction_hysteresis"]["mu"]
+    assert abs(mu - sim.hidden["friction_hysteresis"]["mu"]) < 4 * sd
+    assert 0 < sd < 0.1 * mu
+
+
+def test_elasticity_vs_radius_error_on_the_dip_alone_is_ambiguous(hand):
+    # only the index DIP (q3) measured over 40 % of the travel: elasticity and a radius error
+    # both bend q3 in proportion to the flexion
+    sim = simulate(hand, ["tendon_elasticity"], noise_deg=NOISE, seed=1, points=POINTS, travel=0.4, joints=["q3"])
+    d = diagnose(hand, sim.measurements)
+    assert d.selected[0] in ("tendon_elasticity", "pulley_radius_error")
+    assert len(d.ambiguities) >= 1
+    a = d.ambiguities[0]
+    assert set(a["effects"]) == {"tendon_elasticity", "pulley_radius_error"}
+    assert "measure the MCP" in a["experiment"]
+    # with every joint measured over the full travel, the MCP separates them
+    sim = simulate(hand, ["tendon_elasticity"], noise_deg=NOISE, seed=1, points=POINTS)
+    d = diagnose(hand, sim.measurements)
+    assert d.selected == ["tendon_elasticity"] and d.ambiguities == []
+
+
+def test_json_fields(hand):
+    sim = simulate(hand, ["tendon_slack"], noise_deg=NOISE, seed=2, points=POINTS)
+    out = diagnose(hand, sim.measurements).to_json()
+    assert out["selected"] == ["tendon_slack"]
+    assert out["mae_deg_before"] > 2 * sim.noise_mae_deg >= out["mae_deg_after"]
+    assert [c["effect"] for c in out["ranking"]][0] == "tendon_slack"
+    assert set(out["per_joint"]) == {f"q{i}" for i in range(1, 16)}
+    assert out["per_joint"]["q5"]["before"] > out["per_joint"]["q5"]["after"]
+    assert set(out["effects"]["tendon_slack"]["parameters"]) == {f"u{j}_deg" for j in range(1, 6)}
+
+
+# -- a user's own effect ---------------------------------------------------------------------
+
+@pytest.fixture
+def cmc_gain_error():
+    @register_effect
+    class CmcGainError(Effect):
+        name = "cmc_gain_error"
+        stage = "joint"
+        explanation = "the thumb CMC drifts in proportion to u6: the direct-drive gain is not 1"
+        formula = "q15 = (1 + g) u6"
+        signature = "linear in u6 on q15 only"
+        reference = "toy example of docs/effects.md"
+
+        def parameters(self, hand):
+            return [Param("gain_relative", -0.3, 0.3, (0.02, 0.05), True, (14,), True,
+                          "relative error of the CMC gain")]
+
+        def apply(self, ctx, x):
+            ctx.q[:, 14] += x[0] * ctx.s[:, 5]
+
+    yield "cmc_gain_error"
+    unregister_effect("cmc_gain_error")
+
+
+def test_a_registered_toy_effect_is_diagnosed(hand, cmc_gain_error):
+    sim = simulate(hand, [cmc_gain_error], noise_deg=NOISE, seed=0, points=POINTS,
+                   explicit={cmc_gain_error: {"gain_relative": 0.04}})
+    d = diagnose(hand, sim.measurements)
+    assert d.selected == [cmc_gain_error]
+    g = d.after.values()[cmc_gain_error]["gain_relative"]
+    assert g == pytest.approx(0.04, abs=0.003)
+    # the gain error shows on q15 only; with it fitted, q15 falls to the noise
+    pj = d.per_joint()
+    assert pj["q15"]["before"] > 5 * pj["q15"]["after"]
