@@ -241,7 +241,11 @@ class TendonElasticity(Effect):
 
     def apply(self, ctx, x):
         ctx.compliance[:] = x[0]
-        ctx.compliance_ref = float(x[0])
+        # `fit` writes compliance 0 when the data showed no elasticity: the base compensation is
+        # then off, but the tendon's stiffness that friction stretches stays the [mechanics] one,
+        # as it was when friction was fitted without this effect
+        if x[0] > 0.0:
+            ctx.compliance_ref = float(x[0])
 
 
 @register_effect

@@ -29,16 +29,17 @@ FLEX, EXTEND = "tab:red", "tab:blue"
 def metrics(m: Measurements, q_model: np.ndarray) -> dict:
     """MAE / RMS / max |residual| (degrees) per measured joint and overall."""
     r = (m.q - q_model) * RAD2DEG
-    out = {"per_joint": {}, "overall": {}}
+    out = {"per_joint": {}, "overall": _summary(r[np.isfinite(r)])}
     for j, c in enumerate(Q_COLUMNS):
         x = r[:, j][np.isfinite(r[:, j])]
         if x.size:
-            out["per_joint"][c] = {"mae": float(np.mean(np.abs(x))), "rms": float(np.sqrt(np.mean(x * x))),
-                                   "max": float(np.max(np.abs(x))), "n": int(x.size)}
-    x = r[np.isfinite(r)]
-    out["overall"] = {"mae": float(np.mean(np.abs(x))), "rms": float(np.sqrt(np.mean(x * x))),
-                      "max": float(np.max(np.abs(x))), "n": int(x.size)}
+            out["per_joint"][c] = _summary(x)
     return out
+
+
+def _summary(x: np.ndarray) -> dict:
+    return {"mae": float(np.mean(np.abs(x))), "rms": float(np.sqrt(np.mean(x * x))),
+            "max": float(np.max(np.abs(x))), "n": int(x.size)}
 
 
 def _plt():
@@ -56,32 +57,45 @@ def _grid(n):
     return rows, cols
 
 
-def plot_residuals(path, m: Measurements, q_model: np.ndarray, title: str) -> None:
+def _panels(m: Measurements, sharey: bool):
+    """One panel per measured joint: (plt, fig, axes, [(ax, joint, servo), ...])."""
     plt = _plt()
     joints = [j for j in range(len(Q_COLUMNS)) if m.measured[j]]
     rows, cols = _grid(len(joints))
-    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.6 * rows), squeeze=False, sharey=True)
-    d = m.direction
-    r = (m.q - q_model) * RAD2DEG
+    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.6 * rows), squeeze=False, sharey=sharey)
+    panels = []
     for ax, j in zip(axes.flat, joints):
         s = JOINT_SERVO[j]
+        ax.set_title(f"{Q_COLUMNS[j]} {JOINT_NAMES[j]}", fontsize=9)
+        ax.set_xlabel(f"u{s + 1} (deg)", fontsize=8)
+        ax.tick_params(labelsize=7)
+        panels.append((ax, j, s))
+    for ax in list(axes.flat)[len(joints):]:
+        ax.axis("off")
+    return plt, fig, axes, panels
+
+
+def _save(plt, fig, axes, path, ylabel: str, title: str, legend_size: int) -> None:
+    axes[0, 0].set_ylabel(ylabel, fontsize=8)
+    axes[0, 0].legend(fontsize=legend_size)
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def plot_residuals(path, m: Measurements, q_model: np.ndarray, title: str) -> None:
+    plt, fig, axes, panels = _panels(m, sharey=True)
+    d = m.direction
+    r = (m.q - q_model) * RAD2DEG
+    for ax, j, s in panels:
         ok = np.isfinite(r[:, j])
         for sign, colour, label in ((1, FLEX, "flexing"), (-1, EXTEND, "extending"), (0, "0.5", "at rest")):
             sel = ok & (d[:, s] == sign)
             if sel.any():
                 ax.plot(m.u[sel, s] * RAD2DEG, r[sel, j], "o", ms=2.5, color=colour, label=label)
         ax.axhline(0, color="k", lw=0.6)
-        ax.set_title(f"{Q_COLUMNS[j]} {JOINT_NAMES[j]}", fontsize=9)
-        ax.set_xlabel(f"u{s + 1} (deg)", fontsize=8)
-        ax.tick_params(labelsize=7)
-    for ax in list(axes.flat)[len(joints):]:
-        ax.axis("off")
-    axes[0, 0].set_ylabel("residual (deg)", fontsize=8)
-    axes[0, 0].legend(fontsize=7)
-    fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    _save(plt, fig, axes, path, "residual (deg)", title, legend_size=7)
 
 
 def plot_mae(path, before: dict, after: dict | None, labels=("before", "after"), title="") -> None:
@@ -106,13 +120,9 @@ def plot_mae(path, before: dict, after: dict | None, labels=("before", "after"),
 def plot_hysteresis(path, m: Measurements, q_model: np.ndarray, q_analytic: np.ndarray, title: str) -> None:
     """Deviation from the analytic model (measured and modelled) against the servo angle, per
     direction: a direction-dependent effect opens a loop between the two branches."""
-    plt = _plt()
-    joints = [j for j in range(len(Q_COLUMNS)) if m.measured[j]]
-    rows, cols = _grid(len(joints))
-    fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.6 * rows), squeeze=False)
+    plt, fig, axes, panels = _panels(m, sharey=False)
     d = m.direction
-    for ax, j in zip(axes.flat, joints):
-        s = JOINT_SERVO[j]
+    for ax, j, s in panels:
         ok = np.isfinite(m.q[:, j])
         for sign, colour, label in ((1, FLEX, "flexing"), (-1, EXTEND, "extending")):
             sel = ok & (d[:, s] == sign)
@@ -123,17 +133,7 @@ def plot_hysteresis(path, m: Measurements, q_model: np.ndarray, q_analytic: np.n
                     color=colour, alpha=0.6, label=f"measured, {label}")
             ax.plot(m.u[sel, s][order] * RAD2DEG, (q_model[sel, j] - q_analytic[sel, j])[order] * RAD2DEG, "-",
                     lw=1, color=colour, label=f"model, {label}")
-        ax.set_title(f"{Q_COLUMNS[j]} {JOINT_NAMES[j]}", fontsize=9)
-        ax.set_xlabel(f"u{s + 1} (deg)", fontsize=8)
-        ax.tick_params(labelsize=7)
-    for ax in list(axes.flat)[len(joints):]:
-        ax.axis("off")
-    axes[0, 0].set_ylabel("q - q_analytic (deg)", fontsize=8)
-    axes[0, 0].legend(fontsize=6)
-    fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    _save(plt, fig, axes, path, "q - q_analytic (deg)", title, legend_size=6)
 
 
 class ReportDir:

@@ -78,6 +78,24 @@ def test_fit_writes_a_parameter_file_the_control_law_uses(workflow):
     assert math.degrees(abs(plain.inverse(target, compensated=False)[1] - u0[1])) > 2.0
 
 
+def test_fitted_friction_survives_the_parameter_file(tmp_path):
+    # friction fitted without elasticity: `fit` writes tendon_elasticity.compliance_per_m = 0, which
+    # must switch the base compensation off without also switching the friction off
+    data, out = tmp_path / "fr.csv", tmp_path / "fr.toml"
+    r = run("simulate", "--effects", "friction_hysteresis", "--effect-param", "friction_hysteresis.mu=0.2",
+            "--seed", "5", "--points", "20", "--out", data)
+    assert r.returncode == 0, r.stderr
+    r = run("fit", data, "--effects", "friction_hysteresis", "--out", out)
+    assert r.returncode == 0, r.stderr
+    assert load_hand(out).params.effects["tendon_elasticity"]["compliance_per_m"] == 0.0
+    r = run("compare", data, "--params", out, "--report", tmp_path / "cmp")
+    assert r.returncode == 0, r.stderr
+    metrics = json.loads((tmp_path / "cmp" / "metrics.json").read_text())
+    floor = 0.1 * math.sqrt(2 / math.pi)          # MAE of N(0, 0.1 deg) noise
+    assert metrics["before"]["overall"]["mae"] > 2 * floor
+    assert metrics["after"]["overall"]["mae"] < 1.5 * floor
+
+
 def test_compare_prints_metrics(workflow):
     d, data = workflow
     r = run("compare", data, "--effects", "tendon_slack", "--report", d / "cmp")
