@@ -147,6 +147,19 @@ class Print:
 
 
 @dataclass(frozen=True)
+class Cad:
+    """Dimensions only the printable parts use (params/phantom.toml [cad]); metres, radians."""
+
+    finger_base_length: float    # finger base: magnet face to MCP axis
+    cheek: float                 # clevis cheek wall beside each joint tongue
+    eyelet_length: float         # MCP / thumb MP guide eyelet length along the tendon
+    spring_diameter: float       # dorsal cable-spring channel diameter
+    servo_pulley_width: float    # servo pulley axial width
+    horn_hole_radius: float      # servo horn screw circle radius
+    servo_shaft_offset: float    # servo output shaft from the body centre along its length
+
+
+@dataclass(frozen=True)
 class HandParams:
     name: str
     side: str
@@ -158,6 +171,7 @@ class HandParams:
     servo: Servo
     hardware: Hardware
     print: Print
+    cad: Cad
     #: fitted effect parameters, ``{effect_name: {param: value}}`` (see phantom_cad.calibration)
     effects: Mapping[str, Mapping[str, Any]]
     #: the validated document, as parsed (units as in the file); dump() writes it back
@@ -340,6 +354,48 @@ def _thumb(t: Table, hand_length: float) -> Thumb:
                  gain, limits["cmc"], cmc_travel, horn)
 
 
+def _cad(c: Table, fingers, thumb, servo, hardware, printing) -> Cad:
+    """[cad]: the few dimensions only the printable parts need, and the rules that make them fit."""
+    cad = Cad(
+        finger_base_length=c.number("finger_base_length_mm", gt=0) * MM,
+        cheek=c.number("cheek_mm", gt=0) * MM,
+        eyelet_length=c.number("eyelet_length_mm", gt=0) * MM,
+        spring_diameter=c.number("spring_diameter_mm", gt=0) * MM,
+        servo_pulley_width=c.number("servo_pulley_width_mm", gt=0) * MM,
+        horn_hole_radius=c.number("horn_hole_radius_mm", gt=0) * MM,
+        servo_shaft_offset=c.number("servo_shaft_offset_mm", ge=0) * MM,
+    )
+    c.done()
+    groove = hardware.tendon_diameter + 2.0 * printing.hole_clearance
+    digits = [(f"fingers.{n}", f.width, f.thickness) for n, f in fingers.items()]
+    digits.append(("thumb", thumb.width, thumb.thickness))
+    for name, width, thick in digits:
+        # the joint tongue between the two cheeks carries two bearings and the tendon groove
+        tongue = width - 2.0 * cad.cheek - 2.0 * printing.hole_clearance
+        need = 2.0 * hardware.bearing_width + groove + 2.0 * printing.hole_clearance
+        if tongue < need - 1e-12:
+            raise c.error("cheek_mm", cad.cheek / MM,
+                          f"leaves a {tongue / MM:.3f} mm joint tongue in {name}.width_mm = {width / MM:g}; "
+                          f"two bearings and the tendon groove need {need / MM:.3f} mm")
+        # magnets, the MCP boss and a wall fit between the base's magnet face and the MCP axis
+        base_need = thick / 2.0 + hardware.magnet_thickness + printing.magnet_clearance + printing.hole_clearance
+        if name != "thumb" and cad.finger_base_length < base_need - 1e-12:
+            raise c.error("finger_base_length_mm", cad.finger_base_length / MM,
+                          f"must be >= {base_need / MM:.3f} mm ({name}: half thickness + magnet "
+                          "thickness + magnet and joint clearances)")
+    for name, r in [(f"fingers.{n}", f.chain.servo_radius) for n, f in fingers.items()] + [
+            ("thumb", thumb.chain.servo_radius), ("thumb.cmc_horn", thumb.cmc_horn_radius)]:
+        limit = r - hardware.screw_diameter / 2.0 - printing.hole_clearance - hardware.tendon_diameter
+        if cad.horn_hole_radius > limit + 1e-12:
+            raise c.error("horn_hole_radius_mm", cad.horn_hole_radius / MM,
+                          f"must be <= {limit / MM:.3f} mm so the horn screws stay inside the "
+                          f"{name} pulley radius {r / MM:g} mm")
+    if cad.servo_shaft_offset >= servo.body[0] / 2.0:
+        raise c.error("servo_shaft_offset_mm", cad.servo_shaft_offset / MM,
+                      f"must be < half the servo body length ({servo.body[0] / 2.0 / MM:g} mm)")
+    return cad
+
+
 def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
     """Validate a parsed parameter document and build the frozen :class:`HandParams`."""
     root = Table(dict(document), "", source)
@@ -427,6 +483,8 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
     )
     pr.done()
 
+    cad = _cad(root.table("cad"), fingers, thumb, servo, hardware, printing)
+
     effects = root.table("effects", default={})
     effect_params = {}
     for key in effects.keys():
@@ -438,6 +496,6 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
     return HandParams(
         name=name, side=side, hand_length=hand_length,
         fingers=MappingProxyType(fingers), thumb=thumb, mechanics=mechanics, palm=palm,
-        servo=servo, hardware=hardware, print=printing,
+        servo=servo, hardware=hardware, print=printing, cad=cad,
         effects=_freeze(effect_params), document=_freeze(dict(document)), source=source,
     )

@@ -1,0 +1,160 @@
+"""Palm housing.
+
+Frame: the palm (hand) frame (docs/frames.md): origin on the index MCP axis, x ulnar,
+y distal, z dorsal. Built from:
+
+* four finger sockets: blocks whose magnet faces sit where each finger base's magnet face
+  sits at rest, turned by palm.arc_offset from finger to finger (the socket face normal is
+  the finger column's y), each with two magnet pockets facing the finger base's pockets
+  and the tendon exit at the palm's tendon height;
+* the servo bay: a slab around five tendon servos (two staggered rows, shafts along the
+  palm's x, each pulley straight behind its finger's socket) with their pockets (open on
+  the dorsal side for assembly), pulley cavities and M2 pilot holes at the flange ears;
+* the thenar housing of servo 6, coaxial with the thumb CMC axis (open on the shaft side);
+* tendon channels from each socket's tendon exit straight back to its servo pulley's
+  tangent point, and the thumb tendon's channel from servo 1 out of the palm's radial side.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...kinematics import frames as F
+from ...kinematics.topology import FINGERS
+from .common import Tolerances, box, build, cylinder, mm, transform
+
+
+def _mm(T):
+    return F.to_mm(T)
+
+
+class Palm:
+    name = "palm"
+
+    def __init__(self, params):
+        self.params = params
+        self.tol = Tolerances(params)
+        self.thickness = mm(params.palm.thickness)
+        sv = params.servo
+        self.servo_body = tuple(mm(v) for v in sv.body)           # length, width, height
+        self.flange_span = mm(sv.flange_span)
+        self.shaft_offset = mm(params.cad.servo_shaft_offset)
+        self.pulley_width = mm(params.cad.servo_pulley_width)
+        self.tendon_z = mm(F.tendon_height(params))
+
+    # -- placements (mm) ---------------------------------------------------
+    def T_socket(self, finger: str) -> np.ndarray:
+        return _mm(F.T_palm_socket(self.params, finger))
+
+    def T_servo(self, k: int) -> np.ndarray:
+        """Servo frame of servo k (1-based)."""
+        return _mm(F.T_palm_servo(self.params, k - 1))
+
+    def magnet_centres(self, finger: str) -> list[np.ndarray]:
+        """Opening centres of the socket's magnet pockets, palm frame (mm)."""
+        from .finger_base import FingerBase
+        s = FingerBase(self.params, finger).magnet_offset
+        T = self.T_socket(finger)
+        return [(T @ np.array([sx, 0.0, 0.0, 1.0]))[:3] for sx in (-s, s)]
+
+    def pulley_radius(self, k: int) -> float:
+        if k == 6:
+            return mm(self.params.thumb.cmc_horn_radius)
+        return mm(self.params.chains[k - 1].servo_radius)
+
+    def body_box(self, k: int, grow: float = 0.0):
+        """Servo k's body as (lo, hi) corners in its servo frame, grown by ``grow``."""
+        L, W, H = self.servo_body
+        c = self.tol.clearance
+        z_top = -(self.pulley_width / 2.0 + c)
+        lo = np.array([-W / 2.0, -self.shaft_offset - L / 2.0, z_top - H]) - grow
+        hi = np.array([W / 2.0, -self.shaft_offset + L / 2.0, z_top]) + grow
+        return lo, hi
+
+    def cavity_radius(self, k: int) -> float:
+        t = self.tol
+        return self.pulley_radius(k) + 2.0 * t.tendon + t.clearance + t.tendon
+
+    def screw_points(self, k: int) -> list[np.ndarray]:
+        """Flange screw centres (servo frame) on the body's top plane, one each end."""
+        L, W, H = self.servo_body
+        e = (L / 2.0 + self.flange_span / 2.0) / 2.0
+        z_top = -(self.pulley_width / 2.0 + self.tol.clearance)
+        return [np.array([0.0, -self.shaft_offset + s * e, z_top]) for s in (-1.0, 1.0)]
+
+    def _corners(self, T, lo, hi):
+        pts = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+        return (T @ pts.T).T[:, :3]
+
+    def extents(self):
+        """Slab x/y extents (mm) enclosing the socket roots and servos 1-5, one wall around."""
+        w, c = self.tol.wall, self.tol.clearance
+        pts = []
+        for k in range(1, 6):
+            T = self.T_servo(k)
+            lo, hi = self.body_box(k, grow=c + w)
+            pts.append(self._corners(T, lo, hi))
+            rc = self.cavity_radius(k) + w
+            pts.append(self._corners(T, np.array([-rc, -rc, -self.pulley_width / 2.0 - c - w]),
+                                     np.array([rc, rc, self.pulley_width / 2.0 + c + w])))
+        pts = np.vstack(pts)
+        y_front = self.slab_front()
+        return pts[:, 0].min(), pts[:, 0].max(), pts[:, 1].min(), y_front
+
+    def slab_front(self) -> float:
+        """The slab stops behind every socket face (its trailing corner), one clearance back."""
+        ys = []
+        for f in FINGERS:
+            T = self.T_socket(f)
+            W = mm(self.params.fingers[f].width)
+            for sx in (-W / 2.0, W / 2.0):
+                ys.append((T @ np.array([sx, 0.0, 0.0, 1.0]))[1])
+        return min(ys) - self.tol.clearance
+
+    # -- geometry ----------------------------------------------------------
+    def build(self):
+        t, Tp = self.tol, self.thickness
+        c, w = t.clearance, t.wall
+        x0, x1, y0, y1 = self.extents()
+        body = [box(x0, x1, y0, y1, -Tp / 2.0, Tp / 2.0)]
+        tools = []
+        # finger sockets
+        for f in FINGERS:
+            T = self.T_socket(f)
+            W = mm(self.params.fingers[f].width)
+            depth = T[1, 3] - y0
+            body.append(transform(box(-W / 2.0, W / 2.0, -depth, 0.0, -Tp / 2.0, Tp / 2.0), T))
+            for m in self.magnet_centres(f):
+                n = T[:3, 1]
+                tools.append(cylinder(m + n, m - n * t.magnet_pocket_depth, t.magnet_pocket_d / 2.0))
+            # tendon: socket exit straight back to the servo pulley's tangent point
+            k = FINGERS.index(f) + 2
+            Ts = self.T_servo(k)
+            r = self.pulley_radius(k)
+            tangent = (Ts @ np.array([-r, 0.0, 0.0, 1.0]))[:3]   # servo x = palm z: bottom of the pulley
+            exit_ = (T @ np.array([0.0, 0.0, self.tendon_z, 1.0]))[:3]
+            tools.append(cylinder(exit_ + T[:3, 1], tangent - np.array([0.0, 1.0, 0.0]), t.tendon_hole / 2.0))
+        # thumb tendon: servo 1's tangent point out through the radial side
+        Ts = self.T_servo(1)
+        tangent = (Ts @ np.array([-self.pulley_radius(1), 0.0, 0.0, 1.0]))[:3]
+        tools.append(cylinder(tangent, np.array([x0 - 1.0, tangent[1], tangent[2]]), t.tendon_hole / 2.0))
+        # servo pockets, pulley cavities, flange screws
+        for k in range(1, 7):
+            Ts = self.T_servo(k)
+            lo, hi = self.body_box(k, grow=c)
+            rc = self.cavity_radius(k)
+            if k <= 5:
+                # open toward the dorsal face (servo x = palm z): drop-in from the back
+                tools.append(transform(box(lo[0], Tp, lo[1], hi[1], lo[2], hi[2]), Ts))
+                zc0, zc1 = hi[2] - c, self.pulley_width / 2.0 + c
+                tools.append(transform(cylinder((0, 0, zc0), (0, 0, zc1), rc), Ts))
+                tools.append(transform(box(0.0, Tp, -rc, rc, zc0, zc1), Ts))
+            else:
+                hlo, hhi = self.body_box(k, grow=c + w)
+                body.append(transform(box(hlo[0], hhi[0], hlo[1], hhi[1], hlo[2], hi[2] - c), Ts))
+                # open on the shaft side: the servo drops in before the hub goes on
+                tools.append(transform(box(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2] + 1.0), Ts))
+            for p in self.screw_points(k):
+                tools.append(transform(cylinder(p + np.array([0, 0, 1.0]), p - np.array([0, 0, 6.0]),
+                                                t.screw_pilot / 2.0), Ts))
+        return build(body, tools, self.name)
