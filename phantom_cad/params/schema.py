@@ -354,7 +354,7 @@ def _thumb(t: Table, hand_length: float) -> Thumb:
                  gain, limits["cmc"], cmc_travel, horn)
 
 
-def _cad(c: Table, fingers, thumb, servo, hardware, printing) -> Cad:
+def _cad(c: Table, fingers, thumb, palm, servo, hardware, printing) -> Cad:
     """[cad]: the few dimensions only the printable parts need, and the rules that make them fit."""
     cad = Cad(
         finger_base_length=c.number("finger_base_length_mm", gt=0) * MM,
@@ -383,6 +383,24 @@ def _cad(c: Table, fingers, thumb, servo, hardware, printing) -> Cad:
             raise c.error("finger_base_length_mm", cad.finger_base_length / MM,
                           f"must be >= {base_need / MM:.3f} mm ({name}: half thickness + magnet "
                           "thickness + magnet and joint clearances)")
+    names = list(fingers)
+    for a, b in zip(names, names[1:]):
+        # adjacent finger bases converge toward the arc centre: their back corners must clear
+        room = (palm.arc_radius - cad.finger_base_length) * 2.0 * math.sin(palm.arc_offset / 2.0)
+        need = (fingers[a].width + fingers[b].width) / 2.0 + printing.hole_clearance
+        if room < need - 1e-12:
+            raise c.error("finger_base_length_mm", cad.finger_base_length / MM,
+                          f"the {a} and {b} bases are {room / MM:.3f} mm apart at their magnet faces "
+                          f"(palm arc radius {palm.arc_radius / MM:.3f} mm), they need "
+                          f"{need / MM:.3f} mm (half widths + hole_clearance)")
+    for name, d in [(f"fingers.{n}", f) for n, f in fingers.items()] + [("thumb", thumb)]:
+        # the phalanx-side guide eyelet must lie outside the joint's pulley boss
+        g = d.chain.guide
+        need = d.thickness / 2.0 + printing.hole_clearance + cad.eyelet_length / 2.0
+        if g.d2 < need - 1e-12:
+            raise ParamError(f"{name}.guide.d2_mm", round(g.d2 / MM, 6),
+                             f"must be >= {need / MM:.3f} mm (half the thickness + hole_clearance + half "
+                             "cad.eyelet_length): the phalanx guide eyelet must clear the joint boss", c.source)
     for name, r in [(f"fingers.{n}", f.chain.servo_radius) for n, f in fingers.items()] + [
             ("thumb", thumb.chain.servo_radius), ("thumb.cmc_horn", thumb.cmc_horn_radius)]:
         limit = r - hardware.screw_diameter / 2.0 - printing.hole_clearance - hardware.tendon_diameter
@@ -390,6 +408,18 @@ def _cad(c: Table, fingers, thumb, servo, hardware, printing) -> Cad:
             raise c.error("horn_hole_radius_mm", cad.horn_hole_radius / MM,
                           f"must be <= {limit / MM:.3f} mm so the horn screws stay inside the "
                           f"{name} pulley radius {r / MM:g} mm")
+    if cad.spring_diameter + 2.0 * printing.hole_clearance >= cad.cheek - 1e-12:
+        raise c.error("spring_diameter_mm", cad.spring_diameter / MM,
+                      f"its channel ({(cad.spring_diameter + 2.0 * printing.hole_clearance) / MM:g} mm with "
+                      f"clearance) must fit inside a clevis cheek (cheek_mm = {cad.cheek / MM:g})")
+    # each tendon runs under the neighbouring servo's body on its way to its own pulley
+    for name, r in [(f"fingers.{n}.servo_pulley_radius_mm", f.chain.servo_radius) for n, f in fingers.items()] + [
+            ("thumb.servo_pulley_radius_mm", thumb.chain.servo_radius)]:
+        need = servo.body[1] / 2.0 + 2.0 * printing.hole_clearance + hardware.tendon_diameter / 2.0
+        if r <= need + 1e-12:
+            raise ParamError(name, round(r / MM, 6),
+                             f"must exceed {need / MM:.3f} mm (half the servo body width servo.body_mm[1] "
+                             "+ tendon + clearances): the next finger's tendon passes under the servo", c.source)
     if cad.servo_shaft_offset >= servo.body[0] / 2.0:
         raise c.error("servo_shaft_offset_mm", cad.servo_shaft_offset / MM,
                       f"must be < half the servo body length ({servo.body[0] / 2.0 / MM:g} mm)")
@@ -483,7 +513,7 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
     )
     pr.done()
 
-    cad = _cad(root.table("cad"), fingers, thumb, servo, hardware, printing)
+    cad = _cad(root.table("cad"), fingers, thumb, palm, servo, hardware, printing)
 
     effects = root.table("effects", default={})
     effect_params = {}

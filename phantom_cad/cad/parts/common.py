@@ -131,8 +131,8 @@ class DigitSection:
 
     @property
     def groove_outer(self) -> float:
-        """The groove is cut from R out past the boss surface."""
-        return self.boss_radius + self.tol.clearance + 1.0
+        """The groove is cut from R out just past the boss surface."""
+        return self.boss_radius + self.tol.clearance
 
     @property
     def spring_x(self) -> float:

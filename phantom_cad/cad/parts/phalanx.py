@@ -153,11 +153,13 @@ class Phalanx:
         sec, t = self.sec, self.sec.tol
         W, T, L = sec.width, sec.thickness, self.length
         body, tools = tongue(sec, self.proximal_joint)
-        if self.distal_joint is None:       # fingertip, rounded
-            y_round = max(L - T / 2.0, sec.slot_back)
-            body.append(box(-W / 2.0, W / 2.0, sec.slot_back, y_round, -T / 2.0, T / 2.0))
-            body.append(cyl_x(L - y_round, -W / 2.0, W / 2.0, y_round, 0.0)
-                        if L - y_round < T / 2.0 else cyl_x(T / 2.0, -W / 2.0, W / 2.0, y_round, 0.0))
+        if self.distal_joint is None:       # fingertip: a half-cylinder of radius T/2 (or less)
+            r_tip = min(T / 2.0, L - sec.slot_back)
+            y_c = L - r_tip
+            body.append(box(-W / 2.0, W / 2.0, sec.slot_back, y_c, -T / 2.0, T / 2.0))
+            tip = cyl_x(r_tip, -W / 2.0, W / 2.0, y_c, 0.0).cut(
+                box(-W / 2.0 - 1.0, W / 2.0 + 1.0, y_c - r_tip - 1.0, y_c, -T / 2.0 - 1.0, T / 2.0 + 1.0))
+            body.append(tip)
         else:
             body.append(box(-W / 2.0, W / 2.0, sec.slot_back, L, -T / 2.0, T / 2.0))
             b2, t2 = clevis(sec, self.distal_joint, L)
