@@ -277,20 +277,46 @@ def test_no_two_parts_intersect_at_rest(placed, params):
     assert bad == []
 
 
-def test_flexion_stop_engages_at_the_limit(built, document, params):
-    """Index PIP: free just below its Table I limit, blocked just above it."""
+STOPS = [(f, j, p, c) for f in FINGERS for j, p, c in (("mcp", "base", "proximal"), ("pip", "proximal", "middle"),
+                                                          ("dip", "middle", "distal"))] \
+    + [("thumb", "mp", "cmc_base", "proximal"), ("thumb", "ip", "proximal", "distal")]
+
+
+@pytest.mark.parametrize("digit,joint,parent,child", STOPS)
+def test_hard_stop_engages_at_the_limit(built, document, params, digit, joint, parent, child):
+    """Each joint turns freely up to its Table I limit and is blocked 1 degree beyond it."""
     from phantom_cad.kinematics.topology import joint_index
-    prox, mid = built["index_proximal"], built["index_middle"]
-    q_max = document["fingers"]["index"]["limits_rad"]["pip"][1]
+    P, Cp = built[f"{digit}_{parent}"], built[f"{digit}_{child}"]
+    table = document["thumb"] if digit == "thumb" else document["fingers"][digit]
+    q_max = table["limits_rad"][joint][1]
     vols = []
-    for q in (q_max - math.radians(1.0), q_max + math.radians(3.0)):
+    for q in (q_max, q_max + math.radians(1.0)):
         qv = np.zeros(15)
-        qv[joint_index("index", "pip")] = q
+        qv[joint_index(digit, joint)] = q
         T = assembly.pose_transforms(params, qv)
-        vols.append(check.intersection_volume(check.placed(prox.shape, T["index_proximal"]),
-                                              check.placed(mid.shape, T["index_middle"])))
+        vols.append(check.intersection_volume(check.placed(P.shape, T[f"{digit}_{parent}"]),
+                                              check.placed(Cp.shape, T[f"{digit}_{child}"])))
     assert vols[0] < 1e-3
-    assert vols[1] > 0.5
+    assert vols[1] > 0.05
+
+
+def test_half_flexed_hand_has_no_interference(built, params, document):
+    """At half of every joint's upper limit no two parts overlap (joint pairs may touch)."""
+    from phantom_cad.kinematics.topology import JOINT_NAMES
+    q = np.zeros(15)
+    for i, name in enumerate(JOINT_NAMES):
+        digit, joint = name.split("_")
+        table = document["thumb"] if digit == "thumb" else document["fingers"][digit]
+        q[i] = 0.5 * table["limits_rad"][joint][1]
+    T = assembly.pose_transforms(params, q)
+    placed = {n: check.placed(b.shape, T[n]) for n, b in built.items()}
+    allowed = {frozenset((a, b)) for a, b, _ in assembly.designed_contacts(params)}
+    bad = []
+    for a, b in itertools.combinations(sorted(placed), 2):
+        v = check.intersection_volume(placed[a], placed[b])
+        if v > (1e-2 if frozenset((a, b)) in allowed else 1e-3):
+            bad.append((a, b, round(v, 4)))
+    assert bad == []
 
 
 # ---------------------------------------------------------------------------

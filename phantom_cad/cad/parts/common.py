@@ -164,14 +164,20 @@ class DigitSection:
         G2 = mm(g.d2) * np.array([math.cos(psi2), -math.sin(psi2)])
         return G1, G2
 
+    def recess(self, q_max: float) -> float:
+        """Beyond 90 degrees of flexion the child's palmar face would reach the slot's back wall
+        below the axis before q_max: the palmar half of the back wall is then recessed by
+        half a thickness and the flexion-stop wedge rebuilt in it."""
+        return self.thickness / 2.0 if q_max > math.pi / 2.0 else 0.0
+
     def stop_polygon(self, q_max: float) -> list[tuple[float, float]] | None:
         """(y, z) polygon, relative to the joint axis, of the flexion stop left in the palmar back
         corner of a clevis slot: the child's palmar face (z_child = -boss radius) lies on its
         edge exactly when the joint reaches q_max."""
         rb = self.boss_radius
-        y0 = -self.slot_back
-        rect = [(y0, -self.thickness / 2.0), (y0 + self.thickness, -self.thickness / 2.0),
-                (y0 + self.thickness, 0.0), (y0, 0.0)]
+        y0 = -self.slot_back - self.recess(q_max)
+        rect = [(y0, -self.thickness / 2.0), (y0 + 2.0 * self.thickness, -self.thickness / 2.0),
+                (y0 + 2.0 * self.thickness, 0.0), (y0, 0.0)]
         s, c = math.sin(q_max), math.cos(q_max)
         poly = clip_halfplane(rect, lambda p: -(p[0] * s + p[1] * c) - rb)
         if len(poly) < 3 or polygon_area(poly) < 0.25:

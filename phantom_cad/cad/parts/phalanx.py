@@ -50,15 +50,21 @@ def clevis(sec: DigitSection, joint: str, y: float):
     rb, W, T, sw = sec.boss_radius, sec.width, sec.thickness, sec.slot_width
     body = [cyl_x(rb, -W / 2.0, W / 2.0, y, 0.0)]
     slot = box(-sw / 2.0, sw / 2.0, y - sec.slot_back, y + rb + 1.0, -T / 2.0 - 1.0, T / 2.0 + 1.0)
+    recess = sec.recess(sec.q_max[joint])
+    half = sw / 2.0
+    if recess > 0.0:       # across the full width: the child's full-width body swings in here
+        half = W / 2.0 + 1.0
+        quadrant = box(-half, half, y - sec.slot_back - recess, y, -T / 2.0 - 1.0, 0.0)
+        slot = slot.fuse(quadrant.cut(cyl_x(rb, -half - 1.0, half + 1.0, y, 0.0)))
     poly = sec.stop_polygon(sec.q_max[joint])
     if poly is not None:   # keep the flexion-stop wedge: the slot tool leaves it standing
-        wedge = prism_x([(py + y, pz) for py, pz in poly], -sw / 2.0 - 0.5, sw / 2.0 + 0.5)
+        wedge = prism_x([(py + y, pz) for py, pz in poly], -half - 0.5, half + 0.5)
         slot = slot.cut(wedge)
     tools = [slot, cyl_x(t.axle_press / 2.0, -W / 2.0 - 1.0, W / 2.0 + 1.0, y, 0.0)]
     return body, tools
 
 
-def eyelet(sec: DigitSection, centre_yz, toward_yz):
+def eyelet(sec: DigitSection, centre_yz, toward_yz, clip_palmar: bool = False):
     """A tendon guide eyelet at centre (x = 0), its hole along the line toward ``toward``:
     a boss of material, a hole of exactly eyelet_length between two relief spheres.
     Returns (body, tools, axis unit vector, the two relief-sphere centres)."""
@@ -70,8 +76,14 @@ def eyelet(sec: DigitSection, centre_yz, toward_yz):
     rr = t.tendon_relief / 2.0
     half = t.eyelet_length / 2.0 + math.sqrt(rr * rr - r * r)
     s_near, s_far = c + half * u, c - half * u
-    boss_half = half + rr + t.wall / 2.0
-    body = [cylinder(c - boss_half * u, c + boss_half * u, sec.eyelet_boss_radius)]
+    # the boss reaches back past the far relief sphere but only to the near sphere's centre
+    # toward the other guide, so the two guides' bosses clear each other at full flexion
+    boss_back = half + rr + t.wall / 2.0
+    boss = cylinder(c - boss_back * u, c + half * u, sec.eyelet_boss_radius)
+    if clip_palmar:   # a child's guide stays inside its palmar face (the flexion-stop face)
+        T = sec.thickness
+        boss = boss.cut(box(-T, T, c[1] - 2.0 * boss_back, c[1] + 2.0 * boss_back, -2.0 * T, -T / 2.0))
+    body = [boss]
     tools = [cylinder(s_far, s_near, r), sphere(s_near, rr), sphere(s_far, rr)]
     return body, tools, u, (s_near, s_far)
 
@@ -168,7 +180,7 @@ class Phalanx:
             tools += figure_eight(sec, self.proximal_joint, self.distal_joint, L)
         if self.has_guide:
             G1, G2 = sec.guide_points()
-            b3, t3, u, (s_near, s_far) = eyelet(sec, G2, G1)
+            b3, t3, u, (s_near, s_far) = eyelet(sec, G2, G1, clip_palmar=True)
             body += b3
             tools += t3
             chord = float(np.linalg.norm(G1 - G2))
