@@ -22,9 +22,9 @@ def build(
     side: Optional[str] = typer.Option(None, "--side", help="Override hand.side: right or left (mirrored parts)."),
     jobs: Optional[int] = typer.Option(None, "--jobs", "-j", min=1,
                                        help="Worker processes building parts (default: os.cpu_count())."),
-    slice_: Optional[bool] = typer.Option(None, "--slice/--no-slice",
-                                          help="Slice every STL with PrusaSlicer for print time and filament "
-                                               "(default: when prusa-slicer is installed)."),
+    slice_: bool = typer.Option(False, "--slice/--no-slice",
+                                help="Slice every STL with PrusaSlicer (headless) and record print time and "
+                                     "filament in the manifest; about 1-4 s per part the first time, cached after."),
     render: bool = typer.Option(True, "--render/--no-render", help="Write PNG renders (renders/)."),
     cache_dir: Optional[Path] = typer.Option(None, "--cache-dir",
                                              help="Part cache (default $PHANTOM_CAD_CACHE or .cache)."),

@@ -70,33 +70,16 @@ def step_bytes(shape, label: str | None = None, color=None) -> bytes:
     return canonicalize_step(buf.getvalue())
 
 
-_ENTITY = re.compile(rb"#(\d+)\s*=\s*")
+_ENTITY = re.compile(rb"#(\d+)\s*=\s*((?:[^;']|'[^']*')*);")
 _REF = re.compile(rb"#(\d+)")
 
 
 def _split_entities(data: bytes):
     """(prefix, [(id, body)], suffix) of a STEP file's DATA section; body excludes ';'.
-    Quoted strings may contain ';' or '#' (handled)."""
+    Quoted strings may contain ';' or '#'."""
     start = data.index(b"DATA;") + len(b"DATA;")
     end = data.rindex(b"ENDSEC;")
-    section = data[start:end]
-    entities = []
-    i, n = 0, len(section)
-    while True:
-        m = _ENTITY.search(section, i)
-        if not m:
-            break
-        j = m.end()
-        in_str = False
-        while j < n:
-            c = section[j]
-            if c == 0x27:  # '
-                in_str = not in_str
-            elif c == 0x3B and not in_str:  # ;
-                break
-            j += 1
-        entities.append((int(m.group(1)), section[m.end():j]))
-        i = j + 1
+    entities = [(int(m.group(1)), m.group(2)) for m in _ENTITY.finditer(data, start, end)]
     return data[:start], entities, data[end:]
 
 
@@ -217,47 +200,34 @@ def read_brep(path: str | os.PathLike):
 def tessellate(shape, tolerance: float, angular_tolerance: float = ANGULAR_TOLERANCE_RAD
                ) -> tuple[np.ndarray, np.ndarray]:
     """BRepMesh triangulation of ``shape`` as (vertices (n,3) float64, faces (m,3) int64),
-    with the nodes shared by adjacent faces merged (so closed solids give closed meshes)."""
-    from OCP.BRep import BRep_Tool
+    with the nodes shared by adjacent faces merged (so closed solids give closed meshes).
+
+    The triangles are collected by OCCT's StlAPI_Writer (C++, per face, orientation
+    handled) into a temporary binary STL, so the vertices are float32-exact values."""
+    import tempfile
+
     from OCP.BRepMesh import BRepMesh_IncrementalMesh
-    from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED
-    from OCP.TopExp import TopExp_Explorer
-    from OCP.TopLoc import TopLoc_Location
-    from OCP.TopoDS import TopoDS
+    from OCP.BRepTools import BRepTools
+    from OCP.StlAPI import StlAPI_Writer
 
     wrapped = shape.wrapped
+    BRepTools.Clean_s(wrapped)   # drop any coarser/finer mesh left by an earlier call
     BRepMesh_IncrementalMesh(wrapped, tolerance, False, angular_tolerance, False).Perform()
-    verts: list[np.ndarray] = []
-    tris: list[np.ndarray] = []
-    offset = 0
-    explorer = TopExp_Explorer(wrapped, TopAbs_FACE)
-    while explorer.More():
-        face = TopoDS.Face_s(explorer.Current())
-        explorer.Next()
-        loc = TopLoc_Location()
-        poly = BRep_Tool.Triangulation_s(face, loc)
-        if poly is None:
-            raise RuntimeError("a face has no triangulation")
-        trsf = loc.Transformation()
-        n = poly.NbNodes()
-        pts = np.empty((n, 3))
-        for i in range(n):
-            p = poly.Node(i + 1).Transformed(trsf)
-            pts[i] = (p.X(), p.Y(), p.Z())
-        m = poly.NbTriangles()
-        tri = np.empty((m, 3), dtype=np.int64)
-        for i in range(m):
-            a, b, c = poly.Triangle(i + 1).Get()
-            tri[i] = (a, b, c)
-        tri -= 1
-        if face.Orientation() == TopAbs_REVERSED:
-            tri = tri[:, [0, 2, 1]]
-        verts.append(pts)
-        tris.append(tri + offset)
-        offset += n
-    if not verts:
+    writer = StlAPI_Writer()
+    writer.ASCIIMode = False
+    fd, tmp = tempfile.mkstemp(suffix=".stl", prefix="phantom-tess-")
+    os.close(fd)
+    try:
+        if not writer.Write(wrapped, tmp):
+            raise RuntimeError("StlAPI_Writer failed (a face has no triangulation?)")
+        with open(tmp, "rb") as fh:
+            data = fh.read()
+    finally:
+        os.unlink(tmp)
+    v, f = read_stl(data)
+    if len(f) == 0:
         raise RuntimeError("the shape has no faces")
-    return merge_vertices(np.vstack(verts), np.vstack(tris))
+    return v, f
 
 
 def transform_shape(shape, T: np.ndarray):

@@ -44,7 +44,8 @@ def standin_build(tmp_path_factory):
     mp.setattr(build, "ASSEMBLY_MODULE", "standin_assembly")
     try:
         root = tmp_path_factory.mktemp("standin")
-        result = build_hand(None, root / "exports" / "phantom", cache_dir=root / "cache", jobs=2)
+        result = build_hand(None, root / "exports" / "phantom", cache_dir=root / "cache", jobs=2,
+                            slice=None)
     finally:
         mp.undo()
     return result, root / "cache"
@@ -66,5 +67,6 @@ def hand_build(tmp_path_factory):
     from phantom_cad.cad.build import build_hand
 
     root = tmp_path_factory.mktemp("hand")
-    result = build_hand(None, root / "exports" / "phantom", cache_dir=root / "cache", jobs=2)
+    result = build_hand(None, root / "exports" / "phantom", cache_dir=root / "cache", jobs=2,
+                        slice=None)
     return result, root / "cache"

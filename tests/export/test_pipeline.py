@@ -163,7 +163,7 @@ def test_deterministic_fresh_cache(standin_build, standin, tmp_path):
     from phantom_cad.cad.build import build_hand
 
     result, _ = standin_build
-    again = build_hand(None, tmp_path / "out", cache_dir=tmp_path / "cache", jobs=2)
+    again = build_hand(None, tmp_path / "out", cache_dir=tmp_path / "cache", jobs=2, slice=None)
     assert again.built == result.parts
     a, b = tree(result.out_dir), tree(again.out_dir)
     assert a == b        # STL, STEP (fixed timestamp), PNG, BOM, manifest: byte-identical
@@ -176,7 +176,7 @@ def test_warm_rebuild_uses_cache(standin_build, standin, tmp_path):
     from phantom_cad.cad.build import build_hand
 
     result, cache = standin_build
-    again = build_hand(None, tmp_path / "out", cache_dir=cache, jobs=2)
+    again = build_hand(None, tmp_path / "out", cache_dir=cache, jobs=2, slice=None)
     assert again.built == [] and again.cached == result.parts
     assert tree(again.out_dir) == tree(result.out_dir)
 
@@ -336,5 +336,5 @@ def test_cli_builds(standin, standin_build, tmp_path):
     assert res.exit_code == 0, res.output
     assert "3 parts, 0 built, 3 from cache" in res.output
     man = json.loads((tmp_path / "o" / "manifest.json").read_text())
-    assert man["slicer"] == {"used": False, "reason": "--no-slice"}
+    assert man["slicer"] == {"used": False, "reason": "not requested (phantom-cad build --slice)"}
     assert all(p["print"] is None for p in man["parts"])
