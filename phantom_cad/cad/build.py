@@ -257,7 +257,7 @@ def _part_worker(task: dict) -> dict:
                 title=f"{name}  (print orientation)",
                 subtitle=(f"{volume / 1000:.2f} cm³, ~{mass:.1f} g at {params.print.infill:.0%} infill, "
                           f"bbox {np.ptp(vp[:, 0]):.1f} x {np.ptp(vp[:, 1]):.1f} x {np.ptp(vp[:, 2]):.1f} mm"),
-                size_px=700)
+                size_px=700, bed=True)
             timings["render"] = time.perf_counter() - t
         (tmp / "meta.json").write_text(json.dumps(meta, indent=1, sort_keys=True))
         Cache.commit(tmp, final)
@@ -360,7 +360,7 @@ def interference(meshes: dict[str, tuple[np.ndarray, np.ndarray]], poses: dict[s
             checked += 1
             vol = float((solid(a) ^ solid(b)).volume())
             designed = frozenset((a, b)) in allowed
-            entry = {"parts": [a, b], "volume_mm3": round(vol, 4)}
+            entry = {"parts": [a, b], "volume_mm3": round(max(vol, 0.0), 4) + 0.0}
             if designed:
                 contacts.append(entry)
             elif vol > tol_mm3:

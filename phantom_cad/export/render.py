@@ -50,8 +50,9 @@ def _shade(tri: np.ndarray, color) -> np.ndarray:
 
 def render_png(items: list[MeshItem], path: str | os.PathLike, title: str, *,
                elev: float = 22.0, azim: float = -58.0, size_px: int = 900,
-               max_faces: int = 60000, subtitle: str | None = None) -> None:
-    """Render ``items`` into a PNG at ``path``."""
+               max_faces: int = 60000, subtitle: str | None = None, bed: bool = False) -> None:
+    """Render ``items`` into a PNG at ``path``. ``bed``: the items rest on z = 0 (print
+    orientation); the view starts at z = 0 and a grey bed square is drawn there."""
     import matplotlib
 
     matplotlib.use("Agg", force=True)
@@ -81,7 +82,17 @@ def render_png(items: list[MeshItem], path: str | os.PathLike, title: str, *,
     centre, half = (lo + hi) / 2, max((hi - lo).max() / 2, 1e-3) * 1.05
     ax.set_xlim(centre[0] - half, centre[0] + half)
     ax.set_ylim(centre[1] - half, centre[1] + half)
-    ax.set_zlim(centre[2] - half, centre[2] + half)
+    if bed:
+        # seen from above (elev > 0) the bed is always behind the part: draw it first
+        ax.computed_zorder = False
+        coll.set_zorder(2)
+        ax.set_zlim(0.0, 2 * half)
+        sq = np.array([[centre[0] - half, centre[1] - half, 0], [centre[0] + half, centre[1] - half, 0],
+                       [centre[0] + half, centre[1] + half, 0], [centre[0] - half, centre[1] + half, 0]])
+        ax.add_collection3d(Poly3DCollection([sq], facecolors=[(0.85, 0.85, 0.85, 0.6)], edgecolors="0.6",
+                                             linewidths=0.5, zorder=1))
+    else:
+        ax.set_zlim(centre[2] - half, centre[2] + half)
     ax.set_box_aspect((1, 1, 1))
     ax.view_init(elev=elev, azim=azim)
     ax.set_xlabel("x [mm]")

@@ -8,10 +8,13 @@ In CQ-editor (or any cadquery script)::
     hand = load_hand("params/phantom.toml")
     assy = hand_assembly(hand)                      # rest pose
     show_object(assy)                               # CQ-editor
-    # assy.save("hand.step")  /  assy.export("hand.glb")
+    # assy.export("hand.step")  /  assy.export("hand.glb")
 
     import numpy as np
-    q = np.zeros(15); q[3:6] = 0.6                  # flex the index (joint order: topology.py)
+    from phantom_cad.kinematics.topology import joint_index
+    q = np.zeros(15)
+    for j in ("mcp", "pip", "dip"):
+        q[joint_index("index", j)] = 0.6          # flex the index (rad)
     show_object(hand_assembly(hand, q, name="index_flexed"))
 
 Parts are build123d solids (phantom_cad.cad.assembly.build_part) converted through their

@@ -48,3 +48,34 @@ def test_location_rejects_bad_matrix():
 
     with pytest.raises(ValueError, match=r"a placement must be a 4x4 matrix, got shape \(3, 3\)"):
         location(np.eye(3))
+
+
+def test_real_parts_posed(tmp_path):
+    """Two real parts at a bent pose: the locations are assembly.pose_transforms(q)."""
+    from conftest import real_assembly_available
+
+    if not real_assembly_available():
+        pytest.skip("phantom_cad.cad.assembly is not there yet")
+    from phantom_cad.cad import assembly
+    from phantom_cad.interop.cadquery import hand_assembly
+    from phantom_cad.kinematics.topology import joint_index
+
+    hand = load_hand()
+    q = np.zeros(15)
+    q[joint_index("index", "pip")] = 0.5
+    assy = hand_assembly(hand, q, parts=["index_proximal", "index_middle"])
+    poses = assembly.pose_transforms(hand.params, q)
+    rest = assembly.pose_transforms(hand.params)
+    assert [c.name for c in assy.children] == ["index_proximal", "index_middle"]
+    for child in assy.children:
+        trsf = child.loc.wrapped.Transformation()
+        M = np.array([[trsf.Value(i, j) for j in range(1, 5)] for i in range(1, 4)])
+        assert M == pytest.approx(poses[child.name][:3, :], abs=1e-9)
+    # the middle phalanx turned by the PIP angle relative to the proximal one
+    R_rel = rest["index_proximal"][:3, :3].T @ rest["index_middle"][:3, :3]
+    R_bent = poses["index_proximal"][:3, :3].T @ poses["index_middle"][:3, :3]
+    angle = np.arccos(np.clip((np.trace(R_rel.T @ R_bent) - 1) / 2, -1, 1))
+    assert angle == pytest.approx(0.5, abs=1e-9)
+    path = tmp_path / "two.step"
+    assy.export(str(path))
+    assert path.stat().st_size > 10_000
