@@ -102,10 +102,13 @@ def spring_channel(sec: DigitSection, y0: float, y1: float):
 
 
 def spring_anchor(sec: DigitSection, y: float):
-    """Knot pockets of the cable springs: dorsal wells down to the spring channels."""
+    """Anchor wells of the cable springs: from the dorsal face down through the spring channels
+    (cord + one clearance, narrower than the channel so the two bores never share a radius);
+    the cord is knotted on the dorsal face."""
     t = sec.tol
-    return [cylinder((sx, y, sec.spring_z - t.spring_hole / 2.0), (sx, y, sec.thickness / 2.0 + 1.0),
-                     t.spring_hole / 2.0) for sx in (sec.spring_x, -sec.spring_x)]
+    r = (t.spring + t.clearance) / 2.0
+    return [cylinder((sx, y, sec.spring_z - t.spring_hole / 2.0), (sx, y, sec.thickness / 2.0 + 1.0), r)
+            for sx in (sec.spring_x, -sec.spring_x)]
 
 
 def figure_eight(sec: DigitSection, j_prox: str, j_dist: str, length: float):
@@ -193,10 +196,10 @@ class Phalanx:
             tools.extend(spring_channel(sec, -sec.slot_back - 1.0, y_anchor))
             tools.extend(spring_anchor(sec, y_anchor))
             # tendon anchor: from the groove's palmar side into a knot well
-            R = sec.R[self.proximal_joint]
+            zt = -(sec.R[self.proximal_joint] + t.tendon / 2.0)   # the tendon centreline leaves the groove
             y_knot = sec.slot_back + t.wall + t.tendon_relief / 2.0
-            tools.append(channel((0.0, 0.0, -R), (0.0, y_knot, -R), t.tendon_hole))
-            tools.append(channel((0.0, y_knot, -R), (0.0, y_knot, -T / 2.0 - 1.0), t.tendon_relief))
+            tools.append(channel((0.0, 0.0, zt), (0.0, y_knot, zt), t.tendon_hole))
+            tools.append(channel((0.0, y_knot, zt), (0.0, y_knot, -T / 2.0 - 1.0), t.tendon_relief))
         else:
             tools.extend(spring_channel(sec, -sec.slot_back - 1.0, L + sec.boss_radius + 1.0))
         return build(body, tools, self.name)
