@@ -401,6 +401,16 @@ def _cad(c: Table, fingers, thumb, palm, servo, hardware, printing) -> Cad:
             raise ParamError(f"{name}.guide.d2_mm", round(g.d2 / MM, 6),
                              f"must be >= {need / MM:.3f} mm (half the thickness + hole_clearance + half "
                              "cad.eyelet_length): the phalanx guide eyelet must clear the joint boss", c.source)
+    for n, f in fingers.items():
+        # the metacarpal-side guide eyelet (and its relief) must fit inside the finger base
+        g = f.chain.guide
+        r_hole = hardware.tendon_diameter / 2.0 + printing.hole_clearance
+        reach = g.d1 * math.sin(g.alpha / 2.0) + cad.eyelet_length / 2.0 + (math.sqrt(3.0) + 2.0) * r_hole
+        if reach > cad.finger_base_length + 1e-12:
+            raise ParamError(f"fingers.{n}.guide.d1_mm", round(g.d1 / MM, 6),
+                             f"puts the guide eyelet {reach / MM:.3f} mm behind the MCP axis, beyond the finger "
+                             f"base's magnet face (cad.finger_base_length_mm = {cad.finger_base_length / MM:g})",
+                             c.source)
     for name, r in [(f"fingers.{n}", f.chain.servo_radius) for n, f in fingers.items()] + [
             ("thumb", thumb.chain.servo_radius), ("thumb.cmc_horn", thumb.cmc_horn_radius)]:
         limit = r - hardware.screw_diameter / 2.0 - printing.hole_clearance - hardware.tendon_diameter

@@ -23,7 +23,7 @@ def _fails(document, edit):
 
 def test_default_cad_values_in_si(params):
     cad = params.cad
-    assert cad.finger_base_length == pytest.approx(0.014)
+    assert cad.finger_base_length == pytest.approx(0.013)
     assert cad.cheek == pytest.approx(0.0024)
     assert cad.eyelet_length == pytest.approx(0.002)
     assert cad.horn_hole_radius == pytest.approx(0.004)
@@ -104,3 +104,13 @@ def test_shaft_offset_beyond_the_body(document):
 def test_nonpositive_cad_value(document):
     e = _fails(document, lambda d: d["cad"].__setitem__("eyelet_length_mm", 0.0))
     assert (e.field, e.value, e.rule) == ("cad.eyelet_length_mm", 0.0, "must be > 0")
+
+
+def test_base_guide_behind_the_magnet_face(document):
+    # 14 sin(50 deg) + 2/2 + (sqrt(3) + 2) * (0.6/2 + 0.2) = 13.591 mm > 13 mm
+    reach = 14 * math.sin(math.radians(50)) + 1.0 + (math.sqrt(3) + 2) * 0.5
+    e = _fails(document, lambda d: d["fingers"]["middle"]["guide"].__setitem__("d1_mm", 14.0))
+    assert (e.field, e.value) == ("fingers.middle.guide.d1_mm", 14.0)
+    assert e.rule == (f"puts the guide eyelet {reach:.3f} mm behind the MCP axis, beyond the finger base's "
+                      "magnet face (cad.finger_base_length_mm = 13)")
+    assert f"{reach:.3f}" == "13.591"

@@ -52,7 +52,7 @@ class FingerBase:
         body += b
         # metacarpal-side MCP guide at d1, and the tendon path from the magnet face to it
         G1, G2 = sec.guide_points()
-        b3, t3, u, (s_near, s_far) = eyelet(sec, G1, G2)
+        b3, t3, u, (s_near, s_far) = eyelet(sec, G1, G2, clip_y=-Lb)
         body += b3
         tools += t3
         chord = float(np.linalg.norm(G1 - G2))

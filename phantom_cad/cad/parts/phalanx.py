@@ -64,7 +64,7 @@ def clevis(sec: DigitSection, joint: str, y: float):
     return body, tools
 
 
-def eyelet(sec: DigitSection, centre_yz, toward_yz, clip_palmar: bool = False):
+def eyelet(sec: DigitSection, centre_yz, toward_yz, clip_palmar: bool = False, clip_y: float | None = None):
     """A tendon guide eyelet at centre (x = 0), its hole along the line toward ``toward``:
     a boss of material, a hole of exactly eyelet_length between two relief spheres.
     Returns (body, tools, axis unit vector, the two relief-sphere centres)."""
@@ -83,6 +83,9 @@ def eyelet(sec: DigitSection, centre_yz, toward_yz, clip_palmar: bool = False):
     if clip_palmar:   # a child's guide stays inside its palmar face (the flexion-stop face)
         T = sec.thickness
         boss = boss.cut(box(-T, T, c[1] - 2.0 * boss_back, c[1] + 2.0 * boss_back, -2.0 * T, -T / 2.0))
+    if clip_y is not None:   # stay in front of a mating face (the finger base's magnet face)
+        T = sec.thickness
+        boss = boss.cut(box(-T, T, clip_y - 4.0 * boss_back, clip_y, -2.0 * T, 2.0 * T))
     body = [boss]
     tools = [cylinder(s_far, s_near, r), sphere(s_near, rr), sphere(s_far, rr)]
     return body, tools, u, (s_near, s_far)
