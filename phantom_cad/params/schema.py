@@ -157,6 +157,7 @@ class Cad:
     servo_pulley_width: float    # servo pulley axial width
     horn_hole_radius: float      # servo horn screw circle radius
     servo_shaft_offset: float    # servo output shaft from the body centre along its length
+    module_stop_margin: float    # finger module's own MCP stop beyond the palm's (operational) limit, rad
 
 
 @dataclass(frozen=True)
@@ -364,6 +365,7 @@ def _cad(c: Table, fingers, thumb, palm, servo, hardware, printing) -> Cad:
         servo_pulley_width=c.number("servo_pulley_width_mm", gt=0) * MM,
         horn_hole_radius=c.number("horn_hole_radius_mm", gt=0) * MM,
         servo_shaft_offset=c.number("servo_shaft_offset_mm", ge=0) * MM,
+        module_stop_margin=c.number("module_stop_margin_deg", ge=0, le=10) * DEG,
     )
     c.done()
     groove = hardware.tendon_diameter + 2.0 * printing.hole_clearance

@@ -114,3 +114,8 @@ def test_base_guide_behind_the_magnet_face(document):
     assert e.rule == (f"puts the guide eyelet {reach:.3f} mm behind the MCP axis, beyond the finger base's "
                       "magnet face (cad.finger_base_length_mm = 13)")
     assert f"{reach:.3f}" == "13.591"
+
+
+def test_module_stop_margin_range(document):
+    e = _fails(document, lambda d: d["cad"].__setitem__("module_stop_margin_deg", 12.0))
+    assert (e.field, e.value, e.rule) == ("cad.module_stop_margin_deg", 12.0, "must be <= 10")

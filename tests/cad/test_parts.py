@@ -289,6 +289,8 @@ def test_hard_stop_engages_at_the_limit(built, document, params, digit, joint, p
     P, Cp = built[f"{digit}_{parent}"], built[f"{digit}_{child}"]
     table = document["thumb"] if digit == "thumb" else document["fingers"][digit]
     q_max = table["limits_rad"][joint][1]
+    if joint == "mcp":   # the finger module's own MCP stop lies beyond the palm's
+        q_max += math.radians(document["cad"]["module_stop_margin_deg"])
     vols = []
     for q in (q_max, q_max + math.radians(1.0)):
         qv = np.zeros(15)
@@ -298,6 +300,23 @@ def test_hard_stop_engages_at_the_limit(built, document, params, digit, joint, p
                                               check.placed(Cp.shape, T[f"{digit}_{child}"])))
     assert vols[0] < 1e-3
     assert vols[1] > 0.05
+
+
+@pytest.mark.parametrize("finger", FINGERS)
+def test_palm_housing_limits_mcp_flexion(built, document, params, finger):
+    """The palm's flexion limiter stops the proximal phalanx at the Table I MCP limit, before
+    the finger module's own stop."""
+    from phantom_cad.kinematics.topology import joint_index
+    q_max = document["fingers"][finger]["limits_rad"]["mcp"][1]
+    palm, prox = built["palm"], built[f"{finger}_proximal"]
+    vols = []
+    for q in (0.0, q_max, q_max + math.radians(1.0)):
+        qv = np.zeros(15)
+        qv[joint_index(finger, "mcp")] = q
+        T = assembly.pose_transforms(params, qv)
+        vols.append(check.intersection_volume(palm.shape, check.placed(prox.shape, T[f"{finger}_proximal"])))
+    assert vols[0] < 1e-3 and vols[1] < 1e-3
+    assert vols[2] > 0.05
 
 
 def test_half_flexed_hand_has_no_interference(built, params, document):

@@ -104,7 +104,13 @@ class DigitSection:
         self.cheek = mm(params.cad.cheek)
         chain = d.chain
         self.R = {j: mm(r) for j, r in zip(chain.joints, chain.radii)}
+        #: upper limits (Table I): where the operational stops engage
         self.q_max = {j: lim[1] for j, lim in zip(chain.joints, chain.limits)}
+        #: where this digit module's own hard stops engage: the finger MCP goes
+        #: cad.module_stop_margin further (the palm housing stops it at q_max)
+        self.q_stop = dict(self.q_max)
+        if digit != "thumb":
+            self.q_stop["mcp"] = self.q_max["mcp"] + params.cad.module_stop_margin
         self.guide = chain.guide
 
     @property

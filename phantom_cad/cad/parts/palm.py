@@ -21,7 +21,9 @@ import numpy as np
 
 from ...kinematics import frames as F
 from ...kinematics.topology import FINGERS
-from .common import Tolerances, box, build, cylinder, mm, transform
+import math
+
+from .common import DigitSection, Tolerances, box, build, cylinder, mm, prism_x, transform
 
 
 def _mm(T):
@@ -111,6 +113,31 @@ class Palm:
                 ys.append((T @ np.array([sx, 0.0, 0.0, 1.0]))[1])
         return min(ys) - self.tol.clearance
 
+    def limiter_polygon(self, finger: str) -> list[tuple[float, float]]:
+        """(y, z) outline, in the finger base frame (MCP axis at the origin), of the palm's
+        flexion limiter: from inside the socket block to the plane the proximal phalanx's
+        palmar face (z_child = -thickness/2) reaches at the MCP upper limit."""
+        sec = DigitSection(self.params, finger)
+        q = sec.q_max["mcp"]
+        s, c = math.sin(q), math.cos(q)
+        rb = sec.boss_radius
+        Lb = mm(self.params.cad.finger_base_length)
+        z_top = -sec.thickness / 2.0 - self.tol.clearance
+        z_bot = -self.thickness / 2.0
+        y_at = lambda z: (-rb - z * c) / s  # noqa: E731
+        return [(-Lb - self.tol.wall, z_bot), (y_at(z_bot), z_bot), (y_at(z_top), z_top),
+                (-Lb - self.tol.wall, z_top)]
+
+    def limiter_x(self, finger: str) -> tuple[float, float]:
+        """Inner and outer |x| of the two rails: clear of the guide eyelet bosses, flush with the finger."""
+        sec = DigitSection(self.params, finger)
+        return sec.eyelet_boss_radius + self.tol.clearance, sec.width / 2.0
+
+    def limiter_rails(self, finger: str):
+        poly = self.limiter_polygon(finger)
+        x0, x1 = self.limiter_x(finger)
+        return [prism_x(poly, x0, x1), prism_x(poly, -x1, -x0)]
+
     # -- geometry ----------------------------------------------------------
     def build(self):
         t, Tp = self.tol, self.thickness
@@ -134,6 +161,11 @@ class Palm:
             tangent = (Ts @ np.array([-r, 0.0, 0.0, 1.0]))[:3]   # servo x = palm z: bottom of the pulley
             exit_ = (T @ np.array([0.0, 0.0, self.tendon_z, 1.0]))[:3]
             tools.append(cylinder(exit_ + T[:3, 1], tangent - np.array([0.0, 1.0, 0.0]), t.tendon_hole / 2.0))
+        # flexion-limiting housing: two rails under each finger base whose sloped fronts are
+        # where the proximal phalanx's palmar face lies at the MCP limit (Table I)
+        for f in FINGERS:
+            for rail in self.limiter_rails(f):
+                body.append(transform(rail, _mm(F.T_palm_finger_base(self.params, f))))
         # thumb tendon: servo 1's tangent point out through the radial side
         Ts = self.T_servo(1)
         tangent = (Ts @ np.array([-self.pulley_radius(1), 0.0, 0.0, 1.0]))[:3]

@@ -50,13 +50,13 @@ def clevis(sec: DigitSection, joint: str, y: float):
     rb, W, T, sw = sec.boss_radius, sec.width, sec.thickness, sec.slot_width
     body = [cyl_x(rb, -W / 2.0, W / 2.0, y, 0.0)]
     slot = box(-sw / 2.0, sw / 2.0, y - sec.slot_back, y + rb + 1.0, -T / 2.0 - 1.0, T / 2.0 + 1.0)
-    recess = sec.recess(sec.q_max[joint])
+    recess = sec.recess(sec.q_stop[joint])
     half = sw / 2.0
     if recess > 0.0:       # across the full width: the child's full-width body swings in here
         half = W / 2.0 + 1.0
         quadrant = box(-half, half, y - sec.slot_back - recess, y, -T / 2.0 - 1.0, 0.0)
         slot = slot.fuse(quadrant.cut(cyl_x(rb, -half - 1.0, half + 1.0, y, 0.0)))
-    poly = sec.stop_polygon(sec.q_max[joint])
+    poly = sec.stop_polygon(sec.q_stop[joint])
     if poly is not None:   # keep the flexion-stop wedge: the slot tool leaves it standing
         wedge = prism_x([(py + y, pz) for py, pz in poly], -half - 0.5, half + 0.5)
         slot = slot.cut(wedge)
