@@ -403,3 +403,43 @@ def test_left_hand_is_the_mirror_image(built, variant, name):
     pr = check.solid_report(check.placed(right.shape, right.T_hand_link))
     assert np.allclose(pl["bbox_min"], [-pr["bbox_max"][0], pr["bbox_min"][1], pr["bbox_min"][2]], atol=1e-3)
     assert np.allclose(pl["bbox_max"], [-pr["bbox_min"][0], pr["bbox_max"][1], pr["bbox_max"][2]], atol=1e-3)
+
+
+# ---------------------------------------------------------------------------
+# tendon routing: socket -> servo pulley
+# ---------------------------------------------------------------------------
+
+def _line_distance(p1, d1, p2, d2):
+    n = np.cross(d1, d2)
+    if np.linalg.norm(n) < 1e-12:
+        return check.point_line_distance(p2, p1, d1)
+    return abs((p2 - p1) @ n) / np.linalg.norm(n)
+
+
+@pytest.mark.parametrize("k,finger", [(2, "index"), (3, "middle"), (4, "ring"), (5, "pinky")])
+def test_palm_tendon_channel_joins_base_and_pulley(built, document, k, finger):
+    """The palm's tendon channel starts where the finger base's tendon channel crosses the
+    magnet face and runs tangent to its servo pulley's groove (distance r_j from the axis)."""
+    palm, base, pulley = built["palm"], built[f"{finger}_base"], built[f"servo_pulley_{k}"]
+    channels = [c for c in check.cylinders(palm.shape) if abs(c["radius"] - tendon_hole(document) / 2) < 1e-6]
+    # the base's entry channel (a relief, twice the hole) crosses the magnet face y = -base length
+    Lb = document["cad"]["finger_base_length_mm"]
+    entries = []
+    for c in check.cylinders(base.shape):
+        if abs(c["radius"] - tendon_hole(document)) < 1e-6 and abs(c["direction"][1]) > 1e-6:
+            t = (-Lb - c["point"][1]) / c["direction"][1]
+            entries.append(_hand(base.T_hand_link, c["point"] + t * c["direction"]))
+    # the pulley's groove axis, measured
+    r = document["fingers"][finger]["servo_pulley_radius_mm"]
+    groove = [c for c in check.cylinders(pulley.shape) if abs(c["radius"] - r) < 1e-6]
+    assert groove
+    pa, pd = _hand(pulley.T_hand_link, groove[0]["point"]), _dir(pulley.T_hand_link, groove[0]["direction"])
+    hits = 0
+    for c in channels:
+        p, d = c["point"], c["direction"]
+        through_entry = any(check.point_line_distance(e, p, d) < 1e-6 for e in entries)
+        if through_entry:
+            hits += 1
+            assert _line_distance(p, d, pa, pd) == pytest.approx(r, abs=1e-6)
+            assert abs(d @ pd) < 1e-9   # the tendon leaves in the pulley's plane
+    assert hits == 1

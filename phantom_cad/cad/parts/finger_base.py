@@ -57,7 +57,8 @@ class FingerBase:
         tools += t3
         chord = float(np.linalg.norm(G1 - G2))
         tools.append(channel(s_near, s_near + u * chord / 2.0, t.tendon_relief))
-        tools.append(channel(self.tendon_entry - np.array([0.0, 1.0, 0.0]), s_far, t.tendon_relief))
+        u_in = (s_far - self.tendon_entry) / np.linalg.norm(s_far - self.tendon_entry)
+        tools.append(cylinder(self.tendon_entry - u_in, s_far, t.tendon_relief / 2.0))   # ends in the relief sphere
         # magnet pockets, opening on the magnet face
         for c in self.magnet_centres():
             tools.append(cylinder(c - np.array([0.0, 1.0, 0.0]),

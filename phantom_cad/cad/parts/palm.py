@@ -160,7 +160,8 @@ class Palm:
             r = self.pulley_radius(k)
             tangent = (Ts @ np.array([-r, 0.0, 0.0, 1.0]))[:3]   # servo x = palm z: bottom of the pulley
             exit_ = (T @ np.array([0.0, 0.0, self.tendon_z, 1.0]))[:3]
-            tools.append(cylinder(exit_ + T[:3, 1], tangent - np.array([0.0, 1.0, 0.0]), t.tendon_hole / 2.0))
+            u = (tangent - exit_) / np.linalg.norm(tangent - exit_)
+            tools.append(cylinder(exit_ - u, tangent + u, t.tendon_hole / 2.0))
         # flexion-limiting housing: two rails under each finger base whose sloped fronts are
         # where the proximal phalanx's palmar face lies at the MCP limit (Table I)
         for f in FINGERS:
