@@ -228,12 +228,16 @@ def bill_of_materials(params) -> list[dict]:
     bom.append({"item": "magnet", "spec": f"disc {g(hw.magnet_diameter)} x {g(hw.magnet_thickness)} mm (N52)",
                 "quantity": 4 * len(FINGERS),
                 "used_in": "two per finger base and two per palm socket"})
-    bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} x 8 self-tapping (servo flange)",
-                "quantity": 2 * N_SERVOS, "used_in": "palm servo pockets"})
-    bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} horn screw",
+    from .parts.common import Tolerances   # numpy only
+    engage = Tolerances(params).screw_engagement / 1000.0
+    bom.append({"item": "screw",
+                "spec": f"M{g(hw.screw_diameter)} self-tapping, {g(engage)} mm thread engagement + servo flange",
+                "quantity": 2 * N_SERVOS, "used_in": "servo flanges into the palm's pilot holes"})
+    bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} horn screw (servo accessory)",
                 "quantity": 2 * N_SERVOS, "used_in": "servo pulleys 1-6 to their horns"})
-    bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} x 20 (CMC base to hub)",
-                "quantity": 2, "used_in": "thumb_cmc_base -> servo_pulley_6"})
+    cmc = params.thumb.thickness + params.print.hole_clearance + engage
+    bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} x {cmc * 1000.0:.0f} self-tapping",
+                "quantity": 2, "used_in": "thumb_cmc_base through its hub into servo_pulley_6"})
     for d, L in _tendon_lengths(params).items():
         bom.append({"item": "tendon", "spec": f"{g(hw.tendon_diameter)} mm braided UHMWPE, {L:.0f} mm",
                     "quantity": 1, "used_in": f"{d}: servo pulley to distal anchor"})

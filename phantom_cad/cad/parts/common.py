@@ -79,6 +79,11 @@ class Tolerances:
         return self.screw - self.interference
 
     @property
+    def screw_engagement(self) -> float:
+        """Depth of a self-tapping pilot hole: three screw diameters of thread in plastic."""
+        return 3.0 * self.screw
+
+    @property
     def magnet_pocket_d(self) -> float:
         return self.magnet_d + 2.0 * self.magnet_clearance
 

@@ -188,6 +188,6 @@ class Palm:
                 # open on the shaft side: the servo drops in before the hub goes on
                 tools.append(transform(box(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2] + 1.0), Ts))
             for p in self.screw_points(k):
-                tools.append(transform(cylinder(p + np.array([0, 0, 1.0]), p - np.array([0, 0, 6.0]),
+                tools.append(transform(cylinder(p + np.array([0, 0, 1.0]), p - np.array([0, 0, t.screw_engagement]),
                                                 t.screw_pilot / 2.0), Ts))
         return build(body, tools, self.name)
