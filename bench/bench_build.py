@@ -10,7 +10,9 @@ with a private cache and export directory in a temporary folder:
 3. one finger changed: ``fingers.index.width_mm`` - 0.5 mm (only the index parts rebuild);
 4. with ``--slice``: a cold slicing pass of every STL with PrusaSlicer, then a warm one.
 
-Prints one line per case with the wall time and the parts built / taken from the cache.
+Prints one line per case: wall time, CPU time of the build process and its workers (user +
+sys; on a busy machine wall grows but CPU does not: the idle 2-core wall is about CPU / 2 plus
+the serial start-up), parts built / taken from the cache.
 """
 
 from __future__ import annotations
@@ -29,14 +31,24 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 
-def run(args: list[str], env: dict) -> tuple[float, str]:
+def _children_cpu() -> float:
+    import resource
+
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def run(args: list[str], env: dict) -> tuple[float, float, str]:
+    """(wall s, CPU s of the build and its workers, output)"""
+    cpu0 = _children_cpu()
     t = time.perf_counter()
     proc = subprocess.run([sys.executable, "-m", "phantom_cad.cad.cli", *args], capture_output=True,
                           text=True, env=env, cwd=ROOT)
     wall = time.perf_counter() - t
+    cpu = _children_cpu() - cpu0
     if proc.returncode != 0:
         sys.exit(f"build failed ({' '.join(args)}):\n{proc.stderr[-3000:]}")
-    return wall, proc.stdout + proc.stderr
+    return wall, cpu, proc.stdout + proc.stderr
 
 
 def counts(out: str) -> str:
@@ -68,26 +80,30 @@ def main() -> None:
             base = ["--out", str(tmp / "out" / "phantom"), "--cache-dir", str(tmp / "cache")]
             jobs = ["--jobs", str(a.jobs)] if a.jobs else []
             rows = []
-            wall, out = run(base + jobs + ["--no-slice"], env)
-            rows.append(("cold build (STEP+STL+renders+manifest)", wall, counts(out)))
-            wall, out = run(base + jobs + ["--no-slice"], env)
-            rows.append(("warm rebuild, same parameters", wall, counts(out)))
+            wall, cpu, out = run(base + jobs + ["--no-slice"], env)
+            rows.append(("cold build (STEP+STL+renders+manifest)", wall, cpu, counts(out)))
+            wall, cpu, out = run(base + jobs + ["--no-slice"], env)
+            rows.append(("warm rebuild, same parameters", wall, cpu, counts(out)))
             doc = load_document(DEFAULT_PARAMS)
             doc["fingers"]["index"]["width_mm"] = doc["fingers"]["index"]["width_mm"] - 0.5
             changed = tmp / "changed.toml"
             changed.write_text(tomli_w.dumps(doc))
-            wall, out = run(base + jobs + ["--no-slice", "--params", str(changed)], env)
-            rows.append(("one finger changed (index width -0.5 mm)", wall, counts(out)))
+            wall, cpu, out = run(base + jobs + ["--no-slice", "--params", str(changed)], env)
+            rows.append(("one finger changed (index width -0.5 mm)", wall, cpu, counts(out)))
             if a.slice:
-                wall, out = run(base + jobs + ["--slice"], env)
-                rows.append(("--slice, cold slicer cache (every part)", wall, counts(out)))
-                wall, out = run(base + jobs + ["--slice"], env)
-                rows.append(("--slice, warm (estimates cached)", wall, counts(out)))
-            print(f"\n## run {rep + 1}")
-            print("| case | wall [s] | parts |")
-            print("|---|---:|---|")
-            for name, wall, c in rows:
-                print(f"| {name} | {wall:.2f} | {c} |")
+                wall, cpu, out = run(base + jobs + ["--slice"], env)
+                rows.append(("--slice, cold slicer cache (every part)", wall, cpu, counts(out)))
+                wall, cpu, out = run(base + jobs + ["--slice"], env)
+                rows.append(("--slice, warm (estimates cached)", wall, cpu, counts(out)))
+            try:
+                load = f", load average after {os.getloadavg()[0]:.2f}"
+            except OSError:
+                load = ""
+            print(f"\n## run {rep + 1}{load}")
+            print("| case | wall [s] | CPU [s] | parts |")
+            print("|---|---:|---:|---|")
+            for name, wall, cpu, c in rows:
+                print(f"| {name} | {wall:.2f} | {cpu:.1f} | {c} |")
 
 
 if __name__ == "__main__":
