@@ -443,3 +443,26 @@ def test_palm_tendon_channel_joins_base_and_pulley(built, document, k, finger):
             assert _line_distance(p, d, pa, pd) == pytest.approx(r, abs=1e-6)
             assert abs(d @ pd) < 1e-9   # the tendon leaves in the pulley's plane
     assert hits == 1
+
+
+# ---------------------------------------------------------------------------
+# check.verify_part: what the build uses to refuse a broken part
+# ---------------------------------------------------------------------------
+
+def test_verify_part_accepts_every_default_part(built, params):
+    assert {n: check.verify_part(params, n, b.shape) for n, b in built.items()} == {n: [] for n in built}
+
+
+def test_verify_part_reports_a_wrong_groove(variant, params):
+    p = variant(lambda d: d["fingers"]["middle"]["pulley_radius_mm"].__setitem__("pip", 4.6))
+    shape = assembly.build_part(p, "middle_middle").shape
+    assert check.verify_part(params, "middle_middle", shape) == [
+        "middle_middle: pip groove radius measures 4.6000, expected 4.0000 mm"]
+
+
+def test_verify_part_reports_several_solids(params):
+    import build123d as bd
+    two = bd.Compound([bd.Box(1, 1, 1), bd.Pos(5, 0, 0) * bd.Box(1, 1, 1)])
+    assert check.verify_part(params, "servo_pulley_2", two) == ["servo_pulley_2: 2 solids, expected 1"]
+    assert check.verify_part(params, "servo_pulley_2", bd.Box(4, 4, 4)) == [
+        "servo_pulley_2: groove radius measures nothing, expected 7.0000 mm"]
