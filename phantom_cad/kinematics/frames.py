@@ -236,3 +236,37 @@ def link_transforms(params, q=None) -> dict[str, np.ndarray]:
     if params.side == "left":
         out = {k: mirror(v) for k, v in out.items()}
     return out
+
+
+def joints(params) -> list[dict]:
+    """The 15 actuated joints for a URDF/MJCF writer, in q order (Table I): name
+    (``index_dip``, ...), parent and child link, ``origin`` = T_parent_child at rest (metres,
+    mirrored for a left hand), ``axis`` (unit vector in the child frame; q turns the child
+    about it by +q), ``q_index`` and ``limits`` (rad) from the parameters."""
+    from .topology import JOINT_NAMES
+
+    rest = joint_transforms(params, None)
+    left = params.side == "left"
+    out = []
+    for i, name in enumerate(JOINT_NAMES):
+        digit, joint = name.split("_")
+        if digit == "thumb":
+            chain = {"cmc": ("palm", "thumb_cmc_base"), "mp": ("thumb_cmc_base", "thumb_proximal"),
+                     "ip": ("thumb_proximal", "thumb_distal")}[joint]
+            limits = params.thumb.cmc_limits if joint == "cmc" else dict(
+                zip(params.thumb.chain.joints, params.thumb.chain.limits))[joint]
+        else:
+            chain = {"mcp": (f"{digit}_base", f"{digit}_proximal"), "pip": (f"{digit}_proximal", f"{digit}_middle"),
+                     "dip": (f"{digit}_middle", f"{digit}_distal")}[joint]
+            limits = dict(zip(params.fingers[digit].chain.joints, params.fingers[digit].chain.limits))[joint]
+        parent, child = chain
+        T = rest[f"T_{parent}_{child}"]
+        if joint == "cmc":
+            # the CMC's own rotation Rz(q15) is the joint, not part of its origin
+            axis = np.array([0.0, 0.0, -1.0 if left else 1.0])
+        else:
+            axis = np.array([-1.0, 0.0, 0.0])
+        out.append({"name": name, "parent": parent, "child": child,
+                    "origin": mirror(T) if left else T, "axis": axis, "q_index": i,
+                    "limits": tuple(float(v) for v in limits)})
+    return out

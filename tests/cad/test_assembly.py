@@ -165,3 +165,34 @@ def test_print_rotation_lays_each_part_on_a_flat_face(built):
         down = sum(f["area"] for f in check.planar_faces(s)
                    if f["normal"][2] < -0.999999 and abs(f["centre"][2] - z0) < 1e-6)
         assert down > 0.25 * footprint, (n, down, footprint)
+
+
+@pytest.mark.parametrize("side", ["right", "left"])
+def test_joint_table_reproduces_the_posed_links(params, variant, side):
+    """Chaining origin * rotation(axis, q) over frames.joints() gives pose_transforms(q)."""
+    from phantom_cad.kinematics import frames as F
+    p = params if side == "right" else variant(lambda d: d["hand"].__setitem__("side", "left"))
+    q = np.linspace(0.1, 0.9, 15)
+    table = F.joints(p)
+    assert [j["name"] for j in table][:3] == ["thumb_ip", "thumb_mp", "index_dip"]
+
+    def rot(axis, a):   # Rodrigues, written out here
+        k = np.asarray(axis, float)
+        K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+        T = np.eye(4)
+        T[:3, :3] = np.eye(3) + math.sin(a) * K + (1 - math.cos(a)) * K @ K
+        return T
+
+    links = {"palm": np.eye(4)}
+    fixed = {f"{f}_base": F.link_transforms(p)[f"{f}_base"] for f in FINGERS}
+    links.update(fixed)
+    pending = sorted(table, key=lambda j: 0 if j["parent"] in links else 1)
+    while pending:
+        j = next(j for j in pending if j["parent"] in links)
+        pending.remove(j)
+        links[j["child"]] = links[j["parent"]] @ j["origin"] @ rot(j["axis"], q[j["q_index"]])
+    posed = {n: F.link_transforms(p, q)[n] for n in links}
+    for n, T in links.items():
+        assert np.allclose(T, posed[n], atol=1e-12), n
+    # limits come from the parameter file
+    assert table[2]["limits"] == (0.0, 1.31) and table[14]["limits"] == (0.0, 1.57)
