@@ -13,7 +13,6 @@ carries its print tolerance from ``params.print`` (docs/parts.md lists which):
 from __future__ import annotations
 
 import math
-from functools import cached_property
 
 import numpy as np
 
