@@ -189,10 +189,12 @@ def _tendon_lengths(params) -> dict[str, float]:
         wrap = chain.servo_radius * chain.travel[1]
         out[f] = (run + wrap) * mm
     th = params.thumb
-    Ts = F.T_palm_servo(params, 0)
-    tangent = (Ts @ np.array([-th.chain.servo_radius, 0, 0, 1.0]))[:3]
-    cmc = np.asarray(params.palm.thumb_cmc_offset)
-    run = np.linalg.norm(cmc - tangent) + th.metacarpal + th.chain.guide.L0 + th.proximal + th.distal / 2.0
+    from .parts.palm import Palm   # numpy only until build()
+    palm = Palm(params)
+    path = palm.thumb_tendon_path()             # mm: servo 1 -> palm exit -> post -> arch -> CMC axis
+    run = sum(float(np.linalg.norm(b - a)) for a, b in zip(path, path[1:])) / mm
+    run += palm.cmc_arch()["z_lo"] / mm         # down the CMC axis to the CMC base's mid-plane
+    run += th.metacarpal + th.chain.guide.L0 + th.proximal + th.distal / 2.0
     out["thumb"] = (run + th.chain.servo_radius * th.chain.travel[1]) * mm
     return out
 

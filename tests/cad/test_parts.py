@@ -466,3 +466,22 @@ def test_verify_part_reports_several_solids(params):
     assert check.verify_part(params, "servo_pulley_2", two) == ["servo_pulley_2: 2 solids, expected 1"]
     assert check.verify_part(params, "servo_pulley_2", bd.Box(4, 4, 4)) == [
         "servo_pulley_2: groove radius measures nothing, expected 7.0000 mm"]
+
+
+def test_thumb_tendon_reaches_the_cmc_base_on_its_axis(built, document):
+    """The palm's arch drops the thumb tendon onto the CMC axis (measured: the hub's axis of
+    the CMC base) and the CMC base has its bore on that axis, so CMC rotation leaves the
+    tendon length alone."""
+    palm, base = built["palm"], built["thumb_cmc_base"]
+    r_hub = document["thumb"]["cmc_horn_radius_mm"]
+    hub = [c for c in check.cylinders(base.shape) if abs(c["radius"] - r_hub) < 1e-6]
+    assert hub
+    a, d = _hand(base.T_hand_link, hub[0]["point"]), _dir(base.T_hand_link, hub[0]["direction"])
+    holes = [c for c in check.cylinders(palm.shape) if abs(c["radius"] - tendon_hole(document) / 2) < 1e-6]
+    on_axis = [c for c in holes if check.point_line_distance(c["point"], a, d) < 1e-6
+               and abs(abs(c["direction"] @ d) - 1) < 1e-9]
+    assert len(on_axis) == 1
+    # the CMC base's central bore is coaxial too
+    clear = document["hardware"]["screw_diameter_mm"] / 2 + document["print"]["hole_clearance_mm"]
+    assert any(abs(c["radius"] - clear) < 1e-6 and check.coaxial(c, hub[0]["point"], hub[0]["direction"])
+               for c in check.cylinders(base.shape))

@@ -12,7 +12,10 @@ y distal, z dorsal. Built from:
   the dorsal side for assembly), pulley cavities and M2 pilot holes at the flange ears;
 * the thenar housing of servo 6, coaxial with the thumb CMC axis (open on the shaft side);
 * tendon channels from each socket's tendon exit straight back to its servo pulley's
-  tangent point, and the thumb tendon's channel from servo 1 out of the palm's radial side.
+  tangent point, and the thumb tendon's channel from servo 1 out of the palm's radial side;
+* the CMC post and arch: the thumb tendon climbs a post on servo 6's housing and reaches the
+  CMC axis above the CMC base, so turning the thumb about the CMC does not change its length;
+* the flexion-limiting housing (rails under each finger base, at the Table I MCP limit).
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ from ...kinematics import frames as F
 from ...kinematics.topology import FINGERS
 import math
 
-from .common import DigitSection, Tolerances, box, build, cylinder, mm, prism_x, transform
+from .common import DigitSection, Tolerances, box, build, cylinder, mm, prism_x, sphere, transform
 
 
 def _mm(T):
@@ -113,6 +116,71 @@ class Palm:
                 ys.append((T @ np.array([sx, 0.0, 0.0, 1.0]))[1])
         return min(ys) - self.tol.clearance
 
+    # -- thumb tendon over the CMC axis --------------------------------------
+    def T_cmc(self) -> np.ndarray:
+        return _mm(F.T_palm_thumb_cmc_base(self.params))
+
+    def cmc_arch(self) -> dict:
+        """Dimensions (CMC frame, mm) of the post and arch that carry the thumb tendon onto the
+        CMC axis above the CMC base, so that turning the CMC does not change its length. The
+        post stands on the end wall of servo 6's housing, on the side the thumb never sweeps
+        (q15 turns the thumb from +y toward -x), the arch clears the CMC base by one clearance."""
+        t = self.tol
+        T = mm(self.params.thumb.thickness)
+        r_hub = mm(self.params.thumb.cmc_horn_radius)
+        r_post = t.wall
+        # on the end wall of servo 6's housing, clear of the pocket and of the hub
+        L = self.servo_body[0]
+        y_post = -max(self.shaft_offset + L / 2.0 + 2.0 * t.clearance + r_post, r_hub + t.clearance + r_post)
+        z_floor = -(T / 2.0 + 2.0 * t.clearance + self.pulley_width)   # servo 6 housing top
+        z_lo = T / 2.0 + t.clearance                                     # arch underside
+        z_hi = z_lo + 2.0 * t.wall
+        z_mid = (z_lo + z_hi) / 2.0
+        z_entry = z_floor + t.tendon_relief + t.wall
+        return {"r_post": r_post, "y_post": y_post, "z_floor": z_floor, "z_lo": z_lo, "z_hi": z_hi,
+                "z_mid": z_mid, "z_entry": z_entry}
+
+    def thumb_tendon_path(self) -> list[np.ndarray]:
+        """Palm-frame points (mm) of the thumb tendon: servo 1's tangent point, the palm exit,
+        the post entry, the post top, the point above the CMC axis, the CMC axis at the arch's
+        underside."""
+        a = self.cmc_arch()
+        x0 = self.extents()[0]
+        Ts = self.T_servo(1)
+        tangent = (Ts @ np.array([-self.pulley_radius(1), 0.0, 0.0, 1.0]))[:3]
+        exit_ = np.array([x0 - 1.0, tangent[1], tangent[2]])
+        Tc = self.T_cmc()
+        P = lambda *v: (Tc @ np.array([*v, 1.0]))[:3]  # noqa: E731
+        entry = P(0.0, a["y_post"], a["z_entry"])
+        top = P(0.0, a["y_post"], a["z_mid"])
+        over = P(0.0, 0.0, a["z_mid"])
+        axis = P(0.0, 0.0, a["z_lo"])
+        return [tangent, exit_, entry, top, over, axis]
+
+    def cmc_arch_body(self):
+        a = self.cmc_arch()
+        w, r = self.tol.wall, a["r_post"]
+        post = cylinder((0.0, a["y_post"], a["z_floor"] - w), (0.0, a["y_post"], a["z_hi"]), r)
+        arch = box(-r, r, a["y_post"], r, a["z_lo"], a["z_hi"])
+        return [post, arch]
+
+    def cmc_arch_tools(self):
+        """Tendon channel in the post and arch (CMC frame): relief spheres at the bends."""
+        a = self.cmc_arch()
+        t = self.tol
+        r, rr = t.tendon_hole / 2.0, t.tendon_relief / 2.0
+        e = np.array([0.0, a["y_post"], a["z_entry"]])
+        top = np.array([0.0, a["y_post"], a["z_mid"]])
+        over = np.array([0.0, 0.0, a["z_mid"]])
+        # the entry hole faces the palm exit (the tendon arrives through the air)
+        Tc_inv = np.linalg.inv(self.T_cmc())
+        exit_local = (Tc_inv @ np.append(self.thumb_tendon_path()[1], 1.0))[:3]
+        u = exit_local - e
+        u /= np.linalg.norm(u)
+        return [cylinder(e, e + u * (a["r_post"] + 2.0 * t.wall), r), sphere(e, rr), cylinder(e, top, r), sphere(top, rr),
+                cylinder(top, over, r), sphere(over, rr),
+                cylinder(over, (0.0, 0.0, a["z_lo"] - 1.0), r)]
+
     def limiter_polygon(self, finger: str) -> list[tuple[float, float]]:
         """(y, z) outline, in the finger base frame (MCP axis at the origin), of the palm's
         flexion limiter: from inside the socket block to the plane the proximal phalanx's
@@ -167,10 +235,16 @@ class Palm:
         for f in FINGERS:
             for rail in self.limiter_rails(f):
                 body.append(transform(rail, _mm(F.T_palm_finger_base(self.params, f))))
-        # thumb tendon: servo 1's tangent point out through the radial side
-        Ts = self.T_servo(1)
-        tangent = (Ts @ np.array([-self.pulley_radius(1), 0.0, 0.0, 1.0]))[:3]
-        tools.append(cylinder(tangent, np.array([x0 - 1.0, tangent[1], tangent[2]]), t.tendon_hole / 2.0))
+        # thumb tendon: servo 1's tangent point out through the radial side, then (in the air)
+        # to the CMC post, up the post, along the arch and down the CMC axis into the thumb
+        pts = self.thumb_tendon_path()
+        tools.append(cylinder(pts[0], pts[1], t.tendon_hole / 2.0))
+        tools.append(cylinder(pts[1], pts[2], t.tendon_hole / 2.0))   # where it grazes the housing
+        Tc = self.T_cmc()
+        for tool in self.cmc_arch_tools():
+            tools.append(transform(tool, Tc))
+        for part in self.cmc_arch_body():
+            body.append(transform(part, Tc))
         # servo pockets, pulley cavities, flange screws
         for k in range(1, 7):
             Ts = self.T_servo(k)

@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from .common import DigitSection, box, build, cylinder, mm
+from .common import DigitSection, box, build, cylinder, mm, sphere
 from .phalanx import channel, clevis, eyelet, spring_anchor, spring_channel
 from .pulley import BASE_ANGLES, HORN_ANGLES
 
@@ -53,9 +53,11 @@ class ThumbCMCBase:
         tools += t3
         chord = float(np.linalg.norm(G1 - G2))
         tools.append(channel(s_near, s_near + u * chord / 2.0, t.tendon_relief))
-        # tendon enters behind the hub and runs along the arm to the eyelet
-        entry = np.array([0.0, -self.hub_radius - 1.0, s_far[2]])
-        tools.append(channel(entry, s_far, t.tendon_relief))
+        # the tendon comes down the CMC axis (through the hub's central bore, from the palm's
+        # arch above) and turns along the arm to the eyelet: CMC rotation leaves its length alone
+        turn = np.array([0.0, 0.0, s_far[2]])
+        tools.append(sphere(turn, t.tendon_relief / 2.0 + t.clearance))
+        tools.append(cylinder(turn, s_far, t.tendon_relief / 2.0))
         # hub: spline-screw bore and the four holes on the horn circle
         h = T / 2.0 + 1.0
         tools.append(cylinder((0, 0, -h), (0, 0, h), t.screw_clear / 2.0))
