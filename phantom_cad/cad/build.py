@@ -13,7 +13,8 @@ Pipeline
    ``assembly.part_inputs`` into a cache key (:mod:`phantom_cad.cad.cache`);
 2. build the parts missing from the cache in parallel worker processes (each worker gets
    the plain parameter document and re-parses it); a worker builds the part
-   (``assembly.build_part``), checks it is one valid solid, writes BREP/STEP, re-imports
+   (``assembly.build_part``), checks it is one valid solid and measures it against the
+   parameters (``phantom_cad.check.verify_part``), writes BREP/STEP, re-imports
    the STEP (same volume), tessellates it (``print.stl_tolerance``), checks the mesh
    (watertight, manifold, volume) and renders it;
 3. the assembly STEP (parts placed with ``assembly.pose_transforms``), the assembly
@@ -182,6 +183,24 @@ def _bbox(v: np.ndarray) -> dict:
 # ---------------------------------------------------------------------------
 # worker: one part
 
+def _verify(params, name: str, shape, module: str | None) -> str:
+    """Helper A's measured part-vs-parameters verification (phantom_cad.check.verify_part:
+    groove radii, guide eyelets, magnet pockets, ...). Runs for the real parts module only.
+    Returns "ok" or "skipped"; raises CheckError listing the problems."""
+    if (module or ASSEMBLY_MODULE) != "phantom_cad.cad.assembly":
+        return "skipped"
+    try:
+        from ..check import verify_part
+    except ImportError:
+        return "skipped"
+    problems = verify_part(params, name, shape)
+    if problems:
+        from ..export.step_stl import CheckError
+
+        raise CheckError(name, "verify_part", "; ".join(problems))
+    return "ok"
+
+
 def _part_worker(task: dict) -> dict:
     """Build, check and export one part into its cache entry. Runs in a worker process."""
     name = task["name"]
@@ -200,6 +219,7 @@ def _part_worker(task: dict) -> dict:
             raise step_stl.CheckError(name, "name", f"build_part returned a part named {built.name!r}")
         shape = built.shape
         step_stl.check_solid(name, shape)
+        verified = _verify(params, name, shape, task.get("assembly_module"))
         volume = float(shape.volume)
         area = float(shape.area)
 
@@ -247,6 +267,7 @@ def _part_worker(task: dict) -> dict:
             "stl": {"sha256": sha256(stl), "bytes": len(stl), **mesh_checks},
             "step": {"sha256": sha256(step), "bytes": len(step), "reimport_volume_mm3": reimported},
             "part_inputs": jsonable(inputs),
+            "verify_part": verified,
         }
         if task.get("render", True):
             t = time.perf_counter()

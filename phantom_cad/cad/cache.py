@@ -36,6 +36,7 @@ PIPELINE_VERSION = 1
 _PKG = Path(__file__).resolve().parents[1]      # .../phantom_cad
 #: sources whose code decides the geometry and the exported bytes
 _CODE_DIRS = ("cad", "export", "kinematics", "params")
+_CODE_FILES = ("check.py",)     # the measured verification the build runs on every part
 
 
 def default_root() -> Path:
@@ -78,6 +79,11 @@ def code_digest() -> str:
             if path.name == "cli.py":
                 continue
             h.update(str(path.relative_to(_PKG)).encode())
+            h.update(hashlib.sha256(path.read_bytes()).digest())
+    for extra in _CODE_FILES:
+        path = _PKG / extra
+        if path.is_file():
+            h.update(extra.encode())
             h.update(hashlib.sha256(path.read_bytes()).digest())
     return h.hexdigest()
 

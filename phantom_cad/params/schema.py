@@ -158,6 +158,8 @@ class Cad:
     horn_hole_radius: float      # servo horn screw circle radius
     servo_shaft_offset: float    # servo output shaft from the body centre along its length
     module_stop_margin: float    # finger module's own MCP stop beyond the palm's (operational) limit, rad
+    servo_ear_offset: float      # servo output face to the flange ears' top face
+    servo_ear_thickness: float   # servo flange ear thickness
 
 
 @dataclass(frozen=True)
@@ -366,6 +368,8 @@ def _cad(c: Table, fingers, thumb, palm, servo, hardware, printing) -> Cad:
         horn_hole_radius=c.number("horn_hole_radius_mm", gt=0) * MM,
         servo_shaft_offset=c.number("servo_shaft_offset_mm", ge=0) * MM,
         module_stop_margin=c.number("module_stop_margin_deg", ge=0, le=10) * DEG,
+        servo_ear_offset=c.number("servo_ear_offset_mm", ge=0) * MM,
+        servo_ear_thickness=c.number("servo_ear_thickness_mm", gt=0) * MM,
     )
     c.done()
     groove = hardware.tendon_diameter + 2.0 * printing.hole_clearance
@@ -432,6 +436,10 @@ def _cad(c: Table, fingers, thumb, palm, servo, hardware, printing) -> Cad:
             raise ParamError(name, round(r / MM, 6),
                              f"must exceed {need / MM:.3f} mm (half the servo body width servo.body_mm[1] "
                              "+ tendon + clearances): the next finger's tendon passes under the servo", c.source)
+    if cad.servo_ear_offset + cad.servo_ear_thickness >= servo.body[2] - 1e-12:
+        raise c.error("servo_ear_offset_mm", cad.servo_ear_offset / MM,
+                      f"with servo_ear_thickness_mm = {cad.servo_ear_thickness / MM:g} the ears must lie on the "
+                      f"servo body (height servo.body_mm[2] = {servo.body[2] / MM:g})")
     if cad.servo_shaft_offset >= servo.body[0] / 2.0:
         raise c.error("servo_shaft_offset_mm", cad.servo_shaft_offset / MM,
                       f"must be < half the servo body length ({servo.body[0] / 2.0 / MM:g} mm)")

@@ -119,3 +119,10 @@ def test_base_guide_behind_the_magnet_face(document):
 def test_module_stop_margin_range(document):
     e = _fails(document, lambda d: d["cad"].__setitem__("module_stop_margin_deg", 12.0))
     assert (e.field, e.value, e.rule) == ("cad.module_stop_margin_deg", 12.0, "must be <= 10")
+
+
+def test_servo_ears_off_the_body(document):
+    e = _fails(document, lambda d: d["cad"].__setitem__("servo_ear_offset_mm", 23.0))
+    assert e.field == "cad.servo_ear_offset_mm"
+    assert e.rule == ("with servo_ear_thickness_mm = 2.5 the ears must lie on the servo body "
+                      "(height servo.body_mm[2] = 25.3)")

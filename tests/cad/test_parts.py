@@ -485,3 +485,22 @@ def test_thumb_tendon_reaches_the_cmc_base_on_its_axis(built, document):
     clear = document["hardware"]["screw_diameter_mm"] / 2 + document["print"]["hole_clearance_mm"]
     assert any(abs(c["radius"] - clear) < 1e-6 and check.coaxial(c, hub[0]["point"], hub[0]["direction"])
                for c in check.cylinders(base.shape))
+
+
+def test_palm_has_two_flange_screw_pilots_per_servo(built, document):
+    hw, pr, sv = document["hardware"], document["print"], document["servo"]
+    pilot = (hw["screw_diameter_mm"] - pr["press_fit_interference_mm"]) / 2
+    holes = [c for c in check.cylinders(built["palm"].shape) if abs(c["radius"] - pilot) < 1e-6]
+    assert len(holes) == 12
+    # mid-ear on both ends: (body length / 2 + flange span / 2) apart, along the body length
+    spacing = sv["body_mm"][0] / 2 + sv["flange_span_mm"] / 2
+    pairs = 0
+    for a, b in itertools.combinations(holes, 2):
+        if abs(abs(a["direction"] @ b["direction"]) - 1) < 1e-9:
+            v = b["centre"] - a["centre"]
+            v_perp = v - (v @ a["direction"]) * a["direction"]
+            if abs(v @ a["direction"]) < 1e-6 and abs(np.linalg.norm(v_perp) - spacing) < 1e-6:
+                pairs += 1   # the same servo: side by side at the same depth
+    assert pairs == 6
+    # each hole is 3 screw diameters deep below the ear slot (plus one clearance)
+    assert all(c["length"] >= 3 * hw["screw_diameter_mm"] for c in holes)

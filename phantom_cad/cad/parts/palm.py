@@ -76,16 +76,26 @@ class Palm:
         hi = np.array([W / 2.0, -self.shaft_offset + L / 2.0, z_top]) + grow
         return lo, hi
 
+    def ear_box(self, k: int, grow: float = 0.0):
+        """Servo k's flange ears (both, as one slab across the body) in its servo frame."""
+        L, W, H = self.servo_body
+        z_top = -(self.pulley_width / 2.0 + self.tol.clearance)
+        z1 = z_top - mm(self.params.cad.servo_ear_offset)
+        z0 = z1 - mm(self.params.cad.servo_ear_thickness)
+        lo = np.array([-W / 2.0, -self.shaft_offset - self.flange_span / 2.0, z0]) - grow
+        hi = np.array([W / 2.0, -self.shaft_offset + self.flange_span / 2.0, z1]) + grow
+        return lo, hi
+
     def cavity_radius(self, k: int) -> float:
         t = self.tol
         return self.pulley_radius(k) + 2.0 * t.tendon + t.clearance + t.tendon
 
     def screw_points(self, k: int) -> list[np.ndarray]:
-        """Flange screw centres (servo frame) on the body's top plane, one each end."""
+        """Flange screw centres (servo frame) on the ears' underside, mid-ear, one each end."""
         L, W, H = self.servo_body
         e = (L / 2.0 + self.flange_span / 2.0) / 2.0
-        z_top = -(self.pulley_width / 2.0 + self.tol.clearance)
-        return [np.array([0.0, -self.shaft_offset + s * e, z_top]) for s in (-1.0, 1.0)]
+        z_under = self.ear_box(k)[0][2]
+        return [np.array([0.0, -self.shaft_offset + s * e, z_under]) for s in (-1.0, 1.0)]
 
     def _corners(self, T, lo, hi):
         pts = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
@@ -98,6 +108,8 @@ class Palm:
         for k in range(1, 6):
             T = self.T_servo(k)
             lo, hi = self.body_box(k, grow=c + w)
+            pts.append(self._corners(T, lo, hi))
+            lo, hi = self.ear_box(k, grow=c + w)
             pts.append(self._corners(T, lo, hi))
             rc = self.cavity_radius(k) + w
             pts.append(self._corners(T, np.array([-rc, -rc, -self.pulley_width / 2.0 - c - w]),
@@ -129,9 +141,9 @@ class Palm:
         T = mm(self.params.thumb.thickness)
         r_hub = mm(self.params.thumb.cmc_horn_radius)
         r_post = t.wall
-        # on the end wall of servo 6's housing, clear of the pocket and of the hub
-        L = self.servo_body[0]
-        y_post = -max(self.shaft_offset + L / 2.0 + 2.0 * t.clearance + r_post, r_hub + t.clearance + r_post)
+        # on the end wall of servo 6's housing, clear of the pocket, its ear slots and the hub
+        y_post = -max(self.shaft_offset + self.flange_span / 2.0 + 2.0 * t.clearance + r_post,
+                      r_hub + t.clearance + r_post)
         z_floor = -(T / 2.0 + 2.0 * t.clearance + self.pulley_width)   # servo 6 housing top
         z_lo = T / 2.0 + t.clearance                                     # arch underside
         z_hi = z_lo + 2.0 * t.wall
@@ -250,18 +262,23 @@ class Palm:
             Ts = self.T_servo(k)
             lo, hi = self.body_box(k, grow=c)
             rc = self.cavity_radius(k)
+            elo, ehi = self.ear_box(k, grow=c)
             if k <= 5:
-                # open toward the dorsal face (servo x = palm z): drop-in from the back
+                # open toward the dorsal face (servo x = palm z): drop-in from the back, ears in slots
                 tools.append(transform(box(lo[0], Tp, lo[1], hi[1], lo[2], hi[2]), Ts))
+                tools.append(transform(box(elo[0], Tp, elo[1], ehi[1], elo[2], ehi[2]), Ts))
                 zc0, zc1 = hi[2] - c, self.pulley_width / 2.0 + c
                 tools.append(transform(cylinder((0, 0, zc0), (0, 0, zc1), rc), Ts))
                 tools.append(transform(box(0.0, Tp, -rc, rc, zc0, zc1), Ts))
             else:
                 hlo, hhi = self.body_box(k, grow=c + w)
-                body.append(transform(box(hlo[0], hhi[0], hlo[1], hhi[1], hlo[2], hi[2] - c), Ts))
-                # open on the shaft side: the servo drops in before the hub goes on
+                glo, ghi = self.ear_box(k, grow=c + w)
+                body.append(transform(box(hlo[0], hhi[0], min(hlo[1], glo[1]), max(hhi[1], ghi[1]),
+                                          hlo[2], hi[2] - c), Ts))
+                # open on the shaft side: the servo drops in before the hub goes on, ears in a step
                 tools.append(transform(box(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2] + 1.0), Ts))
+                tools.append(transform(box(elo[0], ehi[0], elo[1], ehi[1], elo[2], hi[2] + 1.0), Ts))
             for p in self.screw_points(k):
-                tools.append(transform(cylinder(p + np.array([0, 0, 1.0]), p - np.array([0, 0, t.screw_engagement]),
+                tools.append(transform(cylinder(p + np.array([0, 0, 1.0]), p - np.array([0, 0, c + t.screw_engagement]),
                                                 t.screw_pilot / 2.0), Ts))
         return build(body, tools, self.name)
