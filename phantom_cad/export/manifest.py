@@ -81,6 +81,7 @@ def build_manifest(*, stage: Path, params, params_path: Path, names, keys, metas
             "stl_triangles": m["stl"]["triangles"],
             "checks": {
                 "one_valid_solid": True,
+                "verify_part": m.get("verify_part", "skipped"),
                 "step_reimport_volume_mm3": _r(m["step"]["reimport_volume_mm3"], 4),
                 "stl_watertight": m["stl"]["watertight"],
                 "stl_is_volume": m["stl"]["is_volume"],

@@ -39,6 +39,8 @@ def test_every_part_exported(hand):
             assert (result.out_dir / rel).is_file(), rel
             assert rel in man["files"]
     assert (result.out_dir / "renders" / "hand_assembly.png").stat().st_size > 20_000
+    # helper A's measured verification ran on every part and passed
+    assert {p["checks"]["verify_part"] for p in man["parts"]} == {"ok"}
     assert (result.out_dir / "bom.csv").read_text().startswith("item,spec,quantity,used_in")
 
 
@@ -122,3 +124,22 @@ def test_mass_estimates(hand):
         known = p["volume_mm3"] * 1e-3 * (params.document["print"]["density_g_per_cm3"]) * params.print.infill
         assert p["mass_g"] == pytest.approx(known, rel=1e-6)
         assert man["files"][f"stl/{p['name']}.stl"]["sha256"]
+
+
+def test_verify_part_problem_refuses_the_part(hand_build, monkeypatch, tmp_path):
+    """A problem reported by phantom_cad.check.verify_part fails the part with its text."""
+    from phantom_cad import check
+    from phantom_cad.cad.build import _part_worker
+    from phantom_cad.params import DEFAULT_PARAMS, load_document
+    from phantom_cad.params.schema import _plain
+
+    monkeypatch.setattr(check, "verify_part",
+                        lambda params, name, shape: [f"{name}: groove radius measures 6.0000, expected 7.0000 mm"])
+    r = _part_worker({"name": "servo_pulley_1", "key": "k", "document": _plain(load_document(DEFAULT_PARAMS)),
+                      "source": str(DEFAULT_PARAMS), "cache_root": str(tmp_path), "render": False})
+    assert r["ok"] is False
+    f = r["failure"]
+    assert f["check"] == "verify_part"
+    assert f["error"] == ("CheckError: part 'servo_pulley_1': check 'verify_part' failed: "
+                          "servo_pulley_1: groove radius measures 6.0000, expected 7.0000 mm")
+    assert not (tmp_path / "parts" / "k").exists()

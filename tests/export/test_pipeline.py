@@ -63,6 +63,8 @@ def test_layout_and_manifest_checksums(standin_build):
     assert man["params"]["digest"] == load_params().digest
     assert man["params"]["file_sha256"] == sha(DEFAULT_PARAMS)
     assert man["hand"] == {"name": "phantom", "side": "right", "parts": names}
+    # helper A's verify_part only knows the real parts
+    assert {p["checks"]["verify_part"] for p in man["parts"]} == {"skipped"}
     # no staging directory left beside the export
     assert [p.name for p in out.parent.iterdir()] == ["phantom"]
 
