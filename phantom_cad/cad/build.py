@@ -372,7 +372,7 @@ def interference(meshes: dict[str, tuple[np.ndarray, np.ndarray]], poses: dict[s
                 vert_properties=w.astype(np.float32), tri_verts=f.astype(np.uint32)))
         return solids[n]
 
-    checked, collisions, contacts = 0, [], []
+    checked, collisions, contacts, largest = 0, [], [], None
     for i, a in enumerate(names):
         for b in names[i + 1:]:
             (alo, ahi), (blo, bhi) = boxes[a], boxes[b]
@@ -384,10 +384,14 @@ def interference(meshes: dict[str, tuple[np.ndarray, np.ndarray]], poses: dict[s
             entry = {"parts": [a, b], "volume_mm3": round(max(vol, 0.0), 4) + 0.0}
             if designed:
                 contacts.append(entry)
-            elif vol > tol_mm3:
-                collisions.append(entry)
+            else:
+                if largest is None or vol > largest["volume_mm3"]:
+                    largest = entry
+                if vol > tol_mm3:
+                    collisions.append(entry)
     return {"checked_pairs": checked, "tolerance_mm3": tol_mm3,
-            "collisions": collisions, "designed_contacts": contacts}
+            "collisions": collisions, "designed_contacts": contacts,
+            "largest_other_overlap": largest}
 
 
 # ---------------------------------------------------------------------------
