@@ -395,6 +395,7 @@ def test_left_hand_is_the_mirror_image(built, variant, name):
     right = built[name]
     rl, rr = check.solid_report(left.shape), check.solid_report(right.shape)
     assert rl["valid"] and rl["n_solids"] == 1
+    assert check.verify_part(p, name, left.shape) == []
     assert rl["volume"] == pytest.approx(rr["volume"], rel=1e-6)
     assert np.allclose(rl["bbox_min"], [-rr["bbox_max"][0], rr["bbox_min"][1], rr["bbox_min"][2]], atol=1e-6)
     assert np.allclose(rl["bbox_max"], [-rr["bbox_min"][0], rr["bbox_max"][1], rr["bbox_max"][2]], atol=1e-6)
