@@ -145,11 +145,14 @@ def model_inverse(
 
 @app.command("demo")
 def demo(params: Optional[Path] = ParamsOpt,
-         out: Optional[Path] = typer.Option(None, "--out", help="Export folder for the parts (default exports/<hand>).")):
-    """The main job on the default hand: workspace, a forward/inverse round trip, and the parts."""
+         out: Optional[Path] = typer.Option(None, "--out", help="Export folder for the parts (default exports/<hand>)."),
+         slice_: bool = typer.Option(True, "--slice/--no-slice",
+                                     help="Slice the parts with PrusaSlicer for print estimates (cached).")):
+    """The main job on the default hand: workspace, a forward/inverse round trip, and every printable part."""
     import numpy as np
 
     from . import load_hand
+    from .params import DEFAULT_PARAMS
 
     hand = load_hand(params)
     typer.echo(describe(hand))
@@ -159,12 +162,15 @@ def demo(params: Optional[Path] = ParamsOpt,
         err = np.abs(hand.inverse(q, compensated=compensated) - u).max()
         typer.echo(f"round trip inverse(forward(u)) over the whole travel, "
                    f"{'compensated' if compensated else 'analytic'}: max |du| = {err:.2e} rad")
-    for hook in _demo_hooks:
-        hook(params, out)
+    typer.echo("")
+    build(params=params or DEFAULT_PARAMS, out=out, side=None, jobs=None, slice_=slice_, render=True,
+          cache_dir=None, quiet=False)
 
 
-#: later stages of the demo (parts build, ...) register here
-_demo_hooks: list = []
+# -- parts (phantom_cad/cad/cli.py; CAD is imported inside the command) -------------
+from .cad.cli import build  # noqa: E402
+
+app.command("build")(build)
 
 
 # -- calibration (phantom_cad/calibration/cli.py) -------------------------------

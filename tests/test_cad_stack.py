@@ -1,26 +1,27 @@
 """build123d and cadquery both ship the OCP module; the pins in pyproject.toml keep them on one
-OCP. If a future install breaks that, `import build123d` fails while pip reports no conflict:
-this test imports both in one process and builds a solid with each."""
-
-from __future__ import annotations
+OCP (an unpinned pair overwrites it and `import build123d` fails while pip reports no conflict).
+Both must import in one process and build solids whose volumes match textbook formulas."""
 
 import math
 
 import pytest
 
 
-def test_build123d_and_cadquery_share_one_ocp():
-    import build123d as bd
+def test_build123d_and_cadquery_share_ocp_and_build_solids():
+    import build123d
     import cadquery as cq
     import OCP
 
-    box = bd.Box(10, 20, 30)
-    assert box.is_valid
-    assert box.volume == pytest.approx(10 * 20 * 30)
-    cyl = cq.Workplane("XY").cylinder(5.0, 2.0).val()
-    assert cyl.isValid()
-    assert cyl.Volume() == pytest.approx(math.pi * 2.0 ** 2 * 5.0, rel=1e-9)
-    # the two libraries hand shapes to each other through the same OCP classes
-    as_cq = cq.Shape.cast(box.wrapped)
-    assert as_cq.Volume() == pytest.approx(6000.0)
-    assert type(box.wrapped).__module__.split(".")[0] == OCP.__name__
+    # build123d: box minus a through hole
+    a, b, c, r = 30.0, 20.0, 10.0, 4.0
+    part = build123d.Box(a, b, c) - build123d.Cylinder(r, 2 * c)
+    assert part.volume == pytest.approx(a * b * c - math.pi * r * r * c, rel=1e-9)
+    # cadquery: sphere
+    R = 7.0
+    sphere = cq.Workplane("XY").sphere(R).val()
+    assert sphere.Volume() == pytest.approx(4.0 / 3.0 * math.pi * R ** 3, rel=1e-6)
+    # both wrap the same OCP classes: a build123d shape converts to cadquery and back
+    shape = cq.Shape.cast(part.wrapped)
+    assert shape.Volume() == pytest.approx(part.volume, rel=1e-12)
+    assert type(shape.wrapped).__module__ == type(part.wrapped).__module__
+    assert OCP.__file__

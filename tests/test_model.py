@@ -15,23 +15,23 @@ from phantom_cad import Hand, load_hand
 from phantom_cad.params import parse
 
 # A hand whose numbers make the equations easy to do by hand: every chain has
-# d1 = d2 = 10 mm, alpha = 90 deg, r = 5 mm, so L0 = 10 sqrt(2) mm (eq. 4).
-# At u* = 2 (sqrt(2) - 1) rad the chord is L = L0 - r u* = 10 mm, the cosine-law argument is
+# d1 = d2 = 10 mm, alpha = 90 deg, r = 10 mm, so L0 = 10 sqrt(2) mm (eq. 4).
+# At u* = sqrt(2) - 1 rad the chord is L = L0 - r u* = 10 mm, the cosine-law argument is
 # (100 + 100 - 100) / 200 = 0.5, the included angle 60 deg, so q_ref = 90 - 60 = 30 deg (eq. 6).
-U_STAR = 2.0 * (math.sqrt(2.0) - 1.0)
+U_STAR = math.sqrt(2.0) - 1.0
 Q_REF_STAR = math.pi / 6.0
 
 
 def easy_document(document):
     for name, f in document["fingers"].items():
         f["guide"] = {"d1_mm": 10.0, "d2_mm": 10.0, "alpha_deg": 90.0}
-        f["servo_pulley_radius_mm"] = 5.0
+        f["servo_pulley_radius_mm"] = 10.0
         f["servo_travel_deg"] = [0.0, 60.0]
         f["pulley_radius_mm"] = {"dip": 5.0, "pip": 4.0, "mcp": 5.0}
         f["path_length_mm"] = {"mcp_pip": 55.0, "pip_dip": 35.0}
     t = document["thumb"]
     t["guide"] = {"d1_mm": 10.0, "d2_mm": 10.0, "alpha_deg": 90.0}
-    t["servo_pulley_radius_mm"] = 5.0
+    t["servo_pulley_radius_mm"] = 10.0
     t["servo_travel_deg"] = [0.0, 60.0]
     t["pulley_radius_mm"] = {"ip": 5.0, "mp": 4.0}
     t["path_length_mm"] = {"mp_ip": 40.0}
@@ -186,7 +186,7 @@ def test_projection_onto_finger_curve(easy):
     s = 1.625 / 3.5625
     # cosine law inverted by hand: L = sqrt(d1^2 + d2^2 - 2 d1 d2 cos(alpha - s)), u = (L0 - L) / r
     L = math.sqrt(200.0 - 200.0 * math.cos(math.pi / 2 - s))
-    u_expected = (10.0 * math.sqrt(2.0) - L) / 5.0
+    u_expected = (10.0 * math.sqrt(2.0) - L) / 10.0
     q = np.zeros(15)
     q[[4, 3, 2]] = 0.5
     u = easy.inverse(q, compensated=False)

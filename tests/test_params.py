@@ -63,7 +63,7 @@ def test_dump_refuses_invalid_and_writes_nothing(tmp_path, document):
 def test_unknown_top_level_key(document):
     document["colour"] = 1
     refuse(document, "colour = 1: unknown key 'colour' (allowed: schema_version, hand, fingers, "
-                     "thumb, mechanics, palm, servo, hardware, print, effects)")
+                     "thumb, mechanics, palm, servo, hardware, print, cad, effects)")
 
 
 def test_finger_name_typo(document):

@@ -147,6 +147,22 @@ class Print:
 
 
 @dataclass(frozen=True)
+class Cad:
+    """Dimensions only the printable parts use (params/phantom.toml [cad]); metres, radians."""
+
+    finger_base_length: float    # finger base: magnet face to MCP axis
+    cheek: float                 # clevis cheek wall beside each joint tongue
+    eyelet_length: float         # MCP / thumb MP guide eyelet length along the tendon
+    spring_diameter: float       # dorsal cable-spring channel diameter
+    servo_pulley_width: float    # servo pulley axial width
+    horn_hole_radius: float      # servo horn screw circle radius
+    servo_shaft_offset: float    # servo output shaft from the body centre along its length
+    module_stop_margin: float    # finger module's own MCP stop beyond the palm's (operational) limit, rad
+    servo_ear_offset: float      # servo output face to the flange ears' top face
+    servo_ear_thickness: float   # servo flange ear thickness
+
+
+@dataclass(frozen=True)
 class HandParams:
     name: str
     side: str
@@ -158,6 +174,7 @@ class HandParams:
     servo: Servo
     hardware: Hardware
     print: Print
+    cad: Cad
     #: fitted effect parameters, ``{effect_name: {param: value}}`` (see phantom_cad.calibration)
     effects: Mapping[str, Mapping[str, Any]]
     #: the validated document, as parsed (units as in the file); dump() writes it back
@@ -340,6 +357,95 @@ def _thumb(t: Table, hand_length: float) -> Thumb:
                  gain, limits["cmc"], cmc_travel, horn)
 
 
+def _cad(c: Table, fingers, thumb, palm, servo, hardware, printing) -> Cad:
+    """[cad]: the few dimensions only the printable parts need, and the rules that make them fit."""
+    cad = Cad(
+        finger_base_length=c.number("finger_base_length_mm", gt=0) * MM,
+        cheek=c.number("cheek_mm", gt=0) * MM,
+        eyelet_length=c.number("eyelet_length_mm", gt=0) * MM,
+        spring_diameter=c.number("spring_diameter_mm", gt=0) * MM,
+        servo_pulley_width=c.number("servo_pulley_width_mm", gt=0) * MM,
+        horn_hole_radius=c.number("horn_hole_radius_mm", gt=0) * MM,
+        servo_shaft_offset=c.number("servo_shaft_offset_mm", ge=0) * MM,
+        module_stop_margin=c.number("module_stop_margin_deg", ge=0, le=10) * DEG,
+        servo_ear_offset=c.number("servo_ear_offset_mm", ge=0) * MM,
+        servo_ear_thickness=c.number("servo_ear_thickness_mm", gt=0) * MM,
+    )
+    c.done()
+    groove = hardware.tendon_diameter + 2.0 * printing.hole_clearance
+    digits = [(f"fingers.{n}", f.width, f.thickness) for n, f in fingers.items()]
+    digits.append(("thumb", thumb.width, thumb.thickness))
+    for name, width, thick in digits:
+        # the joint tongue between the two cheeks carries two bearings and the tendon groove
+        tongue = width - 2.0 * cad.cheek - 2.0 * printing.hole_clearance
+        need = 2.0 * hardware.bearing_width + groove + 2.0 * printing.hole_clearance
+        if tongue < need - 1e-12:
+            raise c.error("cheek_mm", cad.cheek / MM,
+                          f"leaves a {tongue / MM:.3f} mm joint tongue in {name}.width_mm = {width / MM:g}; "
+                          f"two bearings and the tendon groove need {need / MM:.3f} mm")
+        # magnets, the MCP boss and a wall fit between the base's magnet face and the MCP axis
+        base_need = thick / 2.0 + hardware.magnet_thickness + printing.magnet_clearance + printing.hole_clearance
+        if name != "thumb" and cad.finger_base_length < base_need - 1e-12:
+            raise c.error("finger_base_length_mm", cad.finger_base_length / MM,
+                          f"must be >= {base_need / MM:.3f} mm ({name}: half thickness + magnet "
+                          "thickness + magnet and joint clearances)")
+    names = list(fingers)
+    for a, b in zip(names, names[1:]):
+        # adjacent finger bases converge toward the arc centre: their back corners must clear
+        room = (palm.arc_radius - cad.finger_base_length) * 2.0 * math.sin(palm.arc_offset / 2.0)
+        need = (fingers[a].width + fingers[b].width) / 2.0 + printing.hole_clearance
+        if room < need - 1e-12:
+            raise c.error("finger_base_length_mm", cad.finger_base_length / MM,
+                          f"the {a} and {b} bases are {room / MM:.3f} mm apart at their magnet faces "
+                          f"(palm arc radius {palm.arc_radius / MM:.3f} mm), they need "
+                          f"{need / MM:.3f} mm (half widths + hole_clearance)")
+    for name, d in [(f"fingers.{n}", f) for n, f in fingers.items()] + [("thumb", thumb)]:
+        # the phalanx-side guide eyelet must lie outside the joint's pulley boss
+        g = d.chain.guide
+        need = d.thickness / 2.0 + printing.hole_clearance + cad.eyelet_length / 2.0
+        if g.d2 < need - 1e-12:
+            raise ParamError(f"{name}.guide.d2_mm", round(g.d2 / MM, 6),
+                             f"must be >= {need / MM:.3f} mm (half the thickness + hole_clearance + half "
+                             "cad.eyelet_length): the phalanx guide eyelet must clear the joint boss", c.source)
+    for n, f in fingers.items():
+        # the metacarpal-side guide eyelet (and its relief) must fit inside the finger base
+        g = f.chain.guide
+        r_hole = hardware.tendon_diameter / 2.0 + printing.hole_clearance
+        reach = g.d1 * math.sin(g.alpha / 2.0) + cad.eyelet_length / 2.0 + (math.sqrt(3.0) + 2.0) * r_hole
+        if reach > cad.finger_base_length + 1e-12:
+            raise ParamError(f"fingers.{n}.guide.d1_mm", round(g.d1 / MM, 6),
+                             f"puts the guide eyelet {reach / MM:.3f} mm behind the MCP axis, beyond the finger "
+                             f"base's magnet face (cad.finger_base_length_mm = {cad.finger_base_length / MM:g})",
+                             c.source)
+    for name, r in [(f"fingers.{n}", f.chain.servo_radius) for n, f in fingers.items()] + [
+            ("thumb", thumb.chain.servo_radius), ("thumb.cmc_horn", thumb.cmc_horn_radius)]:
+        limit = r - hardware.screw_diameter / 2.0 - printing.hole_clearance - hardware.tendon_diameter
+        if cad.horn_hole_radius > limit + 1e-12:
+            raise c.error("horn_hole_radius_mm", cad.horn_hole_radius / MM,
+                          f"must be <= {limit / MM:.3f} mm so the horn screws stay inside the "
+                          f"{name} pulley radius {r / MM:g} mm")
+    if cad.spring_diameter + 2.0 * printing.hole_clearance >= cad.cheek - 1e-12:
+        raise c.error("spring_diameter_mm", cad.spring_diameter / MM,
+                      f"its channel ({(cad.spring_diameter + 2.0 * printing.hole_clearance) / MM:g} mm with "
+                      f"clearance) must fit inside a clevis cheek (cheek_mm = {cad.cheek / MM:g})")
+    # each tendon runs under the neighbouring servo's body on its way to its own pulley
+    for name, r in [(f"fingers.{n}.servo_pulley_radius_mm", f.chain.servo_radius) for n, f in fingers.items()] + [
+            ("thumb.servo_pulley_radius_mm", thumb.chain.servo_radius)]:
+        need = servo.body[1] / 2.0 + 2.0 * printing.hole_clearance + hardware.tendon_diameter / 2.0
+        if r <= need + 1e-12:
+            raise ParamError(name, round(r / MM, 6),
+                             f"must exceed {need / MM:.3f} mm (half the servo body width servo.body_mm[1] "
+                             "+ tendon + clearances): the next finger's tendon passes under the servo", c.source)
+    if cad.servo_ear_offset + cad.servo_ear_thickness >= servo.body[2] - 1e-12:
+        raise c.error("servo_ear_offset_mm", cad.servo_ear_offset / MM,
+                      f"with servo_ear_thickness_mm = {cad.servo_ear_thickness / MM:g} the ears must lie on the "
+                      f"servo body (height servo.body_mm[2] = {servo.body[2] / MM:g})")
+    if cad.servo_shaft_offset >= servo.body[0] / 2.0:
+        raise c.error("servo_shaft_offset_mm", cad.servo_shaft_offset / MM,
+                      f"must be < half the servo body length ({servo.body[0] / 2.0 / MM:g} mm)")
+    return cad
+
+
 def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
     """Validate a parsed parameter document and build the frozen :class:`HandParams`."""
     root = Table(dict(document), "", source)
@@ -427,6 +533,8 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
     )
     pr.done()
 
+    cad = _cad(root.table("cad"), fingers, thumb, palm, servo, hardware, printing)
+
     effects = root.table("effects", default={})
     effect_params = {}
     for key in effects.keys():
@@ -443,6 +551,6 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
     return HandParams(
         name=name, side=side, hand_length=hand_length,
         fingers=MappingProxyType(fingers), thumb=thumb, mechanics=mechanics, palm=palm,
-        servo=servo, hardware=hardware, print=printing,
+        servo=servo, hardware=hardware, print=printing, cad=cad,
         effects=_freeze(effect_params), document=_freeze(dict(document)), source=source,
     )

@@ -1,0 +1,174 @@
+"""The part cache of ``phantom-cad build``.
+
+Layout (default root ``.cache`` in the working directory, or ``$PHANTOM_CAD_CACHE``)::
+
+    .cache/parts/<key>/       one built part: part.brep, part.step, part.stl,
+                              mesh.npz (link frame), view.npz (coarse, for pictures),
+                              render.png, meta.json
+    .cache/assembly/<key>/    hand_assembly.step, render.png, interference.json
+    .cache/slice/<key>.json   PrusaSlicer estimates of one STL with one config
+
+A part's key is the SHA-256 of its name, ``assembly.part_inputs(params, name)`` (the
+plain values the part depends on), the hand side, the STL tolerance, the versions of
+build123d/OCP and a digest of the phantom_cad source that makes geometry. So changing
+one finger rebuilds only that finger's parts, and editing the modelling code rebuilds
+everything. Entries are written to a temporary directory and renamed into place, so a
+crashed build never leaves a half entry; any entry can be deleted at any time.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import shutil
+from functools import lru_cache
+from importlib import metadata
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+#: bump when the cached files' format or the export pipeline changes their bytes
+PIPELINE_VERSION = 1
+
+_PKG = Path(__file__).resolve().parents[1]      # .../phantom_cad
+#: sources whose code decides the geometry and the exported bytes
+_CODE_DIRS = ("cad", "export", "kinematics", "params")
+_CODE_FILES = ("check.py",)     # the measured verification the build runs on every part
+
+
+def default_root() -> Path:
+    return Path(os.environ.get("PHANTOM_CAD_CACHE", ".cache"))
+
+
+def jsonable(obj: Any) -> Any:
+    """Plain JSON types from params values (MappingProxy, tuples, numpy scalars/arrays)."""
+    if isinstance(obj, Mapping):
+        return {str(k): jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return jsonable(obj.tolist())
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return repr(obj)
+    if obj is None or isinstance(obj, (bool, int, float, str)):
+        return obj
+    if hasattr(obj, "__dataclass_fields__"):
+        return {k: jsonable(getattr(obj, k)) for k in obj.__dataclass_fields__}
+    return repr(obj)
+
+
+def canonical(obj: Any) -> bytes:
+    return json.dumps(jsonable(obj), sort_keys=True, separators=(",", ":")).encode()
+
+
+def sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+@lru_cache(maxsize=1)
+def code_digest() -> str:
+    """SHA-256 over the phantom_cad sources that make geometry (the CLI is excluded)."""
+    h = hashlib.sha256()
+    for sub in _CODE_DIRS:
+        for path in sorted((_PKG / sub).rglob("*.py")):
+            if path.name == "cli.py":
+                continue
+            h.update(str(path.relative_to(_PKG)).encode())
+            h.update(hashlib.sha256(path.read_bytes()).digest())
+    for extra in _CODE_FILES:
+        path = _PKG / extra
+        if path.is_file():
+            h.update(extra.encode())
+            h.update(hashlib.sha256(path.read_bytes()).digest())
+    return h.hexdigest()
+
+
+def _version(dist: str) -> str | None:
+    try:
+        return metadata.version(dist)
+    except metadata.PackageNotFoundError:
+        return None
+
+
+@lru_cache(maxsize=1)
+def cad_versions() -> dict[str, str | None]:
+    """Versions of the CAD stack, read from package metadata (no OCP import)."""
+    return {
+        "build123d": _version("build123d"),
+        "cadquery-ocp": _version("cadquery-ocp") or _version("cadquery_ocp"),
+        "cadquery": _version("cadquery"),
+        "trimesh": _version("trimesh"),
+        "manifold3d": _version("manifold3d"),
+        "matplotlib": _version("matplotlib"),
+    }
+
+
+def part_key(params, name: str, part_inputs: Mapping[str, Any]) -> str:
+    return sha256(canonical({
+        "pipeline": PIPELINE_VERSION,
+        "part": name,
+        "inputs": part_inputs,
+        "side": params.side,
+        "stl_tolerance_m": params.print.stl_tolerance,
+        "code": code_digest(),
+        "versions": cad_versions(),
+    }))
+
+
+class Cache:
+    def __init__(self, root: str | os.PathLike | None = None):
+        self.root = Path(root) if root is not None else default_root()
+
+    # parts ----------------------------------------------------------------
+    def part_dir(self, key: str) -> Path:
+        return self.root / "parts" / key
+
+    def has_part(self, key: str) -> bool:
+        return (self.part_dir(key) / "meta.json").is_file()
+
+    def part_meta(self, key: str) -> dict:
+        return json.loads((self.part_dir(key) / "meta.json").read_text())
+
+    # assembly ---------------------------------------------------------------
+    def assembly_dir(self, key: str) -> Path:
+        return self.root / "assembly" / key
+
+    # slicing ------------------------------------------------------------------
+    def slice_file(self, key: str) -> Path:
+        return self.root / "slice" / f"{key}.json"
+
+    # helpers -------------------------------------------------------------------
+    @staticmethod
+    def staging_path(final: Path) -> Path:
+        return final.parent / f".{final.name}.{os.getpid()}.tmp"
+
+    def staging(self, final: Path) -> Path:
+        """A fresh temporary directory beside ``final`` (same file system)."""
+        final.parent.mkdir(parents=True, exist_ok=True)
+        tmp = self.staging_path(final)
+        if tmp.exists():
+            shutil.rmtree(tmp)
+        tmp.mkdir()
+        return tmp
+
+    @staticmethod
+    def commit(tmp: Path, final: Path) -> None:
+        """Rename a finished staging directory into place (first writer wins)."""
+        try:
+            os.rename(tmp, final)
+        except OSError:
+            if (final / "meta.json").exists() or final.exists():
+                shutil.rmtree(tmp, ignore_errors=True)
+            else:
+                raise
+
+    def write_json(self, path: Path, obj: Any) -> None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        tmp.write_text(json.dumps(obj, indent=1, sort_keys=True))
+        os.replace(tmp, path)

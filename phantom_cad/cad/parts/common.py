@@ -1,0 +1,323 @@
+"""Shared dimensions and geometry helpers of the printable parts.
+
+Two layers, as in bd_warehouse: plain-Python *dimension* classes (millimetres, derived from
+the validated parameter object, properties only; numpy only, importable without OCP) and
+``build()`` methods that import build123d lazily and make the solid. Every mating feature
+carries its print tolerance from ``params.print`` (docs/parts.md lists which):
+
+* clearance hole (axle through a bearing's neighbour, screws, tendon):  d + 2 * hole_clearance
+* press fit (bearing outer ring in its seat, axle in the clevis cheeks): d - press_fit_interference
+* magnet pocket: (d + 2 * magnet_clearance) x (t + magnet_clearance)
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+MM = 1000.0  # metres -> millimetres, the one place the CAD layer converts units
+
+
+def mm(x: float) -> float:
+    return float(x) * MM
+
+
+# ---------------------------------------------------------------------------
+# dimensions (numpy only)
+# ---------------------------------------------------------------------------
+
+class Tolerances:
+    """The print tolerances and hardware, in mm, with the derived hole sizes."""
+
+    def __init__(self, params):
+        pr, hw = params.print, params.hardware
+        self.clearance = mm(pr.hole_clearance)
+        self.interference = mm(pr.press_fit_interference)
+        self.magnet_clearance = mm(pr.magnet_clearance)
+        self.tendon = mm(hw.tendon_diameter)
+        self.axle = mm(hw.axle_diameter)
+        self.bearing_outer = mm(hw.bearing_outer)
+        self.bearing_width = mm(hw.bearing_width)
+        self.screw = mm(hw.screw_diameter)
+        self.magnet_d = mm(hw.magnet_diameter)
+        self.magnet_t = mm(hw.magnet_thickness)
+        self.wall = mm(params.palm.wall)
+        self.spring = mm(params.cad.spring_diameter)
+        self.eyelet_length = mm(params.cad.eyelet_length)
+
+    @property
+    def tendon_hole(self) -> float:
+        """Diameter of tendon channels, eyelets and grooves (clearance fit)."""
+        return self.tendon + 2.0 * self.clearance
+
+    @property
+    def tendon_relief(self) -> float:
+        """Diameter of the relief that ends each eyelet (twice the eyelet)."""
+        return 2.0 * self.tendon_hole
+
+    @property
+    def axle_clear(self) -> float:
+        return self.axle + 2.0 * self.clearance
+
+    @property
+    def axle_press(self) -> float:
+        return self.axle - self.interference
+
+    @property
+    def bearing_seat(self) -> float:
+        return self.bearing_outer - self.interference
+
+    @property
+    def screw_clear(self) -> float:
+        return self.screw + 2.0 * self.clearance
+
+    @property
+    def screw_pilot(self) -> float:
+        """Self-tapping pilot hole for the M2 screws in printed material."""
+        return self.screw - self.interference
+
+    @property
+    def screw_engagement(self) -> float:
+        """Depth of a self-tapping pilot hole: three screw diameters of thread in plastic."""
+        return 3.0 * self.screw
+
+    @property
+    def magnet_pocket_d(self) -> float:
+        return self.magnet_d + 2.0 * self.magnet_clearance
+
+    @property
+    def magnet_pocket_depth(self) -> float:
+        return self.magnet_t + self.magnet_clearance
+
+    @property
+    def spring_hole(self) -> float:
+        return self.spring + 2.0 * self.clearance
+
+
+class DigitSection:
+    """Cross-section and joint dimensions (mm) shared by every link of one digit."""
+
+    def __init__(self, params, digit: str):
+        self.params = params
+        self.digit = digit
+        d = params.thumb if digit == "thumb" else params.fingers[digit]
+        self.tol = Tolerances(params)
+        self.width = mm(d.width)
+        self.thickness = mm(d.thickness)
+        self.cheek = mm(params.cad.cheek)
+        chain = d.chain
+        self.R = {j: mm(r) for j, r in zip(chain.joints, chain.radii)}
+        #: upper limits (Table I): where the operational stops engage
+        self.q_max = {j: lim[1] for j, lim in zip(chain.joints, chain.limits)}
+        #: where this digit module's own hard stops engage: the finger MCP goes
+        #: cad.module_stop_margin further (the palm housing stops it at q_max)
+        self.q_stop = dict(self.q_max)
+        if digit != "thumb":
+            self.q_stop["mcp"] = self.q_max["mcp"] + params.cad.module_stop_margin
+        self.guide = chain.guide
+
+    @property
+    def boss_radius(self) -> float:
+        """Radius of a joint's tongue boss and of the rounded clevis ends."""
+        return self.thickness / 2.0
+
+    @property
+    def slot_width(self) -> float:
+        return self.width - 2.0 * self.cheek
+
+    @property
+    def tongue_width(self) -> float:
+        return self.slot_width - 2.0 * self.tol.clearance
+
+    @property
+    def slot_back(self) -> float:
+        """Distance from a joint axis back to its clevis slot's back wall (extension stop face)."""
+        return self.boss_radius + self.tol.clearance
+
+    @property
+    def groove_width(self) -> float:
+        return self.tol.tendon_hole
+
+    @property
+    def groove_outer(self) -> float:
+        """The groove is cut from R out just past the boss surface."""
+        return self.boss_radius + self.tol.clearance
+
+    @property
+    def spring_x(self) -> float:
+        """Lateral offset of the two dorsal cable-spring channels (+/-): mid-cheek, so they pass
+        beside the joint tongue and through the clevis cheeks."""
+        return (self.slot_width / 2.0 + self.width / 2.0) / 2.0
+
+    @property
+    def spring_z(self) -> float:
+        return self.thickness / 2.0 - self.tol.wall - self.tol.spring_hole / 2.0
+
+    @property
+    def heel_z(self) -> float:
+        """Lower edge of the tongue's dorsal heel (the extension stop): half the boss radius."""
+        return self.boss_radius / 2.0
+
+    @property
+    def eyelet_boss_radius(self) -> float:
+        return self.tol.tendon_relief / 2.0 + self.tol.wall / 2.0
+
+    def guide_points(self) -> tuple[np.ndarray, np.ndarray]:
+        """Guide eyelet centres (y, z) relative to the reference joint (MCP / MP) axis at rest:
+        G1 on the metacarpal side at d1, G2 on the phalanx at d2, symmetric about the palmar
+        direction and alpha apart (eq. 4: their chord at rest is L0)."""
+        g = self.guide
+        psi1 = math.pi / 2.0 + g.alpha / 2.0
+        psi2 = math.pi / 2.0 - g.alpha / 2.0
+        G1 = mm(g.d1) * np.array([math.cos(psi1), -math.sin(psi1)])
+        G2 = mm(g.d2) * np.array([math.cos(psi2), -math.sin(psi2)])
+        return G1, G2
+
+    def recess(self, q_max: float) -> float:
+        """Beyond 90 degrees of flexion the child's palmar face would reach the slot's back wall
+        below the axis before q_max: the palmar half of the back wall is then recessed by
+        half a thickness and the flexion-stop wedge rebuilt in it."""
+        return self.thickness / 2.0 if q_max > math.pi / 2.0 else 0.0
+
+    def stop_polygon(self, q_max: float) -> list[tuple[float, float]] | None:
+        """(y, z) polygon, relative to the joint axis, of the flexion stop left in the palmar back
+        corner of a clevis slot: the child's palmar face (z_child = -boss radius) lies on its
+        edge exactly when the joint reaches q_max."""
+        rb = self.boss_radius
+        y0 = -self.slot_back - self.recess(q_max)
+        rect = [(y0, -self.thickness / 2.0), (y0 + 2.0 * self.thickness, -self.thickness / 2.0),
+                (y0 + 2.0 * self.thickness, 0.0), (y0, 0.0)]
+        s, c = math.sin(q_max), math.cos(q_max)
+        poly = clip_halfplane(rect, lambda p: -(p[0] * s + p[1] * c) - rb)
+        if len(poly) < 3 or polygon_area(poly) < 0.25:
+            return None
+        return poly
+
+
+def clip_halfplane(poly, f):
+    """Sutherland-Hodgman: keep the part of a convex polygon where f(p) >= 0 (f affine)."""
+    out = []
+    n = len(poly)
+    for i in range(n):
+        a, b = poly[i], poly[(i + 1) % n]
+        fa, fb = f(a), f(b)
+        if fa >= 0:
+            out.append(a)
+        if (fa >= 0) != (fb >= 0):
+            t = fa / (fa - fb)
+            out.append((a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])))
+    return out
+
+
+def polygon_area(poly) -> float:
+    a = 0.0
+    for i in range(len(poly)):
+        x0, y0 = poly[i]
+        x1, y1 = poly[(i + 1) % len(poly)]
+        a += x0 * y1 - x1 * y0
+    return abs(a) / 2.0
+
+
+def internal_tangents(ra: float, yb: float, rb: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The two crossing (internal) tangents between circle ra at y=0 and rb at y=yb in the (y, z)
+    plane: the figure-eight tendon paths. Returns [(point on a, point on b), ...]."""
+    cb = (ra + rb) / yb
+    sb = math.sqrt(max(0.0, 1.0 - cb * cb))
+    out = []
+    for sign in (1.0, -1.0):
+        pa = np.array([ra * cb, sign * ra * sb])
+        pb = np.array([yb - rb * cb, -sign * rb * sb])
+        out.append((pa, pb))
+    return out
+
+
+# ---------------------------------------------------------------------------
+# geometry (build123d imported lazily)
+# ---------------------------------------------------------------------------
+
+def bd():
+    import build123d
+    return build123d
+
+
+def box(x0, x1, y0, y1, z0, z1):
+    b = bd()
+    return b.Solid.make_box(x1 - x0, y1 - y0, z1 - z0, b.Plane(origin=(x0, y0, z0)))
+
+
+def cylinder(p0, p1, r: float):
+    """Solid cylinder of radius r from point p0 to point p1."""
+    b = bd()
+    p0 = np.asarray(p0, float)
+    p1 = np.asarray(p1, float)
+    axis = p1 - p0
+    h = float(np.linalg.norm(axis))
+    axis = axis / h
+    ref = np.array([1.0, 0.0, 0.0]) if abs(axis[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    xdir = np.cross(axis, ref)
+    xdir /= np.linalg.norm(xdir)
+    return b.Solid.make_cylinder(r, h, b.Plane(origin=tuple(p0), x_dir=tuple(xdir), z_dir=tuple(axis)))
+
+
+def cyl_x(r: float, x0: float, x1: float, y: float, z: float):
+    return cylinder((x0, y, z), (x1, y, z), r)
+
+
+def sphere(c, r: float):
+    b = bd()
+    return b.Solid.make_sphere(r).moved(b.Location(tuple(float(v) for v in c)))
+
+
+def prism_x(poly_yz, x0: float, x1: float):
+    """Extrude a (y, z) polygon along x from x0 to x1."""
+    b = bd()
+    pts = [b.Vector(x0, float(y), float(z)) for y, z in poly_yz]
+    wire = b.Wire.make_polygon(pts, close=True)
+    face = b.Face(wire)
+    return b.Solid.extrude(face, b.Vector(x1 - x0, 0, 0))
+
+
+def transform(shape, T: np.ndarray):
+    """Move a shape by a 4x4 rigid transform (mm)."""
+    b = bd()
+    return shape.moved(location(T))
+
+
+def location(T: np.ndarray):
+    """build123d Location of a 4x4 rigid transform (mm)."""
+    b = bd()
+    T = np.asarray(T, float)
+    plane = b.Plane(origin=tuple(T[:3, 3]), x_dir=tuple(T[:3, 0]), z_dir=tuple(T[:3, 2]))
+    return b.Location(plane)
+
+
+def ring_x(r_in: float, r_out: float, width: float, y: float = 0.0, z: float = 0.0):
+    """Annulus about an x-parallel axis through (y, z), centred on x = 0 (a groove cutter)."""
+    outer = cyl_x(r_out, -width / 2.0, width / 2.0, y, z)
+    inner = cyl_x(r_in, -width / 2.0 - 1.0, width / 2.0 + 1.0, y, z)
+    return outer.cut(inner)
+
+
+def single_solid(shape, name: str):
+    """Return the one solid of a boolean result, or refuse with a clear message."""
+    b = bd()
+    solids = shape.solids()
+    if len(solids) != 1:
+        vols = sorted((round(s.volume, 3) for s in solids), reverse=True)
+        raise RuntimeError(f"{name}: expected one solid, got {len(solids)} (volumes {vols} mm^3)")
+    s = solids[0]
+    if not s.is_valid:
+        raise RuntimeError(f"{name}: the solid is not valid")
+    return b.Solid(s.wrapped) if not isinstance(s, b.Solid) else s
+
+
+def build(body_parts, tools, name: str):
+    """Fuse the body parts, cut every tool in one boolean, and return the one valid solid."""
+    body = body_parts[0]
+    if len(body_parts) > 1:
+        body = body.fuse(*body_parts[1:])
+    if tools:
+        body = body.cut(*tools)
+
+    return single_solid(body, name)

@@ -1,0 +1,284 @@
+"""Palm housing.
+
+Frame: the palm (hand) frame (docs/frames.md): origin on the index MCP axis, x ulnar,
+y distal, z dorsal. Built from:
+
+* four finger sockets: blocks whose magnet faces sit where each finger base's magnet face
+  sits at rest, turned by palm.arc_offset from finger to finger (the socket face normal is
+  the finger column's y), each with two magnet pockets facing the finger base's pockets
+  and the tendon exit at the palm's tendon height;
+* the servo bay: a slab around five tendon servos (two staggered rows, shafts along the
+  palm's x, each pulley straight behind its finger's socket) with their pockets (open on
+  the dorsal side for assembly), pulley cavities and M2 pilot holes at the flange ears;
+* the thenar housing of servo 6, coaxial with the thumb CMC axis (open on the shaft side);
+* tendon channels from each socket's tendon exit straight back to its servo pulley's
+  tangent point, and the thumb tendon's channel from servo 1 out of the palm's radial side;
+* the CMC post and arch: the thumb tendon climbs a post on servo 6's housing and reaches the
+  CMC axis above the CMC base, so turning the thumb about the CMC does not change its length;
+* the flexion-limiting housing (rails under each finger base, at the Table I MCP limit).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...kinematics import frames as F
+from ...kinematics.topology import FINGERS
+import math
+
+from .common import DigitSection, Tolerances, box, build, cylinder, mm, prism_x, sphere, transform
+
+
+def _mm(T):
+    return F.to_mm(T)
+
+
+class Palm:
+    name = "palm"
+
+    def __init__(self, params):
+        self.params = params
+        self.tol = Tolerances(params)
+        self.thickness = mm(params.palm.thickness)
+        sv = params.servo
+        self.servo_body = tuple(mm(v) for v in sv.body)           # length, width, height
+        self.flange_span = mm(sv.flange_span)
+        self.shaft_offset = mm(params.cad.servo_shaft_offset)
+        self.pulley_width = mm(params.cad.servo_pulley_width)
+        self.tendon_z = mm(F.tendon_height(params))
+
+    # -- placements (mm) ---------------------------------------------------
+    def T_socket(self, finger: str) -> np.ndarray:
+        return _mm(F.T_palm_socket(self.params, finger))
+
+    def T_servo(self, k: int) -> np.ndarray:
+        """Servo frame of servo k (1-based)."""
+        return _mm(F.T_palm_servo(self.params, k - 1))
+
+    def magnet_centres(self, finger: str) -> list[np.ndarray]:
+        """Opening centres of the socket's magnet pockets, palm frame (mm)."""
+        from .finger_base import FingerBase
+        s = FingerBase(self.params, finger).magnet_offset
+        T = self.T_socket(finger)
+        return [(T @ np.array([sx, 0.0, 0.0, 1.0]))[:3] for sx in (-s, s)]
+
+    def pulley_radius(self, k: int) -> float:
+        if k == 6:
+            return mm(self.params.thumb.cmc_horn_radius)
+        return mm(self.params.chains[k - 1].servo_radius)
+
+    def body_box(self, k: int, grow: float = 0.0):
+        """Servo k's body as (lo, hi) corners in its servo frame, grown by ``grow``."""
+        L, W, H = self.servo_body
+        c = self.tol.clearance
+        z_top = -(self.pulley_width / 2.0 + c)
+        lo = np.array([-W / 2.0, -self.shaft_offset - L / 2.0, z_top - H]) - grow
+        hi = np.array([W / 2.0, -self.shaft_offset + L / 2.0, z_top]) + grow
+        return lo, hi
+
+    def ear_box(self, k: int, grow: float = 0.0):
+        """Servo k's flange ears (both, as one slab across the body) in its servo frame."""
+        L, W, H = self.servo_body
+        z_top = -(self.pulley_width / 2.0 + self.tol.clearance)
+        z1 = z_top - mm(self.params.cad.servo_ear_offset)
+        z0 = z1 - mm(self.params.cad.servo_ear_thickness)
+        lo = np.array([-W / 2.0, -self.shaft_offset - self.flange_span / 2.0, z0]) - grow
+        hi = np.array([W / 2.0, -self.shaft_offset + self.flange_span / 2.0, z1]) + grow
+        return lo, hi
+
+    def cavity_radius(self, k: int) -> float:
+        t = self.tol
+        return self.pulley_radius(k) + 2.0 * t.tendon + t.clearance + t.tendon
+
+    def screw_points(self, k: int) -> list[np.ndarray]:
+        """Flange screw centres (servo frame) on the ears' underside, mid-ear, one each end."""
+        L, W, H = self.servo_body
+        e = (L / 2.0 + self.flange_span / 2.0) / 2.0
+        z_under = self.ear_box(k)[0][2]
+        return [np.array([0.0, -self.shaft_offset + s * e, z_under]) for s in (-1.0, 1.0)]
+
+    def _corners(self, T, lo, hi):
+        pts = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+        return (T @ pts.T).T[:, :3]
+
+    def extents(self):
+        """Slab x/y extents (mm) enclosing the socket roots and servos 1-5, one wall around."""
+        w, c = self.tol.wall, self.tol.clearance
+        pts = []
+        for k in range(1, 6):
+            T = self.T_servo(k)
+            lo, hi = self.body_box(k, grow=c + w)
+            pts.append(self._corners(T, lo, hi))
+            lo, hi = self.ear_box(k, grow=c + w)
+            pts.append(self._corners(T, lo, hi))
+            rc = self.cavity_radius(k) + w
+            pts.append(self._corners(T, np.array([-rc, -rc, -self.pulley_width / 2.0 - c - w]),
+                                     np.array([rc, rc, self.pulley_width / 2.0 + c + w])))
+        pts = np.vstack(pts)
+        y_front = self.slab_front()
+        return pts[:, 0].min(), pts[:, 0].max(), pts[:, 1].min(), y_front
+
+    def slab_front(self) -> float:
+        """The slab stops behind every socket face (its trailing corner), one clearance back."""
+        ys = []
+        for f in FINGERS:
+            T = self.T_socket(f)
+            W = mm(self.params.fingers[f].width)
+            for sx in (-W / 2.0, W / 2.0):
+                ys.append((T @ np.array([sx, 0.0, 0.0, 1.0]))[1])
+        return min(ys) - self.tol.clearance
+
+    # -- thumb tendon over the CMC axis --------------------------------------
+    def T_cmc(self) -> np.ndarray:
+        return _mm(F.T_palm_thumb_cmc_base(self.params))
+
+    def cmc_arch(self) -> dict:
+        """Dimensions (CMC frame, mm) of the post and arch that carry the thumb tendon onto the
+        CMC axis above the CMC base, so that turning the CMC does not change its length. The
+        post stands on the end wall of servo 6's housing, on the side the thumb never sweeps
+        (q15 turns the thumb from +y toward -x), the arch clears the CMC base by one clearance."""
+        t = self.tol
+        T = mm(self.params.thumb.thickness)
+        r_hub = mm(self.params.thumb.cmc_horn_radius)
+        r_post = t.wall
+        # on the end wall of servo 6's housing, clear of the pocket, its ear slots and the hub
+        y_post = -max(self.shaft_offset + self.flange_span / 2.0 + 2.0 * t.clearance + r_post,
+                      r_hub + t.clearance + r_post)
+        z_floor = -(T / 2.0 + 2.0 * t.clearance + self.pulley_width)   # servo 6 housing top
+        z_lo = T / 2.0 + t.clearance                                     # arch underside
+        z_hi = z_lo + 2.0 * t.wall
+        z_mid = (z_lo + z_hi) / 2.0
+        z_entry = z_floor + t.tendon_relief + t.wall
+        return {"r_post": r_post, "y_post": y_post, "z_floor": z_floor, "z_lo": z_lo, "z_hi": z_hi,
+                "z_mid": z_mid, "z_entry": z_entry}
+
+    def thumb_tendon_path(self) -> list[np.ndarray]:
+        """Palm-frame points (mm) of the thumb tendon: servo 1's tangent point, the palm exit,
+        the post entry, the post top, the point above the CMC axis, the CMC axis at the arch's
+        underside."""
+        a = self.cmc_arch()
+        x0 = self.extents()[0]
+        Ts = self.T_servo(1)
+        tangent = (Ts @ np.array([-self.pulley_radius(1), 0.0, 0.0, 1.0]))[:3]
+        exit_ = np.array([x0 - 1.0, tangent[1], tangent[2]])
+        Tc = self.T_cmc()
+        P = lambda *v: (Tc @ np.array([*v, 1.0]))[:3]  # noqa: E731
+        entry = P(0.0, a["y_post"], a["z_entry"])
+        top = P(0.0, a["y_post"], a["z_mid"])
+        over = P(0.0, 0.0, a["z_mid"])
+        axis = P(0.0, 0.0, a["z_lo"])
+        return [tangent, exit_, entry, top, over, axis]
+
+    def cmc_arch_body(self):
+        a = self.cmc_arch()
+        w, r = self.tol.wall, a["r_post"]
+        post = cylinder((0.0, a["y_post"], a["z_floor"] - w), (0.0, a["y_post"], a["z_hi"]), r)
+        arch = box(-r, r, a["y_post"], r, a["z_lo"], a["z_hi"])
+        return [post, arch]
+
+    def cmc_arch_tools(self):
+        """Tendon channel in the post and arch (CMC frame): relief spheres at the bends."""
+        a = self.cmc_arch()
+        t = self.tol
+        r, rr = t.tendon_hole / 2.0, t.tendon_relief / 2.0
+        e = np.array([0.0, a["y_post"], a["z_entry"]])
+        top = np.array([0.0, a["y_post"], a["z_mid"]])
+        over = np.array([0.0, 0.0, a["z_mid"]])
+        # the entry hole faces the palm exit (the tendon arrives through the air)
+        Tc_inv = np.linalg.inv(self.T_cmc())
+        exit_local = (Tc_inv @ np.append(self.thumb_tendon_path()[1], 1.0))[:3]
+        u = exit_local - e
+        u /= np.linalg.norm(u)
+        return [cylinder(e, e + u * (a["r_post"] + 2.0 * t.wall), r), sphere(e, rr), cylinder(e, top, r), sphere(top, rr),
+                cylinder(top, over, r), sphere(over, rr),
+                cylinder(over, (0.0, 0.0, a["z_lo"] - 1.0), r)]
+
+    def limiter_polygon(self, finger: str) -> list[tuple[float, float]]:
+        """(y, z) outline, in the finger base frame (MCP axis at the origin), of the palm's
+        flexion limiter: from inside the socket block to the plane the proximal phalanx's
+        palmar face (z_child = -thickness/2) reaches at the MCP upper limit."""
+        sec = DigitSection(self.params, finger)
+        q = sec.q_max["mcp"]
+        s, c = math.sin(q), math.cos(q)
+        rb = sec.boss_radius
+        Lb = mm(self.params.cad.finger_base_length)
+        z_top = -sec.thickness / 2.0 - self.tol.clearance
+        z_bot = -self.thickness / 2.0
+        y_at = lambda z: (-rb - z * c) / s  # noqa: E731
+        return [(-Lb - self.tol.wall, z_bot), (y_at(z_bot), z_bot), (y_at(z_top), z_top),
+                (-Lb - self.tol.wall, z_top)]
+
+    def limiter_x(self, finger: str) -> tuple[float, float]:
+        """Inner and outer |x| of the two rails: clear of the guide eyelet bosses, flush with the finger."""
+        sec = DigitSection(self.params, finger)
+        return sec.eyelet_boss_radius + self.tol.clearance, sec.width / 2.0
+
+    def limiter_rails(self, finger: str):
+        poly = self.limiter_polygon(finger)
+        x0, x1 = self.limiter_x(finger)
+        return [prism_x(poly, x0, x1), prism_x(poly, -x1, -x0)]
+
+    # -- geometry ----------------------------------------------------------
+    def build(self):
+        t, Tp = self.tol, self.thickness
+        c, w = t.clearance, t.wall
+        x0, x1, y0, y1 = self.extents()
+        body = [box(x0, x1, y0, y1, -Tp / 2.0, Tp / 2.0)]
+        tools = []
+        # finger sockets
+        for f in FINGERS:
+            T = self.T_socket(f)
+            W = mm(self.params.fingers[f].width)
+            depth = T[1, 3] - y0
+            body.append(transform(box(-W / 2.0, W / 2.0, -depth, 0.0, -Tp / 2.0, Tp / 2.0), T))
+            for m in self.magnet_centres(f):
+                n = T[:3, 1]
+                tools.append(cylinder(m + n, m - n * t.magnet_pocket_depth, t.magnet_pocket_d / 2.0))
+            # tendon: socket exit straight back to the servo pulley's tangent point
+            k = FINGERS.index(f) + 2
+            Ts = self.T_servo(k)
+            r = self.pulley_radius(k)
+            tangent = (Ts @ np.array([-r, 0.0, 0.0, 1.0]))[:3]   # servo x = palm z: bottom of the pulley
+            exit_ = (T @ np.array([0.0, 0.0, self.tendon_z, 1.0]))[:3]
+            u = (tangent - exit_) / np.linalg.norm(tangent - exit_)
+            tools.append(cylinder(exit_ - u, tangent + u, t.tendon_hole / 2.0))
+        # flexion-limiting housing: two rails under each finger base whose sloped fronts are
+        # where the proximal phalanx's palmar face lies at the MCP limit (Table I)
+        for f in FINGERS:
+            for rail in self.limiter_rails(f):
+                body.append(transform(rail, _mm(F.T_palm_finger_base(self.params, f))))
+        # thumb tendon: servo 1's tangent point out through the radial side, then (in the air)
+        # to the CMC post, up the post, along the arch and down the CMC axis into the thumb
+        pts = self.thumb_tendon_path()
+        tools.append(cylinder(pts[0], pts[1], t.tendon_hole / 2.0))
+        tools.append(cylinder(pts[1], pts[2], t.tendon_hole / 2.0))   # where it grazes the housing
+        Tc = self.T_cmc()
+        for tool in self.cmc_arch_tools():
+            tools.append(transform(tool, Tc))
+        for part in self.cmc_arch_body():
+            body.append(transform(part, Tc))
+        # servo pockets, pulley cavities, flange screws
+        for k in range(1, 7):
+            Ts = self.T_servo(k)
+            lo, hi = self.body_box(k, grow=c)
+            rc = self.cavity_radius(k)
+            elo, ehi = self.ear_box(k, grow=c)
+            if k <= 5:
+                # open toward the dorsal face (servo x = palm z): drop-in from the back, ears in slots
+                tools.append(transform(box(lo[0], Tp, lo[1], hi[1], lo[2], hi[2]), Ts))
+                tools.append(transform(box(elo[0], Tp, elo[1], ehi[1], elo[2], ehi[2]), Ts))
+                zc0, zc1 = hi[2] - c, self.pulley_width / 2.0 + c
+                tools.append(transform(cylinder((0, 0, zc0), (0, 0, zc1), rc), Ts))
+                tools.append(transform(box(0.0, Tp, -rc, rc, zc0, zc1), Ts))
+            else:
+                hlo, hhi = self.body_box(k, grow=c + w)
+                glo, ghi = self.ear_box(k, grow=c + w)
+                body.append(transform(box(hlo[0], hhi[0], min(hlo[1], glo[1]), max(hhi[1], ghi[1]),
+                                          hlo[2], hi[2] - c), Ts))
+                # open on the shaft side: the servo drops in before the hub goes on, ears in a step
+                tools.append(transform(box(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2] + 1.0), Ts))
+                tools.append(transform(box(elo[0], ehi[0], elo[1], ehi[1], elo[2], hi[2] + 1.0), Ts))
+            for p in self.screw_points(k):
+                tools.append(transform(cylinder(p + np.array([0, 0, 1.0]), p - np.array([0, 0, c + t.screw_engagement]),
+                                                t.screw_pilot / 2.0), Ts))
+        return build(body, tools, self.name)

@@ -1,0 +1,208 @@
+"""Phalanges of the four fingers and the thumb, and the joint features every digit link shares.
+
+Link frame (docs/frames.md): origin on the proximal joint axis at the middle of the width,
+x along the joint axes (ulnar side of a right hand), y along the link, z dorsal.
+
+A joint is a clevis on the parent (two cheeks that hold the axle with a press fit, a slot
+between them whose back wall is the extension stop and whose palmar back corner keeps a
+wedge that is the flexion stop at the joint's upper limit) and a tongue on the child (a
+boss of radius thickness/2 with the tendon groove of radius R at mid-width, two bearing
+seats, a clearance bore for the axle, and a dorsal heel that rests on the parent's back
+wall at full extension).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .common import (DigitSection, box, build, cyl_x, cylinder, internal_tangents, prism_x,
+                     ring_x, sphere)
+
+# ---------------------------------------------------------------------------
+# shared joint features: each returns (body_parts, cutting_tools), link frame, mm
+# ---------------------------------------------------------------------------
+
+
+def tongue(sec: DigitSection, joint: str):
+    """Child side of a joint whose axis is the link's x axis."""
+    t = sec.tol
+    rb, tw, T = sec.boss_radius, sec.tongue_width, sec.thickness
+    body = [
+        cyl_x(rb, -tw / 2.0, tw / 2.0, 0.0, 0.0),
+        box(-tw / 2.0, tw / 2.0, 0.0, sec.slot_back, -T / 2.0, T / 2.0),
+        box(-tw / 2.0, tw / 2.0, -sec.slot_back, 0.0, sec.heel_z, T / 2.0),   # extension-stop heel
+    ]
+    tools = [
+        ring_x(sec.R[joint], sec.groove_outer, sec.groove_width),              # tendon groove, radius R
+        cyl_x(t.axle_clear / 2.0, -tw / 2.0 - 1.0, tw / 2.0 + 1.0, 0.0, 0.0),  # axle clearance bore
+    ]
+    for sgn in (1.0, -1.0):                                                    # two bearing seats
+        x_in, x_out = sgn * (tw / 2.0 - t.bearing_width), sgn * (tw / 2.0 + 1.0)
+        tools.append(cyl_x(t.bearing_seat / 2.0, min(x_in, x_out), max(x_in, x_out), 0.0, 0.0))
+    return body, tools
+
+
+def clevis(sec: DigitSection, joint: str, y: float):
+    """Parent side of a joint whose axis is parallel to x through (y, 0)."""
+    t = sec.tol
+    rb, W, T, sw = sec.boss_radius, sec.width, sec.thickness, sec.slot_width
+    body = [cyl_x(rb, -W / 2.0, W / 2.0, y, 0.0)]
+    slot = box(-sw / 2.0, sw / 2.0, y - sec.slot_back, y + rb + 1.0, -T / 2.0 - 1.0, T / 2.0 + 1.0)
+    recess = sec.recess(sec.q_stop[joint])
+    half = sw / 2.0
+    if recess > 0.0:       # across the full width: the child's full-width body swings in here
+        half = W / 2.0 + 1.0
+        quadrant = box(-half, half, y - sec.slot_back - recess, y, -T / 2.0 - 1.0, 0.0)
+        slot = slot.fuse(quadrant.cut(cyl_x(rb, -half - 1.0, half + 1.0, y, 0.0)))
+    poly = sec.stop_polygon(sec.q_stop[joint])
+    if poly is not None:   # keep the flexion-stop wedge: the slot tool leaves it standing
+        wedge = prism_x([(py + y, pz) for py, pz in poly], -half - 0.5, half + 0.5)
+        slot = slot.cut(wedge)
+    tools = [slot, cyl_x(t.axle_press / 2.0, -W / 2.0 - 1.0, W / 2.0 + 1.0, y, 0.0)]
+    return body, tools
+
+
+def eyelet(sec: DigitSection, centre_yz, toward_yz, clip_palmar: bool = False, clip_y: float | None = None):
+    """A tendon guide eyelet at centre (x = 0), its hole along the line toward ``toward``:
+    a boss of material, a hole of exactly eyelet_length between two relief spheres.
+    Returns (body, tools, axis unit vector, the two relief-sphere centres)."""
+    t = sec.tol
+    c = np.array([0.0, *centre_yz])
+    u = np.array([0.0, *toward_yz]) - c
+    u /= np.linalg.norm(u)
+    r = t.tendon_hole / 2.0
+    rr = t.tendon_relief / 2.0
+    half = t.eyelet_length / 2.0 + math.sqrt(rr * rr - r * r)
+    s_near, s_far = c + half * u, c - half * u
+    # the boss reaches back past the far relief sphere but only to the near sphere's centre
+    # toward the other guide, so the two guides' bosses clear each other at full flexion
+    boss_back = half + rr + t.wall / 2.0
+    boss = cylinder(c - boss_back * u, c + half * u, sec.eyelet_boss_radius)
+    if clip_palmar:   # a child's guide stays inside its palmar face (the flexion-stop face)
+        T = sec.thickness
+        boss = boss.cut(box(-T, T, c[1] - 2.0 * boss_back, c[1] + 2.0 * boss_back, -2.0 * T, -T / 2.0))
+    if clip_y is not None:   # stay in front of a mating face (the finger base's magnet face)
+        T = sec.thickness
+        boss = boss.cut(box(-T, T, clip_y - 4.0 * boss_back, clip_y, -2.0 * T, 2.0 * T))
+    body = [boss]
+    tools = [cylinder(s_far, s_near, r), sphere(s_near, rr), sphere(s_far, rr)]
+    return body, tools, u, (s_near, s_far)
+
+
+def channel(p0, p1, d: float, extend: float = 0.0):
+    p0 = np.asarray(p0, float)
+    p1 = np.asarray(p1, float)
+    u = (p1 - p0) / np.linalg.norm(p1 - p0)
+    return cylinder(p0 - extend * u, p1 + extend * u, d / 2.0)
+
+
+def spring_channel(sec: DigitSection, y0: float, y1: float):
+    """The two dorsal cable-spring channels (one in each cheek line)."""
+    return [cylinder((sx, y0, sec.spring_z), (sx, y1, sec.spring_z), sec.tol.spring_hole / 2.0)
+            for sx in (sec.spring_x, -sec.spring_x)]
+
+
+def spring_anchor(sec: DigitSection, y: float):
+    """Anchor wells of the cable springs: from the dorsal face down through the spring channels
+    (cord + one clearance, narrower than the channel so the two bores never share a radius);
+    the cord is knotted on the dorsal face."""
+    t = sec.tol
+    r = (t.spring + t.clearance) / 2.0
+    return [cylinder((sx, y, sec.spring_z - t.spring_hole / 2.0), (sx, y, sec.thickness / 2.0 + 1.0), r)
+            for sx in (sec.spring_x, -sec.spring_x)]
+
+
+def figure_eight(sec: DigitSection, j_prox: str, j_dist: str, length: float):
+    """The two crossing tendon channels between the pulley grooves of this link's proximal
+    joint (at y = 0) and distal joint (at y = length)."""
+    out = []
+    half = sec.tol.tendon / 2.0   # the tendon's centreline wraps at R + d/2
+    for pa, pb in internal_tangents(sec.R[j_prox] + half, length, sec.R[j_dist] + half):
+        out.append(channel((0.0, *pa), (0.0, *pb), sec.tol.tendon_hole, extend=1.0))
+    return out
+
+
+# ---------------------------------------------------------------------------
+# phalanges
+# ---------------------------------------------------------------------------
+
+class Phalanx:
+    """One phalanx: ``digit`` in (index, middle, ring, pinky, thumb), ``segment`` in
+    (proximal, middle, distal) (thumb: proximal, distal). Dimensions in mm."""
+
+    SEGMENTS = {"finger": ("proximal", "middle", "distal"), "thumb": ("proximal", "distal")}
+
+    def __init__(self, params, digit: str, segment: str):
+        kind = "thumb" if digit == "thumb" else "finger"
+        if digit != "thumb" and digit not in params.fingers:
+            raise ValueError(f"unknown digit {digit!r}")
+        if segment not in self.SEGMENTS[kind]:
+            raise ValueError(f"{digit} has no {segment!r} phalanx (allowed: {self.SEGMENTS[kind]})")
+        self.params, self.digit, self.segment = params, digit, segment
+        self.sec = DigitSection(params, digit)
+        d = params.thumb if digit == "thumb" else params.fingers[digit]
+        self.length = getattr(d, segment) * 1000.0
+        joints = ("mp", "ip") if kind == "thumb" else ("mcp", "pip", "dip")
+        i = self.SEGMENTS[kind].index(segment)
+        #: joint at this link's origin, and at its far end (None for the distal phalanx)
+        self.proximal_joint = joints[i]
+        self.distal_joint = joints[i + 1] if i + 1 < len(joints) else None
+        for name, v in (("length", self.length),):
+            if v <= 2.0 * self.sec.slot_back:
+                raise ValueError(f"{digit} {segment} {name} {v:.2f} mm is shorter than two joint bosses")
+
+    @property
+    def name(self) -> str:
+        return f"{self.digit}_{self.segment}"
+
+    @property
+    def has_guide(self) -> bool:
+        """The phalanx-side MCP (thumb MP) guide sits on the proximal phalanx, at d2."""
+        return self.segment == "proximal"
+
+    @property
+    def tip_y(self) -> float:
+        """Far end of the part along y: the fingertip, or the clevis boss beyond the distal axis."""
+        return self.length if self.distal_joint is None else self.length + self.sec.boss_radius
+
+    def build(self):
+        sec, t = self.sec, self.sec.tol
+        W, T, L = sec.width, sec.thickness, self.length
+        body, tools = tongue(sec, self.proximal_joint)
+        if self.distal_joint is None:       # fingertip: a half-cylinder of radius T/2 (or less)
+            r_tip = min(T / 2.0, L - sec.slot_back)
+            y_c = L - r_tip
+            body.append(box(-W / 2.0, W / 2.0, sec.slot_back, y_c, -T / 2.0, T / 2.0))
+            tip = cyl_x(r_tip, -W / 2.0, W / 2.0, y_c, 0.0).cut(
+                box(-W / 2.0 - 1.0, W / 2.0 + 1.0, y_c - r_tip - 1.0, y_c, -T / 2.0 - 1.0, T / 2.0 + 1.0))
+            body.append(tip)
+        else:
+            body.append(box(-W / 2.0, W / 2.0, sec.slot_back, L, -T / 2.0, T / 2.0))
+            b2, t2 = clevis(sec, self.distal_joint, L)
+            body += b2
+            tools += t2
+            tools += figure_eight(sec, self.proximal_joint, self.distal_joint, L)
+        if self.has_guide:
+            G1, G2 = sec.guide_points()
+            b3, t3, u, (s_near, s_far) = eyelet(sec, G2, G1, clip_palmar=True)
+            body += b3
+            tools += t3
+            chord = float(np.linalg.norm(G1 - G2))
+            tools.append(channel(s_near, s_near + u * chord / 2.0, t.tendon_relief))
+            # on to the distal joint's pulley, palmar side
+            tools.append(channel(s_far, (0.0, L, -sec.R[self.distal_joint]), t.tendon_hole))
+        # dorsal cable spring: through the whole link; anchored in the distal phalanx
+        if self.distal_joint is None:
+            y_anchor = max(sec.slot_back + t.spring_hole + t.wall, L - T / 2.0 - t.spring_hole)
+            tools.extend(spring_channel(sec, -sec.slot_back - 1.0, y_anchor))
+            tools.extend(spring_anchor(sec, y_anchor))
+            # tendon anchor: from the groove's palmar side into a knot well
+            zt = -(sec.R[self.proximal_joint] + t.tendon / 2.0)   # the tendon centreline leaves the groove
+            y_knot = sec.slot_back + t.wall + t.tendon_relief / 2.0
+            tools.append(channel((0.0, 0.0, zt), (0.0, y_knot, zt), t.tendon_hole))
+            tools.append(channel((0.0, y_knot, zt), (0.0, y_knot, -T / 2.0 - 1.0), t.tendon_relief))
+        else:
+            tools.extend(spring_channel(sec, -sec.slot_back - 1.0, L + sec.boss_radius + 1.0))
+        return build(body, tools, self.name)

@@ -1,0 +1,70 @@
+"""Thumb CMC base: the thumb's metacarpal module, turned about the CMC axis by servo 6.
+
+Frame: origin on the CMC axis (the frame's z, coaxial with servo 6's output), y along the
+thumb metacarpal to the MP axis at y = thumb.metacarpal, z toward the thumb's dorsal side
+(docs/frames.md). Features: a hub of radius thumb.cmc_horn_radius that sits on servo
+pulley 6 with four clearance holes on the horn circle (two for the screws into the hub,
+two for access to the horn screws) and the spline-screw bore; the metacarpal arm; the MP
+clevis (axle press bore, extension and flexion stops at the MP limit); the
+metacarpal-side MP guide eyelet at d1_th; the tendon path from the hub to the eyelet; the
+anchors of the two cable springs. The thumb phalanges are phalanx.Phalanx("thumb", ...).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .common import DigitSection, box, build, cylinder, mm, sphere
+from .phalanx import channel, clevis, eyelet, spring_anchor, spring_channel
+from .pulley import BASE_ANGLES, HORN_ANGLES
+
+
+class ThumbCMCBase:
+    def __init__(self, params):
+        self.params = params
+        self.sec = DigitSection(params, "thumb")
+        self.length = mm(params.thumb.metacarpal)
+        self.hub_radius = mm(params.thumb.cmc_horn_radius)
+        self.horn_radius = mm(params.cad.horn_hole_radius)
+        if self.length <= self.hub_radius + self.sec.slot_back:
+            raise ValueError(f"thumb metacarpal {self.length:.2f} mm leaves no arm between the CMC hub "
+                             f"(radius {self.hub_radius:g} mm) and the MP clevis")
+
+    name = "thumb_cmc_base"
+
+    def guide_point(self) -> np.ndarray:
+        """The metacarpal-side MP guide (x, y, z) in this part's frame."""
+        G1, _ = self.sec.guide_points()
+        return np.array([0.0, self.length + G1[0], G1[1]])
+
+    def build(self):
+        sec, t = self.sec, self.sec.tol
+        W, T, L = sec.width, sec.thickness, self.length
+        body = [cylinder((0, 0, -T / 2.0), (0, 0, T / 2.0), self.hub_radius),
+                box(-W / 2.0, W / 2.0, 0.0, L, -T / 2.0, T / 2.0)]
+        b, tools = clevis(sec, "mp", L)
+        body += b
+        G1, G2 = sec.guide_points()
+        shift = np.array([L, 0.0])
+        b3, t3, u, (s_near, s_far) = eyelet(sec, G1 + shift, G2 + shift)
+        body += b3
+        tools += t3
+        chord = float(np.linalg.norm(G1 - G2))
+        tools.append(channel(s_near, s_near + u * chord / 2.0, t.tendon_relief))
+        # the tendon comes down the CMC axis (through the hub's central bore, from the palm's
+        # arch above) and turns along the arm to the eyelet: CMC rotation leaves its length alone
+        turn = np.array([0.0, 0.0, s_far[2]])
+        tools.append(sphere(turn, t.tendon_relief / 2.0 + t.clearance))
+        tools.append(cylinder(turn, s_far, t.tendon_relief / 2.0))
+        # hub: spline-screw bore and the four holes on the horn circle
+        h = T / 2.0 + 1.0
+        tools.append(cylinder((0, 0, -h), (0, 0, h), t.screw_clear / 2.0))
+        for a in HORN_ANGLES + BASE_ANGLES:
+            c = self.horn_radius * np.array([math.cos(a), math.sin(a), 0.0])
+            tools.append(cylinder(c - (0, 0, h), c + (0, 0, h), t.screw_clear / 2.0))
+        y_anchor = self.hub_radius + t.wall + t.spring_hole
+        tools.extend(spring_channel(sec, y_anchor, L + sec.boss_radius + 1.0))
+        tools.extend(spring_anchor(sec, y_anchor))
+        return build(body, tools, self.name)

@@ -1,0 +1,288 @@
+"""Measurements of built solids: what the tests compare with closed forms, and what the
+build uses to refuse writing broken parts. Every function reads the B-rep (faces, edges,
+booleans), never the parameters. Units: mm. build123d is imported lazily.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def _bd():
+    import build123d
+    return build123d
+
+
+def _vec(v) -> np.ndarray:
+    return np.array([v.X, v.Y, v.Z], float)
+
+
+# ---------------------------------------------------------------------------
+# solids
+# ---------------------------------------------------------------------------
+
+def solid_report(shape) -> dict:
+    """Number of solids, validity, volume and bounding box of a shape."""
+    bb = shape.bounding_box()
+    return {
+        "n_solids": len(shape.solids()),
+        "valid": bool(shape.is_valid),
+        "volume": float(shape.volume),
+        "bbox_min": _vec(bb.min),
+        "bbox_max": _vec(bb.max),
+    }
+
+
+def placed(shape, T: np.ndarray):
+    """The shape moved by a 4x4 rigid transform (mm)."""
+    from .cad.parts.common import transform
+    return transform(shape, T)
+
+
+def intersection_volume(a, b) -> float:
+    """Volume (mm^3) common to two solids (0 when their bounding boxes are apart)."""
+    ba, bb = a.bounding_box(), b.bounding_box()
+    if (ba.max.X < bb.min.X or bb.max.X < ba.min.X or ba.max.Y < bb.min.Y or bb.max.Y < ba.min.Y
+            or ba.max.Z < bb.min.Z or bb.max.Z < ba.min.Z):
+        return 0.0
+    common = a.intersect(b)
+    if common is None:
+        return 0.0
+    solids = common.solids() if hasattr(common, "solids") else [s for c in common for s in c.solids()]
+    return float(sum(s.volume for s in solids))
+
+
+# ---------------------------------------------------------------------------
+# cylindrical features
+# ---------------------------------------------------------------------------
+
+def cylinders(shape):
+    """Every cylindrical face: dicts with radius, axis point, axis direction, face centre,
+    axial extent (length along the axis) and the face itself."""
+    bd = _bd()
+    out = []
+    for f in shape.faces():
+        if f.geom_type != bd.GeomType.CYLINDER:
+            continue
+        from OCP.BRepAdaptor import BRepAdaptor_Surface
+        cyl = BRepAdaptor_Surface(f.wrapped).Cylinder()
+        ax = cyl.Axis()
+        loc, dr = ax.Location(), ax.Direction()
+        p = np.array([loc.X(), loc.Y(), loc.Z()])
+        d = np.array([dr.X(), dr.Y(), dr.Z()])
+        d /= np.linalg.norm(d)
+        radius = cyl.Radius()
+        verts = np.array([_vec(v) for v in f.vertices()]) if f.vertices() else np.zeros((0, 3))
+        # axial extent from the face's edges (sampled), robust to seams
+        pts = []
+        for e in f.edges():
+            for t in np.linspace(0.0, 1.0, 9):
+                pts.append(_vec(e.position_at(t)))
+        pts = np.array(pts) if pts else verts
+        s = (pts - p) @ d
+        out.append({
+            "radius": float(radius), "point": p, "direction": d,
+            "s_min": float(s.min()), "s_max": float(s.max()),
+            "length": float(s.max() - s.min()),
+            "centre": p + d * float((s.max() + s.min()) / 2.0),
+            "face": f,
+        })
+    return out
+
+
+def _angle_span(c, samples: int = 16) -> float:
+    """Angular span (rad) that a cylindrical face covers about its axis."""
+    f, p, d = c["face"], c["point"], c["direction"]
+    ref = np.array([1.0, 0.0, 0.0]) if abs(d[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    e1 = np.cross(d, ref)
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(d, e1)
+    angs = []
+    for e in f.edges():
+        for t in np.linspace(0.0, 1.0, samples):
+            v = _vec(e.position_at(t)) - p
+            angs.append(math.atan2(v @ e2, v @ e1))
+    angs = np.sort(np.mod(angs, 2 * math.pi))
+    gaps = np.diff(np.concatenate([angs, [angs[0] + 2 * math.pi]]))
+    return float(2 * math.pi - gaps.max())
+
+
+def point_line_distance(p, a, d) -> float:
+    d = np.asarray(d, float) / np.linalg.norm(d)
+    v = np.asarray(p, float) - np.asarray(a, float)
+    return float(np.linalg.norm(v - (v @ d) * d))
+
+
+def coaxial(c, point, direction, tol: float = 1e-3) -> bool:
+    d = np.asarray(direction, float) / np.linalg.norm(direction)
+    return abs(abs(c["direction"] @ d) - 1.0) < tol and point_line_distance(c["point"], point, d) < tol
+
+
+def groove_radii(shape, axis_point, axis_direction, tol: float = 1e-3) -> list[float]:
+    """Radii of the cylindrical faces coaxial with the given axis whose axial length is at most
+    the narrowest such face: the bottoms of grooves, read from the solid."""
+    cs = [c for c in cylinders(shape) if coaxial(c, axis_point, axis_direction, tol)]
+    return sorted({round(c["radius"], 6) for c in cs})
+
+
+def measure_groove_radius(shape, axis_point, axis_direction, width: float, tol: float = 1e-3) -> float:
+    """Radius of the groove bottom about an axis: the coaxial cylindrical face whose axial length
+    equals the groove ``width`` (a groove is a short concave band) and whose radius is the
+    smallest such band beyond the bore (if several bands, the outermost is the pulley flange)."""
+    cs = [c for c in cylinders(shape) if coaxial(c, axis_point, axis_direction, tol)
+          and abs(c["length"] - width) < 1e-3]
+    if not cs:
+        raise ValueError("no coaxial cylindrical band of that width")
+    # the groove bottom is concave toward the outside: the band whose radius is not a bore
+    # (bores are longer than the groove); when both flanges and bottom match, take the smallest
+    return float(min(c["radius"] for c in cs))
+
+
+def eyelet_centres(shape, radius: float, length: float, tol: float = 1e-3) -> list[dict]:
+    """Guide eyelets: full cylindrical holes of ``radius`` whose axial length is ``length``;
+    returns their axis direction and the centre of the band (the guide point)."""
+    out = []
+    for c in cylinders(shape):
+        if abs(c["radius"] - radius) < tol and abs(c["length"] - length) < 0.05:
+            out.append({"centre": c["centre"], "direction": c["direction"], "length": c["length"]})
+    return out
+
+
+def circular_pockets(shape, radius: float, tol: float = 1e-3) -> list[dict]:
+    """Blind round pockets of ``radius``: for each such cylindrical face, the centre of its
+    opening (the end not closed by a flat bottom face) and the outward direction (bottom ->
+    opening)."""
+    bd = _bd()
+    planes = [f for f in shape.faces() if f.geom_type == bd.GeomType.PLANE]
+    out = []
+    for c in cylinders(shape):
+        if abs(c["radius"] - radius) > tol:
+            continue
+        p, d = c["point"], c["direction"]
+        ends = [p + d * c["s_min"], p + d * c["s_max"]]
+        closed = []
+        for e in ends:
+            hit = False
+            for f in planes:
+                n = _vec(f.normal_at(f.center()))
+                if abs(abs(n @ d) - 1.0) < 1e-6 and abs((e - _vec(f.center())) @ n) < 1e-6 \
+                        and f.area < math.pi * radius * radius * 1.01 and \
+                        np.linalg.norm(_vec(f.center()) - e) < 1e-3:
+                    hit = True
+            closed.append(hit)
+        if closed[0] == closed[1]:
+            continue
+        bottom, opening = (ends[0], ends[1]) if closed[0] else (ends[1], ends[0])
+        u = opening - bottom
+        out.append({"centre": opening, "facing": u / np.linalg.norm(u), "depth": float(np.linalg.norm(u))})
+    return out
+
+
+def planar_faces(shape, min_area: float = 0.0):
+    bd = _bd()
+    out = []
+    for f in shape.faces():
+        if f.geom_type == bd.GeomType.PLANE and f.area >= min_area:
+            out.append({"centre": _vec(f.center()), "normal": _vec(f.normal_at(f.center())), "area": float(f.area),
+                        "face": f})
+    return out
+
+
+def face_normal_at(shape, point, tol: float = 1e-3):
+    """Outward normal of the planar face that contains ``point`` (largest if several)."""
+    best = None
+    for pf in planar_faces(shape):
+        n = pf["normal"]
+        if abs((np.asarray(point) - pf["centre"]) @ n) < tol:
+            f = pf["face"]
+            bd = _bd()
+            if f.distance_to(bd.Vector(*map(float, point))) < tol:
+                if best is None or pf["area"] > best["area"]:
+                    best = pf
+    return None if best is None else best["normal"]
+
+
+# ---------------------------------------------------------------------------
+# a built part against its parameters (the build refuses parts that fail)
+# ---------------------------------------------------------------------------
+
+def verify_part(params, name: str, shape) -> list[str]:
+    """Problems found by measuring ``shape`` (part ``name`` in its link frame, mm) against the
+    parameters: one valid solid of positive volume; groove radius R (digit links) or r_j
+    (servo pulleys) or the CMC hub radius; the guide eyelets at d1 / d2 from the joint axis;
+    two magnet pockets per finger base and eight in the palm, its socket normals arc_offset
+    apart. An empty list means the part is sound."""
+    from .cad.parts.common import Tolerances
+
+    mm = 1000.0
+    out = []
+    rep = solid_report(shape)
+    if rep["n_solids"] != 1:
+        out.append(f"{name}: {rep['n_solids']} solids, expected 1")
+    if not rep["valid"]:
+        out.append(f"{name}: the solid is not valid")
+    if not rep["volume"] > 0:
+        out.append(f"{name}: volume {rep['volume']:.3f} mm^3")
+    if out:
+        return out
+    tol = Tolerances(params)
+    head, _, seg = name.partition("_")
+
+    def expect(what, measured, wanted, eps=1e-3):
+        if measured is None or abs(measured - wanted) > eps:
+            got = "nothing" if measured is None else f"{measured:.4f}"
+            out.append(f"{name}: {what} measures {got}, expected {wanted:.4f} mm")
+
+    def groove(point, direction):
+        try:
+            return measure_groove_radius(shape, point, direction, tol.tendon_hole)
+        except ValueError:
+            return None
+
+    if name.startswith("servo_pulley_"):
+        k = int(name.rsplit("_", 1)[1])
+        if k == 6:
+            cs = [c for c in cylinders(shape) if coaxial(c, (0, 0, 0), (0, 0, 1))]
+            expect("hub radius", max((c["radius"] for c in cs), default=None), params.thumb.cmc_horn_radius * mm)
+        else:
+            expect("groove radius", groove((0, 0, 0), (0, 0, 1)), params.chains[k - 1].servo_radius * mm)
+        return out
+    if head in params.fingers or head == "thumb":
+        digit = params.thumb if head == "thumb" else params.fingers[head]
+        R = dict(zip(digit.chain.joints, digit.chain.radii))
+        joints = ("mp", "ip") if head == "thumb" else ("mcp", "pip", "dip")
+        segs = ("proximal", "distal") if head == "thumb" else ("proximal", "middle", "distal")
+        if seg in segs:
+            j = joints[segs.index(seg)]
+            expect(f"{j} groove radius", groove((0, 0, 0), (1, 0, 0)), R[j] * mm)
+        g = digit.chain.guide
+        eyes = eyelet_centres(shape, tol.tendon_hole / 2.0, tol.eyelet_length)
+        if seg == "proximal":
+            expect("guide d2", point_line_distance(eyes[0]["centre"], (0, 0, 0), (1, 0, 0)) if len(eyes) == 1
+                   else None, g.d2 * mm, 0.02)
+        if seg in ("base", "cmc_base"):
+            axis_y = 0.0 if seg == "base" else params.thumb.metacarpal * mm
+            expect("guide d1", point_line_distance(eyes[0]["centre"], (0, axis_y, 0), (1, 0, 0)) if len(eyes) == 1
+                   else None, g.d1 * mm, 0.02)
+        if seg == "base":
+            n = len(circular_pockets(shape, tol.magnet_pocket_d / 2.0))
+            if n != 2:
+                out.append(f"{name}: {n} magnet pockets, expected 2")
+        return out
+    if name == "palm":
+        pk = circular_pockets(shape, tol.magnet_pocket_d / 2.0)
+        if len(pk) != 8:
+            out.append(f"palm: {len(pk)} magnet pockets, expected 8")
+            return out
+        normals = []
+        for p in sorted(pk, key=lambda p: p["centre"][0] * (1 if params.side == "right" else -1)):
+            if not normals or np.linalg.norm(p["facing"] - normals[-1]) > 1e-9:
+                normals.append(p["facing"])
+        for a, b in zip(normals, normals[1:]):
+            ang = math.degrees(math.acos(float(np.clip(a @ b, -1.0, 1.0))))
+            if abs(ang - math.degrees(params.palm.arc_offset)) > 1e-6:
+                out.append(f"palm: socket normals {ang:.6f} deg apart, expected "
+                           f"{math.degrees(params.palm.arc_offset):g}")
+    return out

@@ -1,0 +1,132 @@
+"""Slice STL files headless with PrusaSlicer and read its print estimates.
+
+PrusaSlicer's command line (``prusa-slicer --export-gcode``) runs without a display.
+The configuration is PrusaSlicer's built-in defaults (its default printer: 0.4 mm
+nozzle, 200 x 200 mm bed, 0.3 mm layers, 1.75 mm filament) overridden only by what the
+parameter file says about printing: infill density (``print.infill``) and filament
+density (``print.density_g_per_cm3``, so that PrusaSlicer reports grams). The .ini we
+load is written next to the exports (``slicer/config.ini``) so the estimate can be
+reproduced by hand::
+
+    prusa-slicer --load slicer/config.ini --export-gcode --output part.gcode stl/part.stl
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+import shutil
+import subprocess
+import tempfile
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+EXECUTABLE = "prusa-slicer"
+
+
+@dataclass(frozen=True)
+class PrintEstimate:
+    time_s: float            # estimated printing time, normal mode
+    time_text: str           # as PrusaSlicer prints it ("1h 2m 3s")
+    filament_mm: float
+    filament_cm3: float
+    filament_g: float
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+class SlicerError(RuntimeError):
+    pass
+
+
+def find_slicer() -> str | None:
+    """Path of the prusa-slicer executable, or None."""
+    return shutil.which(EXECUTABLE)
+
+
+def slicer_version(exe: str | None = None) -> str | None:
+    exe = exe or find_slicer()
+    if exe is None:
+        return None
+    out = subprocess.run([exe, "--help"], capture_output=True, text=True, timeout=60,
+                         env=_env()).stdout
+    m = re.search(r"PrusaSlicer-([^\s]+)", out)
+    return m.group(1) if m else "unknown"
+
+
+def config_ini(print_params) -> str:
+    """The PrusaSlicer config derived from ``params.print`` (a phantom_cad Print)."""
+    density_g_cm3 = print_params.density / 1000.0   # kg/m^3 -> g/cm^3
+    return (
+        "# PrusaSlicer config written by phantom_cad from params [print]; everything else\n"
+        "# is PrusaSlicer's built-in default.\n"
+        f"fill_density = {print_params.infill * 100:g}%\n"
+        f"filament_density = {density_g_cm3:g}\n"
+    )
+
+
+def _env() -> dict:
+    env = dict(os.environ)
+    env.pop("DISPLAY", None)     # headless: never try to open the GUI
+    env.pop("WAYLAND_DISPLAY", None)
+    return env
+
+
+_TIME = re.compile(r"^; estimated printing time \(normal mode\) = (.+)$", re.M)
+_FIELDS = {
+    "filament_mm": re.compile(r"^; filament used \[mm\] = ([0-9.eE+-]+)", re.M),
+    "filament_cm3": re.compile(r"^; filament used \[cm3\] = ([0-9.eE+-]+)", re.M),
+    "filament_g": re.compile(r"^; (?:total )?filament used \[g\] = ([0-9.eE+-]+)", re.M),
+}
+
+
+def parse_duration(text: str) -> float:
+    """'1d 2h 3m 4s' -> seconds."""
+    units = {"d": 86400, "h": 3600, "m": 60, "s": 1}
+    parts = re.findall(r"(\d+)\s*([dhms])", text)
+    if not parts:
+        raise SlicerError(f"cannot read the printing time {text!r}")
+    return float(sum(int(n) * units[u] for n, u in parts))
+
+
+def parse_gcode(text: str) -> PrintEstimate:
+    """Read PrusaSlicer's summary comments at the end of a G-code file."""
+    m = _TIME.search(text)
+    if not m:
+        raise SlicerError("no '; estimated printing time (normal mode)' line in the G-code")
+    values = {}
+    for key, rx in _FIELDS.items():
+        found = rx.search(text)
+        if not found:
+            raise SlicerError(f"no '{rx.pattern}' line in the G-code")
+        values[key] = float(found.group(1))
+    return PrintEstimate(time_s=parse_duration(m.group(1)), time_text=m.group(1).strip(), **values)
+
+
+def slice_stl(stl_path: str | os.PathLike, ini_text: str, exe: str | None = None,
+              gcode_path: str | os.PathLike | None = None, timeout: float = 600) -> PrintEstimate:
+    """Slice one STL with the given config; return PrusaSlicer's estimates."""
+    exe = exe or find_slicer()
+    if exe is None:
+        raise SlicerError(f"{EXECUTABLE} is not installed (Debian: apt-get install prusa-slicer; "
+                          "see .ci/sysdeps)")
+    with tempfile.TemporaryDirectory(prefix="phantom-slice-") as tmp:
+        ini = Path(tmp) / "config.ini"
+        ini.write_text(ini_text)
+        out = Path(gcode_path) if gcode_path else Path(tmp) / "part.gcode"
+        cmd = [exe, "--load", str(ini), "--export-gcode", "--output", str(out), str(stl_path)]
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=_env(), cwd=tmp)
+        if proc.returncode != 0 or not out.exists():
+            tail = "\n".join((proc.stderr + proc.stdout).strip().splitlines()[-5:])
+            raise SlicerError(f"prusa-slicer failed on {stl_path} (exit {proc.returncode}): {tail}")
+        text = out.read_text(encoding="utf-8", errors="replace")
+        return parse_gcode(text)
+
+
+def estimate_key(stl_bytes: bytes, ini_text: str, version: str | None) -> str:
+    h = hashlib.sha256()
+    for chunk in (stl_bytes, ini_text.encode(), (version or "").encode()):
+        h.update(hashlib.sha256(chunk).digest())
+    return h.hexdigest()

@@ -1,0 +1,48 @@
+"""Fixtures of the part tests: the default hand's parts, built once per session.
+
+* ``params``: the default hand (params/phantom.toml).
+* ``built``: {name: Built} of every part (right hand).
+* ``placed``: {name: solid} every part moved to its rest pose in the hand frame.
+* ``variant(edit)``: parse the default document after ``edit(doc)`` (a plain dict).
+"""
+
+from __future__ import annotations
+
+import copy
+
+import pytest
+
+from phantom_cad import load_params
+from phantom_cad.params import parse
+from phantom_cad.params.schema import _plain
+
+
+@pytest.fixture(scope="session")
+def params():
+    return load_params()
+
+
+@pytest.fixture(scope="session")
+def document(params):
+    return _plain(params.document)
+
+
+@pytest.fixture(scope="session")
+def variant(document):
+    def make(edit):
+        doc = copy.deepcopy(document)
+        edit(doc)
+        return parse(doc)
+    return make
+
+
+@pytest.fixture(scope="session")
+def built(params):
+    from phantom_cad.cad import assembly
+    return {name: assembly.build_part(params, name) for name in assembly.part_names(params)}
+
+
+@pytest.fixture(scope="session")
+def placed(built):
+    from phantom_cad import check
+    return {name: check.placed(b.shape, b.T_hand_link) for name, b in built.items()}

@@ -1,0 +1,128 @@
+"""The [cad] parameters and the fit rules the parts add to the schema: each bad input gets
+its exact error (field, value, rule). Numbers below are worked out by hand from the
+default file (params/phantom.toml)."""
+
+from __future__ import annotations
+
+import copy
+import math
+
+import pytest
+
+from phantom_cad import ParamError
+from phantom_cad.params import parse
+
+
+def _fails(document, edit):
+    doc = copy.deepcopy(document)
+    edit(doc)
+    with pytest.raises(ParamError) as exc:
+        parse(doc)
+    return exc.value
+
+
+def test_default_cad_values_in_si(params):
+    cad = params.cad
+    assert cad.finger_base_length == pytest.approx(0.013)
+    assert cad.cheek == pytest.approx(0.0024)
+    assert cad.eyelet_length == pytest.approx(0.002)
+    assert cad.horn_hole_radius == pytest.approx(0.004)
+
+
+def test_cad_table_is_required(document):
+    e = _fails(document, lambda d: d.pop("cad"))
+    assert (e.field, e.value, e.rule) == ("cad", None, "is required but missing")
+
+
+def test_unknown_cad_key(document):
+    e = _fails(document, lambda d: d["cad"].__setitem__("fillet_mm", 1.0))
+    assert e.field == "cad.fillet_mm"
+
+
+def test_cheek_too_thick_for_the_pinky_tongue(document):
+    # pinky: 15 - 2*4 - 2*0.2 = 6.6 mm tongue; 2 bearings 3 mm + groove (0.6 + 0.4) + 0.4 = 7.4 mm
+    e = _fails(document, lambda d: d["cad"].__setitem__("cheek_mm", 4.0))
+    assert e.field == "cad.cheek_mm"
+    assert e.value == pytest.approx(4.0)
+    assert e.rule == ("leaves a 6.600 mm joint tongue in fingers.pinky.width_mm = 15; "
+                      "two bearings and the tendon groove need 7.400 mm")
+
+
+def test_finger_base_too_short_for_the_magnets(document):
+    # index: 16/2 + 3 + 0.1 + 0.2 = 11.3 mm
+    e = _fails(document, lambda d: d["cad"].__setitem__("finger_base_length_mm", 11.0))
+    assert e.field == "cad.finger_base_length_mm"
+    assert e.rule == ("must be >= 11.300 mm (fingers.index: half thickness + magnet thickness "
+                      "+ magnet and joint clearances)")
+
+
+def test_finger_bases_too_long_collide(document):
+    R = 19.5 / (2 * math.sin(math.radians(2.5)))
+    room = (R - 20.0) * 2 * math.sin(math.radians(2.5))
+    e = _fails(document, lambda d: d["cad"].__setitem__("finger_base_length_mm", 20.0))
+    assert e.field == "cad.finger_base_length_mm"
+    assert e.rule == (f"the index and middle bases are {room:.3f} mm apart at their magnet faces "
+                      f"(palm arc radius {R:.3f} mm), they need 18.200 mm (half widths + hole_clearance)")
+    assert f"{room:.3f}" == "17.755"
+
+
+def test_guide_eyelet_inside_the_boss(document):
+    # index 18 mm thick: 9 + 0.2 + 1 = 10.2 mm > d2 = 10
+    e = _fails(document, lambda d: d["fingers"]["index"].__setitem__("thickness_mm", 18.0))
+    assert (e.field, e.value) == ("fingers.index.guide.d2_mm", 10.0)
+    assert e.rule == ("must be >= 10.200 mm (half the thickness + hole_clearance + half cad.eyelet_length): "
+                      "the phalanx guide eyelet must clear the joint boss")
+
+
+def test_horn_circle_outside_the_pulley(document):
+    # 7 - 2/2 - 0.2 - 0.6 = 5.2 mm
+    e = _fails(document, lambda d: d["cad"].__setitem__("horn_hole_radius_mm", 5.5))
+    assert e.field == "cad.horn_hole_radius_mm"
+    assert e.rule == "must be <= 5.200 mm so the horn screws stay inside the fingers.index pulley radius 7 mm"
+
+
+def test_spring_channel_wider_than_the_cheek(document):
+    e = _fails(document, lambda d: d["cad"].__setitem__("spring_diameter_mm", 2.0))
+    assert e.field == "cad.spring_diameter_mm"
+    assert e.rule == "its channel (2.4 mm with clearance) must fit inside a clevis cheek (cheek_mm = 2.4)"
+
+
+def test_servo_pulley_too_small_for_the_tendon_under_the_next_servo(document):
+    # 14/2 + 2*0.2 + 0.6/2 = 7.7 mm > r = 7 mm
+    e = _fails(document, lambda d: d["servo"].__setitem__("body_mm", [23.2, 14.0, 25.3]))
+    assert (e.field, e.value) == ("fingers.index.servo_pulley_radius_mm", 7.0)
+    assert e.rule == ("must exceed 7.700 mm (half the servo body width servo.body_mm[1] + tendon + clearances): "
+                      "the next finger's tendon passes under the servo")
+
+
+def test_shaft_offset_beyond_the_body(document):
+    e = _fails(document, lambda d: d["cad"].__setitem__("servo_shaft_offset_mm", 11.6))
+    assert e.field == "cad.servo_shaft_offset_mm"
+    assert e.rule == "must be < half the servo body length (11.6 mm)"
+
+
+def test_nonpositive_cad_value(document):
+    e = _fails(document, lambda d: d["cad"].__setitem__("eyelet_length_mm", 0.0))
+    assert (e.field, e.value, e.rule) == ("cad.eyelet_length_mm", 0.0, "must be > 0")
+
+
+def test_base_guide_behind_the_magnet_face(document):
+    # 14 sin(50 deg) + 2/2 + (sqrt(3) + 2) * (0.6/2 + 0.2) = 13.591 mm > 13 mm
+    reach = 14 * math.sin(math.radians(50)) + 1.0 + (math.sqrt(3) + 2) * 0.5
+    e = _fails(document, lambda d: d["fingers"]["middle"]["guide"].__setitem__("d1_mm", 14.0))
+    assert (e.field, e.value) == ("fingers.middle.guide.d1_mm", 14.0)
+    assert e.rule == (f"puts the guide eyelet {reach:.3f} mm behind the MCP axis, beyond the finger base's "
+                      "magnet face (cad.finger_base_length_mm = 13)")
+    assert f"{reach:.3f}" == "13.591"
+
+
+def test_module_stop_margin_range(document):
+    e = _fails(document, lambda d: d["cad"].__setitem__("module_stop_margin_deg", 12.0))
+    assert (e.field, e.value, e.rule) == ("cad.module_stop_margin_deg", 12.0, "must be <= 10")
+
+
+def test_servo_ears_off_the_body(document):
+    e = _fails(document, lambda d: d["cad"].__setitem__("servo_ear_offset_mm", 23.0))
+    assert e.field == "cad.servo_ear_offset_mm"
+    assert e.rule == ("with servo_ear_thickness_mm = 2.5 the ears must lie on the servo body "
+                      "(height servo.body_mm[2] = 25.3)")

@@ -1,0 +1,507 @@
+"""The printable parts, measured from the built solids.
+
+Known answers come from the parameter file's numbers (the document, in its own units) and
+textbook geometry written out here; every feature position is read from the B-rep
+(cylindrical faces, pocket openings, boolean volumes), never from the part classes.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+from phantom_cad import check
+from phantom_cad.cad import assembly
+
+FINGERS = ("index", "middle", "ring", "pinky")
+
+
+def _hand(T, p):
+    return (np.asarray(T) @ np.append(np.asarray(p, float), 1.0))[:3]
+
+
+def _dir(T, d):
+    return np.asarray(T)[:3, :3] @ np.asarray(d, float)
+
+
+def tendon_hole(doc):
+    return doc["hardware"]["tendon_diameter_mm"] + 2 * doc["print"]["hole_clearance_mm"]
+
+
+# ---------------------------------------------------------------------------
+# every part: one valid solid, plausible size
+# ---------------------------------------------------------------------------
+
+def test_every_part_is_one_valid_solid(built):
+    assert len(built) == 26
+    for name, b in built.items():
+        rep = check.solid_report(b.shape)
+        assert rep["n_solids"] == 1, name
+        assert rep["valid"], name
+        assert rep["volume"] > 100.0, name
+
+
+def test_phalanx_bounding_boxes_match_the_segment_lengths(built, document):
+    HL = document["hand"]["hand_length_mm"]
+    for f in FINGERS:
+        fd = document["fingers"][f]
+        W, T = fd["width_mm"], fd["thickness_mm"]
+        for seg, far in (("proximal", True), ("middle", True), ("distal", False)):
+            L = fd["length_fraction"][seg] * HL
+            rep = check.solid_report(built[f"{f}_{seg}"].shape)
+            lo, hi = rep["bbox_min"], rep["bbox_max"]
+            assert hi[0] - lo[0] == pytest.approx(W, abs=1e-6)
+            # the far end is the clevis boss (radius T/2) beyond the next axis, or the fingertip
+            assert hi[1] == pytest.approx(L + T / 2 if far else L, abs=1e-6), (f, seg)
+            # the tongue's heel reaches back to the parent's slot wall: T/2 + clearance
+            assert lo[1] == pytest.approx(-(T / 2 + document["print"]["hole_clearance_mm"]), abs=1e-6)
+            assert hi[2] == pytest.approx(T / 2, abs=1e-6)
+            assert T / 2 <= -lo[2] <= T / 2 + 3.0
+
+
+def test_palm_spans_the_four_sockets_and_the_servos(built, document):
+    rep = check.solid_report(built["palm"].shape)
+    lo, hi = rep["bbox_min"], rep["bbox_max"]
+    pitch = document["palm"]["finger_pitch_mm"]
+    # at least three pitches plus the outer half widths across, and the dorsal face at +T/2
+    assert hi[0] - lo[0] > 3 * pitch + 18.0
+    assert hi[2] == pytest.approx(document["palm"]["thickness_mm"] / 2, abs=1e-6)
+    # five servo bodies in two rows behind the sockets: longer than two servo lengths
+    assert hi[1] - lo[1] > 2 * document["servo"]["body_mm"][0]
+
+
+# ---------------------------------------------------------------------------
+# pulley grooves at their radii
+# ---------------------------------------------------------------------------
+
+GROOVES = [(f, seg, j) for f in FINGERS for seg, j in (("proximal", "mcp"), ("middle", "pip"), ("distal", "dip"))] \
+    + [("thumb", "proximal", "mp"), ("thumb", "distal", "ip")]
+
+
+@pytest.mark.parametrize("digit,segment,joint", GROOVES)
+def test_joint_groove_radius_is_R(built, document, digit, segment, joint):
+    shape = built[f"{digit}_{segment}"].shape
+    R = check.measure_groove_radius(shape, (0, 0, 0), (1, 0, 0), tendon_hole(document))
+    table = document["thumb"] if digit == "thumb" else document["fingers"][digit]
+    assert R == pytest.approx(table["pulley_radius_mm"][joint], abs=1e-6)
+
+
+def test_finger_grooves_are_5_4_5(built, document):
+    w = tendon_hole(document)
+    for f in FINGERS:
+        r = [check.measure_groove_radius(built[f"{f}_{s}"].shape, (0, 0, 0), (1, 0, 0), w)
+             for s in ("distal", "middle", "proximal")]
+        assert np.allclose(np.array(r) / r[0] * 5.0, [5.0, 4.0, 5.0])
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, 4, 5])
+def test_servo_pulley_groove_radius_is_r(built, document, k):
+    r = check.measure_groove_radius(built[f"servo_pulley_{k}"].shape, (0, 0, 0), (0, 0, 1), tendon_hole(document))
+    src = document["thumb"] if k == 1 else document["fingers"][FINGERS[k - 2]]
+    assert r == pytest.approx(src["servo_pulley_radius_mm"], abs=1e-6)
+
+
+def test_cmc_hub_radius_is_the_horn_radius(built, document):
+    cs = [c for c in check.cylinders(built["servo_pulley_6"].shape)
+          if check.coaxial(c, (0, 0, 0), (0, 0, 1))]
+    assert max(c["radius"] for c in cs) == pytest.approx(document["thumb"]["cmc_horn_radius_mm"], abs=1e-6)
+
+
+# ---------------------------------------------------------------------------
+# MCP guides at d1, d2, alpha in the assembled rest pose
+# ---------------------------------------------------------------------------
+
+def _axle_axis(shape, T, doc):
+    """The press-fit axle bore of a clevis, in the hand frame (measured)."""
+    r = (doc["hardware"]["axle_diameter_mm"] - doc["print"]["press_fit_interference_mm"]) / 2
+    cs = [c for c in check.cylinders(shape) if abs(c["radius"] - r) < 1e-6]
+    assert cs
+    near = min(cs, key=lambda c: np.linalg.norm(c["point"] - np.dot(c["point"], c["direction"]) * c["direction"]))
+    return _hand(T, near["point"]), _dir(T, near["direction"])
+
+
+def _eyelet(shape, T, doc):
+    hits = check.eyelet_centres(shape, tendon_hole(doc) / 2, doc["cad"]["eyelet_length_mm"])
+    assert len(hits) == 1
+    return _hand(T, hits[0]["centre"])
+
+
+def _guide_geometry(axis_point, axis_dir, G1, G2):
+    d = axis_dir / np.linalg.norm(axis_dir)
+    v1 = G1 - axis_point
+    v1 -= (v1 @ d) * d
+    v2 = G2 - axis_point
+    v2 -= (v2 @ d) * d
+    ang = math.acos(float(v1 @ v2 / np.linalg.norm(v1) / np.linalg.norm(v2)))
+    return float(np.linalg.norm(v1)), float(np.linalg.norm(v2)), ang
+
+
+@pytest.mark.parametrize("finger", FINGERS)
+def test_mcp_guides_at_d1_d2_alpha(built, document, finger):
+    base, prox = built[f"{finger}_base"], built[f"{finger}_proximal"]
+    a, d = _axle_axis(base.shape, base.T_hand_link, document)
+    G1 = _eyelet(base.shape, base.T_hand_link, document)
+    G2 = _eyelet(prox.shape, prox.T_hand_link, document)
+    d1, d2, alpha = _guide_geometry(a, d, G1, G2)
+    g = document["fingers"][finger]["guide"]
+    assert d1 == pytest.approx(g["d1_mm"], abs=0.02)
+    assert d2 == pytest.approx(g["d2_mm"], abs=0.02)
+    assert math.degrees(alpha) == pytest.approx(g["alpha_deg"], abs=0.1)
+    # eq. (4): the chord between the guides at rest
+    L0 = math.sqrt(g["d1_mm"] ** 2 + g["d2_mm"] ** 2 - 2 * g["d1_mm"] * g["d2_mm"] * math.cos(math.radians(g["alpha_deg"])))
+    assert np.linalg.norm(G1 - G2) == pytest.approx(L0, abs=0.03)
+    # both guides lie on the palmar side
+    assert G1[2] < 0 and G2[2] < 0
+
+
+def test_thumb_mp_guides_at_d1_d2_alpha(built, document):
+    base, prox = built["thumb_cmc_base"], built["thumb_proximal"]
+    a, d = _axle_axis(base.shape, base.T_hand_link, document)
+    G1 = _eyelet(base.shape, base.T_hand_link, document)
+    G2 = _eyelet(prox.shape, prox.T_hand_link, document)
+    d1, d2, alpha = _guide_geometry(a, d, G1, G2)
+    g = document["thumb"]["guide"]
+    assert (d1, d2) == (pytest.approx(g["d1_mm"], abs=0.02), pytest.approx(g["d2_mm"], abs=0.02))
+    assert math.degrees(alpha) == pytest.approx(g["alpha_deg"], abs=0.1)
+
+
+# ---------------------------------------------------------------------------
+# palm sockets and magnets
+# ---------------------------------------------------------------------------
+
+def _magnet_r(doc):
+    return doc["hardware"]["magnet"]["diameter_mm"] / 2 + doc["print"]["magnet_clearance_mm"]
+
+
+def test_palm_sockets_are_arc_offset_apart(built, document):
+    pockets = check.circular_pockets(built["palm"].shape, _magnet_r(document))
+    assert len(pockets) == 8
+    # group the pocket axes (the socket face normals) into the four sockets, ordered radial -> ulnar
+    normals = []
+    for p in sorted(pockets, key=lambda p: p["centre"][0]):
+        if not normals or np.linalg.norm(p["facing"] - normals[-1]) > 1e-9:
+            normals.append(p["facing"])
+    assert len(normals) == 4
+    for a, b in zip(normals, normals[1:]):
+        ang = math.degrees(math.acos(float(np.clip(a @ b, -1, 1))))
+        assert ang == pytest.approx(document["palm"]["arc_offset_deg"], abs=1e-6)
+        # the fan opens toward the ulnar side (x grows from index to pinky)
+        assert np.cross(a, b)[2] < 0
+    # the sockets face distally
+    assert all(n[1] > 0.95 for n in normals)
+
+
+@pytest.mark.parametrize("finger", FINGERS)
+def test_magnet_sockets_coincide_with_the_palm(built, document, finger):
+    r = _magnet_r(document)
+    base = built[f"{finger}_base"]
+    palm = built["palm"]
+    mine = [(_hand(base.T_hand_link, p["centre"]), _dir(base.T_hand_link, p["facing"]))
+            for p in check.circular_pockets(base.shape, r)]
+    theirs = [(p["centre"], p["facing"]) for p in check.circular_pockets(palm.shape, r)]
+    assert len(mine) == 2
+    for c, n in mine:
+        match = [(c2, n2) for c2, n2 in theirs if np.linalg.norm(c2 - c) < 1e-6]
+        assert len(match) == 1, (finger, c)
+        assert match[0][1] @ n == pytest.approx(-1.0, abs=1e-9)   # opposite facing
+    # the depth holds the magnet plus its clearance
+    for p in check.circular_pockets(base.shape, r):
+        assert p["depth"] == pytest.approx(document["hardware"]["magnet"]["thickness_mm"]
+                                           + document["print"]["magnet_clearance_mm"], abs=1e-6)
+
+
+# ---------------------------------------------------------------------------
+# mating seats: axles in both parts, screws in the CMC base and its hub
+# ---------------------------------------------------------------------------
+
+JOINTS = [(f"{f}_{a}", f"{f}_{b}") for f in FINGERS for a, b in (("base", "proximal"), ("proximal", "middle"),
+                                                                   ("middle", "distal"))] \
+    + [("thumb_cmc_base", "thumb_proximal"), ("thumb_proximal", "thumb_distal")]
+
+
+@pytest.mark.parametrize("parent,child", JOINTS)
+def test_axle_bore_and_bearing_seats_are_coaxial(built, document, parent, child):
+    P, Cb = built[parent], built[child]
+    hw, pr = document["hardware"], document["print"]
+    press = (hw["axle_diameter_mm"] - pr["press_fit_interference_mm"]) / 2
+    seat = (hw["bearing"]["outer_mm"] - pr["press_fit_interference_mm"]) / 2
+    clear = (hw["axle_diameter_mm"] + 2 * pr["hole_clearance_mm"]) / 2
+    # the child's bearing seats and clearance bore sit on its own x axis
+    seats = [c for c in check.cylinders(Cb.shape) if abs(c["radius"] - seat) < 1e-6]
+    assert len(seats) == 2 and all(check.coaxial(c, (0, 0, 0), (1, 0, 0)) for c in seats)
+    assert all(c["length"] == pytest.approx(hw["bearing"]["width_mm"], abs=1e-6) for c in seats)
+    assert any(abs(c["radius"] - clear) < 1e-6 and check.coaxial(c, (0, 0, 0), (1, 0, 0))
+               for c in check.cylinders(Cb.shape))
+    # the parent's press-fit bore, taken to the hand frame, is the child's axis at rest
+    a = _hand(Cb.T_hand_link, (0, 0, 0))
+    d = _dir(Cb.T_hand_link, (1, 0, 0))
+    bores = [c for c in check.cylinders(P.shape) if abs(c["radius"] - press) < 1e-6]
+    assert any(check.point_line_distance(_hand(P.T_hand_link, c["point"]), a, d) < 1e-6
+               and abs(abs(_dir(P.T_hand_link, c["direction"]) @ d) - 1) < 1e-9 for c in bores)
+
+
+def test_cmc_base_screws_meet_the_hub(built, document):
+    hw, pr = document["hardware"], document["print"]
+    clear = hw["screw_diameter_mm"] / 2 + pr["hole_clearance_mm"]
+    pilot = (hw["screw_diameter_mm"] - pr["press_fit_interference_mm"]) / 2
+    base, hub = built["thumb_cmc_base"], built["servo_pulley_6"]
+    base_axes = [(_hand(base.T_hand_link, c["point"]), _dir(base.T_hand_link, c["direction"]))
+                 for c in check.cylinders(base.shape) if abs(c["radius"] - clear) < 1e-6]
+    hub_holes = [c for c in check.cylinders(hub.shape) if abs(c["radius"] - pilot) < 1e-6]
+    assert len(hub_holes) == 2
+    for c in hub_holes:
+        p, d = _hand(hub.T_hand_link, c["point"]), _dir(hub.T_hand_link, c["direction"])
+        assert any(check.point_line_distance(p, a, dd) < 1e-6 and abs(abs(d @ dd) - 1) < 1e-9
+                   for a, dd in base_axes)
+    # and the hub turns on the CMC axis: its axis is the CMC base's z
+    assert _dir(hub.T_hand_link, (0, 0, 1)) @ _dir(base.T_hand_link, (0, 0, 1)) == pytest.approx(1.0)
+    assert check.point_line_distance(_hand(hub.T_hand_link, (0, 0, 0)), _hand(base.T_hand_link, (0, 0, 0)),
+                                     _dir(base.T_hand_link, (0, 0, 1))) < 1e-9
+
+
+# ---------------------------------------------------------------------------
+# the assembled hand at rest
+# ---------------------------------------------------------------------------
+
+def test_no_two_parts_intersect_at_rest(placed, params):
+    allowed = {frozenset((a, b)) for a, b, _ in assembly.designed_contacts(params)}
+    bad = []
+    for a, b in itertools.combinations(sorted(placed), 2):
+        v = check.intersection_volume(placed[a], placed[b])
+        tol = 1e-2 if frozenset((a, b)) in allowed else 1e-3
+        if v > tol:
+            bad.append((a, b, round(v, 4)))
+    assert bad == []
+
+
+STOPS = [(f, j, p, c) for f in FINGERS for j, p, c in (("mcp", "base", "proximal"), ("pip", "proximal", "middle"),
+                                                          ("dip", "middle", "distal"))] \
+    + [("thumb", "mp", "cmc_base", "proximal"), ("thumb", "ip", "proximal", "distal")]
+
+
+@pytest.mark.parametrize("digit,joint,parent,child", STOPS)
+def test_hard_stop_engages_at_the_limit(built, document, params, digit, joint, parent, child):
+    """Each joint turns freely up to its Table I limit and is blocked 1 degree beyond it."""
+    from phantom_cad.kinematics.topology import joint_index
+    P, Cp = built[f"{digit}_{parent}"], built[f"{digit}_{child}"]
+    table = document["thumb"] if digit == "thumb" else document["fingers"][digit]
+    q_max = table["limits_rad"][joint][1]
+    if joint == "mcp":   # the finger module's own MCP stop lies beyond the palm's
+        q_max += math.radians(document["cad"]["module_stop_margin_deg"])
+    vols = []
+    for q in (q_max, q_max + math.radians(1.0)):
+        qv = np.zeros(15)
+        qv[joint_index(digit, joint)] = q
+        T = assembly.pose_transforms(params, qv)
+        vols.append(check.intersection_volume(check.placed(P.shape, T[f"{digit}_{parent}"]),
+                                              check.placed(Cp.shape, T[f"{digit}_{child}"])))
+    assert vols[0] < 1e-3
+    assert vols[1] > 0.05
+
+
+@pytest.mark.parametrize("finger", FINGERS)
+def test_palm_housing_limits_mcp_flexion(built, document, params, finger):
+    """The palm's flexion limiter stops the proximal phalanx at the Table I MCP limit, before
+    the finger module's own stop."""
+    from phantom_cad.kinematics.topology import joint_index
+    q_max = document["fingers"][finger]["limits_rad"]["mcp"][1]
+    palm, prox = built["palm"], built[f"{finger}_proximal"]
+    vols = []
+    for q in (0.0, q_max, q_max + math.radians(1.0)):
+        qv = np.zeros(15)
+        qv[joint_index(finger, "mcp")] = q
+        T = assembly.pose_transforms(params, qv)
+        vols.append(check.intersection_volume(palm.shape, check.placed(prox.shape, T[f"{finger}_proximal"])))
+    assert vols[0] < 1e-3 and vols[1] < 1e-3
+    assert vols[2] > 0.05
+
+
+def test_half_flexed_hand_has_no_interference(built, params, document):
+    """At half of every joint's upper limit no two parts overlap (joint pairs may touch)."""
+    from phantom_cad.kinematics.topology import JOINT_NAMES
+    q = np.zeros(15)
+    for i, name in enumerate(JOINT_NAMES):
+        digit, joint = name.split("_")
+        table = document["thumb"] if digit == "thumb" else document["fingers"][digit]
+        q[i] = 0.5 * table["limits_rad"][joint][1]
+    T = assembly.pose_transforms(params, q)
+    placed = {n: check.placed(b.shape, T[n]) for n, b in built.items()}
+    allowed = {frozenset((a, b)) for a, b, _ in assembly.designed_contacts(params)}
+    bad = []
+    for a, b in itertools.combinations(sorted(placed), 2):
+        v = check.intersection_volume(placed[a], placed[b])
+        if v > (1e-2 if frozenset((a, b)) in allowed else 1e-3):
+            bad.append((a, b, round(v, 4)))
+    assert bad == []
+
+
+# ---------------------------------------------------------------------------
+# parameters move the measured features
+# ---------------------------------------------------------------------------
+
+def test_changed_pulley_radius_moves_the_groove(variant, document):
+    def edit(doc):
+        doc["fingers"]["middle"]["pulley_radius_mm"]["pip"] = 4.6
+    p = variant(edit)
+    shape = assembly.build_part(p, "middle_middle").shape
+    assert check.measure_groove_radius(shape, (0, 0, 0), (1, 0, 0), tendon_hole(document)) == pytest.approx(4.6)
+
+
+def test_changed_d1_moves_the_base_guide(variant, document):
+    def edit(doc):
+        doc["fingers"]["ring"]["guide"]["d1_mm"] = 12.8
+    p = variant(edit)
+    b = assembly.build_part(p, "ring_base")
+    a, d = _axle_axis(b.shape, np.eye(4), document)
+    G1 = _eyelet(b.shape, np.eye(4), document)
+    assert check.point_line_distance(G1, a, d) == pytest.approx(12.8, abs=0.02)
+
+
+def test_changed_servo_radius_moves_the_servo_groove(variant, document):
+    def edit(doc):
+        doc["fingers"]["pinky"]["servo_pulley_radius_mm"] = 7.5
+        doc["fingers"]["pinky"]["servo_travel_deg"] = [0.0, 80.0]
+    p = variant(edit)
+    shape = assembly.build_part(p, "servo_pulley_5").shape
+    assert check.measure_groove_radius(shape, (0, 0, 0), (0, 0, 1), tendon_hole(document)) == pytest.approx(7.5)
+
+
+def test_changed_arc_offset_turns_the_sockets(variant, document):
+    def edit(doc):
+        doc["palm"]["arc_offset_deg"] = 4.0
+    p = variant(edit)
+    # the socket normals are the finger bases' y axes: measure on two bases' magnet pockets
+    T = assembly.pose_transforms(p)
+    shape = assembly.build_part(p, "ring_base").shape
+    pk = check.circular_pockets(shape, _magnet_r(document))
+    n_ring = -_dir(T["ring_base"], pk[0]["facing"])
+    n_middle = -_dir(T["middle_base"], pk[0]["facing"])
+    assert math.degrees(math.acos(float(n_ring @ n_middle))) == pytest.approx(4.0, abs=1e-6)
+
+
+# ---------------------------------------------------------------------------
+# left hand
+# ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name", ["index_proximal", "thumb_cmc_base", "palm"])
+def test_left_hand_is_the_mirror_image(built, variant, name):
+    def edit(doc):
+        doc["hand"]["side"] = "left"
+    p = variant(edit)
+    left = assembly.build_part(p, name)
+    right = built[name]
+    rl, rr = check.solid_report(left.shape), check.solid_report(right.shape)
+    assert rl["valid"] and rl["n_solids"] == 1
+    assert check.verify_part(p, name, left.shape) == []
+    assert rl["volume"] == pytest.approx(rr["volume"], rel=1e-6)
+    assert np.allclose(rl["bbox_min"], [-rr["bbox_max"][0], rr["bbox_min"][1], rr["bbox_min"][2]], atol=1e-6)
+    assert np.allclose(rl["bbox_max"], [-rr["bbox_min"][0], rr["bbox_max"][1], rr["bbox_max"][2]], atol=1e-6)
+    # placed in the hand: the mirror of the right hand's placed part in the palm's y-z plane
+    pl = check.solid_report(check.placed(left.shape, left.T_hand_link))
+    pr = check.solid_report(check.placed(right.shape, right.T_hand_link))
+    assert np.allclose(pl["bbox_min"], [-pr["bbox_max"][0], pr["bbox_min"][1], pr["bbox_min"][2]], atol=1e-3)
+    assert np.allclose(pl["bbox_max"], [-pr["bbox_min"][0], pr["bbox_max"][1], pr["bbox_max"][2]], atol=1e-3)
+
+
+# ---------------------------------------------------------------------------
+# tendon routing: socket -> servo pulley
+# ---------------------------------------------------------------------------
+
+def _line_distance(p1, d1, p2, d2):
+    n = np.cross(d1, d2)
+    if np.linalg.norm(n) < 1e-12:
+        return check.point_line_distance(p2, p1, d1)
+    return abs((p2 - p1) @ n) / np.linalg.norm(n)
+
+
+@pytest.mark.parametrize("k,finger", [(2, "index"), (3, "middle"), (4, "ring"), (5, "pinky")])
+def test_palm_tendon_channel_joins_base_and_pulley(built, document, k, finger):
+    """The palm's tendon channel starts where the finger base's tendon channel crosses the
+    magnet face and runs tangent to its servo pulley's groove (distance r_j from the axis)."""
+    palm, base, pulley = built["palm"], built[f"{finger}_base"], built[f"servo_pulley_{k}"]
+    channels = [c for c in check.cylinders(palm.shape) if abs(c["radius"] - tendon_hole(document) / 2) < 1e-6]
+    # the base's entry channel (a relief, twice the hole) crosses the magnet face y = -base length
+    Lb = document["cad"]["finger_base_length_mm"]
+    entries = []
+    for c in check.cylinders(base.shape):
+        if abs(c["radius"] - tendon_hole(document)) < 1e-6 and abs(c["direction"][1]) > 1e-6:
+            t = (-Lb - c["point"][1]) / c["direction"][1]
+            entries.append(_hand(base.T_hand_link, c["point"] + t * c["direction"]))
+    # the pulley's groove axis, measured
+    r = document["fingers"][finger]["servo_pulley_radius_mm"]
+    groove = [c for c in check.cylinders(pulley.shape) if abs(c["radius"] - r) < 1e-6]
+    assert groove
+    pa, pd = _hand(pulley.T_hand_link, groove[0]["point"]), _dir(pulley.T_hand_link, groove[0]["direction"])
+    hits = 0
+    for c in channels:
+        p, d = c["point"], c["direction"]
+        through_entry = any(check.point_line_distance(e, p, d) < 1e-6 for e in entries)
+        if through_entry:
+            hits += 1
+            assert _line_distance(p, d, pa, pd) == pytest.approx(r, abs=1e-6)
+            assert abs(d @ pd) < 1e-9   # the tendon leaves in the pulley's plane
+    assert hits == 1
+
+
+# ---------------------------------------------------------------------------
+# check.verify_part: what the build uses to refuse a broken part
+# ---------------------------------------------------------------------------
+
+def test_verify_part_accepts_every_default_part(built, params):
+    assert {n: check.verify_part(params, n, b.shape) for n, b in built.items()} == {n: [] for n in built}
+
+
+def test_verify_part_reports_a_wrong_groove(variant, params):
+    p = variant(lambda d: d["fingers"]["middle"]["pulley_radius_mm"].__setitem__("pip", 4.6))
+    shape = assembly.build_part(p, "middle_middle").shape
+    assert check.verify_part(params, "middle_middle", shape) == [
+        "middle_middle: pip groove radius measures 4.6000, expected 4.0000 mm"]
+
+
+def test_verify_part_reports_several_solids(params):
+    import build123d as bd
+    two = bd.Compound([bd.Box(1, 1, 1), bd.Pos(5, 0, 0) * bd.Box(1, 1, 1)])
+    assert check.verify_part(params, "servo_pulley_2", two) == ["servo_pulley_2: 2 solids, expected 1"]
+    assert check.verify_part(params, "servo_pulley_2", bd.Box(4, 4, 4)) == [
+        "servo_pulley_2: groove radius measures nothing, expected 7.0000 mm"]
+
+
+def test_thumb_tendon_reaches_the_cmc_base_on_its_axis(built, document):
+    """The palm's arch drops the thumb tendon onto the CMC axis (measured: the hub's axis of
+    the CMC base) and the CMC base has its bore on that axis, so CMC rotation leaves the
+    tendon length alone."""
+    palm, base = built["palm"], built["thumb_cmc_base"]
+    r_hub = document["thumb"]["cmc_horn_radius_mm"]
+    hub = [c for c in check.cylinders(base.shape) if abs(c["radius"] - r_hub) < 1e-6]
+    assert hub
+    a, d = _hand(base.T_hand_link, hub[0]["point"]), _dir(base.T_hand_link, hub[0]["direction"])
+    holes = [c for c in check.cylinders(palm.shape) if abs(c["radius"] - tendon_hole(document) / 2) < 1e-6]
+    on_axis = [c for c in holes if check.point_line_distance(c["point"], a, d) < 1e-6
+               and abs(abs(c["direction"] @ d) - 1) < 1e-9]
+    assert len(on_axis) == 1
+    # the CMC base's central bore is coaxial too
+    clear = document["hardware"]["screw_diameter_mm"] / 2 + document["print"]["hole_clearance_mm"]
+    assert any(abs(c["radius"] - clear) < 1e-6 and check.coaxial(c, hub[0]["point"], hub[0]["direction"])
+               for c in check.cylinders(base.shape))
+
+
+def test_palm_has_two_flange_screw_pilots_per_servo(built, document):
+    hw, pr, sv = document["hardware"], document["print"], document["servo"]
+    pilot = (hw["screw_diameter_mm"] - pr["press_fit_interference_mm"]) / 2
+    holes = [c for c in check.cylinders(built["palm"].shape) if abs(c["radius"] - pilot) < 1e-6]
+    assert len(holes) == 12
+    # mid-ear on both ends: (body length / 2 + flange span / 2) apart, along the body length
+    spacing = sv["body_mm"][0] / 2 + sv["flange_span_mm"] / 2
+    pairs = 0
+    for a, b in itertools.combinations(holes, 2):
+        if abs(abs(a["direction"] @ b["direction"]) - 1) < 1e-9:
+            v = b["centre"] - a["centre"]
+            v_perp = v - (v @ a["direction"]) * a["direction"]
+            if abs(v @ a["direction"]) < 1e-6 and abs(np.linalg.norm(v_perp) - spacing) < 1e-6:
+                pairs += 1   # the same servo: side by side at the same depth
+    assert pairs == 6
+    # each hole is 3 screw diameters deep below the ear slot (plus one clearance)
+    assert all(c["length"] >= 3 * hw["screw_diameter_mm"] for c in holes)

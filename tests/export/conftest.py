@@ -1,0 +1,72 @@
+"""Fixtures of the export tests.
+
+* ``standin``: phantom_cad.cad.assembly replaced by tests/export/standin_assembly.py
+  (three parts of known geometry; faults can be injected) for the pipeline tests.
+* ``standin_build``: the stand-in hand built once per session into a tmp dir.
+* ``hand_build``: the real default hand (helper A's parts) built once per session.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+from pathlib import Path
+
+import pytest
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+import standin_assembly  # noqa: E402
+
+
+@pytest.fixture
+def standin(monkeypatch):
+    """The stand-in assembly module, installed for one test."""
+    from phantom_cad.cad import build
+
+    monkeypatch.setattr(build, "ASSEMBLY_MODULE", "standin_assembly")
+    standin_assembly.FAULT.clear()
+    standin_assembly.OVERLAP.clear()
+    yield standin_assembly
+    standin_assembly.FAULT.clear()
+    standin_assembly.OVERLAP.clear()
+
+
+@pytest.fixture(scope="session")
+def standin_build(tmp_path_factory):
+    """(BuildResult, cache dir) of the stand-in hand, built once."""
+    from phantom_cad.cad.build import build_hand
+
+    mp = pytest.MonkeyPatch()
+    from phantom_cad.cad import build
+
+    mp.setattr(build, "ASSEMBLY_MODULE", "standin_assembly")
+    try:
+        root = tmp_path_factory.mktemp("standin")
+        result = build_hand(None, root / "exports" / "phantom", cache_dir=root / "cache", jobs=2,
+                            slice=None)
+    finally:
+        mp.undo()
+    return result, root / "cache"
+
+
+def real_assembly_available() -> bool:
+    try:
+        importlib.import_module("phantom_cad.cad.assembly")
+    except ImportError:
+        return False
+    return True
+
+
+@pytest.fixture(scope="session")
+def hand_build(tmp_path_factory):
+    """The default hand with the real parts, built once per session (jobs = 2)."""
+    if not real_assembly_available():
+        pytest.skip("phantom_cad.cad.assembly (helper A's parts) is not there yet")
+    from phantom_cad.cad.build import build_hand
+
+    root = tmp_path_factory.mktemp("hand")
+    result = build_hand(None, root / "exports" / "phantom", cache_dir=root / "cache", jobs=2,
+                        slice=None)
+    return result, root / "cache"

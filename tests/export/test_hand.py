@@ -1,0 +1,145 @@
+"""The default hand with helper A's real parts, built once per session (with slicing).
+
+Everything is re-measured from the exported files with independent readers: trimesh and
+manifold3d for the STLs, build123d's STEP reader, PrusaSlicer's G-code comments.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from phantom_cad.params import load_params
+
+trimesh = pytest.importorskip("trimesh")
+manifold3d = pytest.importorskip("manifold3d")
+
+
+@pytest.fixture(scope="module")
+def hand(hand_build):
+    result, cache = hand_build
+    man = json.loads((result.out_dir / "manifest.json").read_text())
+    return result, man
+
+
+def _stl(out, name):
+    return trimesh.load(out / "stl" / f"{name}.stl", force="mesh")
+
+
+def test_every_part_exported(hand):
+    from phantom_cad.cad import assembly
+
+    result, man = hand
+    names = assembly.part_names(load_params())
+    assert [p["name"] for p in man["parts"]] == names
+    for n in names:
+        for rel in (f"step/{n}.step", f"stl/{n}.stl", f"renders/{n}.png"):
+            assert (result.out_dir / rel).is_file(), rel
+            assert rel in man["files"]
+    assert (result.out_dir / "renders" / "hand_assembly.png").stat().st_size > 20_000
+    # helper A's measured verification ran on every part and passed
+    assert {p["checks"]["verify_part"] for p in man["parts"]} == {"ok"}
+    assert (result.out_dir / "bom.csv").read_text().startswith("item,spec,quantity,used_in")
+
+
+def test_stls_watertight_manifold_on_the_bed(hand):
+    result, man = hand
+    for p in man["parts"]:
+        mesh = _stl(result.out_dir, p["name"])
+        assert mesh.is_watertight and mesh.is_volume, p["name"]
+        m = manifold3d.Manifold(manifold3d.Mesh(vert_properties=np.asarray(mesh.vertices, np.float32),
+                                                tri_verts=np.asarray(mesh.faces, np.uint32)))
+        assert m.status() == manifold3d.Error.NoError, p["name"]
+        assert mesh.bounds[0][2] == pytest.approx(0.0, abs=1e-4), p["name"]
+        assert mesh.volume == pytest.approx(p["volume_mm3"], rel=1e-2), p["name"]
+
+
+def test_step_reimports_to_the_same_volume(hand):
+    from build123d import import_step
+
+    result, man = hand
+    for p in man["parts"]:
+        shape = import_step(str(result.out_dir / "step" / f"{p['name']}.step"))
+        assert len(shape.solids()) == 1, p["name"]
+        assert shape.volume == pytest.approx(p["volume_mm3"], rel=1e-3), p["name"]
+    asm = import_step(str(result.out_dir / "step" / "hand_assembly.step"))
+    assert len(asm.solids()) == len(man["parts"])
+    assert sum(s.volume for s in asm.solids()) == pytest.approx(
+        sum(p["volume_mm3"] for p in man["parts"]), rel=1e-3)
+
+
+def test_no_unplanned_intersection_at_rest(hand):
+    """Recomputed from the STL files: undo the print transform, place with T_hand_link,
+    intersect every pair with manifold3d."""
+    from phantom_cad.cad import assembly
+    from phantom_cad.cad.build import INTERFERENCE_TOL_MM3
+
+    result, man = hand
+    allowed = {frozenset(c[:2]) for c in assembly.designed_contacts(load_params())}
+    solids = {}
+    for p in man["parts"]:
+        mesh = _stl(result.out_dir, p["name"])
+        P = np.asarray(p["print_transform"])
+        T = np.asarray(p["T_hand_link"]) @ np.linalg.inv(P)
+        v = mesh.vertices @ T[:3, :3].T + T[:3, 3]
+        solids[p["name"]] = manifold3d.Manifold(manifold3d.Mesh(
+            vert_properties=v.astype(np.float32), tri_verts=np.asarray(mesh.faces, np.uint32)))
+    names = list(solids)
+    bad = []
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            if frozenset((a, b)) in allowed:
+                continue
+            vol = (solids[a] ^ solids[b]).volume()
+            if vol > INTERFERENCE_TOL_MM3:
+                bad.append((a, b, round(vol, 3)))
+    assert bad == []
+    assert man["assembly"]["interference"]["collisions"] == []
+
+
+def test_every_part_slices(hand):
+    from phantom_cad.export import slicer
+
+    if slicer.find_slicer() is None:
+        pytest.skip("prusa-slicer is not installed (bash .ci/sysdeps installs Debian's prusa-slicer)")
+    result, man = hand
+    assert man["slicer"]["used"] is True
+    infill = load_params().print.infill
+    for p in man["parts"]:
+        est = p["print"]
+        assert est is not None and est["time_s"] > 0, p["name"]
+        vol_cm3 = p["volume_mm3"] / 1000.0
+        # at least the infill fraction of the solid, at most the solid (no supports)
+        assert infill * vol_cm3 * 0.9 < est["filament_cm3"] < vol_cm3 * 1.1, p["name"]
+    assert man["totals"]["print_time_s"] == sum(p["print"]["time_s"] for p in man["parts"])
+
+
+def test_mass_estimates(hand):
+    result, man = hand
+    params = load_params()
+    for p in man["parts"]:
+        # g = mm^3 * 1e-3 cm^3/mm^3 * g/cm^3 * infill
+        known = p["volume_mm3"] * 1e-3 * (params.document["print"]["density_g_per_cm3"]) * params.print.infill
+        assert p["mass_g"] == pytest.approx(known, rel=1e-6)
+        assert man["files"][f"stl/{p['name']}.stl"]["sha256"]
+
+
+def test_verify_part_problem_refuses_the_part(hand_build, monkeypatch, tmp_path):
+    """A problem reported by phantom_cad.check.verify_part fails the part with its text."""
+    from phantom_cad import check
+    from phantom_cad.cad.build import _part_worker
+    from phantom_cad.params import DEFAULT_PARAMS, load_document
+    from phantom_cad.params.schema import _plain
+
+    monkeypatch.setattr(check, "verify_part",
+                        lambda params, name, shape: [f"{name}: groove radius measures 6.0000, expected 7.0000 mm"])
+    r = _part_worker({"name": "servo_pulley_1", "key": "k", "document": _plain(load_document(DEFAULT_PARAMS)),
+                      "source": str(DEFAULT_PARAMS), "cache_root": str(tmp_path), "render": False})
+    assert r["ok"] is False
+    f = r["failure"]
+    assert f["check"] == "verify_part"
+    assert f["error"] == ("CheckError: part 'servo_pulley_1': check 'verify_part' failed: "
+                          "servo_pulley_1: groove radius measures 6.0000, expected 7.0000 mm")
+    assert not (tmp_path / "parts" / "k").exists()

@@ -1,0 +1,342 @@
+"""The export pipeline on the stand-in parts (known geometry, injected faults).
+
+Known answers: volumes of boxes and cylinders (textbook formulas in standin_assembly),
+the mass model computed here from the parameter file's numbers, the print-pose box of a
+bar rotated by 90 degrees, files re-read by independent readers (trimesh, build123d).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import os
+import shutil
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from phantom_cad.params import DEFAULT_PARAMS, load_document, load_params, ParamError
+
+trimesh = pytest.importorskip("trimesh")
+manifold3d = pytest.importorskip("manifold3d")
+
+
+def sha(path: Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def tree(out: Path) -> dict[str, str]:
+    return {p.relative_to(out).as_posix(): sha(p) for p in sorted(out.rglob("*")) if p.is_file()}
+
+
+def write_params(tmp_path: Path, edit) -> Path:
+    import tomli_w
+
+    doc = load_document(DEFAULT_PARAMS)
+    edit(doc)
+    path = tmp_path / "hand.toml"
+    path.write_text(tomli_w.dumps(doc))
+    return path
+
+
+# ---------------------------------------------------------------------------
+# layout and contents
+
+def test_layout_and_manifest_checksums(standin_build):
+    result, _ = standin_build
+    out = result.out_dir
+    names = ["palm", "index_proximal", "servo_pulley_2"]
+    assert result.parts == names
+    expected = {f"step/{n}.step" for n in names} | {f"stl/{n}.stl" for n in names} \
+        | {f"renders/{n}.png" for n in names} \
+        | {"step/hand_assembly.step", "renders/hand_assembly.png", "bom.csv", "manifest.json",
+           "slicer/config.ini"}
+    assert set(tree(out)) == expected
+    man = json.loads((out / "manifest.json").read_text())
+    assert set(man["files"]) == expected - {"manifest.json"}
+    for rel, entry in man["files"].items():
+        assert entry["sha256"] == sha(out / rel), rel
+        assert entry["bytes"] == (out / rel).stat().st_size
+    assert man["params"]["digest"] == load_params().digest
+    assert man["params"]["file_sha256"] == sha(DEFAULT_PARAMS)
+    assert man["hand"] == {"name": "phantom", "side": "right", "parts": names}
+    # helper A's verify_part only knows the real parts
+    assert {p["checks"]["verify_part"] for p in man["parts"]} == {"skipped"}
+    # no staging directory left beside the export
+    assert [p.name for p in out.parent.iterdir()] == ["phantom"]
+
+
+def test_step_volumes_match_formulas(standin_build, standin):
+    from build123d import import_step
+
+    result, _ = standin_build
+    params = load_params()
+    man = json.loads((result.out_dir / "manifest.json").read_text())
+    for part in man["parts"]:
+        known = standin.known_volume(params, part["name"])
+        vol = import_step(str(result.out_dir / "step" / f"{part['name']}.step")).volume
+        assert vol == pytest.approx(known, rel=1e-6)
+        assert part["volume_mm3"] == pytest.approx(known, rel=1e-6)
+        assert man["files"][f"step/{part['name']}.step"]["volume_mm3"] == pytest.approx(known, rel=1e-6)
+
+
+def test_mass_estimate_is_volume_density_infill(standin_build, standin):
+    result, _ = standin_build
+    doc = load_document(DEFAULT_PARAMS)
+    rho, infill = doc["print"]["density_g_per_cm3"], doc["print"]["infill"]
+    params = load_params()
+    man = json.loads((result.out_dir / "manifest.json").read_text())
+    for part in man["parts"]:
+        known = standin.known_volume(params, part["name"]) / 1000.0 * rho * infill   # cm^3 * g/cm^3
+        assert part["mass_g"] == pytest.approx(known, rel=1e-5)
+    assert man["totals"]["mass_g"] == pytest.approx(sum(p["mass_g"] for p in man["parts"]), rel=1e-6)
+
+
+def test_stl_printable_watertight_manifold(standin_build, standin):
+    result, _ = standin_build
+    params = load_params()
+    doc = load_document(DEFAULT_PARAMS)
+    for name in result.parts:
+        mesh = trimesh.load(result.out_dir / "stl" / f"{name}.stl", force="mesh")
+        assert mesh.is_watertight and mesh.is_volume, name
+        m = manifold3d.Manifold(manifold3d.Mesh(vert_properties=np.asarray(mesh.vertices, np.float32),
+                                                tri_verts=np.asarray(mesh.faces, np.uint32)))
+        assert m.status() == manifold3d.Error.NoError
+        assert mesh.volume == pytest.approx(standin.known_volume(params, name), rel=5e-3)
+        assert mesh.bounds[0][2] == pytest.approx(0.0, abs=1e-4)     # resting on the bed
+    # the bar is printed lying on its side: extents (width, proximal length, thickness)
+    mesh = trimesh.load(result.out_dir / "stl" / "index_proximal.stl", force="mesh")
+    f = doc["fingers"]["index"]
+    length = f["length_fraction"]["proximal"] * doc["hand"]["hand_length_mm"]
+    assert mesh.extents == pytest.approx([f["width_mm"], length, f["thickness_mm"]], abs=1e-3)
+
+
+def test_stl_header_and_step_timestamp_fixed(standin_build):
+    result, _ = standin_build
+    data = (result.out_dir / "stl" / "palm.stl").read_bytes()
+    assert data[:80] == b"phantom_cad binary STL: palm (mm)".ljust(80, b" ")
+    n = int.from_bytes(data[80:84], "little")
+    assert len(data) == 84 + 50 * n
+    head = (result.out_dir / "step" / "palm.step").read_text()[:600]
+    assert "FILE_NAME('palm','1970-01-01T00:00:00'" in head
+
+
+def test_step_timestamp_follows_source_date_epoch(monkeypatch):
+    from phantom_cad.export.step_stl import step_timestamp
+
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "86400")
+    assert step_timestamp() == "1970-01-02T00:00:00"
+    monkeypatch.delenv("SOURCE_DATE_EPOCH")
+    assert step_timestamp() == "1970-01-01T00:00:00"
+
+
+def test_assembly_step_has_every_part_placed(standin_build, standin):
+    from build123d import import_step
+
+    result, _ = standin_build
+    params = load_params()
+    asm = import_step(str(result.out_dir / "step" / "hand_assembly.step"))
+    solids = asm.solids()
+    assert len(solids) == 3
+    assert sum(s.volume for s in solids) == pytest.approx(
+        sum(standin.known_volume(params, n) for n in result.parts), rel=1e-6)
+    labels = {c.label for c in asm.children} if asm.children else set()
+    assert {"palm", "index_proximal", "servo_pulley_2"} <= labels
+    # the pulley sits 1 mm above the palm plate: its placed box starts at thickness/2 + 1
+    d = standin.dims(params)
+    pulley = min(solids, key=lambda s: s.volume)
+    assert pulley.bounding_box().min.Z == pytest.approx(d["palm"][2] / 2 + 1, abs=1e-6)
+
+
+def test_bom_csv(standin_build):
+    result, _ = standin_build
+    lines = (result.out_dir / "bom.csv").read_text().splitlines()
+    assert lines[0] == "item,spec,quantity,used_in"
+    hw = load_document(DEFAULT_PARAMS)["hardware"]["bearing"]
+    assert lines[1] == f"bearing,{hw['bore_mm']:g}x{hw['outer_mm']:g},2,index_proximal"
+    man = json.loads((result.out_dir / "manifest.json").read_text())
+    assert [r["item"] for r in man["bom"]] == ["bearing", "servo"]
+
+
+def test_deterministic_fresh_cache(standin_build, standin, tmp_path):
+    from phantom_cad.cad.build import build_hand
+
+    result, _ = standin_build
+    again = build_hand(None, tmp_path / "out", cache_dir=tmp_path / "cache", jobs=2, slice=None)
+    assert again.built == result.parts
+    a, b = tree(result.out_dir), tree(again.out_dir)
+    assert a == b        # STL, STEP (fixed timestamp), PNG, BOM, manifest: byte-identical
+
+
+# ---------------------------------------------------------------------------
+# cache
+
+def test_warm_rebuild_uses_cache(standin_build, standin, tmp_path):
+    from phantom_cad.cad.build import build_hand
+
+    result, cache = standin_build
+    again = build_hand(None, tmp_path / "out", cache_dir=cache, jobs=2, slice=None)
+    assert again.built == [] and again.cached == result.parts
+    assert tree(again.out_dir) == tree(result.out_dir)
+
+
+def test_one_finger_change_rebuilds_only_its_parts(standin_build, standin, tmp_path):
+    from phantom_cad.cad.build import build_hand
+
+    _, cache = standin_build
+    path = write_params(tmp_path, lambda d: d["fingers"]["index"].__setitem__("width_mm", 17.0))
+    res = build_hand(path, tmp_path / "out", cache_dir=cache, jobs=1)
+    # the stand-in's index_proximal and servo pulley depend on fingers.index; the palm does not
+    assert sorted(res.built) == ["index_proximal", "servo_pulley_2"]
+    assert res.cached == ["palm"]
+    man = res.manifest
+    prox = next(p for p in man["parts"] if p["name"] == "index_proximal")
+    assert prox["bbox_mm"]["max"][0] - prox["bbox_mm"]["min"][0] == pytest.approx(17.0, abs=1e-6)
+
+
+# ---------------------------------------------------------------------------
+# failures leave the previous export untouched and say what failed
+
+@pytest.fixture
+def previous_export(standin_build, tmp_path):
+    result, _ = standin_build
+    out = tmp_path / "exports" / "phantom"
+    shutil.copytree(result.out_dir, out)
+    return out, tree(out)
+
+
+def _fails(tmp_path, out):
+    from phantom_cad.cad.build import BuildError, build_hand
+
+    with pytest.raises(BuildError) as info:
+        build_hand(None, out, cache_dir=tmp_path / "fresh-cache", jobs=1)
+    return info.value
+
+
+def test_param_error_in_a_part_names_part_and_field(standin, previous_export, tmp_path):
+    out, before = previous_export
+    standin.FAULT.update(part="index_proximal", kind="param")
+    err = _fails(tmp_path, out)
+    assert [f.part for f in err.failures] == ["index_proximal"]
+    assert err.failures[0].field == "fingers.index.width_mm"
+    assert "part 'index_proximal' failed: ParamError" in str(err)
+    assert "parameter: fingers.index.width_mm" in str(err)
+    assert tree(out) == before
+    assert sorted(p.name for p in out.parent.iterdir()) == ["phantom"]
+
+
+def test_crash_in_a_part_reports_its_inputs(standin, previous_export, tmp_path):
+    out, before = previous_export
+    standin.FAULT.update(part="palm", kind="crash")
+    err = _fails(tmp_path, out)
+    assert [f.part for f in err.failures] == ["palm"]
+    assert "RuntimeError: BRep_API: command not done" in str(err)
+    assert "  part_inputs: {" in str(err)
+    assert err.failures[0].part_inputs["palm"] == dict(load_document(DEFAULT_PARAMS)["palm"])
+    assert tree(out) == before
+
+
+def test_two_solids_refused(standin, previous_export, tmp_path):
+    out, before = previous_export
+    standin.FAULT.update(part="index_proximal", kind="two_solids")
+    err = _fails(tmp_path, out)
+    assert err.failures[0].check == "one solid"
+    assert "the part has 2 solids" in str(err)
+    assert tree(out) == before
+
+
+def test_interference_refused(standin, previous_export, tmp_path):
+    from phantom_cad.cad.build import BuildError, build_hand
+
+    out, before = previous_export
+    standin.OVERLAP["depth"] = 3.0     # the pulley sinks 2 mm into the palm plate
+    params = load_params()
+    d = standin.dims(params)
+    with pytest.raises(BuildError) as info:
+        build_hand(None, out, cache_dir=tmp_path / "c", jobs=2)
+    msg = str(info.value)
+    assert "parts intersect at the rest pose" in msg
+    # overlap = pulley disc (r) x 2 mm depth minus the palm's through hole (axle radius) x 2 mm
+    known = (math.pi * d["pulley_r"] ** 2 - math.pi * d["hole_r"] ** 2) * 2.0
+    line = next(s for s in msg.splitlines() if "palm x servo_pulley_2" in s)
+    assert float(line.split(":")[1].split()[0]) == pytest.approx(known, rel=1e-2)
+    assert tree(out) == before
+
+
+def test_bad_side_is_a_param_error(standin, tmp_path):
+    from phantom_cad.cad.build import build_hand
+
+    with pytest.raises(ParamError) as info:
+        build_hand(None, tmp_path / "out", side="middle", cache_dir=tmp_path / "c")
+    assert info.value.field == "hand.side"
+    assert info.value.rule == "must be one of: right, left"
+    assert not (tmp_path / "out").exists()
+
+
+def test_default_out_dir_names():
+    from phantom_cad.cad.build import _default_out, _load
+
+    _, _, params, file_side = _load(None, None)
+    assert _default_out(params, None, file_side) == Path("exports") / "phantom"
+    _, _, left, _ = _load(None, "left")
+    assert left.side == "left"
+    assert _default_out(left, "left", file_side) == Path("exports") / "phantom_left"
+    assert _default_out(params, "right", file_side) == Path("exports") / "phantom"
+
+
+# ---------------------------------------------------------------------------
+# CLI
+
+def test_cli_import_does_not_import_ocp():
+    import subprocess
+
+    code = ("import sys, phantom_cad.cad.cli, phantom_cad.cad.build, phantom_cad.export.manifest; "
+            "print(any(m == 'OCP' or m.startswith(('OCP.', 'build123d', 'cadquery')) for m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "False"
+
+
+def test_cli_help_and_bad_params(tmp_path):
+    import typer
+    from typer.testing import CliRunner
+
+    from phantom_cad.cad.cli import build
+
+    app = typer.Typer()
+    app.command("build")(build)
+    app.command("noop")(lambda: None)
+    runner = CliRunner()
+    res = runner.invoke(app, ["build", "--help"])
+    assert res.exit_code == 0
+    for opt in ("--params", "--out", "--side", "--jobs", "--slice", "--no-slice"):
+        assert opt in res.output
+    bad = tmp_path / "bad.toml"
+    text = DEFAULT_PARAMS.read_text().replace("infill = 0.4", "infill = 1.5")
+    assert text != DEFAULT_PARAMS.read_text()
+    bad.write_text(text)
+    res = runner.invoke(app, ["build", "--params", str(bad), "--out", str(tmp_path / "o")])
+    assert res.exit_code == 2
+    assert "print.infill = 1.5: must be <= 1" in res.output
+    assert not (tmp_path / "o").exists()
+
+
+def test_cli_builds(standin, standin_build, tmp_path):
+    import typer
+    from typer.testing import CliRunner
+
+    from phantom_cad.cad.cli import build
+
+    _, cache = standin_build
+    app = typer.Typer()
+    app.command("build")(build)
+    app.command("noop")(lambda: None)
+    res = CliRunner().invoke(app, ["build", "--out", str(tmp_path / "o"), "--cache-dir", str(cache),
+                                   "--jobs", "1", "--no-slice"])
+    assert res.exit_code == 0, res.output
+    assert "3 parts, 0 built, 3 from cache" in res.output
+    man = json.loads((tmp_path / "o" / "manifest.json").read_text())
+    assert man["slicer"] == {"used": False, "reason": "not requested (phantom-cad build --slice)"}
+    assert all(p["print"] is None for p in man["parts"])

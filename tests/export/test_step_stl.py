@@ -1,0 +1,105 @@
+"""Deterministic writers: canonical STEP presentation block, binary STL, vertex merging."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from phantom_cad.export import step_stl
+
+HEAD = b"""ISO-10303-21;
+HEADER;
+FILE_NAME('x','1970-01-01T00:00:00',('Author'),(''),'','','');
+ENDSEC;
+DATA;
+#1 = PRODUCT('a;b','#9','',(#2));
+#2 = SHAPE_REPRESENTATION('',(#3),#4);
+#3 = AXIS2_PLACEMENT_3D('',#5,#6,#7);
+"""
+TAIL = b"ENDSEC;\nEND-ISO-10303-21;\n"
+
+# the same presentation block written in two entity orders (as OCCT does from run to run)
+BLOCK_A = b"""#10 = MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION('',(#11),#4);
+#11 = STYLED_ITEM('color',(#12),#2);
+#12 = PRESENTATION_STYLE_ASSIGNMENT((#13));
+#13 = COLOUR_RGB('',0.9,0.5,0.2);
+#14 = MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION('',(#15),#5);
+#15 = STYLED_ITEM('color',(#16),#3);
+#16 = PRESENTATION_STYLE_ASSIGNMENT((#17));
+#17 = COLOUR_RGB('',0.2,0.4,0.9);
+"""
+BLOCK_B = b"""#10 = MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION('',(#12),#5);
+#11 = COLOUR_RGB('',0.9,0.5,0.2);
+#12 = STYLED_ITEM('color',(#13),#3);
+#13 = PRESENTATION_STYLE_ASSIGNMENT((#17));
+#14 = STYLED_ITEM('color',(#16),#2);
+#15 = MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION('',(#14),#4);
+#16 = PRESENTATION_STYLE_ASSIGNMENT((#11));
+#17 = COLOUR_RGB('',0.2,0.4,0.9);
+"""
+
+
+def test_canonical_step_block_is_order_independent():
+    a = step_stl.canonicalize_step(HEAD + BLOCK_A + TAIL)
+    b = step_stl.canonicalize_step(HEAD + BLOCK_B + TAIL)
+    assert a == b
+    # the head (geometry) is untouched, quoted ';' and '#' survive
+    assert a.startswith(HEAD)
+    assert a.endswith(TAIL)
+    # each styled item still points at the right geometry with the right colour
+    ents = dict(step_stl._split_entities(a)[1])
+    for geometry, rgb in ((b"#2", b"0.9,0.5,0.2"), (b"#3", b"0.2,0.4,0.9")):
+        item = next(k for k, body in ents.items() if body.startswith(b"STYLED_ITEM") and body.endswith(geometry + b")"))
+        psa = int(ents[item].split(b"(#")[1].split(b")")[0])
+        colour = int(ents[psa].split(b"((#")[1].split(b")")[0])
+        assert ents[colour] == b"COLOUR_RGB(''," + rgb + b")"
+
+
+def test_canonical_step_without_block_is_unchanged():
+    data = HEAD + TAIL
+    assert step_stl.canonicalize_step(data) is data
+
+
+def test_stl_bytes_layout_and_roundtrip():
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    f = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    data = step_stl.stl_bytes(v, f, "tetra")
+    assert len(data) == 80 + 4 + 50 * 4
+    assert data[:80] == b"phantom_cad binary STL: tetra (mm)".ljust(80)
+    assert int.from_bytes(data[80:84], "little") == 4
+    # the first facet normal: triangle (0,2,1) lies in z = 0, wound clockwise from +z -> (0,0,-1)
+    n = np.frombuffer(data[84:96], "<f4")
+    assert n.tolist() == [0.0, 0.0, -1.0]
+    v2, f2 = step_stl.read_stl(data)
+    assert len(v2) == 4 and len(f2) == 4
+    assert step_stl.mesh_volume(v2, f2) == pytest.approx(1.0 / 6.0, rel=1e-7)   # unit tetrahedron
+    assert step_stl.stl_bytes(v, f, "tetra") == data
+
+
+def test_merge_vertices_joins_1ulp_neighbours_and_drops_degenerates():
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [np.nextafter(1.0, 2.0), 0, 0], [-0.0, 0, 0]])
+    f = np.array([[0, 1, 2], [4, 3, 2], [0, 4, 1]])
+    mv, mf = step_stl.merge_vertices(v, f)
+    # sorted: (0,0,0) [also -0.0], (0,1,0), (1,0,0) [also 1 + 1 ulp]
+    assert mv.tolist() == [[0, 0, 0], [0, 1, 0], [1, 0, 0]]
+    # (0, 4, 1) collapses (0 and -0.0 are the same vertex) and is dropped
+    assert mf.tolist() == [[0, 2, 1], [0, 2, 1]]
+
+
+def test_check_mesh_reports_open_mesh():
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    f = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2]])   # one face missing
+    with pytest.raises(step_stl.CheckError) as info:
+        step_stl.check_mesh("tetra", v, f)
+    assert str(info.value) == "part 'tetra': check 'STL watertight' failed: trimesh: the mesh has open edges"
+
+
+def test_print_pose_rests_on_bed():
+    v = np.array([[0, 0, 0], [10, 0, 0], [0, 20, 0], [0, 0, 30]], dtype=float)
+    R = np.array([[1, 0, 0], [0, 0, -1], [0, 1, 0]], dtype=float)   # +90 deg about x
+    vp, T = step_stl.to_print_pose(v, R)
+    assert vp[:, 2].min() == 0.0
+    assert np.ptp(vp, axis=0).tolist() == [10.0, 30.0, 20.0]
+    assert (vp.min(axis=0)[:2] + vp.max(axis=0)[:2]).tolist() == [0.0, 0.0]
+    hom = np.c_[v, np.ones(4)] @ T.T
+    assert hom[:, :3] == pytest.approx(vp)
