@@ -112,10 +112,13 @@ def slice_stl(stl_path: str | os.PathLike, ini_text: str, exe: str | None = None
     if exe is None:
         raise SlicerError(f"{EXECUTABLE} is not installed (Debian: apt-get install prusa-slicer; "
                           "see .ci/sysdeps)")
+    # PrusaSlicer runs in a scratch folder: relative paths (the default cache is .cache/) must
+    # be made absolute first
+    stl_path = Path(stl_path).resolve()
     with tempfile.TemporaryDirectory(prefix="phantom-slice-") as tmp:
         ini = Path(tmp) / "config.ini"
         ini.write_text(ini_text)
-        out = Path(gcode_path) if gcode_path else Path(tmp) / "part.gcode"
+        out = Path(gcode_path).resolve() if gcode_path else Path(tmp) / "part.gcode"
         cmd = [exe, "--load", str(ini), "--export-gcode", "--output", str(out), str(stl_path)]
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=_env(), cwd=tmp)
         if proc.returncode != 0 or not out.exists():

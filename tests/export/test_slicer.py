@@ -57,7 +57,9 @@ def test_slice_cube_headless(tmp_path, monkeypatch):
     stl = tmp_path / "cube.stl"
     stl.write_bytes(stl_bytes(v, f, "cube"))
     params = load_params()
-    est = slicer.slice_stl(stl, slicer.config_ini(params.print))
+    # a relative path, as the default cache (.cache/) gives: PrusaSlicer runs in a scratch folder
+    monkeypatch.chdir(tmp_path)
+    est = slicer.slice_stl(stl.relative_to(tmp_path), slicer.config_ini(params.print))
     cube_cm3 = a ** 3 / 1000.0
     # 40 % infill plus solid shells: more than 40 % of the cube, less than the full cube
     assert 0.4 * cube_cm3 < est.filament_cm3 < cube_cm3
