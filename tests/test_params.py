@@ -172,6 +172,13 @@ def test_path_length_shorter_than_the_phalanx(document):
                      "span of the proximal segment between its pulleys")
 
 
+def test_thumb_path_length_shorter_than_its_proximal(document):
+    document["thumb"]["path_length_mm"]["mp_ip"] = 20.0
+    span = math.sqrt((0.196 * 189) ** 2 - (4 + 5) ** 2)   # proximal 0.196 HL, R_MP + R_IP = 9 mm
+    refuse(document, f"thumb.path_length_mm.mp_ip = 20.0: must be >= {span:.2f} mm, the crossed-tendon "
+                     "span of the proximal segment between its pulleys")
+
+
 def test_finger_wider_than_pitch(document):
     document["fingers"]["middle"]["width_mm"] = 25.0
     refuse(document, "fingers.middle.width_mm = 25.0: must be < palm.finger_pitch_mm = 19.5 "

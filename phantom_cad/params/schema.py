@@ -303,49 +303,49 @@ def _fractions(t: Table, names: tuple[str, ...], hand_length: float) -> dict[str
     return out
 
 
-def _finger(t: Table, name: str, hand_length: float) -> Finger:
-    seg = _fractions(t, ("metacarpal", "proximal", "middle", "distal"), hand_length)
+def _digit(t: Table, digit: str, segments: tuple[str, ...], joints: tuple[str, ...],
+           extra_limits: tuple[str, ...], hand_length: float):
+    """What a finger and the thumb share: segments, section, pulleys, guide, servo, limits, tendon.
+
+    ``joints`` reference joint first (mcp, pip, dip / mp, ip); the file lists them distal first.
+    The tendon path between joints k and k + 1 crosses segment ``segments[k + 1]``.
+    Returns (segment lengths, width, thickness, chain, limits).
+    """
+    seg = _fractions(t, segments, hand_length)
     width = t.number("width_mm", gt=0) * MM
     thickness = t.number("thickness_mm", gt=0) * MM
-    R = _radii(t, ("dip", "pip", "mcp"))
+    R = _radii(t, joints[::-1])
     guide = _guide(t)
     r = t.number("servo_pulley_radius_mm", gt=0) * MM
     travel = tuple(v * DEG for v in t.interval("servo_travel_deg"))
-    limits = _limits(t, ("dip", "pip", "mcp"))
+    limits = _limits(t, joints[::-1] + extra_limits)
+    keys = [f"{a}_{b}" for a, b in zip(joints, joints[1:])]      # mcp_pip, pip_dip / mp_ip
     pt = t.table("path_length_mm")
-    L1 = pt.number("mcp_pip", gt=0) * MM
-    L2 = pt.number("pip_dip", gt=0) * MM
+    paths = tuple(pt.number(k, gt=0) * MM for k in keys)
     pt.done()
-    order = ("mcp", "pip", "dip")
-    chain = Chain(name, order, tuple(R[j] for j in order), (L1, L2),
-                  tuple(limits[j] for j in order), guide, r, travel)
+    chain = Chain(digit, joints, tuple(R[j] for j in joints), paths,
+                  tuple(limits[j] for j in joints), guide, r, travel)
     _check_chain(t, chain, t.field("limits_rad"))
-    _check_path(t, "mcp_pip", L1, seg["proximal"], R["mcp"], R["pip"], "length_fraction.proximal")
-    _check_path(t, "pip_dip", L2, seg["middle"], R["pip"], R["dip"], "length_fraction.middle")
+    for k, (key, length) in enumerate(zip(keys, paths)):
+        crossed = segments[k + 1]
+        _check_path(t, key, length, seg[crossed], R[joints[k]], R[joints[k + 1]], f"length_fraction.{crossed}")
+    return seg, width, thickness, chain, limits
+
+
+def _finger(t: Table, name: str, hand_length: float) -> Finger:
+    seg, width, thickness, chain, _ = _digit(t, name, ("metacarpal", "proximal", "middle", "distal"),
+                                             ("mcp", "pip", "dip"), (), hand_length)
     t.done()
     return Finger(name, seg["metacarpal"], seg["proximal"], seg["middle"], seg["distal"],
                   width, thickness, chain)
 
 
 def _thumb(t: Table, hand_length: float) -> Thumb:
-    seg = _fractions(t, ("metacarpal", "proximal", "distal"), hand_length)
-    width = t.number("width_mm", gt=0) * MM
-    thickness = t.number("thickness_mm", gt=0) * MM
-    R = _radii(t, ("ip", "mp"))
-    guide = _guide(t)
-    r = t.number("servo_pulley_radius_mm", gt=0) * MM
-    travel = tuple(v * DEG for v in t.interval("servo_travel_deg"))
-    limits = _limits(t, ("ip", "mp", "cmc"))
-    pt = t.table("path_length_mm")
-    L = pt.number("mp_ip", gt=0) * MM
-    pt.done()
+    seg, width, thickness, chain, limits = _digit(t, "thumb", ("metacarpal", "proximal", "distal"),
+                                                  ("mp", "ip"), ("cmc",), hand_length)
     gain = t.number("cmc_gain", gt=0)
     cmc_travel = tuple(v * DEG for v in t.interval("cmc_servo_travel_deg"))
     horn = t.number("cmc_horn_radius_mm", gt=0) * MM
-    chain = Chain("thumb", ("mp", "ip"), (R["mp"], R["ip"]), (L,),
-                  (limits["mp"], limits["ip"]), guide, r, travel)
-    _check_chain(t, chain, t.field("limits_rad"))
-    _check_path(t, "mp_ip", L, seg["proximal"], R["mp"], R["ip"], "length_fraction.proximal")
     lo, hi = limits["cmc"]
     for u in cmc_travel:
         if not lo - 1e-12 <= gain * u <= hi + 1e-12:
