@@ -126,11 +126,22 @@ def tendon_height(params) -> float:
     return -min(f.thickness for f in params.fingers.values()) / 2.0 + params.palm.wall
 
 
+def servo_pulley_lip(params) -> float:
+    """Flange height of a tendon servo pulley above its groove bottom: two tendon diameters."""
+    return 2.0 * params.hardware.tendon_diameter
+
+
+def pulley_cavity_margin(params) -> float:
+    """The palm's cavity around a servo pulley is this much larger than the pulley's groove radius:
+    the pulley's flanges, one tendon diameter of running room and a hole clearance."""
+    return servo_pulley_lip(params) + params.hardware.tendon_diameter + params.print.hole_clearance
+
+
 def servo_row_depths(params) -> tuple[float, float]:
-    """Depth (behind the socket face, along the column) of the two staggered servo rows' shafts."""
+    """Depth (behind the socket face, along the column) of the two staggered servo rows' shafts:
+    one palm wall between a socket's magnet pockets and the pulley cavity behind it."""
     hw, pr, cad, sv = params.hardware, params.print, params.cad, params.servo
-    r = max(c.servo_radius for c in params.chains)
-    cavity = r + hw.tendon_diameter + 2.0 * pr.hole_clearance
+    cavity = max(c.servo_radius for c in params.chains) + pulley_cavity_margin(params)
     d_a = hw.magnet_thickness + pr.magnet_clearance + params.palm.wall + cavity
     d_b = d_a + cad.servo_shaft_offset + sv.flange_span / 2.0 + params.palm.wall + cavity
     return d_a, d_b

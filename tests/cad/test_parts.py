@@ -15,8 +15,8 @@ import pytest
 
 from phantom_cad import check
 from phantom_cad.cad import assembly
+from phantom_cad.kinematics.topology import FINGERS
 
-FINGERS = ("index", "middle", "ring", "pinky")
 
 
 def _hand(T, p):
@@ -71,6 +71,29 @@ def test_palm_spans_the_four_sockets_and_the_servos(built, document):
     assert hi[2] == pytest.approx(document["palm"]["thickness_mm"] / 2, abs=1e-6)
     # five servo bodies in two rows behind the sockets: longer than two servo lengths
     assert hi[1] - lo[1] > 2 * document["servo"]["body_mm"][0]
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, 4, 5])
+def test_palm_servo_cavity_leaves_one_wall_behind_the_magnets(built, params, document, k):
+    from phantom_cad.kinematics import frames
+
+    hw, pr = document["hardware"], document["print"]
+    src = document["thumb"] if k == 1 else document["fingers"][FINGERS[k - 2]]
+    # by hand: the pulley's flanges stand two tendon diameters above its groove, plus one tendon
+    # diameter of running room and a hole clearance: 7 + 2 * 0.6 + 0.6 + 0.2 = 9.0 mm by default
+    cavity = src["servo_pulley_radius_mm"] + 3 * hw["tendon_diameter_mm"] + pr["hole_clearance_mm"]
+    T = frames.T_palm_servo(params, k - 1)
+    shaft, axis = T[:3, 3] * 1e3, T[:3, 2]
+    measured = [c["radius"] for c in check.cylinders(built["palm"].shape) if check.coaxial(c, shaft, axis)]
+    assert measured and max(measured) == pytest.approx(cavity, abs=1e-6)
+    # the first servo row sits one palm wall behind the magnet pockets of the largest cavity
+    # (the placement must use the cavity the palm actually cuts)
+    largest = max([document["thumb"]["servo_pulley_radius_mm"]] +
+                  [f["servo_pulley_radius_mm"] for f in document["fingers"].values()])
+    largest += 3 * hw["tendon_diameter_mm"] + pr["hole_clearance_mm"]
+    d_a = frames.servo_row_depths(params)[0] * 1e3
+    pocket = hw["magnet"]["thickness_mm"] + pr["magnet_clearance_mm"]
+    assert d_a - pocket - largest == pytest.approx(document["palm"]["wall_mm"], abs=1e-9)
 
 
 # ---------------------------------------------------------------------------

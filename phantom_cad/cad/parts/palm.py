@@ -87,8 +87,7 @@ class Palm:
         return lo, hi
 
     def cavity_radius(self, k: int) -> float:
-        t = self.tol
-        return self.pulley_radius(k) + 2.0 * t.tendon + t.clearance + t.tendon
+        return self.pulley_radius(k) + mm(F.pulley_cavity_margin(self.params))
 
     def screw_points(self, k: int) -> list[np.ndarray]:
         """Flange screw centres (servo frame) on the ears' underside, mid-ear, one each end."""

@@ -18,6 +18,7 @@ import math
 
 import numpy as np
 
+from ...kinematics import frames
 from .common import Tolerances, build, cylinder, mm
 
 #: angular positions (rad) of the holes on the horn circle
@@ -51,7 +52,7 @@ class ServoPulley:
     @property
     def lip(self) -> float:
         """Groove depth: the flanges stand two tendon diameters above the groove bottom."""
-        return 2.0 * self.tol.tendon
+        return mm(frames.servo_pulley_lip(self.params))
 
     @property
     def outer_radius(self) -> float:
