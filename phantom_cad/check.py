@@ -92,23 +92,6 @@ def cylinders(shape):
     return out
 
 
-def _angle_span(c, samples: int = 16) -> float:
-    """Angular span (rad) that a cylindrical face covers about its axis."""
-    f, p, d = c["face"], c["point"], c["direction"]
-    ref = np.array([1.0, 0.0, 0.0]) if abs(d[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    e1 = np.cross(d, ref)
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(d, e1)
-    angs = []
-    for e in f.edges():
-        for t in np.linspace(0.0, 1.0, samples):
-            v = _vec(e.position_at(t)) - p
-            angs.append(math.atan2(v @ e2, v @ e1))
-    angs = np.sort(np.mod(angs, 2 * math.pi))
-    gaps = np.diff(np.concatenate([angs, [angs[0] + 2 * math.pi]]))
-    return float(2 * math.pi - gaps.max())
-
-
 def point_line_distance(p, a, d) -> float:
     d = np.asarray(d, float) / np.linalg.norm(d)
     v = np.asarray(p, float) - np.asarray(a, float)
@@ -118,13 +101,6 @@ def point_line_distance(p, a, d) -> float:
 def coaxial(c, point, direction, tol: float = 1e-3) -> bool:
     d = np.asarray(direction, float) / np.linalg.norm(direction)
     return abs(abs(c["direction"] @ d) - 1.0) < tol and point_line_distance(c["point"], point, d) < tol
-
-
-def groove_radii(shape, axis_point, axis_direction, tol: float = 1e-3) -> list[float]:
-    """Radii of the cylindrical faces coaxial with the given axis whose axial length is at most
-    the narrowest such face: the bottoms of grooves, read from the solid."""
-    cs = [c for c in cylinders(shape) if coaxial(c, axis_point, axis_direction, tol)]
-    return sorted({round(c["radius"], 6) for c in cs})
 
 
 def measure_groove_radius(shape, axis_point, axis_direction, width: float, tol: float = 1e-3) -> float:
@@ -189,24 +165,6 @@ def planar_faces(shape, min_area: float = 0.0):
                         "face": f})
     return out
 
-
-def face_normal_at(shape, point, tol: float = 1e-3):
-    """Outward normal of the planar face that contains ``point`` (largest if several)."""
-    best = None
-    for pf in planar_faces(shape):
-        n = pf["normal"]
-        if abs((np.asarray(point) - pf["centre"]) @ n) < tol:
-            f = pf["face"]
-            bd = _bd()
-            if f.distance_to(bd.Vector(*map(float, point))) < tol:
-                if best is None or pf["area"] > best["area"]:
-                    best = pf
-    return None if best is None else best["normal"]
-
-
-# ---------------------------------------------------------------------------
-# a built part against its parameters (the build refuses parts that fail)
-# ---------------------------------------------------------------------------
 
 def verify_part(params, name: str, shape) -> list[str]:
     """Problems found by measuring ``shape`` (part ``name`` in its link frame, mm) against the

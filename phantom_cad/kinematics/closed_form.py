@@ -25,10 +25,11 @@ def reference_angle(u, d1, d2, alpha, r):
     return alpha - np.arccos(cosine_argument(u, d1, d2, alpha, r))
 
 
-def servo_angle(q_ref, d1, d2, alpha, r):
-    """Inverse of eq. (6): the servo angle that puts the reference joint at q_ref."""
+def servo_angle(q_ref, d1, d2, alpha, r, L0=None):
+    """Inverse of eq. (6): the servo angle that puts the reference joint at q_ref.
+    ``L0`` (eq. 4) may be passed in precomputed."""
     L = np.sqrt(d1 * d1 + d2 * d2 - 2.0 * d1 * d2 * np.cos(alpha - q_ref))
-    return (chord_rest(d1, d2, alpha) - L) / r
+    return ((chord_rest(d1, d2, alpha) if L0 is None else L0) - L) / r
 
 
 def ideal_coupling(radii):

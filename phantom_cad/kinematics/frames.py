@@ -33,7 +33,7 @@ import math
 
 import numpy as np
 
-from .topology import CHAINS, CMC_Q, FINGERS, N_JOINTS
+from .topology import CHAINS, CMC_Q, FINGERS, N_JOINTS, joint_index
 
 MIRROR = np.diag([-1.0, 1.0, 1.0, 1.0])
 
@@ -191,10 +191,7 @@ def rest_transforms(params) -> dict[str, np.ndarray]:
 
 
 def _q_of(q, digit: str, joint: str) -> float:
-    for spec in CHAINS:
-        if spec.digit == digit:
-            return float(q[spec.q_index[spec.joints.index(joint)]])
-    raise KeyError(digit)
+    return float(q[joint_index(digit, joint)])
 
 
 def joint_transforms(params, q) -> dict[str, np.ndarray]:

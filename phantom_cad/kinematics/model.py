@@ -94,9 +94,7 @@ class Hand:
     def _servo(self, s: np.ndarray) -> np.ndarray:
         """Inverse of :meth:`_reference`."""
         u = np.empty(s.shape)
-        L = np.sqrt(self._sumsq - self._two_d1d2 * np.cos(self._alpha - s[..., :5]))
-        np.subtract(self._L0, L, out=L)
-        np.divide(L, self._r, out=u[..., :5])
+        u[..., :5] = cf.servo_angle(s[..., :5], self._d1, self._d2, self._alpha, self._r, self._L0)
         np.divide(s[..., 5], self._cmc_gain, out=u[..., 5])
         return u
 

@@ -38,9 +38,6 @@ class Table:
             return default
         return self.data[key]
 
-    def has(self, key: str) -> bool:
-        return key in self.data
-
     # -- accessors ---------------------------------------------------------
     def number(self, key: str, *, gt=None, ge=None, lt=None, le=None, default=_MISSING) -> float:
         value = self._get(key, default)
@@ -76,10 +73,9 @@ class Table:
             raise self.error(key, value, f"must be a list of {n} numbers")
         return tuple(self.check_number(f"{key}[{i}]", v, **bounds) for i, v in enumerate(value))
 
-    def interval(self, key: str, value=_MISSING, **bounds) -> tuple[float, float]:
+    def interval(self, key: str, **bounds) -> tuple[float, float]:
         """A [low, high] pair with low < high."""
-        if value is _MISSING:
-            value = self._get(key)
+        value = self._get(key)
         if not isinstance(value, list) or len(value) != 2:
             raise self.error(key, value, "must be a list [low, high] of two numbers")
         lo = self.check_number(f"{key}[0]", value[0], **bounds)

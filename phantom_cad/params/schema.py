@@ -77,10 +77,6 @@ class Finger:
     thickness: float
     chain: Chain
 
-    @property
-    def R(self) -> Mapping[str, float]:
-        return dict(zip(self.chain.joints, self.chain.radii))
-
 
 @dataclass(frozen=True)
 class Thumb:
