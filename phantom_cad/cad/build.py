@@ -48,6 +48,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ..atomic import replace_dir, write_atomic
 from ..params import ParamError, load_document, parse
 from ..params.io import DEFAULT_PARAMS
 from ..params.schema import _plain
@@ -311,7 +312,7 @@ def _assembly_step_worker(task: dict) -> dict:
         hand = Compound(children=children, label=task["label"])
         data = step_stl.step_bytes(hand)
         out = Path(task["out"])
-        step_stl.write_bytes_atomic(out, data)
+        write_atomic(out, data)
         return {"ok": True, "sha256": sha256(data)}
     except BaseException as exc:
         return {"ok": False, "error": f"{type(exc).__name__}: {exc}",
@@ -592,7 +593,7 @@ def build_hand(params_path: str | os.PathLike | None = None, out_dir: str | os.P
                 poses=poses, estimates=estimates, slicer_info=slicer_info, interference=inter,
                 contacts=contacts, bom=bom)
             (stage / "manifest.json").write_text(json.dumps(man, indent=1, sort_keys=False) + "\n")
-            _replace_dir(stage, out)
+            replace_dir(stage, out)
         except BaseException:
             shutil.rmtree(stage, ignore_errors=True)
             raise
@@ -617,20 +618,3 @@ def bom_csv(rows: list[dict]) -> str:
     for r in rows:
         w.writerow({k: (";".join(map(str, v)) if isinstance(v, (list, tuple)) else v) for k, v in r.items()})
     return buf.getvalue()
-
-
-def _replace_dir(stage: Path, out: Path) -> None:
-    """Move the finished ``stage`` to ``out``; the previous export is removed only after."""
-    if out.exists():
-        old = out.parent / f".{out.name}.{os.getpid()}.old"
-        if old.exists():
-            shutil.rmtree(old)
-        os.rename(out, old)
-        try:
-            os.rename(stage, out)
-        except BaseException:
-            os.rename(old, out)
-            raise
-        shutil.rmtree(old, ignore_errors=True)
-    else:
-        os.rename(stage, out)

@@ -30,6 +30,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from ..atomic import write_json_atomic
+
 #: bump when the cached files' format or the export pipeline changes their bytes
 PIPELINE_VERSION = 1
 
@@ -168,7 +170,4 @@ class Cache:
                 raise
 
     def write_json(self, path: Path, obj: Any) -> None:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        tmp.write_text(json.dumps(obj, indent=1, sort_keys=True))
-        os.replace(tmp, path)
+        write_json_atomic(path, obj, indent=1, sort_keys=True)

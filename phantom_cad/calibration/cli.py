@@ -6,9 +6,6 @@ ParamError or cli.UserError (printed as ``error: ...``, exit code 2).
 
 from __future__ import annotations
 
-import json
-import os
-import tempfile
 from pathlib import Path
 from typing import List, Optional
 
@@ -40,17 +37,9 @@ def _effect_names(text: Optional[str], option: str = "--effects") -> list[str]:
 
 
 def _write_json(path: Path, obj) -> None:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            json.dump(obj, fh, indent=2, sort_keys=False)
-            fh.write("\n")
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    from ..atomic import write_json_atomic
+
+    write_json_atomic(path, obj)
 
 
 # -- simulate ---------------------------------------------------------------------

@@ -10,15 +10,15 @@ comments. Every refusal names the line and the column.
 from __future__ import annotations
 
 import csv
+import io
 import math
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Mapping, Sequence
 
 import numpy as np
 
+from ..atomic import write_atomic
 from ..kinematics.topology import N_JOINTS, Q_COLUMNS, U_COLUMNS
 
 ANGLE_COLUMNS = frozenset(U_COLUMNS + Q_COLUMNS)
@@ -244,20 +244,14 @@ def write_table(path, columns: Mapping[str, Iterable], comments: Sequence[str] =
     n = len(data[0]) if data else 0
     if any(len(col) != n for col in data):
         raise ValueError("all columns must have the same length")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            for c in comments:
-                fh.write(f"# {c}\n")
-            w = csv.writer(fh, lineterminator="\n")
-            w.writerow(names)
-            for k in range(n):
-                w.writerow([_cell(col[k]) for col in data])
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    fh = io.StringIO()
+    for c in comments:
+        fh.write(f"# {c}\n")
+    w = csv.writer(fh, lineterminator="\n")
+    w.writerow(names)
+    for k in range(n):
+        w.writerow([_cell(col[k]) for col in data])
+    write_atomic(path, fh.getvalue())
 
 
 def _cell(v) -> str:

@@ -19,7 +19,6 @@ import os
 import re
 import struct
 from datetime import datetime, timezone
-from pathlib import Path
 
 import numpy as np
 
@@ -85,7 +84,7 @@ def _split_entities(data: bytes):
 
 def _refs(body: bytes) -> list[int]:
     # references outside quoted strings
-    out, in_str, i = [], False, 0
+    out, in_str = [], False
     for part in body.split(b"'"):
         if not in_str:
             out += [int(x) for x in _REF.findall(part)]
@@ -342,8 +341,4 @@ def check_mesh(name: str, vertices: np.ndarray, faces: np.ndarray, solid_volume:
             "mesh_volume_mm3": vol, "triangles": int(len(faces))}
 
 
-def write_bytes_atomic(path: str | os.PathLike, data: bytes) -> None:
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    tmp.write_bytes(data)
-    os.replace(tmp, path)
+

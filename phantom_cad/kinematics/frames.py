@@ -33,7 +33,7 @@ import math
 
 import numpy as np
 
-from .topology import CHAINS, CMC_Q, FINGERS, N_JOINTS, joint_index
+from .topology import CMC_Q, FINGERS, N_JOINTS, joint_index
 
 MIRROR = np.diag([-1.0, 1.0, 1.0, 1.0])
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -12,6 +11,7 @@ try:
 except ModuleNotFoundError:  # Python < 3.11
     import tomli as tomllib
 
+from ..atomic import write_atomic
 from .errors import ParamError
 from .schema import HandParams, _plain, parse
 
@@ -46,14 +46,4 @@ def dumps(document: Mapping[str, Any]) -> str:
 def dump_params(document: Mapping[str, Any], path: str | os.PathLike, header: str = "") -> None:
     """Validate ``document`` and write it atomically to ``path`` (nothing is written if invalid)."""
     parse(document, source=str(path))
-    text = header + dumps(document)
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    write_atomic(path, header + dumps(document))

@@ -280,7 +280,6 @@ def prism_x(poly_yz, x0: float, x1: float):
 
 def transform(shape, T: np.ndarray):
     """Move a shape by a 4x4 rigid transform (mm)."""
-    b = bd()
     return shape.moved(location(T))
 
 

@@ -1,0 +1,55 @@
+"""Atomic file writes (stdlib only): a reader sees the old file or the whole new one, never a part.
+
+The data goes to a temporary file in the target's folder, which is then renamed over the target;
+on any error the temporary file is removed and the target is left as it was.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+from pathlib import Path
+from typing import Any
+
+# mkstemp creates 0600 files; written files get the usual permissions (0666 less the umask)
+_UMASK = os.umask(0)
+os.umask(_UMASK)
+
+
+def write_atomic(path: str | os.PathLike, data: str | bytes) -> None:
+    """Write ``data`` (text as UTF-8, or bytes) to ``path`` atomically, creating its folder."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data.encode("utf-8") if isinstance(data, str) else data)
+        os.chmod(tmp, 0o666 & ~_UMASK)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def write_json_atomic(path: str | os.PathLike, obj: Any, indent: int = 2, sort_keys: bool = False) -> None:
+    write_atomic(path, json.dumps(obj, indent=indent, sort_keys=sort_keys) + "\n")
+
+
+def replace_dir(stage: str | os.PathLike, target: str | os.PathLike) -> None:
+    """Move the finished folder ``stage`` to ``target`` (a sibling). A previous ``target`` is set
+    aside first and removed only once the new one is in place; if the move fails it is put back."""
+    stage, target = Path(stage), Path(target)
+    if not target.exists():
+        os.rename(stage, target)
+        return
+    old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old.", dir=target.parent)) / target.name
+    os.rename(target, old)
+    try:
+        os.rename(stage, target)
+    except BaseException:
+        os.rename(old, target)
+        old.parent.rmdir()
+        raise
+    shutil.rmtree(old.parent, ignore_errors=True)
