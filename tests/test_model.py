@@ -272,3 +272,15 @@ def test_load_hand_default_and_path(tmp_path, default_document):
     path.write_text(tomli_w.dumps(doc))
     h3 = load_hand(str(path))
     assert h3.params.name == "other" and h3.params.digest != h1.params.digest
+
+
+def test_beyond_the_cosine_law_domain_the_joint_stops_folded(hand):
+    # far past the servo travel the chord would shorten below |d1 - d2|: the reference joint stops at
+    # alpha (folded) instead of returning NaN, the same answer with and without fitted effects
+    from phantom_cad.calibration.effects import run_pipeline
+
+    u = hand.u_max * 1.6
+    q = hand.forward(u)
+    assert np.all(np.isfinite(q))
+    assert q[4] == pytest.approx(math.radians(100.0))        # index MCP = alpha = 100 deg
+    assert np.allclose(run_pipeline(hand, [], u[None], None, 0.0)[0], q, atol=1e-15)

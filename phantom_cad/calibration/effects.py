@@ -340,14 +340,9 @@ def run_pipeline(hand, items: Sequence[tuple[Effect, np.ndarray]], u, direction=
 
 
 def reference_angles(hand, u_eff: np.ndarray, radius_scale) -> np.ndarray:
-    """Eq. (6)/(8) with the effective servo radius; s6 = g u6. The cosine argument is clipped to [-1, 1]."""
-    s = np.empty(u_eff.shape)
-    r = hand._r * radius_scale
-    L = hand._L0 - r * u_eff[..., :5]
-    x = (hand._sumsq - L * L) / hand._two_d1d2
-    s[..., :5] = hand._alpha - np.arccos(np.clip(x, -1.0, 1.0))
-    s[..., 5] = u_eff[..., 5] * hand._cmc_gain
-    return s
+    """Eq. (6)/(8) with the effective servo radius r * radius_scale; s6 = g u6 (the model's own
+    cosine law, clipped to its domain)."""
+    return hand._reference(u_eff, hand._r * radius_scale)
 
 
 def coupling_vectors(hand, compliance: np.ndarray) -> list[np.ndarray]:
@@ -484,11 +479,7 @@ class EffectStack:
         s_ends = reference_angles(hand, ends.u_eff, radius_scale)
         np.clip(s, s_ends.min(axis=0), s_ends.max(axis=0), out=s)
         # invert the cosine law with the effective radius
-        u = np.empty_like(s)
-        r = hand._r * radius_scale
-        L = np.sqrt(hand._sumsq - hand._two_d1d2 * np.cos(hand._alpha - s[:, :5]))
-        u[:, :5] = (hand._L0 - L) / r
-        u[:, 5] = s[:, 5] / hand._cmc_gain
+        u = hand._servo(s, hand._r * radius_scale)
         for eff, x in reversed(items):
             if eff.stage == "servo" and eff.invertible:
                 u = eff.invert(hand, u, x)

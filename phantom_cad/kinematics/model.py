@@ -79,22 +79,30 @@ class Hand:
         return P
 
     # -- reference angles ----------------------------------------------------
-    def _reference(self, u: np.ndarray) -> np.ndarray:
-        """s (..., 6): q_MCP / q_MP of each tendon chain (eq. 6, 8) and q15 = g u6 (eq. 9)."""
+    def _reference(self, u: np.ndarray, r: np.ndarray | None = None) -> np.ndarray:
+        """s (..., 6): q_MCP / q_MP of each tendon chain (eq. 6, 8) and q15 = g u6 (eq. 9).
+
+        The in-place form of closed_form.reference_angle, the one the model and the effect
+        library use; ``r`` overrides the servo pulley radii (an effective radius). Beyond the
+        cosine law's domain (a servo angle far outside its travel) the argument is clipped to
+        [-1, 1]: the chord cannot shorten past |d1 - d2|, the joint stops folded at alpha.
+        """
         s = np.empty(u.shape)
-        L = self._L0 - self._r * u[..., :5]
+        L = self._L0 - (self._r if r is None else r) * u[..., :5]
         np.multiply(L, L, out=L)
         np.subtract(self._sumsq, L, out=L)
         np.divide(L, self._two_d1d2, out=L)
+        np.clip(L, -1.0, 1.0, out=L)
         np.arccos(L, out=L)
         np.subtract(self._alpha, L, out=s[..., :5])
         np.multiply(u[..., 5], self._cmc_gain, out=s[..., 5])
         return s
 
-    def _servo(self, s: np.ndarray) -> np.ndarray:
-        """Inverse of :meth:`_reference`."""
+    def _servo(self, s: np.ndarray, r: np.ndarray | None = None) -> np.ndarray:
+        """Inverse of :meth:`_reference` (``r``: effective servo pulley radii)."""
         u = np.empty(s.shape)
-        u[..., :5] = cf.servo_angle(s[..., :5], self._d1, self._d2, self._alpha, self._r, self._L0)
+        u[..., :5] = cf.servo_angle(s[..., :5], self._d1, self._d2, self._alpha,
+                                    self._r if r is None else r, self._L0)
         np.divide(s[..., 5], self._cmc_gain, out=u[..., 5])
         return u
 
