@@ -15,11 +15,10 @@ from typing import Any
 import numpy as np
 
 from ..kinematics import frames as F
-from ..kinematics.topology import FINGERS, N_JOINTS
+from ..kinematics.topology import FINGERS, N_JOINTS, N_SERVOS
 
 FINGER_SEGMENTS = ("base", "proximal", "middle", "distal")
 THUMB_PARTS = ("thumb_cmc_base", "thumb_proximal", "thumb_distal")
-N_SERVOS = 6
 
 #: display colours (RGB 0..1): one per digit, palm and pulleys neutral
 COLORS = {
