@@ -92,17 +92,14 @@ def model_forward(
     params: Optional[Path] = ParamsOpt,
 ):
     """Joint angles the model predicts for the servo angles of a measurement CSV."""
-    import numpy as np
-
     from . import load_hand
     from .calibration.data import read_measurements, write_measurements
 
     hand = load_hand(params)
     m = read_measurements(inp, degrees=degrees, sweeps=False)
     q = hand.forward(m.u, compensated=compensated)
-    scale = np.degrees if degrees else (lambda x: x)
     sweep = [m.sweep_ids[k] for k in m.sweep] if m.has_sweep_column else None
-    write_measurements(out, scale(m.u), scale(q), sweep=sweep, t=m.t,
+    write_measurements(out, m.u, q, sweep=sweep, t=m.t, degrees=degrees,
                        comments=[f"phantom-cad model forward{' --compensated' if compensated else ''}, "
                                  f"params digest {hand.params.digest[:12]}, {'degrees' if degrees else 'radians'}"])
     typer.echo(f"wrote {len(m)} rows to {out}")
@@ -128,16 +125,15 @@ def model_inverse(
                        degrees=degrees)
     q = np.column_stack([table.values[c] for c in Q_COLUMNS])
     u = hand.inverse(q, compensated=not ideal)
-    if degrees:
-        u = np.degrees(u)
     cols = {}
     if "sweep" in table.text:
         cols["sweep"] = table.text["sweep"]
     if "t" in table.values:
         cols["t"] = table.values["t"]
     cols.update({c: u[:, i] for i, c in enumerate(U_COLUMNS)})
-    write_table(out, cols, comments=[f"phantom-cad model inverse{' --ideal' if ideal else ''}, "
-                                     f"params digest {hand.params.digest[:12]}, {'degrees' if degrees else 'radians'}"])
+    write_table(out, cols, degrees=degrees,
+                comments=[f"phantom-cad model inverse{' --ideal' if ideal else ''}, "
+                          f"params digest {hand.params.digest[:12]}, {'degrees' if degrees else 'radians'}"])
     typer.echo(f"wrote {len(table)} rows to {out}")
 
 

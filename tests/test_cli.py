@@ -59,6 +59,20 @@ def test_model_forward_degrees(tmp_path, document):
     assert float(read_csv(out)[0]["q5"]) == pytest.approx(30.0, abs=1e-9)
 
 
+def test_model_inverse_degrees(tmp_path, document):
+    params = tmp_path / "easy.toml"
+    params.write_text(tomli_w.dumps(easy_document(document)))
+    q = [0.0] * 15
+    q[2], q[3], q[4] = 30.0, 37.5, 30.0          # index DIP, PIP, MCP on the 4:5:4 curve, degrees
+    inp = tmp_path / "q.csv"
+    inp.write_text(",".join(f"q{i + 1}" for i in range(15)) + "\n" + ",".join(map(str, q)) + "\n")
+    out = tmp_path / "u.csv"
+    cli("model", "inverse", "--in", inp, "--out", out, "--params", params, "--degrees", "--ideal")
+    row = read_csv(out)[0]
+    assert float(row["u2"]) == pytest.approx(math.degrees(U_STAR), abs=1e-9)
+    assert float(row["u1"]) == 0.0
+
+
 def test_model_round_trip_through_files(tmp_path):
     inp = tmp_path / "u.csv"
     rows = ["sweep,u1,u2,u3,u4,u5,u6"]

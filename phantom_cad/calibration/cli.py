@@ -60,8 +60,6 @@ def simulate(
     degrees: bool = typer.Option(False, "--degrees", help="Write degrees instead of radians."),
 ):
     """Sweep every servo (flex, then extend, others at 0) and write what a hand with hidden effects would measure."""
-    import numpy as np
-
     from .. import load_hand
     from .data import write_measurements
     from .simulate import SimulationError, parse_effect_params, simulate as run
@@ -75,10 +73,9 @@ def simulate(
     except SimulationError as exc:
         raise _user_error(str(exc)) from None
     m = sim.measurements
-    scale = np.degrees if degrees else (lambda x: x)
     hidden = "; ".join(f"{n}: " + ", ".join(f"{k}={v:.6g}" for k, v in kv.items()) for n, kv in sim.hidden.items())
-    write_measurements(out, scale(m.u), scale(m.q), sweep=[m.sweep_ids[k] for k in m.sweep],
-                       q_columns=m.q_columns,
+    write_measurements(out, m.u, m.q, sweep=[m.sweep_ids[k] for k in m.sweep],
+                       q_columns=m.q_columns, degrees=degrees,
                        comments=[f"phantom-cad simulate --effects {','.join(names) or 'none'} --noise-deg {noise_deg:g} "
                                  f"--seed {seed} --points {points}, params digest {hand.params.digest[:12]}, "
                                  f"{'degrees' if degrees else 'radians'}",

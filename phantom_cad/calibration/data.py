@@ -236,11 +236,15 @@ def read_measurements(path, degrees: bool = False, sweeps: bool = True) -> Measu
     return Measurements(u, q, measured, sweep, ids, t, table.lines, str(path), "sweep" in table.text)
 
 
-def write_table(path, columns: Mapping[str, Iterable], comments: Sequence[str] = ()) -> None:
-    """Write columns to a CSV atomically. Floats with 12 significant digits; NaN as an empty cell."""
+def write_table(path, columns: Mapping[str, Iterable], comments: Sequence[str] = (),
+                degrees: bool = False) -> None:
+    """Write columns to a CSV atomically. Floats with 12 significant digits; NaN as an empty cell.
+    With ``degrees`` the angle columns (u*, q*), given in radians, are written in degrees, as
+    ``read_table(..., degrees=True)`` reads them back."""
     path = Path(path)
     names = list(columns)
-    data = [list(columns[c]) for c in names]
+    data = [list(np.degrees(np.asarray(columns[c], dtype=float))) if degrees and c in ANGLE_COLUMNS
+            else list(columns[c]) for c in names]
     n = len(data[0]) if data else 0
     if any(len(col) != n for col in data):
         raise ValueError("all columns must have the same length")
@@ -264,7 +268,7 @@ def _cell(v) -> str:
 
 
 def write_measurements(path, u, q=None, sweep=None, t=None, q_columns: Sequence[str] | None = None,
-                       comments: Sequence[str] = ()) -> None:
+                       comments: Sequence[str] = (), degrees: bool = False) -> None:
     """Write the measurement format: u1..u6, then the q columns (all 15 unless ``q_columns``)."""
     u = np.asarray(u, dtype=float)
     cols: dict[str, Iterable] = {}
@@ -279,4 +283,4 @@ def write_measurements(path, u, q=None, sweep=None, t=None, q_columns: Sequence[
         for i, c in enumerate(Q_COLUMNS):
             if q_columns is None or c in q_columns:
                 cols[c] = q[:, i]
-    write_table(path, cols, comments)
+    write_table(path, cols, comments, degrees=degrees)
