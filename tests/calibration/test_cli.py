@@ -146,3 +146,17 @@ def test_simulate_is_deterministic(tmp_path):
     r = run("simulate", "--effects", "friction_hysteresis,joint_offset", "--seed", "6", "--points", "4",
             "--out", tmp_path / "c.csv")
     assert (tmp_path / "a.csv").read_bytes() != (tmp_path / "c.csv").read_bytes()
+
+
+def test_simulate_degrees_reads_back_as_the_radian_file(tmp_path):
+    rad, deg = tmp_path / "rad.csv", tmp_path / "deg.csv"
+    for path, extra in ((rad, []), (deg, ["--degrees"])):
+        r = run("simulate", "--effects", "tendon_slack", "--seed", "2", "--points", "5", "--out", path, *extra)
+        assert r.returncode == 0, r.stderr
+    a, b = read_measurements(rad), read_measurements(deg, degrees=True)
+    assert np.allclose(a.u, b.u, atol=1e-10)
+    assert np.allclose(a.q, b.q, atol=1e-10, equal_nan=True)
+    # the file itself holds degrees: its largest servo cell is the radian file's, converted
+    cells = [float(x) for line in deg.read_text().splitlines() if not line.startswith(("#", "sweep"))
+             for x in line.split(",")[1:7]]
+    assert max(cells) == pytest.approx(math.degrees(a.u.max()), abs=1e-8)
