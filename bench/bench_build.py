@@ -2,7 +2,7 @@
 
     .venv/bin/python bench/bench_build.py [--jobs N] [--slice] [--repeat K]
 
-Each build runs in a fresh process (``python -m phantom_cad.cad.cli``), as a user runs it,
+Each build runs in a fresh process (``python -m phantom_cad build``), as a user runs it,
 with a private cache and export directory in a temporary folder:
 
 1. cold build: empty cache (imports, every part built, checked, exported);
@@ -42,7 +42,7 @@ def run(args: list[str], env: dict) -> tuple[float, float, str]:
     """(wall s, CPU s of the build and its workers, output)"""
     cpu0 = _children_cpu()
     t = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "phantom_cad.cad.cli", *args], capture_output=True,
+    proc = subprocess.run([sys.executable, "-m", "phantom_cad", "build", *args], capture_output=True,
                           text=True, env=env, cwd=ROOT)
     wall = time.perf_counter() - t
     cpu = _children_cpu() - cpu0

@@ -130,7 +130,7 @@ def test_bad_input_exit_2(tmp_path, args, message):
 
 
 def test_calibration_commands_do_not_import_cad():
-    code = ("import sys; from phantom_cad import cli; import phantom_cad.calibration.cli, "
+    code = ("import sys; from phantom_cad import cli; import phantom_cad.cli.calibration, "
             "phantom_cad.calibration.diagnose, phantom_cad.calibration.report; "
             "print(any(m.split('.')[0] in ('OCP', 'build123d', 'cadquery') for m in sys.modules))")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)

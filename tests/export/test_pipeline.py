@@ -293,7 +293,7 @@ def test_default_out_dir_names():
 def test_cli_import_does_not_import_ocp():
     import subprocess
 
-    code = ("import sys, phantom_cad.cad.cli, phantom_cad.cad.build, phantom_cad.export.manifest; "
+    code = ("import sys, phantom_cad.cli.build, phantom_cad.cad.build, phantom_cad.export.manifest; "
             "print(any(m == 'OCP' or m.startswith(('OCP.', 'build123d', 'cadquery')) for m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"
@@ -303,7 +303,7 @@ def test_cli_help_and_bad_params(tmp_path):
     import typer
     from typer.testing import CliRunner
 
-    from phantom_cad.cad.cli import build
+    from phantom_cad.cli.build import build
 
     app = typer.Typer()
     app.command("build")(build)
@@ -327,7 +327,7 @@ def test_cli_builds(standin, standin_build, tmp_path):
     import typer
     from typer.testing import CliRunner
 
-    from phantom_cad.cad.cli import build
+    from phantom_cad.cli.build import build
 
     _, cache = standin_build
     app = typer.Typer()

@@ -12,6 +12,8 @@ from typing import Optional
 
 import typer
 
+from ..errors import UserError
+
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="The PHANTOM Hand from one parameter file: model, parts, calibration.")
 params_app = typer.Typer(no_args_is_help=True, help="Show and validate parameter files.")
@@ -23,8 +25,6 @@ ParamsOpt = typer.Option(None, "--params", "-p", help="Parameter file (default: 
                          dir_okay=False)
 
 
-class UserError(Exception):
-    """An error whose message is for the user: printed without a traceback, exit code 2."""
 
 
 # -- params --------------------------------------------------------------------
@@ -32,7 +32,7 @@ class UserError(Exception):
 @params_app.command("validate")
 def params_validate(files: list[Path] = typer.Argument(None, help="Parameter files (default: params/phantom.toml).")):
     """Validate parameter files; print OK or the first broken rule of each."""
-    from .params import ParamError, load_params
+    from ..params import ParamError, load_params
 
     failed = 0
     for f in files or [None]:
@@ -49,7 +49,7 @@ def params_validate(files: list[Path] = typer.Argument(None, help="Parameter fil
 @params_app.command("show")
 def params_show(params: Optional[Path] = ParamsOpt):
     """Print the hand's derived quantities: L0, coupling vectors, workspace, servo travel."""
-    from . import load_hand
+    from .. import load_hand
 
     typer.echo(describe(load_hand(params)))
 
@@ -57,7 +57,7 @@ def params_show(params: Optional[Path] = ParamsOpt):
 def describe(hand) -> str:
     import numpy as np
 
-    from .kinematics.topology import CHAINS, JOINT_NAMES, SERVO_NAMES
+    from ..kinematics.topology import CHAINS, JOINT_NAMES, SERVO_NAMES
 
     p = hand.params
     out = [f"hand {p.name} ({p.side}), {p.source}", f"digest {p.digest}",
@@ -92,8 +92,8 @@ def model_forward(
     params: Optional[Path] = ParamsOpt,
 ):
     """Joint angles the model predicts for the servo angles of a measurement CSV."""
-    from . import load_hand
-    from .calibration.data import read_measurements, write_measurements
+    from .. import load_hand
+    from ..calibration.data import read_measurements, write_measurements
 
     hand = load_hand(params)
     m = read_measurements(inp, degrees=degrees, sweeps=False)
@@ -116,9 +116,9 @@ def model_inverse(
     """Servo angles of the control law (eq. 15) for target joint angles: clipped, projected, in travel."""
     import numpy as np
 
-    from . import load_hand
-    from .calibration.data import read_table, write_table
-    from .kinematics.topology import Q_COLUMNS, U_COLUMNS
+    from .. import load_hand
+    from ..calibration.data import read_table, write_table
+    from ..kinematics.topology import Q_COLUMNS, U_COLUMNS
 
     hand = load_hand(params)
     table = read_table(inp, required=Q_COLUMNS, optional=U_COLUMNS + ("t",), text_columns=("sweep",),
@@ -147,8 +147,8 @@ def demo(params: Optional[Path] = ParamsOpt,
     """The main job on the default hand: workspace, a forward/inverse round trip, and every printable part."""
     import numpy as np
 
-    from . import load_hand
-    from .params import DEFAULT_PARAMS
+    from .. import load_hand
+    from ..params import DEFAULT_PARAMS
 
     hand = load_hand(params)
     typer.echo(describe(hand))
@@ -164,13 +164,13 @@ def demo(params: Optional[Path] = ParamsOpt,
 
 
 # -- parts (phantom_cad/cad/cli.py; CAD is imported inside the command) -------------
-from .cad.cli import build  # noqa: E402
+from .build import build  # noqa: E402
 
 app.command("build")(build)
 
 
 # -- calibration (phantom_cad/calibration/cli.py) -------------------------------
-from .calibration import cli as _calibration_cli  # noqa: E402  (numpy-free at import; no CAD)
+from . import calibration as _calibration_cli  # noqa: E402  (numpy-free at import; no CAD)
 
 app.command("simulate")(_calibration_cli.simulate)
 app.command("compare")(_calibration_cli.compare)
@@ -180,8 +180,8 @@ app.command("fit")(_calibration_cli.fit)
 
 def main() -> None:
     """Entry point: click handles usage errors and exit codes; our errors print one line, exit 2."""
-    from .calibration.data import DataError
-    from .params import ParamError
+    from ..calibration.data import DataError
+    from ..params import ParamError
 
     try:
         app()

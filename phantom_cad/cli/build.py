@@ -35,7 +35,7 @@ def build(
     Parts are cached by their inputs: a rebuild with unchanged parameters takes about a second, changing one finger rebuilds only its parts. Every part is checked (one valid solid, STEP re-import, watertight manifold STL, no unplanned interference, slicing) before anything is written. See docs/exports.md.
     """
     from ..params import ParamError
-    from .build import BuildError, build_hand
+    from ..cad.build import BuildError, build_hand
 
     def log(msg: str) -> None:
         if not quiet:

@@ -17,13 +17,13 @@ DegreesOpt = typer.Option(False, "--degrees", help="Angles in the CSV are degree
 
 
 def _user_error(msg: str):
-    from ..cli import UserError
+    from ..errors import UserError
 
     return UserError(msg)
 
 
 def _effect_names(text: Optional[str], option: str = "--effects") -> list[str]:
-    from .effects import REGISTRY
+    from ..calibration.effects import REGISTRY
 
     if text is None or text.strip().lower() in ("", "none"):
         return []
@@ -61,8 +61,8 @@ def simulate(
 ):
     """Sweep every servo (flex, then extend, others at 0) and write what a hand with hidden effects would measure."""
     from .. import load_hand
-    from .data import write_measurements
-    from .simulate import SimulationError, parse_effect_params, simulate as run
+    from ..calibration.data import write_measurements
+    from ..calibration.simulate import SimulationError, parse_effect_params, simulate as run
 
     hand = load_hand(params)
     names = _effect_names(effects)
@@ -100,10 +100,10 @@ def compare(
 ):
     """Residual = measured - model per joint: MAE / RMS / max before (analytic) and after (with the effects)."""
     from .. import load_hand
-    from .data import read_measurements
-    from .effects import run_pipeline
-    from .fitting import fit_effects
-    from .report import metrics
+    from ..calibration.data import read_measurements
+    from ..calibration.effects import run_pipeline
+    from ..calibration.fitting import fit_effects
+    from ..calibration.report import metrics
 
     hand = load_hand(params)
     m = read_measurements(data, degrees=degrees)
@@ -128,7 +128,7 @@ def compare(
     lines = _compare_text(m, mb, ma, label, fitted)
     typer.echo("\n".join(lines))
     if report:
-        from .report import ReportDir, mae_table, plot_hysteresis, plot_mae, plot_residuals
+        from ..calibration.report import ReportDir, mae_table, plot_hysteresis, plot_mae, plot_residuals
 
         with ReportDir(report) as tmp:
             plot_residuals(tmp / "residual_before.png", m, q_before, "residual of the analytic model")
@@ -193,8 +193,8 @@ def diagnose(
 ):
     """Which effect is missing? Score every effect of the library, add the ones the held-out data confirm."""
     from .. import load_hand
-    from .data import read_measurements
-    from .diagnose import diagnose as run
+    from ..calibration.data import read_measurements
+    from ..calibration.diagnose import diagnose as run
 
     hand = load_hand(params)
     m = read_measurements(data, degrees=degrees)
@@ -207,7 +207,7 @@ def diagnose(
         _write_json(json_out, result)
         typer.echo(f"wrote {json_out}")
     if report:
-        from .report import ReportDir, mae_table, plot_hysteresis, plot_mae, plot_residuals
+        from ..calibration.report import ReportDir, mae_table, plot_hysteresis, plot_mae, plot_residuals
 
         before = {c: v["before"] for c, v in result["per_joint"].items()}
         after = {c: v["after"] for c, v in result["per_joint"].items()}
@@ -232,7 +232,7 @@ def diagnose(
 
 def diagnosis_text(d, result) -> list[str]:
     from ..kinematics.topology import JOINT_NAMES, Q_COLUMNS
-    from .effects import get_effect
+    from ..calibration.effects import get_effect
 
     out = [f"{result['rows']} rows, {result['measured_cells']} measured angles",
            f"MAE of the analytic model: {result['mae_deg_before']:.3f} deg; with the selected effects: "
@@ -279,11 +279,11 @@ def fit(
     replaced by the fitted ones (tendon_elasticity always written, 0 when not fitted)."""
     from .. import load_hand
     from ..params import dump_params
-    from ..params.schema import _plain
-    from .data import read_measurements
-    from .diagnose import mae
-    from .effects import validate_effects
-    from .fitting import Model, Problem, fit as run_fit
+    from ..canon import plain as _plain
+    from ..calibration.data import read_measurements
+    from ..calibration.diagnose import mae
+    from ..calibration.effects import validate_effects
+    from ..calibration.fitting import Model, Problem, fit as run_fit
 
     names = _effect_names(effects)
     if not names:
