@@ -5,23 +5,30 @@
     q = hand.forward(u, compensated=True)   # (..., 6) rad -> (..., 15) rad
     u = hand.inverse(q_d)                   # (..., 15) rad -> (..., 6) rad
 
-Importing this package imports numpy only; CAD (OCP) is imported by the commands
-that build geometry.
+This module is where the layers meet (docs/architecture.md): it loads the parameters, builds the
+effect library's stack for a calibrated file and hands both to the model. Importing it imports
+numpy only; CAD (OCP) is imported by the commands that build geometry.
 """
 
 from __future__ import annotations
 
 import os
 
+from .calibration import effects as _effects   # installs the [effects] check of the params layer
 from .kinematics.model import Hand
 from .params import HandParams, ParamError, load_params
 
 __version__ = "0.1.0"
 
 
+def make_hand(params: HandParams) -> Hand:
+    """The kinematic model of validated parameters, with the fitted effects they carry (if any)."""
+    return Hand(params, _effects.build_effect_stack(params) if params.effects else None)
+
+
 def load_hand(path: str | os.PathLike | None = None) -> Hand:
     """The kinematic model of the hand described by ``path`` (default: params/phantom.toml)."""
-    return Hand(load_params(path))
+    return make_hand(load_params(path))
 
 
-__all__ = ["load_hand", "load_params", "Hand", "HandParams", "ParamError", "__version__"]
+__all__ = ["load_hand", "load_params", "make_hand", "Hand", "HandParams", "ParamError", "__version__"]

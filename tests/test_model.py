@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from phantom_cad import Hand, load_hand
-from phantom_cad.params import parse
+from phantom_cad.params import load_params, parse
 
 # A hand whose numbers make the equations easy to do by hand: every chain has
 # d1 = d2 = 10 mm, alpha = 90 deg, r = 10 mm, so L0 = 10 sqrt(2) mm (eq. 4).
@@ -284,3 +284,15 @@ def test_beyond_the_cosine_law_domain_the_joint_stops_folded(hand):
     assert np.all(np.isfinite(q))
     assert q[4] == pytest.approx(math.radians(100.0))        # index MCP = alpha = 100 deg
     assert np.allclose(run_pipeline(hand, [], u[None], None, 0.0)[0], q, atol=1e-15)
+
+
+def test_hand_refuses_parameters_with_effects_it_was_not_given():
+    from phantom_cad import make_hand
+    from phantom_cad.canon import plain
+
+    doc = plain(load_params().document)
+    doc["effects"] = {"joint_offset": {"q3_deg": 1.0}}
+    params = parse(doc, "calibrated.toml")
+    with pytest.raises(ValueError, match="carry fitted effects"):
+        Hand(params)
+    assert make_hand(params).effects is not None

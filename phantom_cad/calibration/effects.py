@@ -26,27 +26,19 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from ..kinematics.topology import CHAINS, CMC_Q, CMC_SERVO, N_JOINTS, N_SERVOS, Q_COLUMNS, U_COLUMNS
+from ..kinematics.topology import (CHAINS, DISTAL_JOINTS, JOINTS, N_JOINTS, N_SERVOS, SERVOS, TENDON_SERVOS,
+                                   servo_joints)
 from ..params.errors import ParamError
+from ..params.schema import register_effect_check
+from ..units import DEG
 
-DEG = math.pi / 180.0
 STAGES = ("servo", "reference", "tension", "joint")
 
 #: servo of every joint (0-based), the CMC's is the direct-drive servo
-JOINT_SERVO = np.empty(N_JOINTS, dtype=int)
-for _c in CHAINS:
-    JOINT_SERVO[list(_c.q_index)] = _c.servo
-JOINT_SERVO[CMC_Q] = CMC_SERVO
-#: joints that carry a tendon deviation (PIP, DIP, thumb IP): every chain joint but the reference one
-DISTAL_JOINTS = tuple(sorted(i for c in CHAINS for i in c.q_index[1:]))
-ALL_JOINTS = tuple(range(N_JOINTS))
-
-
-def chain_joints(servo: int) -> tuple[int, ...]:
-    """q indices driven by ``servo`` (0-based)."""
-    if servo == CMC_SERVO:
-        return (CMC_Q,)
-    return CHAINS[servo].q_index
+JOINT_SERVO = np.array([j.servo for j in JOINTS])
+ALL_JOINTS = tuple(j.index for j in JOINTS)
+#: the servos that pull a tendon chain (u1..u5)
+CHAIN_SERVOS = tuple(s for s in SERVOS if s.drive == "tendon")
 
 
 @dataclass(frozen=True)
@@ -81,10 +73,10 @@ class Context:
         #: +1 flexing, -1 extending, 0 unknown, per row and servo (N, 6); None = unknown everywhere
         self.direction = direction
         self.u_eff = u.copy()                       # servo stage output
-        self.radius_scale = np.ones(5)              # reference stage: r_eff = r * radius_scale
+        self.radius_scale = np.ones(len(CHAINS))              # reference stage: r_eff = r * radius_scale
         self.s: np.ndarray | None = None            # reference angles (N, 6), after the reference stage
-        #: k_s / EA (1/m) felt by each chain's elastic segments (N, 5); 0 = analytic model
-        self.compliance = np.full((n, 5), float(compliance))
+        #: k_s / EA (1/m) felt by each chain's elastic segments (N, chains); 0 = analytic model
+        self.compliance = np.full((n, len(CHAINS)), float(compliance))
         #: the tendon's compliance k_s / EA (1/m) that converts a tension change into a deviation
         mech = hand.params.mechanics
         self.compliance_ref = mech.spring_k / mech.tendon_EA
@@ -155,18 +147,6 @@ def get_effect(name: str, field_name: str | None = None, source: str | None = No
                          f"unknown effect (known: {', '.join(REGISTRY)})", source) from None
 
 
-def _chain_constants(params):
-    """Per chain: ideal coupling A, radii R, v = cumulative path / R, R.A, R.v (eq. 13 pieces)."""
-    out = []
-    for chain in params.chains:
-        R = np.asarray(chain.radii, dtype=float)
-        A = R[0] / R
-        cum = np.concatenate(([0.0], np.cumsum(chain.path_lengths)))
-        v = cum / R
-        out.append((A, R, v, float(R @ A), float(R @ v)))
-    return out
-
-
 # ---------------------------------------------------------------------------
 # the built-in effects
 # ---------------------------------------------------------------------------
@@ -185,20 +165,20 @@ class TendonSlack(Effect):
     reference = "dead-zone / backlash models of cable drives, e.g. Kaneko et al., IEEE T-RA 7(3), 1991"
 
     def parameters(self, hand):
-        return [Param(f"{U_COLUMNS[j]}_deg", 0.0, 15.0, (1.0, 4.0), False, chain_joints(j), True,
-                      f"dead band of servo {U_COLUMNS[j]} before its tendon pulls, degrees")
-                for j in range(5)]
+        return [Param(f"{sv.label}_deg", 0.0, 15.0, (1.0, 4.0), False, servo_joints(sv.index), True,
+                      f"dead band of servo {sv.label} before its tendon pulls, degrees")
+                for sv in CHAIN_SERVOS]
 
     def apply(self, ctx, x):
-        lo = ctx.hand.u_min[:5]
+        lo = ctx.hand.u_min[TENDON_SERVOS]
         d = x * DEG
-        ctx.u_eff[:, :5] = lo + np.maximum(ctx.u_eff[:, :5] - lo - d, 0.0)
+        ctx.u_eff[:, TENDON_SERVOS] = lo + np.maximum(ctx.u_eff[:, TENDON_SERVOS] - lo - d, 0.0)
 
     invertible = True
 
     def invert(self, hand, u_eff, x):
         u = u_eff.copy()
-        u[..., :5] = u_eff[..., :5] + x * DEG
+        u[..., TENDON_SERVOS] = u_eff[..., TENDON_SERVOS] + x * DEG
         return u
 
 
@@ -215,9 +195,9 @@ class PulleyRadiusError(Effect):
     reference = "eq. (5)-(6) of the paper; effective radius = pulley radius + half the tendon diameter"
 
     def parameters(self, hand):
-        return [Param(f"{U_COLUMNS[j]}_relative", -0.2, 0.2, (0.015, 0.04), True, chain_joints(j), True,
-                      f"relative error of servo {U_COLUMNS[j]}'s effective pulley radius")
-                for j in range(5)]
+        return [Param(f"{sv.label}_relative", -0.2, 0.2, (0.015, 0.04), True, servo_joints(sv.index), True,
+                      f"relative error of servo {sv.label}'s effective pulley radius")
+                for sv in CHAIN_SERVOS]
 
     def apply(self, ctx, x):
         ctx.radius_scale = ctx.radius_scale * (1.0 + x)
@@ -272,8 +252,9 @@ class FrictionHysteresis(Effect):
             return
         if ctx.s is None:
             raise RuntimeError("friction_hysteresis needs the reference angles")
-        theta = ctx.s[:, :5] * _sum_coupling(ctx.hand)
-        f = np.exp(ctx.direction[:, :5] * x[0] * theta)
+        # Theta = s * sum(A): the sum of the chain's joint angles, the tendon's wrap on its pulleys
+        theta = ctx.s[:, TENDON_SERVOS] * ctx.hand.coupling_ideal.sum(axis=1)[TENDON_SERVOS]
+        f = np.exp(ctx.direction[:, TENDON_SERVOS] * x[0] * theta)
         ctx.compliance += ctx.compliance_ref * (f - 1.0)
 
 
@@ -289,8 +270,8 @@ class JointOffset(Effect):
     reference = "standard zero-offset calibration of joint encoders (e.g. Hollerbach & Wampler 1996)"
 
     def parameters(self, hand):
-        return [Param(f"{Q_COLUMNS[i]}_deg", -10.0, 10.0, (0.5, 2.0), True, (i,), False,
-                      f"zero offset of joint {Q_COLUMNS[i]}, degrees") for i in range(N_JOINTS)]
+        return [Param(f"{j.label}_deg", -10.0, 10.0, (0.5, 2.0), True, (j.index,), False,
+                      f"zero offset of joint {j.label}, degrees") for j in JOINTS]
 
     def apply(self, ctx, x):
         ctx.q += x * DEG
@@ -299,11 +280,6 @@ class JointOffset(Effect):
 
     def invert(self, hand, q, x):
         return q - x * DEG
-
-
-def _sum_coupling(hand) -> np.ndarray:
-    """Per chain: the sum of the ideal coupling vector (Theta = s * sum(A) = sum of the chain's joint angles)."""
-    return np.array([A.sum() for A, *_ in _constants(hand)])
 
 
 # ---------------------------------------------------------------------------
@@ -342,34 +318,12 @@ def run_pipeline(hand, items: Sequence[tuple[Effect, np.ndarray]], u, direction=
 def reference_angles(hand, u_eff: np.ndarray, radius_scale) -> np.ndarray:
     """Eq. (6)/(8) with the effective servo radius r * radius_scale; s6 = g u6 (the model's own
     cosine law, clipped to its domain)."""
-    return hand._reference(u_eff, hand._r * radius_scale)
-
-
-def coupling_vectors(hand, compliance: np.ndarray) -> list[np.ndarray]:
-    """Per chain: M(kappa)^-1 A by Sherman-Morrison, M = I + kappa v R^T (eq. 13): (N, n_joints)."""
-    consts = _constants(hand)
-    out = []
-    for k, (A, R, v, RA, Rv) in enumerate(consts):
-        kap = compliance[:, k]
-        g = kap * RA / (1.0 + kap * Rv)
-        out.append(A[None, :] - g[:, None] * v[None, :])
-    return out
+    return hand.reference_angles(u_eff, hand.servo_radius * radius_scale)
 
 
 def couple(hand, s: np.ndarray, compliance: np.ndarray) -> np.ndarray:
-    q = np.empty(s.shape[:-1] + (N_JOINTS,))
-    for spec, c in zip(CHAINS, coupling_vectors(hand, compliance)):
-        q[:, list(spec.q_index)] = s[:, spec.servo, None] * c
-    q[:, CMC_Q] = s[:, CMC_SERVO]
-    return q
-
-
-def _constants(hand):
-    c = getattr(hand, "_effect_constants", None)
-    if c is None:
-        c = _chain_constants(hand.params)
-        hand._effect_constants = c
-    return c
+    """q (N, 15) from s (N, 6) with the compliance each chain feels per sample (N, 5): eq. (13)/(14)."""
+    return hand.couple(s, hand.coupling_vectors(compliance))
 
 
 # ---------------------------------------------------------------------------
@@ -460,26 +414,20 @@ class EffectStack:
         for eff, x in items:
             if eff.stage == "reference":
                 eff.apply(ctx, x)
-        radius_scale = ctx.radius_scale
+        radius = hand.servo_radius * ctx.radius_scale
         ctx.s = np.zeros((1, N_SERVOS))
         for eff, x in items:
             if eff.stage == "tension":
                 eff.apply(ctx, x)
-        vectors = coupling_vectors(hand, ctx.compliance)
-        s = np.empty((q.shape[0], N_SERVOS))
-        for spec, c in zip(CHAINS, vectors):
-            c = c[0]
-            s[:, spec.servo] = q[:, list(spec.q_index)] @ c / (c @ c)
-        s[:, CMC_SERVO] = q[:, CMC_Q]
         # the travel's image in reference-angle space, with the effects of the servo and reference stages
         ends = Context(hand, np.vstack([hand.u_min, hand.u_max]), None, 0.0)
         for eff, x in items:
             if eff.stage == "servo":
                 eff.apply(ends, x)
-        s_ends = reference_angles(hand, ends.u_eff, radius_scale)
-        np.clip(s, s_ends.min(axis=0), s_ends.max(axis=0), out=s)
-        # invert the cosine law with the effective radius
-        u = hand._servo(s, hand._r * radius_scale)
+        s_ends = hand.reference_angles(ends.u_eff, radius)
+        # project, clip, invert the cosine law with the effective radius, clip to the travel
+        u = hand.control_law(q, hand.coupling_matrix(ctx.compliance[0]),
+                             (s_ends.min(axis=0), s_ends.max(axis=0)), radius)
         for eff, x in reversed(items):
             if eff.stage == "servo" and eff.invertible:
                 u = eff.invert(hand, u, x)
@@ -488,5 +436,8 @@ class EffectStack:
 
 
 def build_effect_stack(params) -> EffectStack:
-    """Called by the kinematics hook when ``params.effects`` is non-empty; raises ParamError on bad tables."""
+    """The stack ``phantom_cad.load_hand`` passes to the model when ``params.effects`` is non-empty."""
     return EffectStack(params)
+
+
+register_effect_check(validate_effects)

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..kinematics.topology import JOINT_NAMES, Q_COLUMNS
+from ..kinematics.topology import JOINT_NAMES, Q_COLUMNS, U_COLUMNS
 from .data import Measurements
 from .effects import JOINT_SERVO
 
@@ -66,7 +66,7 @@ def _panels(m: Measurements, sharey: bool):
     for ax, j in zip(axes.flat, joints):
         s = JOINT_SERVO[j]
         ax.set_title(f"{Q_COLUMNS[j]} {JOINT_NAMES[j]}", fontsize=9)
-        ax.set_xlabel(f"u{s + 1} (deg)", fontsize=8)
+        ax.set_xlabel(f"{U_COLUMNS[s]} (deg)", fontsize=8)
         ax.tick_params(labelsize=7)
         panels.append((ax, j, s))
     for ax in list(axes.flat)[len(joints):]:

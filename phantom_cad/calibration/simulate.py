@@ -14,9 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kinematics.topology import N_JOINTS, N_SERVOS, Q_COLUMNS
+from ..kinematics.topology import N_JOINTS, N_SERVOS, Q_COLUMNS, U_COLUMNS, servo_joints
+from ..units import DEG
 from .data import Measurements
-from .effects import REGISTRY, DEG, chain_joints, effect_values, get_effect, run_pipeline
+from .effects import REGISTRY, effect_values, get_effect, run_pipeline
 
 
 class SimulationError(ValueError):
@@ -76,7 +77,7 @@ def sweep_commands(hand, points: int, travel: float = 1.0):
         u = np.zeros((path.size, N_SERVOS))
         u[:, j] = path
         us.append(u)
-        labels += [f"u{j + 1}"] * path.size
+        labels += [U_COLUMNS[j]] * path.size
     return np.vstack(us), labels
 
 
@@ -113,8 +114,8 @@ def simulate(hand, effects=(), *, noise_deg: float = 0.1, seed: int = 0, points:
     if measure == "chain":
         own = np.zeros(clean.shape, dtype=bool)
         for j in range(N_SERVOS):
-            rows = sweep == ids.index(f"u{j + 1}")
-            own[np.ix_(rows, list(chain_joints(j)))] = True
+            rows = sweep == ids.index(U_COLUMNS[j])
+            own[np.ix_(rows, list(servo_joints(j)))] = True
         mask &= own
     rng = np.random.default_rng([seed, 2])
     noise = rng.normal(0.0, noise_deg * DEG, clean.shape)

@@ -57,27 +57,30 @@ def params_show(params: Optional[Path] = ParamsOpt):
 def describe(hand) -> str:
     import numpy as np
 
-    from ..kinematics.topology import CHAINS, JOINT_NAMES, SERVO_NAMES
+    from ..kinematics.topology import JOINTS, SERVOS
+    from ..units import deg, mm
 
     p = hand.params
     out = [f"hand {p.name} ({p.side}), {p.source}", f"digest {p.digest}",
            f"k_s = {p.mechanics.spring_k:g} N/m, EA = {p.mechanics.tendon_EA:g} N", ""]
     out.append(f"{'chain':8s} {'L0 mm':>7s} {'r mm':>6s} {'travel deg':>14s}  ideal A / compensated M^-1 A")
-    for spec, chain in zip(CHAINS, p.chains):
+    for chain in p.chains:
+        spec = chain.spec
         ideal = hand.coupling_ideal[spec.servo, list(spec.q_index)]
         comp = hand.coupling_compensated[spec.servo, list(spec.q_index)]
         pair = ", ".join(f"{j}: {a:.4f} / {c:.4f}" for j, a, c in zip(chain.joints, ideal, comp))
-        travel = "[" + ", ".join(f"{np.degrees(v):.1f}" for v in chain.travel) + "]"
-        out.append(f"{spec.digit:8s} {chain.guide.L0 * 1e3:7.3f} {chain.servo_radius * 1e3:6.2f} {travel:>14s}  {pair}")
+        travel = "[" + ", ".join(f"{deg(v):.1f}" for v in chain.travel) + "]"
+        out.append(f"{spec.digit:8s} {mm(chain.guide.L0):7.3f} {mm(chain.servo_radius):6.2f} {travel:>14s}  {pair}")
     out.append("")
     lo, hi = hand.workspace(compensated=True)
     out.append(f"{'q':4s} {'joint':12s} {'limits rad':>16s} {'travel image (compensated) rad':>32s}")
-    for i, name in enumerate(JOINT_NAMES):
-        out.append(f"q{i + 1:<3d} {name:12s} [{hand.q_min[i]:6.3f}, {hand.q_max[i]:6.3f}] "
+    for j in JOINTS:
+        i = j.index
+        out.append(f"{j.label:4s} {j.name:12s} [{hand.q_min[i]:6.3f}, {hand.q_max[i]:6.3f}] "
                    f"{'':10s}[{lo[i]:6.3f}, {hi[i]:6.3f}]")
     out.append("")
-    out.append("servos: " + ", ".join(f"u{j + 1} {n} [{np.degrees(a):.1f}, {np.degrees(b):.1f}] deg"
-                                      for j, (n, a, b) in enumerate(zip(SERVO_NAMES, hand.u_min, hand.u_max))))
+    out.append("servos: " + ", ".join(f"{sv.label} {sv.name} [{deg(hand.u_min[sv.index]):.1f}, "
+                                      f"{deg(hand.u_max[sv.index]):.1f}] deg" for sv in SERVOS))
     return "\n".join(out)
 
 

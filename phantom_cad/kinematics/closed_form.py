@@ -1,7 +1,8 @@
-"""Closed-form pieces of the paper's model (eq. 4-6, 8, 11-14), as plain functions.
+"""Closed-form pieces of the paper's model (eq. 4-6, 8, 11-14), as plain functions: the one
+implementation of each formula.
 
-Numbers in, numbers out: no parameter objects, so the schema's validation and the
-model share exactly one implementation of each formula. numpy only.
+Numbers in, numbers out: no parameter objects, so the schema's validation, the model and the
+effect library share exactly these. numpy only; everything broadcasts.
 """
 
 from __future__ import annotations
@@ -14,22 +15,60 @@ def chord_rest(d1, d2, alpha):
     return np.sqrt(d1 * d1 + d2 * d2 - 2.0 * d1 * d2 * np.cos(alpha))
 
 
+def cosine_coefficients(d1, d2, alpha, r):
+    """The cosine law's argument as a polynomial in the servo angle u (eq. 5-6):
+
+    x(u) = (d1^2 + d2^2 - (L0 - r u)^2) / (2 d1 d2) = a + u (b + c u),
+    a = cos(alpha), b = L0 r / (d1 d2), c = -r^2 / (2 d1 d2).
+    """
+    two_d1d2 = 2.0 * d1 * d2
+    return np.cos(alpha), 2.0 * chord_rest(d1, d2, alpha) * r / two_d1d2, -(r * r) / two_d1d2
+
+
 def cosine_argument(u, d1, d2, alpha, r):
     """Argument of the arccos in eq. (5)/(6) at servo angle u."""
+    a, b, c = cosine_coefficients(d1, d2, alpha, r)
+    return a + u * (b + c * u)
+
+
+def reference_angle(u, d1, d2, alpha, r, out=None, coefficients=None):
+    """Eq. (6)/(8): q_MCP (or thumb q_MP) = alpha - arccos((d1^2 + d2^2 - (L0 - r u)^2) / (2 d1 d2)).
+
+    Beyond the law's domain (a servo angle far outside its travel) the argument is clipped to
+    [-1, 1]: the chord cannot shorten past |d1 - d2|, the joint stops folded at alpha.
+    ``out`` receives the result (it may be a strided view); ``coefficients`` may be passed in
+    precomputed (:func:`cosine_coefficients`). The work runs in place on one contiguous
+    temporary, the fast layout for numpy's loops.
+    """
+    a, b, c = cosine_coefficients(d1, d2, alpha, r) if coefficients is None else coefficients
+    x = np.asarray(np.multiply(u, c), dtype=float)
+    x += b
+    x *= u
+    x += a
+    np.clip(x, -1.0, 1.0, out=x)
+    np.arccos(x, out=x)
+    return np.subtract(alpha, x, out=out)
+
+
+def chord_constants(d1, d2, alpha):
+    """(d1^2 + d2^2, 2 d1 d2, L0): what the inverse cosine law needs, for precomputing."""
+    return d1 * d1 + d2 * d2, 2.0 * d1 * d2, chord_rest(d1, d2, alpha)
+
+
+def servo_angle(q_ref, d1, d2, alpha, r, constants=None):
+    """Inverse of eq. (6): the servo angle that puts the reference joint at q_ref,
+    u = (L0 - L) / r with L = sqrt(d1^2 + d2^2 - 2 d1 d2 cos(alpha - q_ref)).
+    ``constants`` may be passed in precomputed (:func:`chord_constants`)."""
+    sumsq, two_d1d2, L0 = chord_constants(d1, d2, alpha) if constants is None else constants
+    L = np.sqrt(sumsq - two_d1d2 * np.cos(alpha - q_ref))
+    return (L0 - L) / r
+
+
+def reference_angle_rate(u, d1, d2, alpha, r):
+    """d q_ref / d u = r L / (d1 d2 sin(phi)), phi the current included angle."""
     L = chord_rest(d1, d2, alpha) - r * u
-    return (d1 * d1 + d2 * d2 - L * L) / (2.0 * d1 * d2)
-
-
-def reference_angle(u, d1, d2, alpha, r):
-    """Eq. (6)/(8): q_MCP (or thumb q_MP) = alpha - arccos((d1^2 + d2^2 - (L0 - r u)^2) / (2 d1 d2))."""
-    return alpha - np.arccos(cosine_argument(u, d1, d2, alpha, r))
-
-
-def servo_angle(q_ref, d1, d2, alpha, r, L0=None):
-    """Inverse of eq. (6): the servo angle that puts the reference joint at q_ref.
-    ``L0`` (eq. 4) may be passed in precomputed."""
-    L = np.sqrt(d1 * d1 + d2 * d2 - 2.0 * d1 * d2 * np.cos(alpha - q_ref))
-    return ((chord_rest(d1, d2, alpha) if L0 is None else L0) - L) / r
+    x = cosine_argument(u, d1, d2, alpha, r)
+    return r * L / (d1 * d2 * np.sqrt(1.0 - x * x))
 
 
 def ideal_coupling(radii):
@@ -38,27 +77,26 @@ def ideal_coupling(radii):
     return radii[0] / radii
 
 
-def compliance_matrix(radii, path_lengths, k_s, EA):
-    """Eq. (13)/(14): the matrix M of M q_comp = A q_ref.
+def elastic_lever(radii, path_lengths):
+    """Eq. (12) per unit tension and unit EA: v_j = (tendon path from the reference joint to joint j) / R_j.
 
-    ``radii`` are the chain's pulley radii, reference joint first (MCP, PIP, DIP or MP, IP);
-    ``path_lengths[k]`` the tendon length between joint k and joint k+1. Joint j > 0 loses
-    b_j = T * (sum of path lengths up to j) / (EA R_j), with T = k_s * sum_i R_i q_i (eq. 11-12).
+    ``radii`` reference joint first; ``path_lengths[k]`` the tendon between joints k and k + 1.
+    A tension T stretches the tendon so that joint j loses b_j = T v_j / EA (v_0 = 0).
     """
     radii = np.asarray(radii, dtype=float)
-    n = radii.size
-    cumulative = np.concatenate(([0.0], np.cumsum(path_lengths)))
-    C = k_s * cumulative / (EA * radii)   # C[0] = 0: the reference joint has no deviation
-    return np.eye(n) + np.outer(C, radii)
+    return np.concatenate(([0.0], np.cumsum(path_lengths))) / radii
 
 
-def compensated_coupling(radii, path_lengths, k_s, EA):
-    """q_comp = (M^-1 A) q_ref: the constant vector of eq. (13)/(14)."""
-    return np.linalg.solve(compliance_matrix(radii, path_lengths, k_s, EA), ideal_coupling(radii))
+def coupling_vector(radii, path_lengths, compliance):
+    """Eq. (13)/(14) in closed form: q_comp = (M^-1 A) q_ref for a compliance kappa = k_s / EA.
 
-
-def reference_angle_rate(u, d1, d2, alpha, r):
-    """d q_ref / d u = r L / (d1 d2 sin(phi)), phi the current included angle."""
-    L = chord_rest(d1, d2, alpha) - r * u
-    x = (d1 * d1 + d2 * d2 - L * L) / (2.0 * d1 * d2)
-    return r * L / (d1 * d2 * np.sqrt(1.0 - x * x))
+    M = I + kappa v R^T (v the :func:`elastic_lever`, since T = k_s R.q), so by Sherman-Morrison
+    M^-1 A = A - v kappa (R.A) / (1 + kappa R.v). ``compliance`` broadcasts: a scalar gives (n,),
+    an array (...,) gives (..., n). kappa = 0 is the analytic model (A itself).
+    """
+    radii = np.asarray(radii, dtype=float)
+    A = ideal_coupling(radii)
+    v = elastic_lever(radii, path_lengths)
+    kappa = np.asarray(compliance, dtype=float)[..., None]
+    g = kappa * (radii @ A) / (1.0 + kappa * (radii @ v))
+    return A - g * v

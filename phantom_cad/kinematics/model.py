@@ -4,110 +4,146 @@ Forward, analytic (eq. 2-10):    q = H(u) u, q_ref = alpha - arccos(...), q_i = 
 Forward, compensated (eq. 11-14): q_comp = (M^-1 A) q_ref per tendon chain.
 Inverse, control law (eq. 15):    u* = H^+(clip(q_d) + b(clip(q_d))).
 
-Every digit's reachable set is a curve q = c s(u) with a constant vector c (A or M^-1 A)
-and the reference angle s = q_MCP (q_MP for the thumb). The inverse clips the target to
-the workspace, projects each digit's target onto its curve by least squares
-(s = c.q / c.c, which for a target on the curve is exactly eq. 15), clips s to the
+Every digit's reachable set is a curve q = c s(u) with a constant vector c (A or M^-1 A,
+:meth:`Hand.coupling_vectors`) and the reference angle s = q_MCP (q_MP for the thumb). The
+control law (:meth:`Hand.control_law`) projects each digit's target onto its curve by least
+squares (s = c.q / c.c, which for a target on the curve is exactly eq. 15), clips s to the
 servo travel's image, and inverts the cosine law in closed form.
 
-All functions broadcast over any leading batch shape. numpy only.
+The model knows the parameters by duck typing (``params.chains``, ``params.thumb``,
+``params.mechanics``): the kinematics layer never imports the params layer. Fitted effects
+(the calibration layer's EffectStack) are passed in by whoever loads them
+(``phantom_cad.load_hand``). All functions broadcast over any leading batch shape. numpy only.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..params.schema import HandParams
 from . import closed_form as cf
-from .topology import CHAINS, CMC_Q, CMC_SERVO, N_JOINTS, N_SERVOS
+from .topology import CHAINS, CMC_Q, CMC_SERVO, N_JOINTS, N_SERVOS, TENDON_SERVOS
+
+
+#: rows per block of a batched forward (a block's temporaries fit a core's L2 cache)
+_BLOCK = 8192
 
 
 class Hand:
-    """The kinematic model of one hand, built from its validated parameters."""
+    """The kinematic model of one hand, built from its validated parameters (``HandParams``).
 
-    def __init__(self, params: HandParams):
+    ``effects``: an object with ``forward(hand, u, compensated)`` and ``inverse(hand, q, compensated)``
+    (the calibration layer's EffectStack) that replaces the plain model, or None. A parameter file
+    that carries fitted effects must be given them: ``phantom_cad.load_hand`` does.
+    """
+
+    def __init__(self, params, effects=None):
+        if params.effects and not effects:
+            raise ValueError(f"{params.source or 'these parameters'} carry fitted effects "
+                             f"({', '.join(params.effects)}): build the hand with phantom_cad.load_hand "
+                             "or pass effects=")
         self.params = params
+        #: the fitted effects this hand applies in forward and inverse (None: the paper's model)
+        self.effects = effects or None
         chains = params.chains
         thumb = params.thumb
-        g = [c.guide for c in chains]
-        self._d1 = np.array([x.d1 for x in g])
-        self._d2 = np.array([x.d2 for x in g])
-        self._alpha = np.array([x.alpha for x in g])
-        self._r = np.array([c.servo_radius for c in chains])
-        self._L0 = cf.chord_rest(self._d1, self._d2, self._alpha)
-        self._sumsq = self._d1 ** 2 + self._d2 ** 2
-        self._two_d1d2 = 2.0 * self._d1 * self._d2
+        self._d1 = np.array([c.guide.d1 for c in chains])
+        self._d2 = np.array([c.guide.d2 for c in chains])
+        self._alpha = np.array([c.guide.alpha for c in chains])
+        #: servo pulley radii r_j of the tendon chains (5,)
+        self.servo_radius = np.array([c.servo_radius for c in chains])
+        self._cosine = cf.cosine_coefficients(self._d1, self._d2, self._alpha, self.servo_radius)
+        self._chord = cf.chord_constants(self._d1, self._d2, self._alpha)
         self._cmc_gain = thumb.cmc_gain
+        #: k_s / EA (1/m): the compliance of eq. (13)/(14) in the parameter file
+        self.compliance = params.mechanics.spring_k / params.mechanics.tendon_EA
 
-        k_s, EA = params.mechanics.spring_k, params.mechanics.tendon_EA
         #: (6, 15) maps the per-servo reference angles s to q: q = s @ P
-        self.coupling_ideal = self._coupling([c.ideal_coupling for c in chains])
-        self.coupling_compensated = self._coupling(
-            [cf.compensated_coupling(c.radii, c.path_lengths, k_s, EA) for c in chains])
-        # least-squares projection onto each digit's curve: s_k = c_k . q / (c_k . c_k)
-        self._project = {
-            False: (self.coupling_ideal / np.sum(self.coupling_ideal ** 2, axis=1, keepdims=True)).T.copy(),
-            True: (self.coupling_compensated / np.sum(self.coupling_compensated ** 2, axis=1, keepdims=True)).T.copy(),
-        }
+        self.coupling_ideal = self.coupling_matrix(0.0)
+        self.coupling_compensated = self.coupling_matrix(self.compliance)
+        self._project = {False: _projection(self.coupling_ideal), True: _projection(self.coupling_compensated)}
 
         q_min = np.zeros(N_JOINTS)
         q_max = np.zeros(N_JOINTS)
-        for spec, chain in zip(CHAINS, chains):
-            for qi, (lo, hi) in zip(spec.q_index, chain.limits):
+        for chain in chains:
+            for qi, (lo, hi) in zip(chain.spec.q_index, chain.limits):
                 q_min[qi], q_max[qi] = lo, hi
         q_min[CMC_Q], q_max[CMC_Q] = thumb.cmc_limits
         self.q_min, self.q_max = q_min, q_max
 
-        u_min = np.array([c.travel[0] for c in chains] + [thumb.cmc_travel[0]])
-        u_max = np.array([c.travel[1] for c in chains] + [thumb.cmc_travel[1]])
-        self.u_min, self.u_max = u_min, u_max
+        tendon = [c.travel for c in chains]
+        self.u_min = np.array([t[0] for t in tendon] + [thumb.cmc_travel[0]])
+        self.u_max = np.array([t[1] for t in tendon] + [thumb.cmc_travel[1]])
         # image of the servo travel in reference-angle space
-        self._s_min = self._reference(u_min)
-        self._s_max = self._reference(u_max)
+        self.s_min = self.reference_angles(self.u_min)
+        self.s_max = self.reference_angles(self.u_max)
 
-        # the effects of phantom_cad.calibration this hand was fitted with (if any)
-        from .effects_hook import resolve_effects
+    # -- eq. (13)/(14): the coupling vectors ------------------------------------
+    def coupling_vectors(self, compliance) -> list[np.ndarray]:
+        """Per tendon chain (servo order): q_chain = c s, c = M(kappa)^-1 A (eq. 13/14, closed form).
 
-        self.effects = resolve_effects(params)
+        ``compliance`` kappa = k_s / EA felt by each chain: a scalar, (5,) or (..., 5); each vector
+        has shape (..., n_joints of the chain). kappa = 0 gives the analytic coupling A (eq. 2).
+        """
+        kappa = np.asarray(compliance, dtype=float)
+        if kappa.ndim == 0:
+            kappa = np.full(len(CHAINS), float(kappa))
+        return [cf.coupling_vector(c.radii, c.path_lengths, kappa[..., k]) for k, c in enumerate(self.params.chains)]
 
-    @staticmethod
-    def _coupling(vectors) -> np.ndarray:
+    def coupling_matrix(self, compliance) -> np.ndarray:
+        """(6, 15) P with q = s @ P for one compliance (scalar or per chain (5,)); the CMC row is 1."""
         P = np.zeros((N_SERVOS, N_JOINTS))
-        for spec, c in zip(CHAINS, vectors):
+        for spec, c in zip(CHAINS, self.coupling_vectors(compliance)):
             P[spec.servo, list(spec.q_index)] = c
         P[CMC_SERVO, CMC_Q] = 1.0
         return P
 
-    # -- reference angles ----------------------------------------------------
-    def _reference(self, u: np.ndarray, r: np.ndarray | None = None) -> np.ndarray:
-        """s (..., 6): q_MCP / q_MP of each tendon chain (eq. 6, 8) and q15 = g u6 (eq. 9).
-
-        The in-place form of closed_form.reference_angle, the one the model and the effect
-        library use; ``r`` overrides the servo pulley radii (an effective radius). Beyond the
-        cosine law's domain (a servo angle far outside its travel) the argument is clipped to
-        [-1, 1]: the chord cannot shorten past |d1 - d2|, the joint stops folded at alpha.
-        """
-        s = np.empty(u.shape)
-        L = self._L0 - (self._r if r is None else r) * u[..., :5]
-        np.multiply(L, L, out=L)
-        np.subtract(self._sumsq, L, out=L)
-        np.divide(L, self._two_d1d2, out=L)
-        np.clip(L, -1.0, 1.0, out=L)
-        np.arccos(L, out=L)
-        np.subtract(self._alpha, L, out=s[..., :5])
-        np.multiply(u[..., 5], self._cmc_gain, out=s[..., 5])
-        return s
-
-    def _servo(self, s: np.ndarray, r: np.ndarray | None = None) -> np.ndarray:
-        """Inverse of :meth:`_reference` (``r``: effective servo pulley radii)."""
-        u = np.empty(s.shape)
-        u[..., :5] = cf.servo_angle(s[..., :5], self._d1, self._d2, self._alpha,
-                                    self._r if r is None else r, self._L0)
-        np.divide(s[..., 5], self._cmc_gain, out=u[..., 5])
-        return u
+    def couple(self, s: np.ndarray, vectors) -> np.ndarray:
+        """q (..., 15) from reference angles s (..., 6) and per-chain coupling vectors (:meth:`coupling_vectors`)."""
+        q = np.empty(s.shape[:-1] + (N_JOINTS,))
+        for spec, c in zip(CHAINS, vectors):
+            q[..., list(spec.q_index)] = s[..., spec.servo, None] * c
+        q[..., CMC_Q] = s[..., CMC_SERVO]
+        return q
 
     def coupling(self, compensated: bool) -> np.ndarray:
         return self.coupling_compensated if compensated else self.coupling_ideal
+
+    # -- reference angles (eq. 6, 8, 9) ------------------------------------------
+    def reference_angles(self, u: np.ndarray, radius: np.ndarray | None = None,
+                         out: np.ndarray | None = None) -> np.ndarray:
+        """s (..., 6): q_MCP / q_MP of each tendon chain (eq. 6, 8) and q15 = g u6 (eq. 9).
+
+        ``radius`` overrides the servo pulley radii (an effective radius, (5,)). Beyond the
+        cosine law's domain the joint stops folded at alpha (closed_form.reference_angle).
+        """
+        s = np.empty(np.shape(u)) if out is None else out
+        coefficients = self._cosine if radius is None else None
+        cf.reference_angle(u[..., TENDON_SERVOS], self._d1, self._d2, self._alpha,
+                           self.servo_radius if radius is None else radius,
+                           out=s[..., TENDON_SERVOS], coefficients=coefficients)
+        np.multiply(u[..., CMC_SERVO], self._cmc_gain, out=s[..., CMC_SERVO])
+        return s
+
+    def servo_angles(self, s: np.ndarray, radius: np.ndarray | None = None) -> np.ndarray:
+        """Inverse of :meth:`reference_angles` (``radius``: effective servo pulley radii)."""
+        u = np.empty(np.shape(s))
+        u[..., TENDON_SERVOS] = cf.servo_angle(s[..., TENDON_SERVOS], self._d1, self._d2, self._alpha,
+                                               self.servo_radius if radius is None else radius, self._chord)
+        np.divide(s[..., CMC_SERVO], self._cmc_gain, out=u[..., CMC_SERVO])
+        return u
+
+    # -- the control law's core ---------------------------------------------------
+    def control_law(self, q: np.ndarray, coupling: np.ndarray, s_range=None, radius=None,
+                    projection: np.ndarray | None = None) -> np.ndarray:
+        """u (..., 6) for joint targets q (..., 15) already clipped to the workspace: project each
+        digit's target onto its curve q = c s (``coupling`` P, (6, 15)), clip s to ``s_range``
+        (default: the travel's image), invert the cosine law (``radius``: effective servo pulley
+        radii), clip to the servo travel. :meth:`inverse` and the effect stack both call it."""
+        s = q @ (_projection(coupling) if projection is None else projection)
+        lo, hi = (self.s_min, self.s_max) if s_range is None else s_range
+        np.clip(s, lo, hi, out=s)
+        u = self.servo_angles(s, radius)
+        return np.clip(u, self.u_min, self.u_max, out=u)
 
     # -- public API ------------------------------------------------------------
     def forward(self, u, compensated: bool = False) -> np.ndarray:
@@ -115,7 +151,19 @@ class Hand:
         u = _as_batch(u, N_SERVOS, "u")
         if self.effects:  # fitted effects (phantom_cad.calibration.effects.EffectStack)
             return self.effects.forward(self, u, compensated)
-        return self._reference(u) @ self.coupling(compensated)
+        P = self.coupling(compensated)
+        flat = u.reshape(-1, N_SERVOS)
+        n = flat.shape[0]
+        if n <= _BLOCK:
+            return self.reference_angles(u) @ P
+        # a large batch runs in blocks whose temporaries stay in the CPU cache: the passes
+        # around the arccos then cost little next to it (docs/performance.md)
+        q = np.empty((n, N_JOINTS))
+        s = np.empty((_BLOCK, N_SERVOS))
+        for i in range(0, n, _BLOCK):
+            j = min(i + _BLOCK, n)
+            np.matmul(self.reference_angles(flat[i:j], out=s[:j - i]), P, out=q[i:j])
+        return q.reshape(u.shape[:-1] + (N_JOINTS,))
 
     def inverse(self, q_d, compensated: bool = True) -> np.ndarray:
         """Control law (eq. 15): servo angles u* (..., 6) for target joint angles q_d (..., 15).
@@ -127,17 +175,15 @@ class Hand:
         q = np.clip(q, self.q_min, self.q_max)
         if self.effects:  # the control law with the fitted effects inverted (docs/effects.md)
             return self.effects.inverse(self, q, compensated)
-        s = q @ self._project[compensated]
-        np.clip(s, self._s_min, self._s_max, out=s)
-        u = self._servo(s)
-        return np.clip(u, self.u_min, self.u_max, out=u)
+        return self.control_law(q, self.coupling(compensated), projection=self._project[compensated])
 
     def jacobian(self, u, compensated: bool = False) -> np.ndarray:
         """dq/du (..., 15, 6) of the model without effects."""
         u = _as_batch(u, N_SERVOS, "u")
         rate = np.empty(u.shape)
-        rate[..., :5] = cf.reference_angle_rate(u[..., :5], self._d1, self._d2, self._alpha, self._r)
-        rate[..., 5] = self._cmc_gain
+        rate[..., TENDON_SERVOS] = cf.reference_angle_rate(u[..., TENDON_SERVOS], self._d1, self._d2,
+                                                           self._alpha, self.servo_radius)
+        rate[..., CMC_SERVO] = self._cmc_gain
         return np.swapaxes(rate[..., :, None] * self.coupling(compensated), -1, -2)
 
     def H(self, u) -> np.ndarray:
@@ -146,31 +192,30 @@ class Hand:
         H_ij(u_j) = q_i(u_j) / u_j; at u_j = 0 its limit, the slope dq_i/du_j.
         """
         u = _as_batch(u, N_SERVOS, "u")
-        s = self._reference(u)
+        s = self.reference_angles(u)
         small = np.abs(u) < 1e-9
         ratio = np.divide(s, u, out=np.zeros_like(s), where=~small)
         if np.any(small):
             slope = np.empty(u.shape)
-            slope[..., :5] = cf.reference_angle_rate(np.zeros_like(u[..., :5]), self._d1, self._d2,
-                                                     self._alpha, self._r)
-            slope[..., 5] = self._cmc_gain
+            slope[..., TENDON_SERVOS] = cf.reference_angle_rate(np.zeros_like(u[..., TENDON_SERVOS]), self._d1,
+                                                                self._d2, self._alpha, self.servo_radius)
+            slope[..., CMC_SERVO] = self._cmc_gain
             ratio = np.where(small, slope, ratio)
         return np.swapaxes(ratio[..., :, None] * self.coupling_ideal, -1, -2)
 
     def bias(self, q) -> np.ndarray:
         """Eq. (11)-(12): b(q) = q_ideal - q_comp for actual joint angles q (..., 15).
 
-        Zero for MCP, thumb MP and CMC; for the others T * (path to the joint) / (EA R_j),
+        Zero for MCP, thumb MP and CMC; for the others T v_j / EA (closed_form.elastic_lever),
         with T = k_s * sum_i R_i q_i over the joint's own tendon chain.
         """
         q = _as_batch(q, N_JOINTS, "q")
         b = np.zeros(q.shape)
-        k_s, EA = self.params.mechanics.spring_k, self.params.mechanics.tendon_EA
-        for spec, chain in zip(CHAINS, self.params.chains):
-            idx = list(spec.q_index)
-            T = k_s * (q[..., idx] @ np.asarray(chain.radii))
-            cumulative = np.concatenate(([0.0], np.cumsum(chain.path_lengths)))
-            b[..., idx] = T[..., None] * cumulative / (EA * np.asarray(chain.radii))
+        EA = self.params.mechanics.tendon_EA
+        for chain in self.params.chains:
+            idx = list(chain.spec.q_index)
+            T = self.params.mechanics.spring_k * (q[..., idx] @ np.asarray(chain.radii))
+            b[..., idx] = T[..., None] * cf.elastic_lever(chain.radii, chain.path_lengths) / EA
         return b
 
     # -- workspace -------------------------------------------------------------
@@ -179,6 +224,11 @@ class Hand:
         q_lo = self.forward(self.u_min, compensated)
         q_hi = self.forward(self.u_max, compensated)
         return np.minimum(q_lo, q_hi), np.maximum(q_lo, q_hi)
+
+
+def _projection(P: np.ndarray) -> np.ndarray:
+    """(15, 6): least-squares projection onto each digit's curve, s_k = c_k . q / (c_k . c_k)."""
+    return (P / np.sum(P ** 2, axis=1, keepdims=True)).T.copy()
 
 
 def _as_batch(x, n: int, name: str) -> np.ndarray:

@@ -13,7 +13,8 @@ except ModuleNotFoundError:  # Python < 3.11
 
 from ..atomic import write_atomic
 from .errors import ParamError
-from .schema import HandParams, _plain, parse
+from ..canon import plain
+from .schema import HandParams, parse
 
 #: the default hand shipped with the package's source tree
 DEFAULT_PARAMS = Path(__file__).resolve().parents[2] / "params" / "phantom.toml"
@@ -40,7 +41,7 @@ def load_params(path: str | os.PathLike | None = None) -> HandParams:
 def dumps(document: Mapping[str, Any]) -> str:
     import tomli_w
 
-    return tomli_w.dumps(_plain(document))
+    return tomli_w.dumps(plain(document))
 
 
 def dump_params(document: Mapping[str, Any], path: str | os.PathLike, header: str = "") -> None:

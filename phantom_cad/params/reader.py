@@ -14,7 +14,7 @@ from .errors import ParamError
 _MISSING = object()
 
 
-class Table:
+class TomlTable:
     def __init__(self, data: Any, path: str, source: str | None):
         self.path = path
         self.source = source
@@ -84,9 +84,9 @@ class Table:
             raise self.error(key, value, "low must be < high")
         return lo, hi
 
-    def table(self, key: str, default=_MISSING) -> "Table":
+    def table(self, key: str, default=_MISSING) -> "TomlTable":
         value = self._get(key, default)
-        return Table(value, self.field(key), self.source)
+        return TomlTable(value, self.field(key), self.source)
 
     def keys(self) -> list[str]:
         return list(self.data)

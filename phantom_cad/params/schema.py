@@ -8,23 +8,32 @@ must satisfy is checked in :func:`parse`, which either returns a complete
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
+from .. import canon
 from ..kinematics import closed_form as cf
+from ..kinematics import topology
 from ..kinematics.topology import FINGERS
+from ..units import DEG, G_PER_CM3, MM
 from .errors import ParamError
-from .reader import Table
+from .reader import TomlTable
 
-MM = 1e-3
-DEG = math.pi / 180.0
 SCHEMA_VERSION = 1
+
+#: checks of the ``[effects.*]`` tables, ``check(effects, source)`` raising ParamError. The effect
+#: library (phantom_cad.calibration.effects) installs its own on import; the package's
+#: ``__init__`` imports it, so every load sees it (the params layer never imports calibration).
+EFFECT_CHECKS: list[Callable[[Mapping[str, Any], str | None], None]] = []
+
+
+def register_effect_check(check: Callable[[Mapping[str, Any], str | None], None]) -> None:
+    if check not in EFFECT_CHECKS:
+        EFFECT_CHECKS.append(check)
 
 
 @dataclass(frozen=True)
@@ -48,17 +57,26 @@ class Guide:
 
 
 @dataclass(frozen=True)
-class Chain:
-    """What the model needs of one tendon-driven digit (reference joint first)."""
+class ChainParams:
+    """What the model needs of one tendon-driven digit (reference joint first), with its
+    topology entry ``spec`` (servo, q indices, joint keys)."""
 
-    digit: str
-    joints: tuple[str, ...]            # ("mcp", "pip", "dip") or ("mp", "ip")
+    spec: topology.Chain
     radii: tuple[float, ...]           # joint pulley radii R, same order
     path_lengths: tuple[float, ...]    # tendon path between consecutive joints
     limits: tuple[tuple[float, float], ...]
     guide: Guide
     servo_radius: float                # r_j
     travel: tuple[float, float]        # servo travel (rad)
+
+    @property
+    def digit(self) -> str:
+        return self.spec.digit
+
+    @property
+    def joints(self) -> tuple[str, ...]:
+        """Joint keys, reference first: ("mcp", "pip", "dip") or ("mp", "ip")."""
+        return self.spec.keys
 
     @property
     def ideal_coupling(self) -> np.ndarray:
@@ -75,7 +93,7 @@ class Finger:
     distal: float
     width: float
     thickness: float
-    chain: Chain
+    chain: ChainParams
 
 
 @dataclass(frozen=True)
@@ -85,7 +103,7 @@ class Thumb:
     distal: float
     width: float
     thickness: float
-    chain: Chain
+    chain: ChainParams
     cmc_gain: float
     cmc_limits: tuple[float, float]
     cmc_travel: tuple[float, float]
@@ -114,7 +132,9 @@ class Palm:
 
 
 @dataclass(frozen=True)
-class Servo:
+class ServoBody:
+    """The servo model's body: length, width, height (m), flange span and screw."""
+
     body: tuple[float, float, float]
     flange_span: float
     screw_diameter: float
@@ -167,7 +187,7 @@ class HandParams:
     thumb: Thumb
     mechanics: Mechanics
     palm: Palm
-    servo: Servo
+    servo: ServoBody
     hardware: Hardware
     print: Print
     cad: Cad
@@ -178,42 +198,25 @@ class HandParams:
     source: str | None = None
 
     @property
-    def chains(self) -> tuple[Chain, ...]:
+    def chains(self) -> tuple[ChainParams, ...]:
         """The five tendon chains in servo order: thumb, index, middle, ring, pinky."""
-        return (self.thumb.chain,) + tuple(self.fingers[n].chain for n in FINGERS)
+        return tuple(self.digit(c.digit).chain for c in topology.CHAINS)
+
+    def digit(self, name: str):
+        """The :class:`Thumb` or the :class:`Finger` named ``name``."""
+        return self.thumb if name == "thumb" else self.fingers[name]
 
     @property
     def digest(self) -> str:
         """SHA-256 of the canonical document: same parameters, same digest."""
-        return digest(self.document)
-
-
-def digest(document: Mapping[str, Any]) -> str:
-    canon = json.dumps(_plain(document), sort_keys=True, separators=(",", ":"))
-    return hashlib.sha256(canon.encode()).hexdigest()
-
-
-def _plain(obj):
-    if isinstance(obj, Mapping):
-        return {k: _plain(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_plain(v) for v in obj]
-    return obj
-
-
-def _freeze(obj):
-    if isinstance(obj, Mapping):
-        return MappingProxyType({k: _freeze(v) for k, v in obj.items()})
-    if isinstance(obj, list):
-        return tuple(_freeze(v) for v in obj)
-    return obj
+        return canon.digest(self.document)
 
 
 # ---------------------------------------------------------------------------
 # parsing and validation
 # ---------------------------------------------------------------------------
 
-def _guide(t: Table) -> Guide:
+def _guide(t: TomlTable) -> Guide:
     g = t.table("guide")
     d1 = g.number("d1_mm", gt=0) * MM
     d2 = g.number("d2_mm", gt=0) * MM
@@ -222,7 +225,7 @@ def _guide(t: Table) -> Guide:
     return Guide(d1, d2, alpha)
 
 
-def _limits(t: Table, joints: tuple[str, ...]) -> dict[str, tuple[float, float]]:
+def _limits(t: TomlTable, joints: tuple[str, ...]) -> dict[str, tuple[float, float]]:
     lt = t.table("limits_rad")
     out = {}
     for j in joints:
@@ -234,14 +237,14 @@ def _limits(t: Table, joints: tuple[str, ...]) -> dict[str, tuple[float, float]]
     return out
 
 
-def _radii(t: Table, joints: tuple[str, ...]) -> dict[str, float]:
+def _radii(t: TomlTable, joints: tuple[str, ...]) -> dict[str, float]:
     rt = t.table("pulley_radius_mm")
     out = {j: rt.number(j, gt=0) * MM for j in joints}
     rt.done()
     return out
 
 
-def _check_chain(t: Table, chain: Chain, ref_limit_key: str) -> None:
+def _check_chain(t: TomlTable, chain: ChainParams, ref_limit_key: str) -> None:
     """Rules linking guides, servo pulley, travel and limits of one chain."""
     g = chain.guide
     ref = chain.joints[0]
@@ -278,7 +281,7 @@ def _check_chain(t: Table, chain: Chain, ref_limit_key: str) -> None:
                     f"the servo travel must map inside the workspace", t.source)
 
 
-def _check_path(t: Table, key: str, length: float, segment: float, r_a: float, r_b: float, segname: str):
+def _check_path(t: TomlTable, key: str, length: float, segment: float, r_a: float, r_b: float, segname: str):
     """A figure-eight tendon crossing between two pulleys is at least the internal tangent."""
     span_sq = segment ** 2 - (r_a + r_b) ** 2
     if span_sq <= 0:
@@ -292,22 +295,21 @@ def _check_path(t: Table, key: str, length: float, segment: float, r_a: float, r
                          f"{segname.split('.')[-1]} segment between its pulleys", t.source)
 
 
-def _fractions(t: Table, names: tuple[str, ...], hand_length: float) -> dict[str, float]:
+def _fractions(t: TomlTable, names: tuple[str, ...], hand_length: float) -> dict[str, float]:
     ft = t.table("length_fraction")
     out = {n: ft.number(n, gt=0, lt=1) * hand_length for n in names}
     ft.done()
     return out
 
 
-def _digit(t: Table, digit: str, segments: tuple[str, ...], joints: tuple[str, ...],
-           extra_limits: tuple[str, ...], hand_length: float):
+def _digit(t: TomlTable, spec: topology.Chain, extra_limits: tuple[str, ...], hand_length: float):
     """What a finger and the thumb share: segments, section, pulleys, guide, servo, limits, tendon.
 
-    ``joints`` reference joint first (mcp, pip, dip / mp, ip); the file lists them distal first.
-    The tendon path between joints k and k + 1 crosses segment ``segments[k + 1]``.
-    Returns (segment lengths, width, thickness, chain, limits).
+    ``spec`` is the digit's topology chain (joint keys reference first; the file lists them
+    distal first). Returns (segment lengths, width, thickness, chain, limits).
     """
-    seg = _fractions(t, segments, hand_length)
+    joints = spec.keys
+    seg = _fractions(t, spec.segments, hand_length)
     width = t.number("width_mm", gt=0) * MM
     thickness = t.number("thickness_mm", gt=0) * MM
     R = _radii(t, joints[::-1])
@@ -315,34 +317,31 @@ def _digit(t: Table, digit: str, segments: tuple[str, ...], joints: tuple[str, .
     r = t.number("servo_pulley_radius_mm", gt=0) * MM
     travel = tuple(v * DEG for v in t.interval("servo_travel_deg"))
     limits = _limits(t, joints[::-1] + extra_limits)
-    keys = [f"{a}_{b}" for a, b in zip(joints, joints[1:])]      # mcp_pip, pip_dip / mp_ip
     pt = t.table("path_length_mm")
-    paths = tuple(pt.number(k, gt=0) * MM for k in keys)
+    paths = tuple(pt.number(key, gt=0) * MM for key, _ in spec.spans)
     pt.done()
-    chain = Chain(digit, joints, tuple(R[j] for j in joints), paths,
-                  tuple(limits[j] for j in joints), guide, r, travel)
+    chain = ChainParams(spec, tuple(R[j] for j in joints), paths,
+                        tuple(limits[j] for j in joints), guide, r, travel)
     _check_chain(t, chain, t.field("limits_rad"))
-    for k, (key, length) in enumerate(zip(keys, paths)):
-        crossed = segments[k + 1]
+    for k, ((key, crossed), length) in enumerate(zip(spec.spans, paths)):
         _check_path(t, key, length, seg[crossed], R[joints[k]], R[joints[k + 1]], f"length_fraction.{crossed}")
     return seg, width, thickness, chain, limits
 
 
-def _finger(t: Table, name: str, hand_length: float) -> Finger:
-    seg, width, thickness, chain, _ = _digit(t, name, ("metacarpal", "proximal", "middle", "distal"),
-                                             ("mcp", "pip", "dip"), (), hand_length)
+def _finger(t: TomlTable, name: str, hand_length: float) -> Finger:
+    seg, width, thickness, chain, _ = _digit(t, topology.chain(name), (), hand_length)
     t.done()
     return Finger(name, seg["metacarpal"], seg["proximal"], seg["middle"], seg["distal"],
                   width, thickness, chain)
 
 
-def _thumb(t: Table, hand_length: float) -> Thumb:
-    seg, width, thickness, chain, limits = _digit(t, "thumb", ("metacarpal", "proximal", "distal"),
-                                                  ("mp", "ip"), ("cmc",), hand_length)
+def _thumb(t: TomlTable, hand_length: float) -> Thumb:
+    cmc = topology.JOINTS[topology.CMC_Q].key
+    seg, width, thickness, chain, limits = _digit(t, topology.chain("thumb"), (cmc,), hand_length)
     gain = t.number("cmc_gain", gt=0)
     cmc_travel = tuple(v * DEG for v in t.interval("cmc_servo_travel_deg"))
     horn = t.number("cmc_horn_radius_mm", gt=0) * MM
-    lo, hi = limits["cmc"]
+    lo, hi = limits[cmc]
     for u in cmc_travel:
         if not lo - 1e-12 <= gain * u <= hi + 1e-12:
             raise t.error("cmc_servo_travel_deg", [round(v / DEG, 6) for v in cmc_travel],
@@ -350,10 +349,10 @@ def _thumb(t: Table, hand_length: float) -> Thumb:
                           f"the CMC limits [{lo:g}, {hi:g}]: the servo travel must map inside the workspace")
     t.done()
     return Thumb(seg["metacarpal"], seg["proximal"], seg["distal"], width, thickness, chain,
-                 gain, limits["cmc"], cmc_travel, horn)
+                 gain, limits[cmc], cmc_travel, horn)
 
 
-def _cad(c: Table, fingers, thumb, palm, servo, hardware, printing) -> Cad:
+def _cad(c: TomlTable, fingers, thumb, palm, servo, hardware, printing) -> Cad:
     """[cad]: the few dimensions only the printable parts need, and the rules that make them fit."""
     cad = Cad(
         finger_base_length=c.number("finger_base_length_mm", gt=0) * MM,
@@ -444,7 +443,7 @@ def _cad(c: Table, fingers, thumb, palm, servo, hardware, printing) -> Cad:
 
 def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
     """Validate a parsed parameter document and build the frozen :class:`HandParams`."""
-    root = Table(dict(document), "", source)
+    root = TomlTable(dict(document), "", source)
     version = root.number("schema_version")
     if version != SCHEMA_VERSION:
         raise root.error("schema_version", root.data["schema_version"], f"must be {SCHEMA_VERSION}")
@@ -487,7 +486,7 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
                              "(adjacent fingers would overlap)", source)
 
     s = root.table("servo")
-    servo = Servo(tuple(v * MM for v in s.vector("body_mm", 3, gt=0)),
+    servo = ServoBody(tuple(v * MM for v in s.vector("body_mm", 3, gt=0)),
                   s.number("flange_span_mm", gt=0) * MM, s.number("screw_diameter_mm", gt=0) * MM)
     s.done()
     if servo.flange_span <= servo.body[0]:
@@ -524,7 +523,7 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
         press_fit_interference=pr.number("press_fit_interference_mm", ge=0, lt=0.5) * MM,
         magnet_clearance=pr.number("magnet_clearance_mm", ge=0, lt=1) * MM,
         stl_tolerance=pr.number("stl_tolerance_mm", gt=0, le=1) * MM,
-        density=pr.number("density_g_per_cm3", gt=0, lt=25) * 1000.0,
+        density=pr.number("density_g_per_cm3", gt=0, lt=25) * G_PER_CM3,
         infill=pr.number("infill", gt=0, le=1),
     )
     pr.done()
@@ -538,15 +537,17 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
         effect_params[key] = dict(et.data)
     effects.done()
     if effect_params:
-        # the effect library knows each effect's parameters and bounds (numpy only)
-        from ..calibration.effects import validate_effects
-
-        validate_effects(effect_params, source)
+        # the effect library knows each effect's parameters and bounds (EFFECT_CHECKS)
+        if not EFFECT_CHECKS:
+            raise ParamError("effects", ", ".join(effect_params), "no effect library is loaded to check them",
+                             source)
+        for check in EFFECT_CHECKS:
+            check(effect_params, source)
 
     root.done()
     return HandParams(
         name=name, side=side, hand_length=hand_length,
         fingers=MappingProxyType(fingers), thumb=thumb, mechanics=mechanics, palm=palm,
         servo=servo, hardware=hardware, print=printing, cad=cad,
-        effects=_freeze(effect_params), document=_freeze(dict(document)), source=source,
+        effects=canon.freeze(effect_params), document=canon.freeze(dict(document)), source=source,
     )

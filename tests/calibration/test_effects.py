@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from phantom_cad import ParamError
+from phantom_cad import ParamError, make_hand
 from phantom_cad.calibration.effects import get_effect, run_pipeline
 from phantom_cad.kinematics.model import Hand
 from phantom_cad.params import dump_params, load_params, parse
-from phantom_cad.params.schema import _plain
+from phantom_cad.canon import plain as _plain
 
 # the default index finger, read off params/phantom.toml by hand (mm, degrees)
 D1, D2, ALPHA, R_SERVO = 12.0, 10.0, math.radians(100.0), 7.0
@@ -129,7 +129,7 @@ def test_friction_known_answer(hand):
 def with_effects(effects):
     doc = _plain(load_params().document)
     doc["effects"] = effects
-    return Hand(parse(doc, "test.toml"))
+    return make_hand(parse(doc, "test.toml"))
 
 
 def test_no_effects_no_stack(hand):
