@@ -12,6 +12,8 @@ import math
 MM = 1e-3
 #: radians per degree (a value in degrees times DEG is in radians)
 DEG = math.pi / 180.0
+#: degrees per radian (a value in radians times DEG_PER_RAD is in degrees)
+DEG_PER_RAD = 180.0 / math.pi
 #: kg/m^3 per g/cm^3
 G_PER_CM3 = 1000.0
 
@@ -28,7 +30,7 @@ def m(millimetres):
 
 def deg(radians):
     """Radians -> degrees."""
-    return radians * (180.0 / math.pi)
+    return radians * DEG_PER_RAD
 
 
 def rad(degrees):

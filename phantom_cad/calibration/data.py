@@ -20,6 +20,7 @@ import numpy as np
 
 from ..atomic import write_atomic
 from ..kinematics.topology import N_JOINTS, Q_COLUMNS, U_COLUMNS
+from ..units import deg, rad
 
 ANGLE_COLUMNS = frozenset(U_COLUMNS + Q_COLUMNS)
 #: an angle beyond this in a radian file is taken for degrees
@@ -124,7 +125,7 @@ def read_table(path, *, required: Sequence[str], optional: Sequence[str] = (),
                 raise DataError(path, lineno, name, f"'{cell}' is not a finite number")
             if name in ANGLE_COLUMNS:
                 if degrees:
-                    v = math.radians(v)
+                    v = rad(v)
                 elif abs(v) > RADIAN_LIMIT:
                     raise DataError(path, lineno, name,
                                     f"{v:g} looks like degrees (angles are radians, |angle| <= 2 pi); "
@@ -243,7 +244,7 @@ def write_table(path, columns: Mapping[str, Iterable], comments: Sequence[str] =
     ``read_table(..., degrees=True)`` reads them back."""
     path = Path(path)
     names = list(columns)
-    data = [list(np.degrees(np.asarray(columns[c], dtype=float))) if degrees and c in ANGLE_COLUMNS
+    data = [list(deg(np.asarray(columns[c], dtype=float))) if degrees and c in ANGLE_COLUMNS
             else list(columns[c]) for c in names]
     n = len(data[0]) if data else 0
     if any(len(col) != n for col in data):

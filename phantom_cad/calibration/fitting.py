@@ -14,13 +14,14 @@ import contextlib
 from dataclasses import dataclass, field
 
 import numpy as np
+
 from scipy import sparse
 from scipy.optimize import least_squares
 
+from ..units import DEG_PER_RAD
 from .data import Measurements
 from .effects import JOINT_SERVO, Effect, Param, get_effect, run_pipeline
 
-RAD2DEG = 180.0 / np.pi
 
 
 def single_threaded_blas():
@@ -171,7 +172,7 @@ def effective_size(problem: Problem, residual: np.ndarray) -> float:
 def _residual_fn(model: Model, problem: Problem):
     def fun(theta):
         q = model.predict(theta, problem.u, problem.direction)
-        return (problem.meas - q[problem.mask]) * RAD2DEG
+        return (problem.meas - q[problem.mask]) * DEG_PER_RAD
     return fun
 
 

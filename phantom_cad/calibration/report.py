@@ -17,17 +17,18 @@ from pathlib import Path
 
 import numpy as np
 
+
 from ..kinematics.topology import JOINT_NAMES, Q_COLUMNS, U_COLUMNS
+from ..units import DEG_PER_RAD
 from .data import Measurements
 from .effects import JOINT_SERVO
 
-RAD2DEG = 180.0 / np.pi
 FLEX, EXTEND = "tab:red", "tab:blue"
 
 
 def metrics(m: Measurements, q_model: np.ndarray) -> dict:
     """MAE / RMS / max |residual| (degrees) per measured joint and overall."""
-    r = (m.q - q_model) * RAD2DEG
+    r = (m.q - q_model) * DEG_PER_RAD
     out = {"per_joint": {}, "overall": _summary(r[np.isfinite(r)])}
     for j, c in enumerate(Q_COLUMNS):
         x = r[:, j][np.isfinite(r[:, j])]
@@ -86,13 +87,13 @@ def _save(plt, fig, axes, path, ylabel: str, title: str, legend_size: int) -> No
 def plot_residuals(path, m: Measurements, q_model: np.ndarray, title: str) -> None:
     plt, fig, axes, panels = _panels(m, sharey=True)
     d = m.direction
-    r = (m.q - q_model) * RAD2DEG
+    r = (m.q - q_model) * DEG_PER_RAD
     for ax, j, s in panels:
         ok = np.isfinite(r[:, j])
         for sign, colour, label in ((1, FLEX, "flexing"), (-1, EXTEND, "extending"), (0, "0.5", "at rest")):
             sel = ok & (d[:, s] == sign)
             if sel.any():
-                ax.plot(m.u[sel, s] * RAD2DEG, r[sel, j], "o", ms=2.5, color=colour, label=label)
+                ax.plot(m.u[sel, s] * DEG_PER_RAD, r[sel, j], "o", ms=2.5, color=colour, label=label)
         ax.axhline(0, color="k", lw=0.6)
     _save(plt, fig, axes, path, "residual (deg)", title, legend_size=7)
 
@@ -128,9 +129,9 @@ def plot_hysteresis(path, m: Measurements, q_model: np.ndarray, q_analytic: np.n
             if not sel.any():
                 continue
             order = np.argsort(m.u[sel, s], kind="stable")
-            ax.plot(m.u[sel, s] * RAD2DEG, (m.q[sel, j] - q_analytic[sel, j]) * RAD2DEG, "o", ms=2,
+            ax.plot(m.u[sel, s] * DEG_PER_RAD, (m.q[sel, j] - q_analytic[sel, j]) * DEG_PER_RAD, "o", ms=2,
                     color=colour, alpha=0.6, label=f"measured, {label}")
-            ax.plot(m.u[sel, s][order] * RAD2DEG, (q_model[sel, j] - q_analytic[sel, j])[order] * RAD2DEG, "-",
+            ax.plot(m.u[sel, s][order] * DEG_PER_RAD, (q_model[sel, j] - q_analytic[sel, j])[order] * DEG_PER_RAD, "-",
                     lw=1, color=colour, label=f"model, {label}")
     _save(plt, fig, axes, path, "q - q_analytic (deg)", title, legend_size=6)
 
