@@ -14,6 +14,8 @@ MM = 1e-3
 DEG = math.pi / 180.0
 #: degrees per radian (a value in radians times DEG_PER_RAD is in degrees)
 DEG_PER_RAD = 180.0 / math.pi
+#: cm^3 per mm^3
+CM3_PER_MM3 = 1e-3
 #: kg/m^3 per g/cm^3
 G_PER_CM3 = 1000.0
 
@@ -36,3 +38,8 @@ def deg(radians):
 def rad(degrees):
     """Degrees -> radians."""
     return degrees * DEG
+
+
+def cm3(mm3):
+    """Cubic millimetres -> cubic centimetres."""
+    return mm3 * CM3_PER_MM3

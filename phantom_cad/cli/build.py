@@ -1,4 +1,5 @@
-"""The ``phantom-cad build`` command (registered by phantom_cad/cli.py).
+"""The ``phantom-cad build`` command (registered by phantom_cad/cli/__init__.py) over
+:func:`phantom_cad.export.pipeline.build_hand`.
 
 Importing this module does not import build123d/OCP: the build imports them in its
 worker processes.
@@ -35,7 +36,7 @@ def build(
     Parts are cached by their inputs: a rebuild with unchanged parameters takes about a second, changing one finger rebuilds only its parts. Every part is checked (one valid solid, STEP re-import, watertight manifold STL, no unplanned interference, slicing) before anything is written. See docs/exports.md.
     """
     from ..params import ParamError
-    from ..cad.build import BuildError, build_hand
+    from ..export.pipeline import BuildError, build_hand
 
     def log(msg: str) -> None:
         if not quiet:
@@ -59,7 +60,7 @@ def build(
                        f"(PrusaSlicer defaults, infill from params)")
 
 
-def main() -> None:  # pragma: no cover - convenience entry point: python -m phantom_cad.cad.cli
+def main() -> None:  # pragma: no cover - convenience entry point: python -m phantom_cad.cli.build
     typer.run(build)
 
 

@@ -24,7 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..cad.cache import cad_versions, code_digest, jsonable
+from .. import units
+from ..canon import jsonable
+from .cache import cad_versions, code_digest, package_version
 from .step_stl import ANGULAR_TOLERANCE_RAD, step_timestamp
 
 MANIFEST_FORMAT = "phantom_cad.exports/1"
@@ -40,8 +42,8 @@ def file_sha256(path: Path) -> str:
 
 def mass_g(volume_mm3: float, printing) -> float:
     """Mass estimate (g) of a part printed with ``params.print`` (density, infill):
-    mm^3 -> m^3, times kg/m^3, times infill, -> g."""
-    return volume_mm3 * 1e-9 * printing.density * printing.infill * 1e3
+    cm^3 times g/cm^3 times infill."""
+    return units.cm3(volume_mm3) * (printing.density / units.G_PER_CM3) * printing.infill
 
 
 def _r(x: float, nd: int = 6) -> float:
@@ -50,8 +52,6 @@ def _r(x: float, nd: int = 6) -> float:
 
 def build_manifest(*, stage: Path, params, params_path: Path, names, keys, metas, poses, estimates,
                    slicer_info, interference, contacts, bom) -> dict:
-    from .. import __version__
-
     printing = params.print
     parts = []
     lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
@@ -126,7 +126,7 @@ def build_manifest(*, stage: Path, params, params_path: Path, names, keys, metas
             "filament_g": _r(sum(e["filament_g"] for e in est), 3),
             "filament_mm": _r(sum(e["filament_mm"] for e in est), 3),
         })
-    versions = {"phantom_cad": __version__, "python": platform.python_version(), **cad_versions(),
+    versions = {"phantom_cad": package_version("phantom_cad"), "python": platform.python_version(), **cad_versions(),
                 "prusa-slicer": slicer_info.get("version")}
     return {
         "format": MANIFEST_FORMAT,
@@ -137,10 +137,10 @@ def build_manifest(*, stage: Path, params, params_path: Path, names, keys, metas
         "code_digest": code_digest(),
         "settings": {
             "units": "mm",
-            "stl_tolerance_mm": _r(printing.stl_tolerance * 1000.0, 9),
+            "stl_tolerance_mm": _r(units.mm(printing.stl_tolerance), 9),
             "angular_tolerance_rad": ANGULAR_TOLERANCE_RAD,
             "stl_format": "binary, fixed header, print orientation resting on z = 0",
-            "density_g_per_cm3": _r(printing.density / 1000.0, 9),
+            "density_g_per_cm3": _r(printing.density / units.G_PER_CM3, 9),
             "infill": printing.infill,
             "mass_model": "mass_g = volume x density x infill",
             "step_timestamp": step_timestamp(),

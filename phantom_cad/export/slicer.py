@@ -22,6 +22,8 @@ import tempfile
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+from .. import units
+
 EXECUTABLE = "prusa-slicer"
 
 
@@ -58,7 +60,7 @@ def slicer_version(exe: str | None = None) -> str | None:
 
 def config_ini(print_params) -> str:
     """The PrusaSlicer config derived from ``params.print`` (a phantom_cad Print)."""
-    density_g_cm3 = print_params.density / 1000.0   # kg/m^3 -> g/cm^3
+    density_g_cm3 = print_params.density / units.G_PER_CM3   # kg/m^3 -> g/cm^3
     return (
         "# PrusaSlicer config written by phantom_cad from params [print]; everything else\n"
         "# is PrusaSlicer's built-in default.\n"

@@ -1,4 +1,5 @@
-"""STEP, STL and BREP writers with deterministic output, and the mesh checks.
+"""STEP, STL and BREP writers with deterministic output, and the mesh checks (the solid's
+own validity is checked once, by ``phantom_cad.cad.verify``).
 
 Everything that touches OCP/build123d imports it inside the function; the pure-mesh
 helpers (binary STL writer/reader, mesh checks) use numpy, trimesh and manifold3d only.
@@ -22,16 +23,10 @@ from datetime import datetime, timezone
 
 import numpy as np
 
+from ..cad.verify import CheckError  # noqa: F401  (raised by check_mesh; the one check error)
+
 #: angular deflection of the tessellation (rad); the linear one is params.print.stl_tolerance
 ANGULAR_TOLERANCE_RAD = 0.1
-
-
-class CheckError(RuntimeError):
-    """A built part fails one of the export checks (solid, mesh, STEP round trip)."""
-
-    def __init__(self, part: str, check: str, detail: str):
-        self.part, self.check, self.detail = part, check, detail
-        super().__init__(f"part '{part}': check '{check}' failed: {detail}")
 
 
 def step_timestamp() -> str:
@@ -43,18 +38,6 @@ def step_timestamp() -> str:
 
 # ---------------------------------------------------------------------------
 # OCP side (lazy imports)
-
-def check_solid(name: str, shape) -> None:
-    """One valid solid, positive volume."""
-    solids = shape.solids()
-    if len(solids) != 1:
-        raise CheckError(name, "one solid", f"the part has {len(solids)} solids")
-    valid = shape.is_valid() if callable(shape.is_valid) else shape.is_valid
-    if not valid:
-        raise CheckError(name, "valid solid", "BRepCheck_Analyzer reports an invalid shape")
-    if not shape.volume > 0:
-        raise CheckError(name, "valid solid", f"volume {shape.volume!r} mm^3 is not positive")
-
 
 def step_bytes(shape, label: str | None = None, color=None) -> bytes:
     """STEP AP214 of one shape (or assembly compound) with a fixed header timestamp."""

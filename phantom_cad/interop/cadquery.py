@@ -11,15 +11,15 @@ In CQ-editor (or any cadquery script)::
     # assy.export("hand.step")  /  assy.export("hand.glb")
 
     import numpy as np
-    from phantom_cad.kinematics.topology import joint_index
-    q = np.zeros(15)
-    for j in ("mcp", "pip", "dip"):
-        q[joint_index("index", j)] = 0.6          # flex the index (rad)
+    from phantom_cad.kinematics.topology import N_JOINTS, chain
+    q = np.zeros(N_JOINTS)
+    q[list(chain("index").q_index)] = 0.6           # flex the index (rad)
     show_object(hand_assembly(hand, q, name="index_flexed"))
 
-Parts are build123d solids (phantom_cad.cad.assembly.build_part) converted through their
-OCP ``TopoDS_Shape`` (``cadquery.Shape.cast(part.shape.wrapped)``), named like the
-exported files, coloured, and located with ``assembly.pose_transforms(params, q)``.
+Parts are build123d solids (``build_part`` of the assembly interface,
+phantom_cad.export.interface: phantom_cad.cad.assembly) converted through their OCP
+``TopoDS_Shape`` (``cadquery.Shape.cast(part.shape.wrapped)``), named like the exported
+files, coloured, and located with ``assembly.pose_transforms(params, q)``.
 """
 
 from __future__ import annotations
@@ -42,14 +42,14 @@ def location(T) -> "cadquery.Location":
 
 def hand_assembly(hand, q=None, *, name: str | None = None, parts: list[str] | None = None):
     """A ``cadquery.Assembly`` of every part of ``hand`` (a phantom_cad ``Hand``, or
-    ``HandParams``) at joint angles ``q`` (15,) rad (None = rest pose).
+    ``HandParams``) at joint angles ``q`` (topology.N_JOINTS,) rad (None = rest pose).
 
     ``parts`` restricts the assembly to some part names (default: all)."""
     import cadquery as cq
 
-    from ..cad.build import _assembly
+    from ..export.interface import assembly
 
-    asm = _assembly()
+    asm = assembly()
     params = getattr(hand, "params", hand)
     names = list(asm.part_names(params))
     if parts is not None:

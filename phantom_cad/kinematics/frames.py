@@ -1,7 +1,8 @@
 """Link frames of the hand: where every part sits, at rest and posed. numpy only.
 
 Units: metres (SI, like the parameter object). The CAD layer converts to millimetres once
-(:func:`to_mm`). Conventions (docs/frames.md):
+(:func:`to_mm`, through :mod:`phantom_cad.units`). Every link, joint and servo comes from
+:mod:`phantom_cad.kinematics.topology`. Conventions (docs/frames.md):
 
 * Palm (hand) frame, right hand: origin on the index MCP axis, centre of the index finger;
   x toward the ulnar side (index -> pinky), y distal (wrist -> fingers), z = x cross y,
@@ -33,7 +34,8 @@ import math
 
 import numpy as np
 
-from .topology import CMC_Q, FINGERS, N_JOINTS, joint_index
+from .. import units
+from .topology import CMC_Q, FINGERS, JOINTS, LINKS, N_JOINTS, SERVOS, joint, link, servo_joints
 
 MIRROR = np.diag([-1.0, 1.0, 1.0, 1.0])
 
@@ -71,7 +73,7 @@ def flex(q: float) -> np.ndarray:
 def to_mm(T: np.ndarray) -> np.ndarray:
     """The same rigid transform with its translation in millimetres."""
     out = np.array(T, float)
-    out[:3, 3] *= 1000.0
+    out[:3, 3] = units.mm(out[:3, 3])
     return out
 
 
@@ -148,14 +150,26 @@ def servo_row_depths(params) -> tuple[float, float]:
 
 
 def servo_column(params, servo: int) -> int:
-    """Column of servo (0-based): servo 0 (thumb flexion) uses a virtual column -1 radial of
-    the index; servos 1..4 their finger's column. Even columns use row A, odd ones row B."""
-    return servo - 1
+    """Palm column of a tendon servo (0-based index): its finger's column on the arc; the thumb
+    flexion servo uses a virtual column -1 radial of the index. Even columns use row A, odd
+    ones row B."""
+    digit = SERVOS[servo].digit
+    return FINGERS.index(digit) if digit in FINGERS else -1
+
+
+def servo_radius(params, servo: int) -> float:
+    """Radius (m) of a servo's output: the chain's pulley radius r_j for a tendon servo, the
+    CMC hub radius for the direct drive."""
+    s = SERVOS[servo]
+    if s.drive == "direct":
+        return params.thumb.cmc_horn_radius
+    return params.digit(s.digit).chain.servo_radius
 
 
 def T_palm_servo(params, servo: int) -> np.ndarray:
-    """Servo output frame (see module doc) of servo 0..4 (tendon servos) and 5 (thumb CMC)."""
-    if servo == 5:
+    """Servo output frame (see module doc) of servo ``servo`` (0-based index, topology.SERVOS):
+    a tendon servo in the palm's servo bay, or the direct-drive CMC servo under the CMC base."""
+    if SERVOS[servo].drive == "direct":
         th = params.thumb
         pw = params.cad.servo_pulley_width
         c = params.print.hole_clearance
@@ -164,7 +178,7 @@ def T_palm_servo(params, servo: int) -> np.ndarray:
     col = servo_column(params, servo)
     d_a, d_b = servo_row_depths(params)
     depth = d_a if col % 2 == 0 else d_b
-    r = params.chains[servo].servo_radius
+    r = servo_radius(params, servo)
     # servos lie along the palm's y axis, in two staggered rows, each pulley straight behind
     # its finger's socket centre (the virtual column -1 of the thumb-flexion servo one
     # finger_pitch radial of the index socket)
@@ -190,91 +204,80 @@ def rest_transforms(params) -> dict[str, np.ndarray]:
     return joint_transforms(params, np.zeros(N_JOINTS))
 
 
-def _q_of(q, digit: str, joint: str) -> float:
-    return float(q[joint_index(digit, joint)])
+def _segment_length(params, ln) -> float:
+    """Length (m) of link ``ln`` from its proximal joint to its distal one (0 for a finger base,
+    whose origin is its distal joint)."""
+    key = ln.length_key
+    return 0.0 if key is None else getattr(params.digit(ln.digit), key)
+
+
+def _joint_transform(params, ln, q) -> np.ndarray:
+    """T_parent_child of link ``ln`` at joint angles q: a fixed mount on the palm (finger base,
+    servo pulley), the CMC (about the CMC base's z) or a flexion joint behind the parent's
+    segment."""
+    if ln.parent_joint is None:
+        if ln.segment == "servo_pulley":
+            T = T_palm_servo(params, ln.servo)
+            if SERVOS[ln.servo].drive == "direct":   # the hub turns with its joint about its z
+                (qi,) = servo_joints(ln.servo)
+                T = T @ rot_z(float(q[qi]))
+            return T
+        return T_palm_finger_base(params, ln.digit)
+    j = joint(ln.parent_joint)
+    if j.index == CMC_Q:
+        return T_palm_thumb_cmc_base(params, float(q[j.index]))
+    L = _segment_length(params, link(ln.parent))
+    return flex(float(q[j.index])) if L == 0.0 else trans(0, L, 0) @ flex(float(q[j.index]))
 
 
 def joint_transforms(params, q) -> dict[str, np.ndarray]:
-    """T_parent_child for every joint at joint angles q (15,), right hand, metres."""
+    """T_parent_child (named ``T_<parent>_<child>``) for every link but the palm at joint angles
+    q (15,), right hand, metres."""
     q = np.zeros(N_JOINTS) if q is None else np.asarray(q, float)
     if q.shape != (N_JOINTS,):
         raise ValueError(f"q must have shape ({N_JOINTS},), got {q.shape}")
-    out = {}
-    for f in FINGERS:
-        fp = params.fingers[f]
-        out[f"T_palm_{f}_base"] = T_palm_finger_base(params, f)
-        out[f"T_{f}_base_{f}_proximal"] = flex(_q_of(q, f, "mcp"))
-        out[f"T_{f}_proximal_{f}_middle"] = trans(0, fp.proximal, 0) @ flex(_q_of(q, f, "pip"))
-        out[f"T_{f}_middle_{f}_distal"] = trans(0, fp.middle, 0) @ flex(_q_of(q, f, "dip"))
-    th = params.thumb
-    out["T_palm_thumb_cmc_base"] = T_palm_thumb_cmc_base(params, float(q[CMC_Q]))
-    out["T_thumb_cmc_base_thumb_proximal"] = trans(0, th.metacarpal, 0) @ flex(_q_of(q, "thumb", "mp"))
-    out["T_thumb_proximal_thumb_distal"] = trans(0, th.proximal, 0) @ flex(_q_of(q, "thumb", "ip"))
-    for k in range(6):
-        T = T_palm_servo(params, k)
-        if k == 5:   # direct drive: the CMC hub turns with q15 about the CMC axis (its z)
-            T = T @ rot_z(float(q[CMC_Q]))
-        out[f"T_palm_servo_pulley_{k + 1}"] = T
-    return out
+    return {_transform_name(ln): _joint_transform(params, ln, q) for ln in LINKS if ln.parent is not None}
 
 
-#: link -> (parent link, joint transform name); palm is the root
-LINK_PARENTS: dict[str, tuple[str, str]] = {}
-for _f in FINGERS:
-    LINK_PARENTS[f"{_f}_base"] = ("palm", f"T_palm_{_f}_base")
-    LINK_PARENTS[f"{_f}_proximal"] = (f"{_f}_base", f"T_{_f}_base_{_f}_proximal")
-    LINK_PARENTS[f"{_f}_middle"] = (f"{_f}_proximal", f"T_{_f}_proximal_{_f}_middle")
-    LINK_PARENTS[f"{_f}_distal"] = (f"{_f}_middle", f"T_{_f}_middle_{_f}_distal")
-LINK_PARENTS["thumb_cmc_base"] = ("palm", "T_palm_thumb_cmc_base")
-LINK_PARENTS["thumb_proximal"] = ("thumb_cmc_base", "T_thumb_cmc_base_thumb_proximal")
-LINK_PARENTS["thumb_distal"] = ("thumb_proximal", "T_thumb_proximal_thumb_distal")
-for _k in range(6):
-    LINK_PARENTS[f"servo_pulley_{_k + 1}"] = ("palm", f"T_palm_servo_pulley_{_k + 1}")
+def _transform_name(ln) -> str:
+    return f"T_{ln.parent}_{ln.name}"
 
-LINKS = ("palm",) + tuple(LINK_PARENTS)
+
+#: link -> (parent link, joint transform name), from the topology; palm is the root
+LINK_PARENTS: dict[str, tuple[str, str]] = {ln.name: (ln.parent, _transform_name(ln))
+                                            for ln in LINKS if ln.parent is not None}
 
 
 def link_transforms(params, q=None) -> dict[str, np.ndarray]:
     """T_palm_link (metres) of every link at joint angles q (None = rest), mirrored for a left hand."""
     joints = joint_transforms(params, q)
     out = {"palm": np.eye(4)}
-    for link in LINKS[1:]:
-        parent, jname = LINK_PARENTS[link]
-        out[link] = out[parent] @ joints[jname]
+    for name, (parent, jname) in LINK_PARENTS.items():   # topology order: parents first
+        out[name] = out[parent] @ joints[jname]
     if params.side == "left":
         out = {k: mirror(v) for k, v in out.items()}
     return out
 
 
 def joints(params) -> list[dict]:
-    """The 15 actuated joints for a URDF/MJCF writer, in q order (Table I): name
-    (``index_dip``, ...), parent and child link, ``origin`` = T_parent_child at rest (metres,
-    mirrored for a left hand), ``axis`` (unit vector in the child frame; q turns the child
-    about it by +q), ``q_index`` and ``limits`` (rad) from the parameters."""
-    from .topology import JOINT_NAMES
-
+    """The 15 actuated joints, in q order (Table I), as a robot-description writer would use
+    them: name (``index_dip``, ...), parent and child link, ``origin`` = T_parent_child at rest
+    (metres, mirrored for a left hand), ``axis`` (unit vector in the child frame; q turns the
+    child about it by +q), ``q_index`` and ``limits`` (rad) from the parameters."""
     rest = joint_transforms(params, None)
     left = params.side == "left"
     out = []
-    for i, name in enumerate(JOINT_NAMES):
-        digit, joint = name.split("_")
-        if digit == "thumb":
-            chain = {"cmc": ("palm", "thumb_cmc_base"), "mp": ("thumb_cmc_base", "thumb_proximal"),
-                     "ip": ("thumb_proximal", "thumb_distal")}[joint]
-            limits = params.thumb.cmc_limits if joint == "cmc" else dict(
-                zip(params.thumb.chain.joints, params.thumb.chain.limits))[joint]
-        else:
-            chain = {"mcp": (f"{digit}_base", f"{digit}_proximal"), "pip": (f"{digit}_proximal", f"{digit}_middle"),
-                     "dip": (f"{digit}_middle", f"{digit}_distal")}[joint]
-            limits = dict(zip(params.fingers[digit].chain.joints, params.fingers[digit].chain.limits))[joint]
-        parent, child = chain
-        T = rest[f"T_{parent}_{child}"]
-        if joint == "cmc":
+    for j in JOINTS:
+        T = rest[_transform_name(link(j.child))]
+        digit = params.digit(j.digit)
+        if j.index == CMC_Q:
             # the CMC's own rotation Rz(q15) is the joint, not part of its origin
             axis = np.array([0.0, 0.0, -1.0 if left else 1.0])
+            limits = params.thumb.cmc_limits
         else:
             axis = np.array([-1.0, 0.0, 0.0])
-        out.append({"name": name, "parent": parent, "child": child,
-                    "origin": mirror(T) if left else T, "axis": axis, "q_index": i,
+            limits = dict(zip(digit.chain.joints, digit.chain.limits))[j.key]
+        out.append({"name": j.name, "parent": j.parent, "child": j.child,
+                    "origin": mirror(T) if left else T, "axis": axis, "q_index": j.index,
                     "limits": tuple(float(v) for v in limits)})
     return out

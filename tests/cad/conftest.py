@@ -14,7 +14,7 @@ import pytest
 
 from phantom_cad import load_params
 from phantom_cad.params import parse
-from phantom_cad.params.schema import _plain
+from phantom_cad.canon import plain as _plain
 
 
 @pytest.fixture(scope="session")
@@ -44,5 +44,5 @@ def built(params):
 
 @pytest.fixture(scope="session")
 def placed(built):
-    from phantom_cad import check
+    from phantom_cad.cad import measure as check
     return {name: check.placed(b.shape, b.T_hand_link) for name, b in built.items()}

@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 
-from phantom_cad import check
+from phantom_cad.cad import measure as check
 from phantom_cad.cad import assembly
 from phantom_cad.kinematics.topology import joint_index
 

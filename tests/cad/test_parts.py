@@ -13,7 +13,8 @@ import math
 import numpy as np
 import pytest
 
-from phantom_cad import check
+from phantom_cad.cad import measure as check
+from phantom_cad.cad.verify import verify_part
 from phantom_cad.cad import assembly
 from phantom_cad.kinematics.topology import FINGERS
 
@@ -418,7 +419,7 @@ def test_left_hand_is_the_mirror_image(built, variant, name):
     right = built[name]
     rl, rr = check.solid_report(left.shape), check.solid_report(right.shape)
     assert rl["valid"] and rl["n_solids"] == 1
-    assert check.verify_part(p, name, left.shape) == []
+    assert verify_part(p, name, left.shape) == []
     assert rl["volume"] == pytest.approx(rr["volume"], rel=1e-6)
     assert np.allclose(rl["bbox_min"], [-rr["bbox_max"][0], rr["bbox_min"][1], rr["bbox_min"][2]], atol=1e-6)
     assert np.allclose(rl["bbox_max"], [-rr["bbox_min"][0], rr["bbox_max"][1], rr["bbox_max"][2]], atol=1e-6)
@@ -470,25 +471,25 @@ def test_palm_tendon_channel_joins_base_and_pulley(built, document, k, finger):
 
 
 # ---------------------------------------------------------------------------
-# check.verify_part: what the build uses to refuse a broken part
+# verify_part: what the build uses to refuse a broken part
 # ---------------------------------------------------------------------------
 
 def test_verify_part_accepts_every_default_part(built, params):
-    assert {n: check.verify_part(params, n, b.shape) for n, b in built.items()} == {n: [] for n in built}
+    assert {n: verify_part(params, n, b.shape) for n, b in built.items()} == {n: [] for n in built}
 
 
 def test_verify_part_reports_a_wrong_groove(variant, params):
     p = variant(lambda d: d["fingers"]["middle"]["pulley_radius_mm"].__setitem__("pip", 4.6))
     shape = assembly.build_part(p, "middle_middle").shape
-    assert check.verify_part(params, "middle_middle", shape) == [
+    assert verify_part(params, "middle_middle", shape) == [
         "middle_middle: pip groove radius measures 4.6000, expected 4.0000 mm"]
 
 
 def test_verify_part_reports_several_solids(params):
     import build123d as bd
     two = bd.Compound([bd.Box(1, 1, 1), bd.Pos(5, 0, 0) * bd.Box(1, 1, 1)])
-    assert check.verify_part(params, "servo_pulley_2", two) == ["servo_pulley_2: 2 solids, expected 1"]
-    assert check.verify_part(params, "servo_pulley_2", bd.Box(4, 4, 4)) == [
+    assert verify_part(params, "servo_pulley_2", two) == ["servo_pulley_2: 2 solids, expected 1"]
+    assert verify_part(params, "servo_pulley_2", bd.Box(4, 4, 4)) == [
         "servo_pulley_2: groove radius measures nothing, expected 7.0000 mm"]
 
 

@@ -1,9 +1,10 @@
 """Fixtures of the export tests.
 
-* ``standin``: phantom_cad.cad.assembly replaced by tests/export/standin_assembly.py
+* ``standin``: the assembly interface (phantom_cad.export.interface.ASSEMBLY_MODULE, normally
+  phantom_cad.cad.assembly) replaced by tests/export/standin_assembly.py
   (three parts of known geometry; faults can be injected) for the pipeline tests.
 * ``standin_build``: the stand-in hand built once per session into a tmp dir.
-* ``hand_build``: the real default hand (helper A's parts) built once per session.
+* ``hand_build``: the real default hand (phantom_cad.cad's parts) built once per session.
 """
 
 from __future__ import annotations
@@ -23,9 +24,9 @@ import standin_assembly  # noqa: E402
 @pytest.fixture
 def standin(monkeypatch):
     """The stand-in assembly module, installed for one test."""
-    from phantom_cad.cad import build
+    from phantom_cad.export import interface
 
-    monkeypatch.setattr(build, "ASSEMBLY_MODULE", "standin_assembly")
+    monkeypatch.setattr(interface, "ASSEMBLY_MODULE", "standin_assembly")
     standin_assembly.FAULT.clear()
     standin_assembly.OVERLAP.clear()
     yield standin_assembly
@@ -36,12 +37,12 @@ def standin(monkeypatch):
 @pytest.fixture(scope="session")
 def standin_build(tmp_path_factory):
     """(BuildResult, cache dir) of the stand-in hand, built once."""
-    from phantom_cad.cad.build import build_hand
+    from phantom_cad.export.pipeline import build_hand
 
     mp = pytest.MonkeyPatch()
-    from phantom_cad.cad import build
+    from phantom_cad.export import interface
 
-    mp.setattr(build, "ASSEMBLY_MODULE", "standin_assembly")
+    mp.setattr(interface, "ASSEMBLY_MODULE", "standin_assembly")
     try:
         root = tmp_path_factory.mktemp("standin")
         result = build_hand(None, root / "exports" / "phantom", cache_dir=root / "cache", jobs=2,
@@ -63,8 +64,8 @@ def real_assembly_available() -> bool:
 def hand_build(tmp_path_factory):
     """The default hand with the real parts, built once per session (jobs = 2)."""
     if not real_assembly_available():
-        pytest.skip("phantom_cad.cad.assembly (helper A's parts) is not there yet")
-    from phantom_cad.cad.build import build_hand
+        pytest.skip("phantom_cad.cad.assembly (the real parts) is not there yet")
+    from phantom_cad.export.pipeline import build_hand
 
     root = tmp_path_factory.mktemp("hand")
     result = build_hand(None, root / "exports" / "phantom", cache_dir=root / "cache", jobs=2,

@@ -1,9 +1,11 @@
-"""A small stand-in for phantom_cad.cad.assembly (helper A's module), used by the
-export tests that need parts with known geometry or deliberately broken parts.
+"""A small stand-in for phantom_cad.cad.assembly, used by the export tests that need parts
+with known geometry or deliberately broken parts.
 
 Three parts sized from the parameters: a palm plate with a through hole, an index
-proximal phalanx (filleted bar), a servo pulley (cylinder). Same interface as
-cad_interface.md. Known volumes are computed here from textbook formulas.
+proximal phalanx (filleted bar), a servo pulley (cylinder). Same assembly interface as
+phantom_cad.cad.assembly (part_names, part_inputs, build_part, pose_transforms,
+designed_contacts, bill_of_materials; see phantom_cad.export.interface), without the
+optional verify_part. Known volumes are computed here from textbook formulas.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The default hand with helper A's real parts, built once per session (with slicing).
+"""The default hand with the real parts (phantom_cad.cad), built once per session (with slicing).
 
 Everything is re-measured from the exported files with independent readers: trimesh and
 manifold3d for the STLs, build123d's STEP reader, PrusaSlicer's G-code comments.
@@ -39,7 +39,7 @@ def test_every_part_exported(hand):
             assert (result.out_dir / rel).is_file(), rel
             assert rel in man["files"]
     assert (result.out_dir / "renders" / "hand_assembly.png").stat().st_size > 20_000
-    # helper A's measured verification ran on every part and passed
+    # the measured verification (phantom_cad.cad.verify) ran on every part and passed
     assert {p["checks"]["verify_part"] for p in man["parts"]} == {"ok"}
     assert (result.out_dir / "bom.csv").read_text().startswith("item,spec,quantity,used_in")
 
@@ -74,7 +74,7 @@ def test_no_unplanned_intersection_at_rest(hand):
     """Recomputed from the STL files: undo the print transform, place with T_hand_link,
     intersect every pair with manifold3d."""
     from phantom_cad.cad import assembly
-    from phantom_cad.cad.build import INTERFERENCE_TOL_MM3
+    from phantom_cad.export.pipeline import INTERFERENCE_TOL_MM3
 
     result, man = hand
     allowed = {frozenset(c[:2]) for c in assembly.designed_contacts(load_params())}
@@ -127,11 +127,11 @@ def test_mass_estimates(hand):
 
 
 def test_verify_part_problem_refuses_the_part(hand_build, monkeypatch, tmp_path):
-    """A problem reported by phantom_cad.check.verify_part fails the part with its text."""
-    from phantom_cad import check
-    from phantom_cad.cad.build import _part_worker
+    """A problem reported by phantom_cad.cad.verify.verify_part fails the part with its text."""
+    from phantom_cad.cad import verify as check
+    from phantom_cad.canon import plain as _plain
+    from phantom_cad.export.pool import part_worker as _part_worker
     from phantom_cad.params import DEFAULT_PARAMS, load_document
-    from phantom_cad.params.schema import _plain
 
     monkeypatch.setattr(check, "verify_part",
                         lambda params, name, shape: [f"{name}: groove radius measures 6.0000, expected 7.0000 mm"])

@@ -63,7 +63,7 @@ def test_layout_and_manifest_checksums(standin_build):
     assert man["params"]["digest"] == load_params().digest
     assert man["params"]["file_sha256"] == sha(DEFAULT_PARAMS)
     assert man["hand"] == {"name": "phantom", "side": "right", "parts": names}
-    # helper A's verify_part only knows the real parts
+    # the measured verification (verify_part) belongs to the real parts; the stand-in has none
     assert {p["checks"]["verify_part"] for p in man["parts"]} == {"skipped"}
     # no staging directory left beside the export
     assert [p.name for p in out.parent.iterdir()] == ["phantom"]
@@ -162,7 +162,7 @@ def test_bom_csv(standin_build):
 
 
 def test_deterministic_fresh_cache(standin_build, standin, tmp_path):
-    from phantom_cad.cad.build import build_hand
+    from phantom_cad.export.pipeline import build_hand
 
     result, _ = standin_build
     again = build_hand(None, tmp_path / "out", cache_dir=tmp_path / "cache", jobs=2, slice=None)
@@ -175,7 +175,7 @@ def test_deterministic_fresh_cache(standin_build, standin, tmp_path):
 # cache
 
 def test_warm_rebuild_uses_cache(standin_build, standin, tmp_path):
-    from phantom_cad.cad.build import build_hand
+    from phantom_cad.export.pipeline import build_hand
 
     result, cache = standin_build
     again = build_hand(None, tmp_path / "out", cache_dir=cache, jobs=2, slice=None)
@@ -184,7 +184,7 @@ def test_warm_rebuild_uses_cache(standin_build, standin, tmp_path):
 
 
 def test_one_finger_change_rebuilds_only_its_parts(standin_build, standin, tmp_path):
-    from phantom_cad.cad.build import build_hand
+    from phantom_cad.export.pipeline import build_hand
 
     _, cache = standin_build
     path = write_params(tmp_path, lambda d: d["fingers"]["index"].__setitem__("width_mm", 17.0))
@@ -209,7 +209,7 @@ def previous_export(standin_build, tmp_path):
 
 
 def _fails(tmp_path, out):
-    from phantom_cad.cad.build import BuildError, build_hand
+    from phantom_cad.export.pipeline import BuildError, build_hand
 
     with pytest.raises(BuildError) as info:
         build_hand(None, out, cache_dir=tmp_path / "fresh-cache", jobs=1)
@@ -249,7 +249,7 @@ def test_two_solids_refused(standin, previous_export, tmp_path):
 
 
 def test_interference_refused(standin, previous_export, tmp_path):
-    from phantom_cad.cad.build import BuildError, build_hand
+    from phantom_cad.export.pipeline import BuildError, build_hand
 
     out, before = previous_export
     standin.OVERLAP["depth"] = 3.0     # the pulley sinks 2 mm into the palm plate
@@ -267,7 +267,7 @@ def test_interference_refused(standin, previous_export, tmp_path):
 
 
 def test_bad_side_is_a_param_error(standin, tmp_path):
-    from phantom_cad.cad.build import build_hand
+    from phantom_cad.export.pipeline import build_hand
 
     with pytest.raises(ParamError) as info:
         build_hand(None, tmp_path / "out", side="middle", cache_dir=tmp_path / "c")
@@ -277,7 +277,7 @@ def test_bad_side_is_a_param_error(standin, tmp_path):
 
 
 def test_default_out_dir_names():
-    from phantom_cad.cad.build import _default_out, _load
+    from phantom_cad.export.pipeline import _default_out, _load
 
     _, _, params, file_side = _load(None, None)
     assert _default_out(params, None, file_side) == Path("exports") / "phantom"
@@ -293,7 +293,7 @@ def test_default_out_dir_names():
 def test_cli_import_does_not_import_ocp():
     import subprocess
 
-    code = ("import sys, phantom_cad.cli.build, phantom_cad.cad.build, phantom_cad.export.manifest; "
+    code = ("import sys, phantom_cad.cli.build, phantom_cad.export.pipeline, phantom_cad.export.manifest; "
             "print(any(m == 'OCP' or m.startswith(('OCP.', 'build123d', 'cadquery')) for m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"

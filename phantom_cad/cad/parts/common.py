@@ -16,11 +16,13 @@ import math
 
 import numpy as np
 
-MM = 1000.0  # metres -> millimetres, the one place the CAD layer converts units
+from ... import units
+from ...kinematics import topology
 
 
 def mm(x: float) -> float:
-    return float(x) * MM
+    """A parameter (metres) in the CAD layer's unit, as a float."""
+    return float(units.mm(float(x)))
 
 
 # ---------------------------------------------------------------------------
@@ -101,7 +103,7 @@ class DigitSection:
     def __init__(self, params, digit: str):
         self.params = params
         self.digit = digit
-        d = params.thumb if digit == "thumb" else params.fingers[digit]
+        d = params.digit(digit)
         self.tol = Tolerances(params)
         self.width = mm(d.width)
         self.thickness = mm(d.thickness)
@@ -110,11 +112,13 @@ class DigitSection:
         self.R = {j: mm(r) for j, r in zip(chain.joints, chain.radii)}
         #: upper limits (Table I): where the operational stops engage
         self.q_max = {j: lim[1] for j, lim in zip(chain.joints, chain.limits)}
-        #: where this digit module's own hard stops engage: the finger MCP goes
-        #: cad.module_stop_margin further (the palm housing stops it at q_max)
+        #: where this digit module's own hard stops engage: a reference joint whose parent is a
+        #: magnet-held finger base (the finger MCP) goes cad.module_stop_margin further (the
+        #: palm housing stops it at q_max)
         self.q_stop = dict(self.q_max)
-        if digit != "thumb":
-            self.q_stop["mcp"] = self.q_max["mcp"] + params.cad.module_stop_margin
+        ref = topology.joint(topology.chain(digit).joint_names[0])
+        if topology.link(ref.parent).segment == "base":
+            self.q_stop[ref.key] = self.q_max[ref.key] + params.cad.module_stop_margin
         self.guide = chain.guide
 
     @property
@@ -298,25 +302,24 @@ def ring_x(r_in: float, r_out: float, width: float, y: float = 0.0, z: float = 0
     return outer.cut(inner)
 
 
-def single_solid(shape, name: str):
-    """Return the one solid of a boolean result, or refuse with a clear message."""
+def as_solid(shape):
+    """The one solid of a boolean result as a ``Solid``; a result of several solids is returned
+    as it is, for the verification (``phantom_cad.cad.verify``, the one place a part's
+    validity is checked) to refuse."""
     b = bd()
     solids = shape.solids()
     if len(solids) != 1:
-        vols = sorted((round(s.volume, 3) for s in solids), reverse=True)
-        raise RuntimeError(f"{name}: expected one solid, got {len(solids)} (volumes {vols} mm^3)")
+        return shape
     s = solids[0]
-    if not s.is_valid:
-        raise RuntimeError(f"{name}: the solid is not valid")
     return b.Solid(s.wrapped) if not isinstance(s, b.Solid) else s
 
 
-def build(body_parts, tools, name: str):
-    """Fuse the body parts, cut every tool in one boolean, and return the one valid solid."""
+def build(body_parts, tools):
+    """Fuse the body parts and cut every tool in one boolean; the result should be one valid
+    solid (checked once per part by ``phantom_cad.cad.verify``)."""
     body = body_parts[0]
     if len(body_parts) > 1:
         body = body.fuse(*body_parts[1:])
     if tools:
         body = body.cut(*tools)
-
-    return single_solid(body, name)
+    return as_solid(body)

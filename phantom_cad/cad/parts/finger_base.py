@@ -12,23 +12,54 @@ from __future__ import annotations
 
 import numpy as np
 
+from ... import canon
 from ...kinematics.frames import tendon_height
+from ...kinematics.topology import FINGERS, digit_links
+from ..measure import circular_pockets, eyelet_centres, point_line_distance
+from .base import Part, child_joint, digit_table
 from .common import DigitSection, box, build, cylinder, mm
 from .phalanx import channel, clevis, eyelet, spring_anchor, spring_channel
 
 
-class FingerBase:
+class FingerBase(Part):
+    """The metacarpal module of ``finger``: a link fixed to the palm by two magnets."""
+
+    SEGMENTS = ("base",)
+    #: magnet pockets on its magnet face
+    MAGNETS = 2
+
     def __init__(self, params, finger: str):
-        if finger not in params.fingers:
+        links = [ln for ln in digit_links(finger) if ln.segment in self.SEGMENTS]
+        if finger not in params.fingers or not links:
             raise ValueError(f"unknown finger {finger!r}")
-        self.params, self.finger = params, finger
+        self.params, self.finger, self.link = params, finger, links[0]
         self.sec = DigitSection(params, finger)
         self.length = mm(params.cad.finger_base_length)
         self.tendon_z = mm(tendon_height(params))
+        #: the joint at its distal end (the MCP): its clevis
+        self.joint = child_joint(self.link).key
 
-    @property
-    def name(self) -> str:
-        return f"{self.finger}_base"
+    @classmethod
+    def for_link(cls, params, link):
+        return cls(params, link.digit)
+
+    def inputs(self) -> dict:
+        doc = self.params.document
+        return {**self.common_inputs(), "finger": canon.plain(digit_table(doc, self.finger)),
+                # the tendon height at the magnet face follows the thinnest finger
+                "thicknesses_mm": {f: doc["fingers"][f]["thickness_mm"] for f in FINGERS}}
+
+    def verify(self, shape) -> list[str]:
+        """The metacarpal-side guide eyelet at d1 from the MCP axis; two magnet pockets."""
+        out: list[str] = []
+        tol = self.sec.tol
+        eyes = eyelet_centres(shape, tol.tendon_hole / 2.0, tol.eyelet_length)
+        d = point_line_distance(eyes[0]["centre"], (0, 0, 0), (1, 0, 0)) if len(eyes) == 1 else None
+        self.expect(out, "guide d1", d, mm(self.sec.guide.d1), 0.02)
+        n = len(circular_pockets(shape, tol.magnet_pocket_d / 2.0))
+        if n != self.MAGNETS:
+            out.append(f"{self.name}: {n} magnet pockets, expected {self.MAGNETS}")
+        return out
 
     @property
     def magnet_offset(self) -> float:
@@ -48,7 +79,7 @@ class FingerBase:
         sec, t = self.sec, self.sec.tol
         W, T, Lb = sec.width, sec.thickness, self.length
         body = [box(-W / 2.0, W / 2.0, -Lb, 0.0, -T / 2.0, T / 2.0)]
-        b, tools = clevis(sec, "mcp", 0.0)
+        b, tools = clevis(sec, self.joint, 0.0)
         body += b
         # metacarpal-side MCP guide at d1, and the tendon path from the magnet face to it
         G1, G2 = sec.guide_points()
@@ -67,4 +98,4 @@ class FingerBase:
         y_anchor = -Lb + t.magnet_pocket_depth + t.wall + t.spring_hole
         tools.extend(spring_channel(sec, y_anchor, sec.boss_radius + 1.0))
         tools.extend(spring_anchor(sec, y_anchor))
-        return build(body, tools, self.name)
+        return build(body, tools)

@@ -7,10 +7,10 @@ y distal, z dorsal. Built from:
   sits at rest, turned by palm.arc_offset from finger to finger (the socket face normal is
   the finger column's y), each with two magnet pockets facing the finger base's pockets
   and the tendon exit at the palm's tendon height;
-* the servo bay: a slab around five tendon servos (two staggered rows, shafts along the
+* the servo bay: a slab around the tendon servos (two staggered rows, shafts along the
   palm's x, each pulley straight behind its finger's socket) with their pockets (open on
   the dorsal side for assembly), pulley cavities and M2 pilot holes at the flange ears;
-* the thenar housing of servo 6, coaxial with the thumb CMC axis (open on the shaft side);
+* the thenar housing of the direct-drive CMC servo, coaxial with the thumb CMC axis (open on the shaft side);
 * tendon channels from each socket's tendon exit straight back to its servo pulley's
   tangent point, and the thumb tendon's channel from servo 1 out of the palm's radial side;
 * the CMC post and arch: the thumb tendon climbs a post on servo 6's housing and reaches the
@@ -20,24 +20,34 @@ y distal, z dorsal. Built from:
 
 from __future__ import annotations
 
-import numpy as np
-
-from ...kinematics import frames as F
-from ...kinematics.topology import FINGERS
 import math
 
+import numpy as np
+
+from ... import canon
+from ...kinematics import frames as F
+from ...kinematics.topology import FINGERS, LINKS, SERVOS, THUMB_CHAIN, chain
+from ..measure import circular_pockets
+from .base import Part
 from .common import DigitSection, Tolerances, box, build, cylinder, mm, prism_x, sphere, transform
+
+#: the servos in the palm's servo bay (the direct-drive CMC servo sits in the thenar housing)
+BAY_SERVOS = tuple(s.index for s in SERVOS if s.drive == "tendon")
 
 
 def _mm(T):
     return F.to_mm(T)
 
 
-class Palm:
-    name = "palm"
+class Palm(Part):
+    """The palm housing: the root link."""
+
+    SEGMENTS = ("palm",)
+    COLOR = (0.55, 0.57, 0.60)
 
     def __init__(self, params):
         self.params = params
+        self.link = next(ln for ln in LINKS if ln.parent is None)
         self.tol = Tolerances(params)
         self.thickness = mm(params.palm.thickness)
         sv = params.servo
@@ -47,13 +57,49 @@ class Palm:
         self.pulley_width = mm(params.cad.servo_pulley_width)
         self.tendon_z = mm(F.tendon_height(params))
 
+    @classmethod
+    def for_link(cls, params, link):
+        return cls(params)
+
+    @property
+    def print_rotation(self) -> np.ndarray:
+        return F.rot_x(math.pi)[:3, :3]            # on its dorsal face
+
+    def inputs(self) -> dict:
+        """Everything but the model's mechanics and effects: the palm carries every socket and servo."""
+        doc = self.params.document
+        out = {k: canon.plain(v) for k, v in doc.items() if k not in ("mechanics", "effects", "hand")}
+        out["side"] = doc["hand"]["side"]
+        out["hand_length_mm"] = doc["hand"]["hand_length_mm"]
+        return out
+
+    def verify(self, shape) -> list[str]:
+        """Two magnet pockets per finger socket; adjacent socket normals arc_offset apart."""
+        out: list[str] = []
+        pk = circular_pockets(shape, self.tol.magnet_pocket_d / 2.0)
+        from .finger_base import FingerBase
+        n = FingerBase.MAGNETS * len(FINGERS)
+        if len(pk) != n:
+            out.append(f"{self.name}: {len(pk)} magnet pockets, expected {n}")
+            return out
+        normals = []
+        for p in sorted(pk, key=lambda p: p["centre"][0] * (1 if self.params.side == "right" else -1)):
+            if not normals or np.linalg.norm(p["facing"] - normals[-1]) > 1e-9:
+                normals.append(p["facing"])
+        want = math.degrees(self.params.palm.arc_offset)
+        for a, b in zip(normals, normals[1:]):
+            ang = math.degrees(math.acos(float(np.clip(a @ b, -1.0, 1.0))))
+            if abs(ang - want) > 1e-6:
+                out.append(f"{self.name}: socket normals {ang:.6f} deg apart, expected {want:g}")
+        return out
+
     # -- placements (mm) ---------------------------------------------------
     def T_socket(self, finger: str) -> np.ndarray:
         return _mm(F.T_palm_socket(self.params, finger))
 
-    def T_servo(self, k: int) -> np.ndarray:
-        """Servo frame of servo k (1-based)."""
-        return _mm(F.T_palm_servo(self.params, k - 1))
+    def T_servo(self, servo: int) -> np.ndarray:
+        """Servo frame of servo ``servo`` (0-based index, topology.SERVOS)."""
+        return _mm(F.T_palm_servo(self.params, servo))
 
     def magnet_centres(self, finger: str) -> list[np.ndarray]:
         """Opening centres of the socket's magnet pockets, palm frame (mm)."""
@@ -62,13 +108,11 @@ class Palm:
         T = self.T_socket(finger)
         return [(T @ np.array([sx, 0.0, 0.0, 1.0]))[:3] for sx in (-s, s)]
 
-    def pulley_radius(self, k: int) -> float:
-        if k == 6:
-            return mm(self.params.thumb.cmc_horn_radius)
-        return mm(self.params.chains[k - 1].servo_radius)
+    def pulley_radius(self, servo: int) -> float:
+        return mm(F.servo_radius(self.params, servo))
 
-    def body_box(self, k: int, grow: float = 0.0):
-        """Servo k's body as (lo, hi) corners in its servo frame, grown by ``grow``."""
+    def body_box(self, servo: int, grow: float = 0.0):
+        """The servo's body as (lo, hi) corners in its servo frame, grown by ``grow``."""
         L, W, H = self.servo_body
         c = self.tol.clearance
         z_top = -(self.pulley_width / 2.0 + c)
@@ -76,8 +120,8 @@ class Palm:
         hi = np.array([W / 2.0, -self.shaft_offset + L / 2.0, z_top]) + grow
         return lo, hi
 
-    def ear_box(self, k: int, grow: float = 0.0):
-        """Servo k's flange ears (both, as one slab across the body) in its servo frame."""
+    def ear_box(self, servo: int, grow: float = 0.0):
+        """The servo's flange ears (both, as one slab across the body) in its servo frame."""
         L, W, H = self.servo_body
         z_top = -(self.pulley_width / 2.0 + self.tol.clearance)
         z1 = z_top - mm(self.params.cad.servo_ear_offset)
@@ -86,14 +130,14 @@ class Palm:
         hi = np.array([W / 2.0, -self.shaft_offset + self.flange_span / 2.0, z1]) + grow
         return lo, hi
 
-    def cavity_radius(self, k: int) -> float:
-        return self.pulley_radius(k) + mm(F.pulley_cavity_margin(self.params))
+    def cavity_radius(self, servo: int) -> float:
+        return self.pulley_radius(servo) + mm(F.pulley_cavity_margin(self.params))
 
-    def screw_points(self, k: int) -> list[np.ndarray]:
+    def screw_points(self, servo: int) -> list[np.ndarray]:
         """Flange screw centres (servo frame) on the ears' underside, mid-ear, one each end."""
         L, W, H = self.servo_body
         e = (L / 2.0 + self.flange_span / 2.0) / 2.0
-        z_under = self.ear_box(k)[0][2]
+        z_under = self.ear_box(servo)[0][2]
         return [np.array([0.0, -self.shaft_offset + s * e, z_under]) for s in (-1.0, 1.0)]
 
     def _corners(self, T, lo, hi):
@@ -101,10 +145,10 @@ class Palm:
         return (T @ pts.T).T[:, :3]
 
     def extents(self):
-        """Slab x/y extents (mm) enclosing the socket roots and servos 1-5, one wall around."""
+        """Slab x/y extents (mm) enclosing the socket roots and the bay's servos, one wall around."""
         w, c = self.tol.wall, self.tol.clearance
         pts = []
-        for k in range(1, 6):
+        for k in BAY_SERVOS:
             T = self.T_servo(k)
             lo, hi = self.body_box(k, grow=c + w)
             pts.append(self._corners(T, lo, hi))
@@ -152,13 +196,13 @@ class Palm:
                 "z_mid": z_mid, "z_entry": z_entry}
 
     def thumb_tendon_path(self) -> list[np.ndarray]:
-        """Palm-frame points (mm) of the thumb tendon: servo 1's tangent point, the palm exit,
+        """Palm-frame points (mm) of the thumb tendon: its servo's tangent point, the palm exit,
         the post entry, the post top, the point above the CMC axis, the CMC axis at the arch's
         underside."""
         a = self.cmc_arch()
         x0 = self.extents()[0]
-        Ts = self.T_servo(1)
-        tangent = (Ts @ np.array([-self.pulley_radius(1), 0.0, 0.0, 1.0]))[:3]
+        Ts = self.T_servo(THUMB_CHAIN.servo)
+        tangent = (Ts @ np.array([-self.pulley_radius(THUMB_CHAIN.servo), 0.0, 0.0, 1.0]))[:3]
         exit_ = np.array([x0 - 1.0, tangent[1], tangent[2]])
         Tc = self.T_cmc()
         P = lambda *v: (Tc @ np.array([*v, 1.0]))[:3]  # noqa: E731
@@ -197,7 +241,7 @@ class Palm:
         flexion limiter: from inside the socket block to the plane the proximal phalanx's
         palmar face (z_child = -thickness/2) reaches at the MCP upper limit."""
         sec = DigitSection(self.params, finger)
-        q = sec.q_max["mcp"]
+        q = sec.q_max[chain(finger).keys[0]]       # the reference joint (MCP)
         s, c = math.sin(q), math.cos(q)
         rb = sec.boss_radius
         Lb = mm(self.params.cad.finger_base_length)
@@ -234,7 +278,7 @@ class Palm:
                 n = T[:3, 1]
                 tools.append(cylinder(m + n, m - n * t.magnet_pocket_depth, t.magnet_pocket_d / 2.0))
             # tendon: socket exit straight back to the servo pulley's tangent point
-            k = FINGERS.index(f) + 2
+            k = chain(f).servo
             Ts = self.T_servo(k)
             r = self.pulley_radius(k)
             tangent = (Ts @ np.array([-r, 0.0, 0.0, 1.0]))[:3]   # servo x = palm z: bottom of the pulley
@@ -257,12 +301,13 @@ class Palm:
         for part in self.cmc_arch_body():
             body.append(transform(part, Tc))
         # servo pockets, pulley cavities, flange screws
-        for k in range(1, 7):
+        for servo in SERVOS:
+            k = servo.index
             Ts = self.T_servo(k)
             lo, hi = self.body_box(k, grow=c)
             rc = self.cavity_radius(k)
             elo, ehi = self.ear_box(k, grow=c)
-            if k <= 5:
+            if k in BAY_SERVOS:
                 # open toward the dorsal face (servo x = palm z): drop-in from the back, ears in slots
                 tools.append(transform(box(lo[0], Tp, lo[1], hi[1], lo[2], hi[2]), Ts))
                 tools.append(transform(box(elo[0], Tp, elo[1], ehi[1], elo[2], ehi[2]), Ts))
@@ -280,4 +325,4 @@ class Palm:
             for p in self.screw_points(k):
                 tools.append(transform(cylinder(p + np.array([0, 0, 1.0]), p - np.array([0, 0, c + t.screw_engagement]),
                                                 t.screw_pilot / 2.0), Ts))
-        return build(body, tools, self.name)
+        return build(body, tools)

@@ -17,7 +17,11 @@ import math
 
 import numpy as np
 
-from .common import (DigitSection, box, build, cyl_x, cylinder, internal_tangents, prism_x,
+from ... import canon
+from ...kinematics.topology import CMC_Q, LINKS, digit_links, joint
+from ..measure import eyelet_centres, measure_groove_radius, point_line_distance
+from .base import Part, child_joint, digit_table, parent_joint
+from .common import (DigitSection, box, build, cyl_x, cylinder, internal_tangents, mm, prism_x,
                      ring_x, sphere)
 
 # ---------------------------------------------------------------------------
@@ -128,44 +132,68 @@ def figure_eight(sec: DigitSection, j_prox: str, j_dist: str, length: float):
 # phalanges
 # ---------------------------------------------------------------------------
 
-class Phalanx:
-    """One phalanx: ``digit`` in (index, middle, ring, pinky, thumb), ``segment`` in
-    (proximal, middle, distal) (thumb: proximal, distal). Dimensions in mm."""
+class Phalanx(Part):
+    """One phalanx of a digit: ``segment`` is its link's segment (``proximal``, ``middle``,
+    ``distal``; the thumb has no middle). Dimensions in mm; the joints at its two ends come
+    from the topology (the joint at its origin, and the next link's joint)."""
 
-    SEGMENTS = {"finger": ("proximal", "middle", "distal"), "thumb": ("proximal", "distal")}
+    #: the links a flexion joint moves (every digit link but the CMC base)
+    SEGMENTS = tuple(dict.fromkeys(ln.segment for ln in LINKS
+                                   if ln.parent_joint and joint(ln.parent_joint).index != CMC_Q))
 
     def __init__(self, params, digit: str, segment: str):
-        kind = "thumb" if digit == "thumb" else "finger"
-        if digit != "thumb" and digit not in params.fingers:
+        links = [ln for ln in digit_links(digit) if ln.segment in self.SEGMENTS]
+        if not links:
             raise ValueError(f"unknown digit {digit!r}")
-        if segment not in self.SEGMENTS[kind]:
-            raise ValueError(f"{digit} has no {segment!r} phalanx (allowed: {self.SEGMENTS[kind]})")
-        self.params, self.digit, self.segment = params, digit, segment
+        allowed = tuple(ln.segment for ln in links)
+        if segment not in allowed:
+            raise ValueError(f"{digit} has no {segment!r} phalanx (allowed: {allowed})")
+        self.params, self.segment = params, segment
+        self.link = links[allowed.index(segment)]
         self.sec = DigitSection(params, digit)
-        d = params.thumb if digit == "thumb" else params.fingers[digit]
-        self.length = getattr(d, segment) * 1000.0
-        joints = ("mp", "ip") if kind == "thumb" else ("mcp", "pip", "dip")
-        i = self.SEGMENTS[kind].index(segment)
-        #: joint at this link's origin, and at its far end (None for the distal phalanx)
-        self.proximal_joint = joints[i]
-        self.distal_joint = joints[i + 1] if i + 1 < len(joints) else None
-        for name, v in (("length", self.length),):
-            if v <= 2.0 * self.sec.slot_back:
-                raise ValueError(f"{digit} {segment} {name} {v:.2f} mm is shorter than two joint bosses")
+        self.length = mm(getattr(params.digit(digit), self.link.length_key))
+        nxt = child_joint(self.link)
+        #: joint key at this link's origin, and at its far end (None for the distal phalanx)
+        self.proximal_joint = parent_joint(self.link).key
+        self.distal_joint = nxt.key if nxt is not None else None
+        if self.length <= 2.0 * self.sec.slot_back:
+            raise ValueError(f"{digit} {segment} length {self.length:.2f} mm is shorter than two joint bosses")
 
-    @property
-    def name(self) -> str:
-        return f"{self.digit}_{self.segment}"
+    @classmethod
+    def for_link(cls, params, link):
+        return cls(params, link.digit, link.segment)
+
+    def inputs(self) -> dict:
+        doc = self.params.document
+        key = "finger" if self.digit in doc["fingers"] else "thumb"
+        return {**self.common_inputs(), key: canon.plain(digit_table(doc, self.digit))}
 
     @property
     def has_guide(self) -> bool:
-        """The phalanx-side MCP (thumb MP) guide sits on the proximal phalanx, at d2."""
-        return self.segment == "proximal"
+        """The phalanx-side guide of the reference joint (MCP, thumb MP) sits on the link that
+        joint moves, at d2."""
+        return parent_joint(self.link).is_reference
 
     @property
     def tip_y(self) -> float:
         """Far end of the part along y: the fingertip, or the clevis boss beyond the distal axis."""
         return self.length if self.distal_joint is None else self.length + self.sec.boss_radius
+
+    def verify(self, shape) -> list[str]:
+        """The proximal joint's groove radius R; on the guide link, the eyelet at d2."""
+        out: list[str] = []
+        tol = self.sec.tol
+        j = self.proximal_joint
+        try:
+            r = measure_groove_radius(shape, (0, 0, 0), (1, 0, 0), tol.tendon_hole)
+        except ValueError:
+            r = None
+        self.expect(out, f"{j} groove radius", r, self.sec.R[j])
+        if self.has_guide:
+            eyes = eyelet_centres(shape, tol.tendon_hole / 2.0, tol.eyelet_length)
+            d = point_line_distance(eyes[0]["centre"], (0, 0, 0), (1, 0, 0)) if len(eyes) == 1 else None
+            self.expect(out, "guide d2", d, mm(self.sec.guide.d2), 0.02)
+        return out
 
     def build(self):
         sec, t = self.sec, self.sec.tol
@@ -205,4 +233,4 @@ class Phalanx:
             tools.append(channel((0.0, y_knot, zt), (0.0, y_knot, -T / 2.0 - 1.0), t.tendon_relief))
         else:
             tools.extend(spring_channel(sec, -sec.slot_back - 1.0, L + sec.boss_radius + 1.0))
-        return build(body, tools, self.name)
+        return build(body, tools)

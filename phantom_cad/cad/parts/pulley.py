@@ -3,11 +3,11 @@
 Frame (docs/frames.md, servo frame): origin on the servo output axis at the pulley's
 mid-plane, z along the shaft from the servo body toward the pulley.
 
-Servos 1-5 (tendon servos): a grooved pulley whose groove bottom radius is the chain's
+Tendon servos (u1-u5): a grooved pulley whose groove bottom radius is the chain's
 servo pulley radius r_j (eq. 5: L = L0 - r_j u_j), a tendon anchor (radial hole from the
 groove into an axial knot well) and the horn interface: a central clearance bore for the
 spline screw and two horn screw holes on the cad.horn_hole_radius circle.
-Servo 6 (thumb CMC, direct drive): a hub of radius thumb.cmc_horn_radius, coaxial with the
+The direct-drive servo (u6, thumb CMC): a hub of radius thumb.cmc_horn_radius, coaxial with the
 CMC axis, with the same horn interface plus two pilot holes for the screws that come
 through the thumb CMC base.
 """
@@ -19,6 +19,9 @@ import math
 import numpy as np
 
 from ...kinematics import frames
+from ...kinematics.topology import N_SERVOS, SERVOS, link
+from ..measure import coaxial, cylinders, measure_groove_radius
+from .base import Part, digit_table
 from .common import Tolerances, build, cylinder, mm
 
 #: angular positions (rad) of the holes on the horn circle
@@ -27,27 +30,56 @@ BASE_ANGLES = (3.0 * math.pi / 4.0, 7.0 * math.pi / 4.0)  # CMC base screws (int
 ANCHOR_ANGLE = math.pi / 2.0                              # tendon anchor
 
 
-class ServoPulley:
+class ServoPulley(Part):
+    """The pulley (tendon servo) or hub (direct drive) on servo ``servo`` (0-based index in
+    u order, topology.SERVOS)."""
+
+    SEGMENTS = ("servo_pulley",)
+    COLOR = (0.20, 0.20, 0.22)
+
     def __init__(self, params, servo: int):
-        """``servo`` is 1-based, as in the paper (u1..u6)."""
-        if servo not in range(1, 7):
-            raise ValueError(f"servo must be 1..6, got {servo!r}")
-        self.params, self.servo = params, servo
+        if servo not in range(N_SERVOS):
+            raise ValueError(f"servo must be 0..{N_SERVOS - 1} (u1..u{N_SERVOS}), got {servo!r}")
+        self.params, self.servo = params, SERVOS[servo]
+        self.link = link(self.servo.link)
         self.tol = Tolerances(params)
         self.width = mm(params.cad.servo_pulley_width)
         self.horn_radius = mm(params.cad.horn_hole_radius)
-        if servo == 6:
-            self.radius = mm(params.thumb.cmc_horn_radius)
-        else:
-            self.radius = mm(params.chains[servo - 1].servo_radius)
+        self.radius = mm(frames.servo_radius(params, servo))
 
-    @property
-    def name(self) -> str:
-        return f"servo_pulley_{self.servo}"
+    @classmethod
+    def for_link(cls, params, link):
+        return cls(params, link.servo)
 
     @property
     def is_hub(self) -> bool:
-        return self.servo == 6
+        return self.servo.drive == "direct"
+
+    @property
+    def print_rotation(self) -> np.ndarray:
+        return np.eye(3)                           # on a flange face
+
+    def inputs(self) -> dict:
+        doc = self.params.document
+        if self.is_hub:
+            src = {"cmc_horn_radius_mm": doc["thumb"]["cmc_horn_radius_mm"]}
+        else:
+            src = {"servo_pulley_radius_mm": digit_table(doc, self.servo.digit)["servo_pulley_radius_mm"]}
+        return {**self.common_inputs(), "servo": self.servo.label, **src}
+
+    def verify(self, shape) -> list[str]:
+        """The hub radius (direct drive) or the groove bottom radius r_j about the shaft."""
+        out: list[str] = []
+        if self.is_hub:
+            cs = [c for c in cylinders(shape) if coaxial(c, (0, 0, 0), (0, 0, 1))]
+            self.expect(out, "hub radius", max((c["radius"] for c in cs), default=None), self.radius)
+        else:
+            try:
+                r = measure_groove_radius(shape, (0, 0, 0), (0, 0, 1), self.tol.tendon_hole)
+            except ValueError:
+                r = None
+            self.expect(out, "groove radius", r, self.radius)
+        return out
 
     @property
     def lip(self) -> float:
@@ -82,4 +114,4 @@ class ServoPulley:
             tools.append(cylinder(d * self.horn_radius, d * (self.radius + 0.5), t.tendon_hole / 2.0))
             tools += [cylinder(d * self.horn_radius - np.array([0, 0, w / 2.0 + 1.0]),
                                d * self.horn_radius + np.array([0, 0, w / 2.0 + 1.0]), t.tendon_relief / 2.0)]
-        return build(body, tools, self.name)
+        return build(body, tools)

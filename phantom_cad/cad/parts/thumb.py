@@ -16,23 +16,50 @@ import math
 
 import numpy as np
 
+from ... import canon
+from ...kinematics.topology import CMC_Q, JOINTS, link
+from ..measure import eyelet_centres, point_line_distance
+from .base import Part, child_joint, digit_table
 from .common import DigitSection, box, build, cylinder, mm, sphere
 from .phalanx import channel, clevis, eyelet, spring_anchor, spring_channel
 from .pulley import BASE_ANGLES, HORN_ANGLES
 
 
-class ThumbCMCBase:
+class ThumbCMCBase(Part):
+    """The thumb's metacarpal module: the link the CMC joint turns (its parent joint is the
+    CMC, direct drive by the CMC servo)."""
+
+    SEGMENTS = ("cmc_base",)
+
     def __init__(self, params):
         self.params = params
-        self.sec = DigitSection(params, "thumb")
-        self.length = mm(params.thumb.metacarpal)
+        self.link = link(JOINTS[CMC_Q].child)
+        self.sec = DigitSection(params, self.link.digit)
+        self.length = mm(getattr(params.digit(self.link.digit), self.link.length_key))
         self.hub_radius = mm(params.thumb.cmc_horn_radius)
         self.horn_radius = mm(params.cad.horn_hole_radius)
+        #: the joint at its distal end (the thumb MP): its clevis
+        self.joint = child_joint(self.link).key
         if self.length <= self.hub_radius + self.sec.slot_back:
             raise ValueError(f"thumb metacarpal {self.length:.2f} mm leaves no arm between the CMC hub "
-                             f"(radius {self.hub_radius:g} mm) and the MP clevis")
+                             f"(radius {self.hub_radius:g} mm) and the {self.joint.upper()} clevis")
 
-    name = "thumb_cmc_base"
+    @classmethod
+    def for_link(cls, params, link):
+        return cls(params)
+
+    def inputs(self) -> dict:
+        return {**self.common_inputs(), "thumb": canon.plain(digit_table(self.params.document, self.digit))}
+
+    def verify(self, shape) -> list[str]:
+        """The metacarpal-side guide eyelet at d1 from the MP axis (at y = metacarpal)."""
+        out: list[str] = []
+        tol = self.sec.tol
+        eyes = eyelet_centres(shape, tol.tendon_hole / 2.0, tol.eyelet_length)
+        d = (point_line_distance(eyes[0]["centre"], (0, self.length, 0), (1, 0, 0)) if len(eyes) == 1
+             else None)
+        self.expect(out, "guide d1", d, mm(self.sec.guide.d1), 0.02)
+        return out
 
     def guide_point(self) -> np.ndarray:
         """The metacarpal-side MP guide (x, y, z) in this part's frame."""
@@ -44,7 +71,7 @@ class ThumbCMCBase:
         W, T, L = sec.width, sec.thickness, self.length
         body = [cylinder((0, 0, -T / 2.0), (0, 0, T / 2.0), self.hub_radius),
                 box(-W / 2.0, W / 2.0, 0.0, L, -T / 2.0, T / 2.0)]
-        b, tools = clevis(sec, "mp", L)
+        b, tools = clevis(sec, self.joint, L)
         body += b
         G1, G2 = sec.guide_points()
         shift = np.array([L, 0.0])
@@ -67,4 +94,4 @@ class ThumbCMCBase:
         y_anchor = self.hub_radius + t.wall + t.spring_hole
         tools.extend(spring_channel(sec, y_anchor, L + sec.boss_radius + 1.0))
         tools.extend(spring_anchor(sec, y_anchor))
-        return build(body, tools, self.name)
+        return build(body, tools)

@@ -9,8 +9,9 @@ Layout (default root ``.cache`` in the working directory, or ``$PHANTOM_CAD_CACH
     .cache/slice/<key>.json   PrusaSlicer estimates of one STL with one config
 
 A part's key is the SHA-256 of its name, ``assembly.part_inputs(params, name)`` (the
-plain values the part depends on), the hand side, the STL tolerance, the versions of
-build123d/OCP and a digest of the phantom_cad source that makes geometry. So changing
+plain values the part depends on, declared by its part family), the hand side, the STL
+tolerance, the versions of build123d/OCP and a digest of the phantom_cad source that makes
+geometry and exported bytes (:func:`code_digest`). So changing
 one finger rebuilds only that finger's parts, and editing the modelling code rebuilds
 everything. Entries are written to a temporary directory and renamed into place, so a
 crashed build never leaves a half entry; any entry can be deleted at any time.
@@ -20,7 +21,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import os
 import shutil
 from functools import lru_cache
@@ -28,58 +28,31 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any, Mapping
 
-import numpy as np
-
 from ..atomic import write_json_atomic
+from ..canon import canonical, sha256
 
 #: bump when the cached files' format or the export pipeline changes their bytes
 PIPELINE_VERSION = 1
 
 _PKG = Path(__file__).resolve().parents[1]      # .../phantom_cad
-#: sources whose code decides the geometry and the exported bytes
+#: sources whose code decides the geometry and the exported bytes: the packages that make
+#: and export the parts (the part families, their verification, frames, the parameters) and
+#: the foundation modules they compute with
 _CODE_DIRS = ("cad", "export", "kinematics", "params")
-_CODE_FILES = ("check.py",)     # the measured verification the build runs on every part
+_CODE_FILES = ("units.py", "canon.py")
 
 
 def default_root() -> Path:
     return Path(os.environ.get("PHANTOM_CAD_CACHE", ".cache"))
 
 
-def jsonable(obj: Any) -> Any:
-    """Plain JSON types from params values (MappingProxy, tuples, numpy scalars/arrays)."""
-    if isinstance(obj, Mapping):
-        return {str(k): jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return jsonable(obj.tolist())
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return repr(obj)
-    if obj is None or isinstance(obj, (bool, int, float, str)):
-        return obj
-    if hasattr(obj, "__dataclass_fields__"):
-        return {k: jsonable(getattr(obj, k)) for k in obj.__dataclass_fields__}
-    return repr(obj)
-
-
-def canonical(obj: Any) -> bytes:
-    return json.dumps(jsonable(obj), sort_keys=True, separators=(",", ":")).encode()
-
-
-def sha256(data: bytes) -> str:
-    return hashlib.sha256(data).hexdigest()
-
-
 @lru_cache(maxsize=1)
 def code_digest() -> str:
-    """SHA-256 over the phantom_cad sources that make geometry (the CLI is excluded)."""
+    """SHA-256 over the phantom_cad sources that make geometry and exported bytes
+    (:data:`_CODE_DIRS`, :data:`_CODE_FILES`; the CLI, calibration and interop are not)."""
     h = hashlib.sha256()
     for sub in _CODE_DIRS:
         for path in sorted((_PKG / sub).rglob("*.py")):
-            if path.name == "cli.py":
-                continue
             h.update(str(path.relative_to(_PKG)).encode())
             h.update(hashlib.sha256(path.read_bytes()).digest())
     for extra in _CODE_FILES:
@@ -90,7 +63,8 @@ def code_digest() -> str:
     return h.hexdigest()
 
 
-def _version(dist: str) -> str | None:
+def package_version(dist: str) -> str | None:
+    """The installed version of a distribution (package metadata), or None."""
     try:
         return metadata.version(dist)
     except metadata.PackageNotFoundError:
@@ -101,12 +75,12 @@ def _version(dist: str) -> str | None:
 def cad_versions() -> dict[str, str | None]:
     """Versions of the CAD stack, read from package metadata (no OCP import)."""
     return {
-        "build123d": _version("build123d"),
-        "cadquery-ocp": _version("cadquery-ocp") or _version("cadquery_ocp"),
-        "cadquery": _version("cadquery"),
-        "trimesh": _version("trimesh"),
-        "manifold3d": _version("manifold3d"),
-        "matplotlib": _version("matplotlib"),
+        "build123d": package_version("build123d"),
+        "cadquery-ocp": package_version("cadquery-ocp") or package_version("cadquery_ocp"),
+        "cadquery": package_version("cadquery"),
+        "trimesh": package_version("trimesh"),
+        "manifold3d": package_version("manifold3d"),
+        "matplotlib": package_version("matplotlib"),
     }
 
 

@@ -1,6 +1,6 @@
-"""Measurements of built solids: what the tests compare with closed forms, and what the
-build uses to refuse writing broken parts. Every function reads the B-rep (faces, edges,
-booleans), never the parameters. Units: mm. build123d is imported lazily.
+"""Measurements of built solids, read from the B-rep (faces, edges, booleans), never from the
+parameters: what the part families' ``verify`` methods and the tests compare with the
+parameters and closed forms. Units: mm. build123d is imported lazily.
 """
 
 from __future__ import annotations
@@ -26,9 +26,10 @@ def _vec(v) -> np.ndarray:
 def solid_report(shape) -> dict:
     """Number of solids, validity, volume and bounding box of a shape."""
     bb = shape.bounding_box()
+    valid = shape.is_valid() if callable(shape.is_valid) else shape.is_valid
     return {
         "n_solids": len(shape.solids()),
-        "valid": bool(shape.is_valid),
+        "valid": bool(valid),
         "volume": float(shape.volume),
         "bbox_min": _vec(bb.min),
         "bbox_max": _vec(bb.max),
@@ -37,7 +38,7 @@ def solid_report(shape) -> dict:
 
 def placed(shape, T: np.ndarray):
     """The shape moved by a 4x4 rigid transform (mm)."""
-    from .cad.parts.common import transform
+    from .parts.common import transform
     return transform(shape, T)
 
 
@@ -163,84 +164,4 @@ def planar_faces(shape, min_area: float = 0.0):
         if f.geom_type == bd.GeomType.PLANE and f.area >= min_area:
             out.append({"centre": _vec(f.center()), "normal": _vec(f.normal_at(f.center())), "area": float(f.area),
                         "face": f})
-    return out
-
-
-def verify_part(params, name: str, shape) -> list[str]:
-    """Problems found by measuring ``shape`` (part ``name`` in its link frame, mm) against the
-    parameters: one valid solid of positive volume; groove radius R (digit links) or r_j
-    (servo pulleys) or the CMC hub radius; the guide eyelets at d1 / d2 from the joint axis;
-    two magnet pockets per finger base and eight in the palm, its socket normals arc_offset
-    apart. An empty list means the part is sound."""
-    from .cad.parts.common import Tolerances
-
-    mm = 1000.0
-    out = []
-    rep = solid_report(shape)
-    if rep["n_solids"] != 1:
-        out.append(f"{name}: {rep['n_solids']} solids, expected 1")
-    if not rep["valid"]:
-        out.append(f"{name}: the solid is not valid")
-    if not rep["volume"] > 0:
-        out.append(f"{name}: volume {rep['volume']:.3f} mm^3")
-    if out:
-        return out
-    tol = Tolerances(params)
-    head, _, seg = name.partition("_")
-
-    def expect(what, measured, wanted, eps=1e-3):
-        if measured is None or abs(measured - wanted) > eps:
-            got = "nothing" if measured is None else f"{measured:.4f}"
-            out.append(f"{name}: {what} measures {got}, expected {wanted:.4f} mm")
-
-    def groove(point, direction):
-        try:
-            return measure_groove_radius(shape, point, direction, tol.tendon_hole)
-        except ValueError:
-            return None
-
-    if name.startswith("servo_pulley_"):
-        k = int(name.rsplit("_", 1)[1])
-        if k == 6:
-            cs = [c for c in cylinders(shape) if coaxial(c, (0, 0, 0), (0, 0, 1))]
-            expect("hub radius", max((c["radius"] for c in cs), default=None), params.thumb.cmc_horn_radius * mm)
-        else:
-            expect("groove radius", groove((0, 0, 0), (0, 0, 1)), params.chains[k - 1].servo_radius * mm)
-        return out
-    if head in params.fingers or head == "thumb":
-        digit = params.thumb if head == "thumb" else params.fingers[head]
-        R = dict(zip(digit.chain.joints, digit.chain.radii))
-        joints = ("mp", "ip") if head == "thumb" else ("mcp", "pip", "dip")
-        segs = ("proximal", "distal") if head == "thumb" else ("proximal", "middle", "distal")
-        if seg in segs:
-            j = joints[segs.index(seg)]
-            expect(f"{j} groove radius", groove((0, 0, 0), (1, 0, 0)), R[j] * mm)
-        g = digit.chain.guide
-        eyes = eyelet_centres(shape, tol.tendon_hole / 2.0, tol.eyelet_length)
-        if seg == "proximal":
-            expect("guide d2", point_line_distance(eyes[0]["centre"], (0, 0, 0), (1, 0, 0)) if len(eyes) == 1
-                   else None, g.d2 * mm, 0.02)
-        if seg in ("base", "cmc_base"):
-            axis_y = 0.0 if seg == "base" else params.thumb.metacarpal * mm
-            expect("guide d1", point_line_distance(eyes[0]["centre"], (0, axis_y, 0), (1, 0, 0)) if len(eyes) == 1
-                   else None, g.d1 * mm, 0.02)
-        if seg == "base":
-            n = len(circular_pockets(shape, tol.magnet_pocket_d / 2.0))
-            if n != 2:
-                out.append(f"{name}: {n} magnet pockets, expected 2")
-        return out
-    if name == "palm":
-        pk = circular_pockets(shape, tol.magnet_pocket_d / 2.0)
-        if len(pk) != 8:
-            out.append(f"palm: {len(pk)} magnet pockets, expected 8")
-            return out
-        normals = []
-        for p in sorted(pk, key=lambda p: p["centre"][0] * (1 if params.side == "right" else -1)):
-            if not normals or np.linalg.norm(p["facing"] - normals[-1]) > 1e-9:
-                normals.append(p["facing"])
-        for a, b in zip(normals, normals[1:]):
-            ang = math.degrees(math.acos(float(np.clip(a @ b, -1.0, 1.0))))
-            if abs(ang - math.degrees(params.palm.arc_offset)) > 1e-6:
-                out.append(f"palm: socket normals {ang:.6f} deg apart, expected "
-                           f"{math.degrees(params.palm.arc_offset):g}")
     return out

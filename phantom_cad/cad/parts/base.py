@@ -1,0 +1,128 @@
+"""The part protocol: what every printable part family declares.
+
+One class per part family (bd_warehouse style): the constructor takes the validated
+parameters and the family's own arguments and refuses impossible ones; the derived
+dimensions are plain properties in mm (numpy only, testable without OCP); ``build()``
+imports build123d lazily. A family declares:
+
+* ``SEGMENTS``: the topology link segments it makes (``topology.Link.segment``), so the
+  links, and the part names (a part is named after its link), come from the topology;
+* ``for_link(params, link)``: the part of one of those links;
+* ``link`` (the topology ``Link`` record), ``name``, ``digit``, ``color``, ``print_rotation``;
+* ``build()``: the right-hand solid in its link frame (mm);
+* ``inputs()``: the plain parameter values the solid depends on (a superset, never a
+  subset): the part cache's key;
+* ``verify(shape)``: what a built solid must measure (groove radius, guides, pockets...),
+  as a list of problems; an empty list means the part is sound.
+
+The registry of families is :mod:`phantom_cad.cad.registry`: adding a part is one class here
+and one entry there.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ... import canon
+from ...kinematics import frames as F
+from ...kinematics.topology import DIGITS, JOINTS, LINKS, Joint, Link, joint
+
+#: display colours (RGB 0..1) of the digit links, one per digit in topology.DIGITS order
+DIGIT_COLORS = dict(zip(DIGITS, (
+    (0.90, 0.55, 0.25),
+    (0.25, 0.55, 0.85),
+    (0.30, 0.70, 0.45),
+    (0.80, 0.35, 0.40),
+    (0.60, 0.45, 0.80),
+), strict=True))
+
+#: digit links print lying on their flat +x side
+SIDE_DOWN = F.rot_y(math.pi / 2.0)[:3, :3]
+
+
+def parent_joint(ln: Link) -> Joint | None:
+    """The joint at a link's origin (None for a link fixed to its parent)."""
+    return joint(ln.parent_joint) if ln.parent_joint else None
+
+
+def child_joint(ln: Link) -> Joint | None:
+    """The joint at a link's far end, to its digit's next link (None at a fingertip)."""
+    return next((j for j in JOINTS if j.parent == ln.name and j.digit == ln.digit), None)
+
+
+def digit_table(document, digit: str):
+    """The parameter document's table of ``digit`` (``[thumb]`` or ``[fingers.<f>]``)."""
+    return document["fingers"][digit] if digit in document["fingers"] else document["thumb"]
+
+
+class Part:
+    """Base of the part families (see the module doc)."""
+
+    #: topology link segments this family makes
+    SEGMENTS: tuple[str, ...] = ()
+    #: display colour; None = the digit's colour
+    COLOR: tuple[float, float, float] | None = None
+
+    params = None
+    link: Link
+
+    @classmethod
+    def links(cls) -> tuple[Link, ...]:
+        """The topology links this family makes, in topology order."""
+        return tuple(ln for ln in LINKS if ln.segment in cls.SEGMENTS)
+
+    @classmethod
+    def for_link(cls, params, link: Link) -> "Part":
+        raise NotImplementedError
+
+    # -- what a part declares ------------------------------------------------
+    @property
+    def name(self) -> str:
+        return self.link.name
+
+    @property
+    def digit(self) -> str | None:
+        return self.link.digit
+
+    @property
+    def color(self) -> tuple[float, float, float]:
+        return self.COLOR if self.COLOR is not None else DIGIT_COLORS[self.digit]
+
+    @property
+    def print_rotation(self) -> np.ndarray:
+        """3x3: lays the part on its best face for printing (z up)."""
+        return SIDE_DOWN
+
+    def build(self):
+        raise NotImplementedError
+
+    def inputs(self) -> dict:
+        raise NotImplementedError
+
+    def verify(self, shape) -> list[str]:
+        return []
+
+    # -- helpers ---------------------------------------------------------------
+    def common_inputs(self) -> dict:
+        """The values every part depends on: side, hand length, hardware, print, cad, palm wall."""
+        doc = self.params.document
+        return {
+            "side": doc["hand"]["side"],
+            "hand_length_mm": doc["hand"]["hand_length_mm"],
+            "hardware": canon.plain(doc["hardware"]),
+            "print": canon.plain(doc["print"]),
+            "cad": canon.plain(doc["cad"]),
+            "palm_wall_mm": doc["palm"]["wall_mm"],
+        }
+
+    def expect(self, problems: list[str], what: str, measured: float | None, wanted: float,
+               eps: float = 1e-3) -> None:
+        """Append a problem when ``measured`` (mm) is missing or off ``wanted`` by more than eps."""
+        if measured is None or abs(measured - wanted) > eps:
+            got = "nothing" if measured is None else f"{measured:.4f}"
+            problems.append(f"{self.name}: {what} measures {got}, expected {wanted:.4f} mm")
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.name!r})"

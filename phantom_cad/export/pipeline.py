@@ -1,0 +1,318 @@
+"""``phantom-cad build``: every printable part of the hand from the parameter file.
+
+    from phantom_cad.export.pipeline import build_hand
+    result = build_hand("params/phantom.toml", "exports/phantom")
+
+Writes ``exports/<hand>/`` (see docs/exports.md): ``step/<part>.step``,
+``step/hand_assembly.step``, ``stl/<part>.stl`` (print orientation), ``bom.csv``,
+``manifest.json``, ``renders/*.png`` and ``slicer/config.ini``.
+
+Pipeline
+--------
+1. parse the parameter file (``--side`` overrides ``hand.side``) and hash every part's
+   ``assembly.part_inputs`` into a cache key (:mod:`phantom_cad.export.cache`);
+2. build the parts missing from the cache in parallel worker processes
+   (:mod:`phantom_cad.export.pool`): a worker builds the part, verifies it once
+   (``phantom_cad.cad.verify``: one valid solid, measured against the parameters), writes
+   BREP/STEP, re-imports the STEP (same volume), tessellates it (``print.stl_tolerance``),
+   checks the mesh (watertight, manifold, volume) and renders it;
+3. the assembly STEP (parts placed with ``assembly.pose_transforms``), the assembly render
+   and the interference check (:mod:`phantom_cad.export.interference`; only
+   ``assembly.designed_contacts`` may overlap) are cached under a key of all part keys and poses;
+4. every STL is sliced with PrusaSlicer (when installed) for print time and filament;
+5. everything is written into a temporary directory beside the target, which replaces
+   the previous export only when the whole build succeeded.
+
+The parts come from the assembly interface (:mod:`phantom_cad.export.interface`). The module
+imports numpy only; build123d/OCP are imported inside the workers.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import os
+import shutil
+import time
+from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from ..atomic import replace_dir
+from ..canon import canonical, plain, sha256
+from ..params import ParamError, load_document, parse
+from ..params.io import DEFAULT_PARAMS
+from . import cache as cache_mod
+from . import interface, pool as pool_mod
+from .bom import bom_csv
+from .cache import Cache
+from .interference import INTERFERENCE_TOL_MM3, interference
+from .results import BuildError, BuildResult, PartFailure, failure_from
+
+__all__ = ["build_hand", "BuildError", "BuildResult", "PartFailure", "INTERFERENCE_TOL_MM3"]
+
+
+def _load(params_path, side):
+    path = Path(params_path) if params_path is not None else DEFAULT_PARAMS
+    document = load_document(path)
+    file_side = (document.get("hand") or {}).get("side") if isinstance(document.get("hand"), dict) else None
+    if side is not None:
+        document = copy.deepcopy(document)
+        if not isinstance(document.get("hand"), dict):
+            raise ParamError("hand", document.get("hand"), "must be a table", str(path))
+        document["hand"]["side"] = side
+    params = parse(document, source=str(path))
+    return path, document, params, file_side
+
+
+def _default_out(params, side, file_side) -> Path:
+    name = params.name
+    if side is not None and side != file_side:
+        name = f"{name}_{side}"
+    return Path("exports") / name
+
+
+class _Build:
+    """One run of :func:`build_hand`: its inputs, the lazily started process pool, the stages."""
+
+    def __init__(self, path, document, params, out: Path, jobs: int, cache: Cache, render: bool, log):
+        self.path, self.document, self.params, self.out = path, document, params, out
+        self.jobs, self.cache, self.render, self.log = jobs, cache, render, log
+        self.asm = interface.assembly()
+        self.pool: ProcessPoolExecutor | None = None
+        self.astage: Path | None = None
+        names = list(self.asm.part_names(params))
+        if len(set(names)) != len(names):
+            raise BuildError(f"assembly.part_names gives duplicate names: {names}")
+        self.names = names
+        self.keys = {}
+        for n in names:
+            try:
+                inputs = self.asm.part_inputs(params, n)
+            except Exception as exc:
+                raise BuildError("cannot compute the part inputs", [failure_from(n, exc, None)]) from exc
+            self.keys[n] = cache_mod.part_key(params, n, inputs)
+        self.missing = [n for n in names if not cache.has_part(self.keys[n])]
+
+    def get_pool(self) -> ProcessPoolExecutor:
+        if self.pool is None:
+            self.pool = ProcessPoolExecutor(max_workers=self.jobs, mp_context=pool_mod.mp_context())
+        return self.pool
+
+    def close(self) -> None:
+        if self.pool is not None:
+            self.pool.shutdown(wait=True, cancel_futures=True)
+        if self.astage is not None:
+            shutil.rmtree(self.astage, ignore_errors=True)
+
+    # 1. parts ------------------------------------------------------------------------
+    def parts(self) -> dict[str, dict]:
+        """Build the missing parts into the cache; return {name: timings} of those built."""
+        part_timings: dict[str, dict] = {}
+        missing = self.missing
+        if not missing:
+            return part_timings
+        self.log(f"building {len(missing)} of {len(self.names)} parts with {self.jobs} worker(s)")
+        doc = plain(self.document)
+        tasks = [{"name": n, "key": self.keys[n], "document": doc, "source": str(self.path),
+                  "assembly_module": self.asm.__name__,
+                  "cache_root": str(self.cache.root), "render": self.render} for n in missing]
+        if self.jobs == 1 or len(missing) == 1:
+            results = [pool_mod.part_worker(task) for task in tasks]
+        else:
+            try:
+                results = list(self.get_pool().map(pool_mod.part_worker, tasks))
+            except BrokenProcessPool as exc:
+                raise BuildError(f"a worker process died while building {missing} "
+                                 f"(crash in OCP?): {exc}; {self.out} was left untouched") from exc
+        failures = []
+        for r in results:
+            if r["ok"]:
+                part_timings[r["name"]] = r["timings"]
+            else:
+                failures.append(PartFailure(**r["failure"]))
+        if failures:
+            raise BuildError(f"{len(failures)} part(s) failed; {self.out} was left untouched", failures)
+        return part_timings
+
+    # 2. assembly: poses, STEP, render, interference -------------------------------------
+    def assembly(self, metas, check_interference: bool):
+        """(poses, contacts, interference report, assembly cache dir)."""
+        params, names, keys, cache = self.params, self.names, self.keys, self.cache
+        poses = {n: np.asarray(T, dtype=float) for n, T in self.asm.pose_transforms(params).items()}
+        absent = [n for n in names if n not in poses]
+        if absent:
+            raise BuildError(f"assembly.pose_transforms has no placement for {absent}")
+        contacts = [tuple(c) for c in self.asm.designed_contacts(params)]
+        allowed = {frozenset(c[:2]) for c in contacts}
+        akey = sha256(canonical({
+            "keys": [keys[n] for n in names],
+            "poses": {n: np.round(poses[n], 9) for n in names},
+            "contacts": sorted(sorted(c[:2]) for c in contacts),
+            "label": params.name, "render": self.render, "tol": INTERFERENCE_TOL_MM3,
+            "code": cache_mod.code_digest(),
+        }))
+        adir = cache.assembly_dir(akey)
+        futures: dict[str, Future] = {}
+        if not (adir / "interference.json").is_file():
+            self.astage = astage = cache.staging(adir)
+            parts_arg = [(n, str(cache.part_dir(keys[n])), poses[n].tolist(), metas[n]["color"]) for n in names]
+            futures["step"] = self.get_pool().submit(pool_mod.assembly_step_worker, {
+                "parts": parts_arg, "label": f"{params.name}_{params.side}",
+                "out": str(astage / "hand_assembly.step")})
+            if self.render:
+                futures["render"] = self.get_pool().submit(pool_mod.assembly_render_worker, {
+                    "parts": [p + (metas[p[0]]["digit"],) for p in parts_arg],
+                    "out": str(astage / "render.png"),
+                    "title": f"{params.name} hand ({params.side}), rest pose, {len(names)} parts",
+                    "subtitle": f"parameters {params.digest[:12]}"})
+            if check_interference:
+                meshes = {}
+                for n in names:
+                    d = np.load(cache.part_dir(keys[n]) / "mesh.npz")
+                    meshes[n] = (d["vertices"], d["faces"])
+                inter = interference(meshes, poses, allowed)
+            else:
+                inter = {"skipped": True}
+            for what, fut in futures.items():
+                r = fut.result()
+                if not r["ok"]:
+                    raise BuildError(f"assembly {what} failed: {r['error']}\n{r['traceback']}")
+            if inter.get("collisions"):
+                lines = [f"  {c['parts'][0]} x {c['parts'][1]}: {c['volume_mm3']:.3f} mm^3"
+                         for c in inter["collisions"]]
+                raise BuildError(
+                    f"parts intersect at the rest pose (overlap > {INTERFERENCE_TOL_MM3} mm^3, not in "
+                    f"assembly.designed_contacts); {self.out} was left untouched:\n" + "\n".join(lines))
+            cache.write_json(astage / "interference.json", inter)
+            Cache.commit(astage, adir)
+            self.astage = None
+        inter = json.loads((adir / "interference.json").read_text())
+        return poses, contacts, inter, adir
+
+    # 3. slicing -------------------------------------------------------------------------
+    def slice(self, slice, ini: str):
+        """({name: estimate or None}, slicer info for the manifest)."""
+        from . import slicer
+
+        names, keys, cache = self.names, self.keys, self.cache
+        exe = slicer.find_slicer() if slice is not False else None
+        if slice is True and exe is None:
+            raise BuildError("--slice: prusa-slicer is not installed (bash .ci/sysdeps, or apt-get install "
+                             "prusa-slicer)")
+        estimates: dict[str, dict | None] = {n: None for n in names}
+        if exe is None:
+            reason = ("not requested (phantom-cad build --slice)" if slice is False else
+                      "prusa-slicer is not installed (bash .ci/sysdeps)")
+            return estimates, {"used": False, "reason": reason}
+        version = slicer.slicer_version(exe)
+        info: dict[str, Any] = {"used": True, "program": "PrusaSlicer", "version": version,
+                                "config": "slicer/config.ini"}
+
+        def one(n):
+            stl_path = cache.part_dir(keys[n]) / "part.stl"
+            skey = slicer.estimate_key(stl_path.read_bytes(), ini, version)
+            sfile = cache.slice_file(skey)
+            if sfile.is_file():
+                return n, json.loads(sfile.read_text())
+            try:
+                est = slicer.slice_stl(stl_path, ini, exe).as_dict()
+            except Exception as exc:
+                return n, {"error": f"{type(exc).__name__}: {exc}"}
+            cache.write_json(sfile, est)
+            return n, dict(sorted(est.items()))     # the same key order as a cache hit
+
+        with ThreadPoolExecutor(max_workers=self.jobs) as tp:
+            for n, est in tp.map(one, names):
+                estimates[n] = est
+        bad = [PartFailure(part=n, error=e["error"], check="slice")
+               for n, e in estimates.items() if e and "error" in e]
+        if bad:
+            raise BuildError(f"slicing failed; {self.out} was left untouched", bad)
+        return estimates, info
+
+    # 4. write the export into a staging directory, then replace the target ---------------
+    def write(self, metas, poses, contacts, inter, adir: Path, estimates, slicer_info, ini: str) -> dict:
+        from . import manifest as manifest_mod
+
+        names, keys, cache, out, render = self.names, self.keys, self.cache, self.out, self.render
+        out.parent.mkdir(parents=True, exist_ok=True)
+        stage = out.parent / f".{out.name}.{os.getpid()}.tmp"
+        if stage.exists():
+            shutil.rmtree(stage)
+        try:
+            for sub in ("step", "stl", "renders", "slicer"):
+                (stage / sub).mkdir(parents=True)
+            for n in names:
+                pdir = cache.part_dir(keys[n])
+                shutil.copyfile(pdir / "part.step", stage / "step" / f"{n}.step")
+                shutil.copyfile(pdir / "part.stl", stage / "stl" / f"{n}.stl")
+                if render and (pdir / "render.png").is_file():
+                    shutil.copyfile(pdir / "render.png", stage / "renders" / f"{n}.png")
+            shutil.copyfile(adir / "hand_assembly.step", stage / "step" / "hand_assembly.step")
+            if render and (adir / "render.png").is_file():
+                shutil.copyfile(adir / "render.png", stage / "renders" / "hand_assembly.png")
+            (stage / "slicer" / "config.ini").write_text(ini)
+            bom = list(self.asm.bill_of_materials(self.params))
+            (stage / "bom.csv").write_text(bom_csv(bom), encoding="utf-8")
+            man = manifest_mod.build_manifest(
+                stage=stage, params=self.params, params_path=self.path, names=names, keys=keys, metas=metas,
+                poses=poses, estimates=estimates, slicer_info=slicer_info, interference=inter,
+                contacts=contacts, bom=bom)
+            (stage / "manifest.json").write_text(json.dumps(man, indent=1, sort_keys=False) + "\n")
+            replace_dir(stage, out)
+        except BaseException:
+            shutil.rmtree(stage, ignore_errors=True)
+            raise
+        return man
+
+
+def build_hand(params_path: str | os.PathLike | None = None, out_dir: str | os.PathLike | None = None,
+               side: str | None = None, jobs: int | None = None, *, slice: bool | None = False,
+               render: bool = True, cache_dir: str | os.PathLike | None = None,
+               check_interference: bool = True,
+               log: Callable[[str], None] | None = None) -> BuildResult:
+    """Build every part of the hand described by ``params_path`` into ``out_dir``.
+
+    ``side`` overrides ``hand.side``; ``jobs`` worker processes (default os.cpu_count());
+    ``slice`` False = skip (default: slicing every part costs ~1-4 s each, cached after),
+    True = slice with PrusaSlicer (error if missing), None = slice when it is installed;
+    ``cache_dir`` default ``$PHANTOM_CAD_CACHE`` or ``.cache``.
+    Raises :class:`BuildError` (nothing written) or :class:`ParamError`.
+    """
+    from .slicer import config_ini
+
+    t_start = time.perf_counter()
+    timings: dict[str, float] = {}
+    path, document, params, file_side = _load(params_path, side)
+    out = Path(out_dir) if out_dir is not None else _default_out(params, side, file_side)
+    jobs = max(1, int(jobs or os.cpu_count() or 1))
+    run = _Build(path, document, params, out, jobs, Cache(cache_dir), render, log or (lambda msg: None))
+    timings["prepare"] = time.perf_counter() - t_start
+    try:
+        t = time.perf_counter()
+        part_timings = run.parts()
+        timings["parts"] = time.perf_counter() - t
+        metas = {n: run.cache.part_meta(run.keys[n]) for n in run.names}
+
+        t = time.perf_counter()
+        poses, contacts, inter, adir = run.assembly(metas, check_interference)
+        timings["assembly"] = time.perf_counter() - t
+
+        t = time.perf_counter()
+        ini = config_ini(params.print)
+        estimates, slicer_info = run.slice(slice, ini)
+        timings["slice"] = time.perf_counter() - t
+
+        t = time.perf_counter()
+        man = run.write(metas, poses, contacts, inter, adir, estimates, slicer_info, ini)
+        timings["write"] = time.perf_counter() - t
+    finally:
+        run.close()
+    timings["total"] = time.perf_counter() - t_start
+    return BuildResult(out_dir=out, hand=params.name, side=params.side, params_digest=params.digest,
+                       parts=run.names, built=run.missing, cached=[n for n in run.names if n not in run.missing],
+                       manifest=man, timings=timings, sliced=slicer_info["used"], part_timings=part_timings)

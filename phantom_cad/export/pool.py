@@ -1,0 +1,202 @@
+"""The worker processes of the build: one part (build, verify, STEP, STL, render into its
+cache entry), the assembly STEP and the assembly render.
+
+Workers receive plain tasks (the plain parameter document, which they re-parse, and the name
+of the assembly module, :mod:`phantom_cad.export.interface`) and return plain dicts; a
+failure is reported, never raised, so one broken part does not bring the pool down.
+build123d/OCP are imported inside the workers.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import shutil
+import sys
+import time
+import traceback
+from pathlib import Path
+
+import numpy as np
+
+from .. import units
+from ..atomic import write_atomic
+from ..canon import jsonable, sha256
+from ..params import parse
+from . import interface
+from .cache import Cache
+from .manifest import mass_g
+from .results import failure_from
+
+#: coarse tessellation used only for pictures (mm, rad)
+VIEW_TOLERANCE_MM = 0.15
+VIEW_ANGULAR_TOLERANCE_RAD = 0.35
+#: STEP re-import must give the same volume to this relative tolerance
+STEP_VOLUME_RTOL = 1e-3
+#: STL volume vs solid volume (tessellation removes material on convex faces)
+STL_VOLUME_RTOL = 1e-2
+
+
+def mp_context():
+    """fork when this process has not loaded OCP yet (fast: the CLI's case); spawn once OCP
+    is loaded (its thread pools make a forked child deadlock) or where fork is missing."""
+    methods = multiprocessing.get_all_start_methods()
+    ocp_loaded = any(m == "OCP" or m.startswith("OCP.") for m in sys.modules)
+    return multiprocessing.get_context("fork" if "fork" in methods and not ocp_loaded else "spawn")
+
+
+def _bbox(v: np.ndarray) -> dict:
+    return {"min": [round(float(x), 6) for x in v.min(axis=0)],
+            "max": [round(float(x), 6) for x in v.max(axis=0)]}
+
+
+def _check(asm, params, name: str, shape) -> str:
+    """The part's one validity check and its measured verification: the assembly module's
+    ``verify_part`` when it has one ("ok", or CheckError listing the problems), else only
+    ``phantom_cad.cad.verify.check_solid`` ("skipped": nothing measured)."""
+    from ..cad import verify
+
+    if not hasattr(asm, "verify_part"):
+        verify.check_solid(name, shape)
+        return "skipped"
+    problems = asm.verify_part(params, name, shape)
+    if problems:
+        raise verify.CheckError(name, "verify_part", "; ".join(problems))
+    return "ok"
+
+
+def part_worker(task: dict) -> dict:
+    """Build, check and export one part into its cache entry. Runs in a worker process."""
+    name = task["name"]
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    inputs = None
+    try:
+        params = parse(task["document"], source=task["source"])
+        asm = interface.assembly(task.get("assembly_module"))
+        inputs = asm.part_inputs(params, name)
+        from . import render, step_stl
+
+        built = asm.build_part(params, name)
+        timings["build_part"] = time.perf_counter() - t0
+        if built.name != name:
+            raise step_stl.CheckError(name, "name", f"build_part returned a part named {built.name!r}")
+        shape = built.shape
+        verified = _check(asm, params, name, shape)
+        volume = float(shape.volume)
+        area = float(shape.area)
+
+        cache = Cache(task["cache_root"])
+        final = cache.part_dir(task["key"])
+        tmp = cache.staging(final)
+        t = time.perf_counter()
+        (tmp / "part.brep").write_bytes(step_stl.brep_bytes(shape))
+        step = step_stl.step_bytes(shape, label=name, color=built.color)
+        (tmp / "part.step").write_bytes(step)
+        reimported = step_stl.step_volume(tmp / "part.step")
+        if abs(reimported - volume) > STEP_VOLUME_RTOL * volume:
+            raise step_stl.CheckError(name, "STEP round trip",
+                                      f"re-imported volume {reimported:.4f} mm^3 vs {volume:.4f} mm^3")
+        timings["step"] = time.perf_counter() - t
+
+        t = time.perf_counter()
+        tol_mm = units.mm(params.print.stl_tolerance)
+        vv, fv = step_stl.tessellate(shape, VIEW_TOLERANCE_MM, VIEW_ANGULAR_TOLERANCE_RAD)
+        v, f = step_stl.tessellate(shape, tol_mm)
+        R = np.asarray(built.print_rotation, dtype=float)
+        if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9) or np.linalg.det(R) < 0:
+            raise step_stl.CheckError(name, "print_rotation", f"not a proper rotation: {R.tolist()}")
+        vp, T_print = step_stl.to_print_pose(v, R)
+        stl = step_stl.stl_bytes(vp, f, name)
+        # check what is written: the float32 mesh read back from the STL bytes
+        sv, sf = step_stl.read_stl(stl)
+        mesh_checks = step_stl.check_mesh(name, sv, sf, volume, STL_VOLUME_RTOL)
+        (tmp / "part.stl").write_bytes(stl)
+        np.savez(tmp / "mesh.npz", vertices=v, faces=f.astype(np.int32))
+        np.savez(tmp / "view.npz", vertices=vv, faces=fv.astype(np.int32))
+        timings["stl"] = time.perf_counter() - t
+
+        meta = {
+            "name": name,
+            "digit": built.digit,
+            "color": [float(c) for c in built.color],
+            "print_rotation": R.tolist(),
+            "print_transform": T_print.tolist(),
+            "T_hand_link": np.asarray(built.T_hand_link, dtype=float).tolist(),
+            "volume_mm3": volume,
+            "area_mm2": area,
+            "bbox_mm": _bbox(v),
+            "print_bbox_mm": _bbox(vp),
+            "stl": {"sha256": sha256(stl), "bytes": len(stl), **mesh_checks},
+            "step": {"sha256": sha256(step), "bytes": len(step), "reimport_volume_mm3": reimported},
+            "part_inputs": jsonable(inputs),
+            "verify_part": verified,
+        }
+        if task.get("render", True):
+            t = time.perf_counter()
+            vpv = (vv @ R.T) + T_print[:3, 3]
+            mass = mass_g(volume, params.print)
+            render.render_png(
+                [render.MeshItem(name, vpv, fv, tuple(built.color))], tmp / "render.png",
+                title=f"{name}  (print orientation)",
+                subtitle=(f"{units.cm3(volume):.2f} cm³, ~{mass:.1f} g at {params.print.infill:.0%} infill, "
+                          f"bbox {np.ptp(vp[:, 0]):.1f} x {np.ptp(vp[:, 1]):.1f} x {np.ptp(vp[:, 2]):.1f} mm"),
+                size_px=700, bed=True)
+            timings["render"] = time.perf_counter() - t
+        (tmp / "meta.json").write_text(json.dumps(meta, indent=1, sort_keys=True))
+        Cache.commit(tmp, final)
+        timings["total"] = time.perf_counter() - t0
+        return {"name": name, "ok": True, "timings": timings}
+    except BaseException as exc:  # report, never crash the pool
+        failure = failure_from(name, exc, inputs)
+        c = Cache(task["cache_root"])
+        shutil.rmtree(c.staging_path(c.part_dir(task["key"])), ignore_errors=True)
+        return {"name": name, "ok": False, "failure": failure.__dict__}
+
+
+def assembly_step_worker(task: dict) -> dict:
+    """hand_assembly.step from the cached BREPs placed at the rest pose."""
+    try:
+        from build123d import Color, Compound
+
+        from . import step_stl
+
+        children = []
+        for name, part_dir, T, color in task["parts"]:
+            shape = step_stl.read_brep(Path(part_dir) / "part.brep")
+            placed = step_stl.transform_shape(shape, np.asarray(T))
+            placed.label = name
+            placed.color = Color(*color)
+            children.append(placed)
+        hand = Compound(children=children, label=task["label"])
+        data = step_stl.step_bytes(hand)
+        out = Path(task["out"])
+        write_atomic(out, data)
+        return {"ok": True, "sha256": sha256(data)}
+    except BaseException as exc:
+        return {"ok": False, "error": f"{type(exc).__name__}: {exc}",
+                "traceback": "".join(traceback.format_exception(exc))}
+
+
+def assembly_render_worker(task: dict) -> dict:
+    try:
+        from . import render
+
+        items = []
+        labelled = set()
+        for name, part_dir, T, color, digit in task["parts"]:
+            d = np.load(Path(part_dir) / "view.npz")
+            T = np.asarray(T)
+            v = d["vertices"] @ T[:3, :3].T + T[:3, 3]
+            label = None
+            key = digit or name
+            if key not in labelled and (digit is not None or name == "palm"):
+                labelled.add(key)
+                label = key
+            items.append(render.MeshItem(name, v, d["faces"], tuple(color), label))
+        render.render_png(items, task["out"], title=task["title"], subtitle=task["subtitle"],
+                          elev=28.0, azim=-62.0, size_px=1000, max_faces=150000)
+        return {"ok": True}
+    except BaseException as exc:
+        return {"ok": False, "error": f"{type(exc).__name__}: {exc}",
+                "traceback": "".join(traceback.format_exception(exc))}
