@@ -323,8 +323,8 @@ def _digit(t: TomlTable, spec: topology.Chain, extra_limits: tuple[str, ...], ha
     chain = ChainParams(spec, tuple(R[j] for j in joints), paths,
                         tuple(limits[j] for j in joints), guide, r, travel)
     _check_chain(t, chain, t.field("limits_rad"))
-    for k, ((key, crossed), length) in enumerate(zip(spec.spans, paths)):
-        _check_path(t, key, length, seg[crossed], R[joints[k]], R[joints[k + 1]], f"length_fraction.{crossed}")
+    for (key, crossed), length, a, b in zip(spec.spans, paths, joints, joints[1:]):
+        _check_path(t, key, length, seg[crossed], R[a], R[b], f"length_fraction.{crossed}")
     return seg, width, thickness, chain, limits
 
 
