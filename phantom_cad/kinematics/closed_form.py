@@ -31,23 +31,25 @@ def cosine_argument(u, d1, d2, alpha, r):
     return a + u * (b + c * u)
 
 
-def reference_angle(u, d1, d2, alpha, r, out=None, coefficients=None):
+def reference_angle(u, d1, d2, alpha, r, out=None, coefficients=None, work=None):
     """Eq. (6)/(8): q_MCP (or thumb q_MP) = alpha - arccos((d1^2 + d2^2 - (L0 - r u)^2) / (2 d1 d2)).
 
     Beyond the law's domain (a servo angle far outside its travel) the argument is clipped to
     [-1, 1]: the chord cannot shorten past |d1 - d2|, the joint stops folded at alpha.
     ``out`` receives the result (it may be a strided view); ``coefficients`` may be passed in
-    precomputed (:func:`cosine_coefficients`). The work runs in place on one contiguous
-    temporary, the fast layout for numpy's loops.
+    precomputed (:func:`cosine_coefficients`). The work runs in place on one C-contiguous
+    array (``work``, or a new one), the fast layout for numpy's loops.
     """
     a, b, c = cosine_coefficients(d1, d2, alpha, r) if coefficients is None else coefficients
-    x = np.asarray(np.multiply(u, c), dtype=float)
+    x = np.empty(np.broadcast(u, c).shape) if work is None else work
+    np.multiply(u, c, out=x)
     x += b
     x *= u
     x += a
     np.clip(x, -1.0, 1.0, out=x)
     np.arccos(x, out=x)
-    return np.subtract(alpha, x, out=out)
+    np.subtract(alpha, x, out=x if out is None else out)
+    return (x if out is None else out)[()]
 
 
 def chord_constants(d1, d2, alpha):

@@ -53,6 +53,9 @@ class Hand:
         self.servo_radius = np.array([c.servo_radius for c in chains])
         self._cosine = cf.cosine_coefficients(self._d1, self._d2, self._alpha, self.servo_radius)
         self._chord = cf.chord_constants(self._d1, self._d2, self._alpha)
+        # the same constants as columns, for the chain-major (5, block) layout of a batched forward
+        self._cosine_columns = tuple(np.reshape(v, (-1, 1)) for v in self._cosine)
+        self._alpha_column = self._alpha[:, None]
         self._cmc_gain = thumb.cmc_gain
         #: k_s / EA (1/m): the compliance of eq. (13)/(14) in the parameter file
         self.compliance = params.mechanics.spring_k / params.mechanics.tendon_EA
@@ -141,9 +144,9 @@ class Hand:
         radii), clip to the servo travel. :meth:`inverse` and the effect stack both call it."""
         s = q @ (_projection(coupling) if projection is None else projection)
         lo, hi = (self.s_min, self.s_max) if s_range is None else s_range
-        np.clip(s, lo, hi, out=s)
+        _clip(s, lo, hi, out=s)
         u = self.servo_angles(s, radius)
-        return np.clip(u, self.u_min, self.u_max, out=u)
+        return _clip(u, self.u_min, self.u_max, out=u)
 
     # -- public API ------------------------------------------------------------
     def forward(self, u, compensated: bool = False) -> np.ndarray:
@@ -156,13 +159,19 @@ class Hand:
         n = flat.shape[0]
         if n <= _BLOCK:
             return self.reference_angles(u) @ P
-        # a large batch runs in blocks whose temporaries stay in the CPU cache: the passes
-        # around the arccos then cost little next to it (docs/performance.md)
+        # a large batch runs in blocks, transposed to (servo, pose): each ufunc then runs along
+        # a contiguous row of a block whose temporaries stay in the CPU cache, so the passes
+        # around the arccos cost little next to it (docs/performance.md)
         q = np.empty((n, N_JOINTS))
-        s = np.empty((_BLOCK, N_SERVOS))
+        s = np.empty((N_SERVOS, _BLOCK))
+        work = np.empty((len(CHAINS), _BLOCK))
         for i in range(0, n, _BLOCK):
             j = min(i + _BLOCK, n)
-            np.matmul(self.reference_angles(flat[i:j], out=s[:j - i]), P, out=q[i:j])
+            uT, sT = flat[i:j].T, s[:, :j - i]
+            cf.reference_angle(uT[TENDON_SERVOS], self._d1, self._d2, self._alpha_column, self.servo_radius,
+                               out=sT[TENDON_SERVOS], coefficients=self._cosine_columns, work=work[:, :j - i])
+            np.multiply(uT[CMC_SERVO], self._cmc_gain, out=sT[CMC_SERVO])
+            np.matmul(sT.T, P, out=q[i:j])
         return q.reshape(u.shape[:-1] + (N_JOINTS,))
 
     def inverse(self, q_d, compensated: bool = True) -> np.ndarray:
@@ -171,8 +180,7 @@ class Hand:
         Targets are clipped to the workspace [q_min, q_max], projected onto each digit's
         reachable curve, and the result respects the servo travel [u_min, u_max].
         """
-        q = _as_batch(q_d, N_JOINTS, "q_d")
-        q = np.clip(q, self.q_min, self.q_max)
+        q = _clip(_as_batch(q_d, N_JOINTS, "q_d"), self.q_min, self.q_max)
         if self.effects:  # the control law with the fitted effects inverted (docs/effects.md)
             return self.effects.inverse(self, q, compensated)
         return self.control_law(q, self.coupling(compensated), projection=self._project[compensated])
@@ -229,6 +237,11 @@ class Hand:
 def _projection(P: np.ndarray) -> np.ndarray:
     """(15, 6): least-squares projection onto each digit's curve, s_k = c_k . q / (c_k . c_k)."""
     return (P / np.sum(P ** 2, axis=1, keepdims=True)).T.copy()
+
+
+def _clip(x, lo, hi, out=None):
+    """np.clip(x, lo, hi, out=out) (NaN stays NaN), at half its cost on one pose."""
+    return np.minimum(np.maximum(x, lo, out=out), hi, out=out)
 
 
 def _as_batch(x, n: int, name: str) -> np.ndarray:
