@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from ... import canon
+from ... import canon, units
 from ...kinematics import frames as F
 from ...kinematics.topology import FINGERS, LINKS, SERVOS, THUMB_CHAIN, chain
 from ..measure import circular_pockets
@@ -86,9 +86,9 @@ class Palm(Part):
         for p in sorted(pk, key=lambda p: p["centre"][0] * (1 if self.params.side == "right" else -1)):
             if not normals or np.linalg.norm(p["facing"] - normals[-1]) > 1e-9:
                 normals.append(p["facing"])
-        want = math.degrees(self.params.palm.arc_offset)
+        want = units.deg(self.params.palm.arc_offset)
         for a, b in zip(normals, normals[1:]):
-            ang = math.degrees(math.acos(float(np.clip(a @ b, -1.0, 1.0))))
+            ang = units.deg(math.acos(float(np.clip(a @ b, -1.0, 1.0))))
             if abs(ang - want) > 1e-6:
                 out.append(f"{self.name}: socket normals {ang:.6f} deg apart, expected {want:g}")
         return out
