@@ -16,11 +16,11 @@ install: $(STAMP)
 
 # System tools the checks use (PrusaSlicer, urdfdom's check_urdf): Debian packages,
 # installed when missing and we are root (as on CI); otherwise the tests that need
-# them say so and skip.
+# them say so and skip, and the demo builds everything but the print estimates.
 sysdeps:
 	@bash .ci/sysdeps
 
-demo: install
+demo: install sysdeps
 	$(VENV)/bin/phantom-cad demo
 
 test: install sysdeps

@@ -145,12 +145,16 @@ def model_inverse(
 @app.command("demo")
 def demo(params: Optional[Path] = ParamsOpt,
          out: Optional[Path] = typer.Option(None, "--out", help="Export folder for the parts (default exports/<hand>)."),
-         slice_: bool = typer.Option(True, "--slice/--no-slice",
-                                     help="Slice the parts with PrusaSlicer for print estimates (cached).")):
+         slice_: Optional[bool] = typer.Option(None, "--slice/--no-slice", show_default="slice when installed",
+                                               help="Slice the parts with PrusaSlicer for print estimates "
+                                                    "(cached). Default: when prusa-slicer is installed."),
+         cache_dir: Optional[Path] = typer.Option(None, "--cache-dir",
+                                                  help="Part cache (default $PHANTOM_CAD_CACHE or .cache).")):
     """The main job on the default hand: workspace, a forward/inverse round trip, and every printable part."""
     import numpy as np
 
     from .. import load_hand
+    from ..export.slicer import find_slicer
     from ..params import DEFAULT_PARAMS
 
     hand = load_hand(params)
@@ -163,7 +167,10 @@ def demo(params: Optional[Path] = ParamsOpt,
                    f"{'compensated' if compensated else 'analytic'}: max |du| = {err:.2e} rad")
     typer.echo("")
     build(params=params or DEFAULT_PARAMS, out=out, side=None, jobs=None, slice_=slice_, render=True,
-          cache_dir=None, quiet=False)
+          cache_dir=cache_dir, quiet=False)
+    if slice_ is None and find_slicer() is None:
+        typer.echo("slicing skipped: prusa-slicer is not installed (as root: bash .ci/sysdeps, or apt-get install "
+                   "prusa-slicer; then phantom-cad build --slice)")
 
 
 # -- parts (phantom_cad/cad/cli.py; CAD is imported inside the command) -------------

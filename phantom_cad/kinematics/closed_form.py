@@ -89,16 +89,22 @@ def elastic_lever(radii, path_lengths):
     return np.concatenate(([0.0], np.cumsum(path_lengths))) / radii
 
 
-def coupling_vector(radii, path_lengths, compliance):
+def coupling_constants(radii, path_lengths):
+    """(A, v, R.A, R.v) of one chain: what :func:`coupling_vector` needs, for precomputing."""
+    radii = np.asarray(radii, dtype=float)
+    A = ideal_coupling(radii)
+    v = elastic_lever(radii, path_lengths)
+    return A, v, float(radii @ A), float(radii @ v)
+
+
+def coupling_vector(radii, path_lengths, compliance, constants=None):
     """Eq. (13)/(14) in closed form: q_comp = (M^-1 A) q_ref for a compliance kappa = k_s / EA.
 
     M = I + kappa v R^T (v the :func:`elastic_lever`, since T = k_s R.q), so by Sherman-Morrison
     M^-1 A = A - v kappa (R.A) / (1 + kappa R.v). ``compliance`` broadcasts: a scalar gives (n,),
-    an array (...,) gives (..., n). kappa = 0 is the analytic model (A itself).
+    an array (...,) gives (..., n). kappa = 0 is the analytic model (A itself). ``constants``
+    may be passed in precomputed (:func:`coupling_constants`).
     """
-    radii = np.asarray(radii, dtype=float)
-    A = ideal_coupling(radii)
-    v = elastic_lever(radii, path_lengths)
+    A, v, RA, Rv = coupling_constants(radii, path_lengths) if constants is None else constants
     kappa = np.asarray(compliance, dtype=float)[..., None]
-    g = kappa * (radii @ A) / (1.0 + kappa * (radii @ v))
-    return A - g * v
+    return A - (kappa * RA / (1.0 + kappa * Rv)) * v

@@ -57,6 +57,7 @@ class Hand:
         self._cosine_columns = tuple(np.reshape(v, (-1, 1)) for v in self._cosine)
         self._alpha_column = self._alpha[:, None]
         self._cmc_gain = thumb.cmc_gain
+        self._coupling_constants = [cf.coupling_constants(c.radii, c.path_lengths) for c in chains]
         #: k_s / EA (1/m): the compliance of eq. (13)/(14) in the parameter file
         self.compliance = params.mechanics.spring_k / params.mechanics.tendon_EA
 
@@ -90,7 +91,8 @@ class Hand:
         kappa = np.asarray(compliance, dtype=float)
         if kappa.ndim == 0:
             kappa = np.full(len(CHAINS), float(kappa))
-        return [cf.coupling_vector(c.radii, c.path_lengths, kappa[..., k]) for k, c in enumerate(self.params.chains)]
+        return [cf.coupling_vector(c.radii, c.path_lengths, kappa[..., k], constants)
+                for k, (c, constants) in enumerate(zip(self.params.chains, self._coupling_constants))]
 
     def coupling_matrix(self, compliance) -> np.ndarray:
         """(6, 15) P with q = s @ P for one compliance (scalar or per chain (5,)); the CMC row is 1."""

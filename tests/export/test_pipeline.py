@@ -340,3 +340,21 @@ def test_cli_builds(standin, standin_build, tmp_path):
     man = json.loads((tmp_path / "o" / "manifest.json").read_text())
     assert man["slicer"] == {"used": False, "reason": "not requested (phantom-cad build --slice)"}
     assert all(p["print"] is None for p in man["parts"])
+
+
+def test_demo_without_prusa_slicer(hand_build, tmp_path, monkeypatch):
+    """`make demo` on a machine without PrusaSlicer: everything but the print estimates, and one
+    line saying slicing was skipped and how to enable it (exit 0)."""
+    from typer.testing import CliRunner
+
+    from phantom_cad.cli import app
+    from phantom_cad.export import slicer
+
+    _, cache = hand_build
+    monkeypatch.setattr(slicer, "find_slicer", lambda: None)
+    res = CliRunner().invoke(app, ["demo", "--out", str(tmp_path / "o"), "--cache-dir", str(cache)])
+    assert res.exit_code == 0, res.output
+    assert "slicing skipped: prusa-slicer is not installed" in res.output
+    man = json.loads((tmp_path / "o" / "manifest.json").read_text())
+    assert man["slicer"]["used"] is False
+    assert len(list((tmp_path / "o" / "stl").glob("*.stl"))) == 26
