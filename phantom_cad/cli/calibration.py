@@ -1,7 +1,7 @@
 """Command functions of the calibration workflow: simulate, compare, diagnose, fit.
 
-Registered in phantom_cad/cli.py. None imports a CAD library. Bad input raises DataError,
-ParamError or cli.UserError (printed as ``error: ...``, exit code 2).
+Registered in phantom_cad/cli/__init__.py. None imports a CAD library. Bad input raises DataError,
+ParamError or errors.UserError (printed as ``error: ...``, exit code 2).
 """
 
 from __future__ import annotations
@@ -279,7 +279,7 @@ def fit(
     replaced by the fitted ones (tendon_elasticity always written, 0 when not fitted)."""
     from .. import load_hand
     from ..params import dump_params
-    from ..canon import plain as _plain
+    from ..canon import plain
     from ..calibration.data import read_measurements
     from ..calibration.diagnose import mae
     from ..calibration.effects import validate_effects
@@ -299,7 +299,7 @@ def fit(
         # the fit starts from the analytic model: a zero compliance keeps compensated=True consistent with it
         table["tendon_elasticity"] = {"compliance_per_m": 0.0}
     validate_effects(table, str(out))
-    doc = _plain(hand.params.document)
+    doc = plain(hand.params.document)
     doc["effects"] = table
     header = [f"# Calibrated by `phantom-cad fit {data} --effects {','.join(names)}`",
               f"# from {hand.params.source} (digest {hand.params.digest[:12]}), {len(m)} rows.",
