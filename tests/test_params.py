@@ -123,6 +123,18 @@ def test_cosine_law_argument_leaves_its_domain(document):
                      "(chord L = L0 - r u = -1.424 mm must stay in [2.000, 22.000] mm)")
 
 
+def test_chord_negative_inside_the_travel(document):
+    # issue 8, defect 4: a 20 mm servo pulley keeps the argument inside [-1, 1] at both ends of
+    # the travel, but the chord L = L0 - r u is linear in u and changes sign inside it.
+    # By hand: L0 = 16.902 mm (above), L(93 deg) = 16.902 - 20 * 1.62316 = -15.561 mm;
+    # at the ends the argument is cos(100 deg) = -0.1736 and (244 - 242.15) / 240 = 0.0077, but at
+    # L = 0 it reaches (144 + 100) / 240 = 1.0167
+    document["fingers"]["index"]["servo_pulley_radius_mm"] = 20.0
+    refuse(document, "fingers.index.servo_travel_deg = [0.0, 93.0]: the chord L = L0 - r u is -15.561 mm "
+                     "at u = 93 deg, outside [2.000, 22.000] mm: inside the travel it leaves the cosine "
+                     "law's domain (the argument reaches 1.0167 at L = 0)")
+
+
 def test_travel_image_outside_limits(document):
     document["fingers"]["index"]["limits_rad"]["mcp"] = [0.0, 1.0]
     # eq. (6) by hand at u = 93 deg: L = L0 - 7 mm * 93 pi / 180

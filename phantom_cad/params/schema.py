@@ -266,6 +266,19 @@ def _check_chain(t: TomlTable, chain: ChainParams, ref_limit_key: str) -> None:
                 f"the cosine-law argument (d1^2 + d2^2 - L^2) / (2 d1 d2) is {x:.4f} at u = {u / DEG:g} deg, "
                 f"outside [-1, 1] (chord L = L0 - r u = {L / MM:.3f} mm must stay in "
                 f"[{g.chord_range[0] / MM:.3f}, {g.chord_range[1] / MM:.3f}] mm)", t.source)
+    # the chord is linear in u: inside [|d1 - d2|, d1 + d2] at both ends (with its sign), it is
+    # inside over the whole travel, and so is the argument (an argument inside [-1, 1] at the
+    # ends alone lets the chord pass through 0 in between)
+    for u in (lo_u, hi_u):
+        L = g.L0 - chain.servo_radius * u
+        if not g.chord_range[0] <= L <= g.chord_range[1]:
+            x_max = max(float(cf.cosine_argument(v, g.d1, g.d2, g.alpha, chain.servo_radius)) for v in
+                        (lo_u, hi_u, g.L0 / chain.servo_radius))
+            raise ParamError(
+                travel_field, travel_val,
+                f"the chord L = L0 - r u is {L / MM:.3f} mm at u = {u / DEG:g} deg, outside "
+                f"[{g.chord_range[0] / MM:.3f}, {g.chord_range[1] / MM:.3f}] mm: inside the travel it leaves "
+                f"the cosine law's domain (the argument reaches {x_max:.4f} at L = 0)", t.source)
     # the image of the whole travel must lie inside the admissible workspace (analytic model;
     # compensation only reduces the distal joints)
     coupling = chain.ideal_coupling
