@@ -166,6 +166,13 @@ class Measurements:
     def q_columns(self) -> tuple[str, ...]:
         return tuple(c for c, m in zip(Q_COLUMNS, self.measured) if m)
 
+    def require_joints(self) -> "Measurements":
+        """Self, or DataError when no joint angle was measured (no q column, or every q cell empty):
+        there is nothing to compare a model with."""
+        if not np.isfinite(self.q).any():
+            raise DataError(self.source, None, None, "no joint angle was measured (every q cell is empty)")
+        return self
+
     @property
     def direction(self) -> np.ndarray:
         """(N, 6) direction of motion of every servo: +1 flexing, -1 extending, 0 never moved

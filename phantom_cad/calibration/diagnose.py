@@ -154,13 +154,9 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
     names = list(REGISTRY) if candidates is None else list(candidates)
     for n in names:
         get_effect(n, "--effects")
-    problem = Problem(hand, m)
+    problem = Problem(hand, m.require_joints())
     parts = folds(problem)
     notes: list[str] = []
-    if problem.m == 0:
-        from .data import DataError
-
-        raise DataError(m.source, None, None, "no joint angle was measured (every q cell is empty)")
     current = list(start)
     base = fit(Model(hand, current, problem), problem)
     before = fit(Model(hand, [], problem), problem)

@@ -10,6 +10,7 @@ Two independent random streams (effects, noise) come from the seed: same seed, s
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,6 +19,10 @@ from ..kinematics.topology import N_JOINTS, N_SERVOS, Q_COLUMNS, U_COLUMNS, serv
 from ..units import DEG
 from .data import Measurements
 from .effects import REGISTRY, effect_values, get_effect, run_pipeline
+
+
+#: most samples per direction per servo: 12 x 100,000 rows of 21 columns is about 0.2 GB in memory
+MAX_POINTS = 100_000
 
 
 class SimulationError(ValueError):
@@ -65,8 +70,9 @@ def draw_hidden(hand, effects, seed: int, explicit: dict | None = None) -> dict[
 
 def sweep_commands(hand, points: int, travel: float = 1.0):
     """u (N, 6) and sweep labels: each servo flexes over ``points`` steps and returns over ``points``."""
-    if points < 2:
-        raise SimulationError(f"--points {points}: must be >= 2")
+    if not 2 <= points <= MAX_POINTS:
+        raise SimulationError(f"--points {points}: must be in [2, {MAX_POINTS}] (the file has about "
+                              f"{2 * N_SERVOS} x points rows)")
     if not 0.0 < travel <= 1.0:
         raise SimulationError(f"--travel {travel}: must be in (0, 1]")
     us, labels = [], []
@@ -92,8 +98,10 @@ def simulate(hand, effects=(), *, noise_deg: float = 0.1, seed: int = 0, points:
     """
     for name in effects:
         get_effect(name, "--effects")
-    if noise_deg < 0:
-        raise SimulationError(f"--noise-deg {noise_deg}: must be >= 0")
+    if not (math.isfinite(noise_deg) and noise_deg >= 0):
+        raise SimulationError(f"--noise-deg {noise_deg}: must be a finite number >= 0")
+    if seed < 0:
+        raise SimulationError(f"--seed {seed}: must be >= 0")
     if measure not in ("chain", "all"):
         raise SimulationError(f"--measure {measure}: must be 'chain' or 'all'")
     cols = list(Q_COLUMNS) if joints is None else list(joints)

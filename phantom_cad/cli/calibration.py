@@ -106,7 +106,7 @@ def compare(
     from ..calibration.report import metrics
 
     hand = load_hand(params)
-    m = read_measurements(data, degrees=degrees)
+    m = read_measurements(data, degrees=degrees).require_joints()
     q_before = run_pipeline(hand, [], m.u, None, 0.0)
     fitted = None
     if effects is not None:
@@ -197,7 +197,7 @@ def diagnose(
     from ..calibration.diagnose import diagnose as run
 
     hand = load_hand(params)
-    m = read_measurements(data, degrees=degrees)
+    m = read_measurements(data, degrees=degrees).require_joints()
     names = _effect_names(candidates, "--candidates") if candidates else None
     d = run(hand, m, names)
     result = d.to_json()
@@ -289,7 +289,7 @@ def fit(
     if not names:
         raise _user_error("--effects: name at least one effect to fit")
     hand = load_hand(params)
-    m = read_measurements(data, degrees=degrees)
+    m = read_measurements(data, degrees=degrees).require_joints()
     problem = Problem(hand, m)
     before = run_fit(Model(hand, [], problem), problem)
     res = run_fit(Model(hand, names, problem), problem)

@@ -160,3 +160,23 @@ def test_simulate_degrees_reads_back_as_the_radian_file(tmp_path):
     cells = [float(x) for line in deg.read_text().splitlines() if not line.startswith(("#", "sweep"))
              for x in line.split(",")[1:7]]
     assert max(cells) == pytest.approx(math.degrees(a.u.max()), abs=1e-8)
+
+
+@pytest.mark.parametrize("args, message", [
+    # issue 8, defect 6: NaN noise wrote a file of empty cells; a negative seed and 1e8 points crashed
+    (["simulate", "--noise-deg", "nan", "--out", "{dir}/x.csv"], "error: --noise-deg nan: must be a finite number >= 0"),
+    (["simulate", "--seed", "-1", "--out", "{dir}/x.csv"], "error: --seed -1: must be >= 0"),
+    (["simulate", "--points", "100000000", "--out", "{dir}/x.csv"],
+     "error: --points 100000000: must be in [2, 100000] (the file has about 12 x points rows)"),
+    # a file without joint columns: fit wrote an empty calibrated file (MAE nan), compare crashed
+    (["fit", "{dir}/nojoints.csv", "--effects", "joint_offset", "--out", "{dir}/c.toml"],
+     "error: {dir}/nojoints.csv: no joint angle was measured (every q cell is empty)"),
+    (["compare", "{dir}/nojoints.csv"], "error: {dir}/nojoints.csv: no joint angle was measured (every q cell is empty)"),
+])
+def test_refused_without_writing(tmp_path, args, message):
+    (tmp_path / "nojoints.csv").write_text("u1,u2,u3,u4,u5,u6\n0,0,0,0,0,0\n0,0.5,0,0,0,0\n0,1.0,0,0,0,0\n")
+    r = run(*[a.format(dir=tmp_path) for a in args])
+    assert r.returncode == 2
+    assert r.stderr.strip() == message.format(dir=tmp_path)
+    assert "Traceback" not in r.stderr
+    assert not (tmp_path / "x.csv").exists() and not (tmp_path / "c.toml").exists()
