@@ -11,7 +11,7 @@ import os
 import shutil
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 # mkstemp creates 0600 files; written files get the usual permissions (0666 less the umask)
 _UMASK = os.umask(0)
@@ -35,6 +35,28 @@ def write_atomic(path: str | os.PathLike, data: str | bytes) -> None:
 
 def write_json_atomic(path: str | os.PathLike, obj: Any, indent: int = 2, sort_keys: bool = False) -> None:
     write_atomic(path, json.dumps(obj, indent=indent, sort_keys=sort_keys) + "\n")
+
+
+def check_replaceable(target: str | os.PathLike, is_ours: Callable[[Path], bool], what: str) -> None:
+    """Refuse (UserError naming the path) to replace ``target`` unless it does not exist, is an
+    empty folder, or is an earlier output of the same kind (``is_ours(target)``, read from its
+    marker file): a command never replaces a user's file or folder."""
+    from .errors import UserError
+
+    target = Path(target)
+    if not os.path.lexists(target):
+        return
+    if target.is_symlink() or not target.is_dir():
+        raise UserError(f"{target}: exists and is not a folder; refusing to replace it with {what} "
+                        "(choose another output path)")
+    try:
+        empty = not any(target.iterdir())
+        ours = empty or is_ours(target)
+    except OSError as exc:
+        raise UserError(f"{target}: cannot be read ({exc.strerror}); refusing to replace it") from None
+    if not ours:
+        raise UserError(f"{target}: exists and is not {what} (its marker file is missing); refusing to "
+                        "replace it (choose another output path, or remove the folder yourself)")
 
 
 def replace_dir(stage: str | os.PathLike, target: str | os.PathLike) -> None:

@@ -154,3 +154,29 @@ def test_model_commands_never_import_cad(tmp_path):
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     assert "HEAVY []" in proc.stdout
+
+
+@pytest.mark.parametrize("command", [
+    ["build", "--no-slice", "--out"],
+    ["compare", "{sweep}", "--report"],
+    ["diagnose", "{sweep}", "--candidates", "joint_offset", "--report"],
+])
+@pytest.mark.parametrize("victim", ["file", "folder"])
+def test_outputs_never_replace_user_data(tmp_path, command, victim):
+    """Issue 8, defect 1: `build -o params/phantom.toml` (a typo for -p) replaced the parameter file
+    with an export folder; `--out mydata` / `--report mydata` deleted what the folder held."""
+    sweep = tmp_path / "sweep.csv"
+    cli("simulate", "--points", "5", "--out", sweep)
+    target = tmp_path / "mydata"
+    if victim == "file":
+        target.write_text("my parameters\n")
+    else:
+        target.mkdir()
+        (target / "thesis.tex").write_text("three years of work\n")
+    before = sorted(p.read_text() for p in ([target] if target.is_file() else target.iterdir()))
+    r = cli(*[a.format(sweep=sweep) for a in command], target, check=False)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.startswith(f"error: {target}: exists and is not ")
+    assert "refusing to replace it" in r.stderr and "Traceback" not in r.stderr
+    after = sorted(p.read_text() for p in ([target] if target.is_file() else target.iterdir()))
+    assert after == before

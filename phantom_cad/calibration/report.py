@@ -136,6 +136,15 @@ def plot_hysteresis(path, m: Measurements, q_model: np.ndarray, q_analytic: np.n
     _save(plt, fig, axes, path, "q - q_analytic (deg)", title, legend_size=6)
 
 
+def _is_report(folder: Path) -> bool:
+    """Whether ``folder`` holds an earlier report (its report.md starts with ``# phantom-cad``)."""
+    try:
+        with open(folder / "report.md", encoding="utf-8") as fh:
+            return fh.readline().startswith("# phantom-cad ")
+    except (OSError, ValueError):
+        return False
+
+
 class ReportDir:
     """Build a report folder in a temporary sibling, move it into place on success."""
 
@@ -143,6 +152,9 @@ class ReportDir:
         self.target = Path(target)
 
     def __enter__(self) -> Path:
+        from ..atomic import check_replaceable
+
+        check_replaceable(self.target, _is_report, "a phantom-cad report (report.md)")
         self.target.parent.mkdir(parents=True, exist_ok=True)
         self.tmp = Path(tempfile.mkdtemp(prefix=f".{self.target.name}.", dir=self.target.parent))
         return self.tmp

@@ -35,8 +35,9 @@ def build(
 
     Parts are cached by their inputs: a rebuild with unchanged parameters takes about a second, changing one finger rebuilds only its parts. Every part is checked (one valid solid, STEP re-import, watertight manifold STL, no unplanned interference, slicing) before anything is written. See docs/exports.md.
     """
-    from ..params import ParamError
+    from ..errors import UserError
     from ..export.pipeline import BuildError, build_hand
+    from ..params import ParamError
 
     def log(msg: str) -> None:
         if not quiet:
@@ -45,7 +46,7 @@ def build(
     try:
         result = build_hand(params, out, side=side, jobs=jobs, slice=slice_, render=render,
                             cache_dir=cache_dir, log=log)
-    except ParamError as exc:
+    except (ParamError, UserError) as exc:
         typer.echo(f"error: {exc}", err=True)
         raise typer.Exit(2)
     except BuildError as exc:

@@ -94,8 +94,8 @@ def compare(
         None, "--effects", help="Effects to fit and add to the analytic model (comma separated); none: the analytic "
                                 "model alone. Default: the parameter file's fitted effects, or else the paper's "
                                 "compensated model."),
-    report: Optional[Path] = typer.Option(None, "--report", help="Folder for report.md, metrics.json and PNGs.",
-                                          file_okay=False),
+    report: Optional[Path] = typer.Option(None, "--report", help="Folder for report.md, metrics.json and PNGs (a new "
+                                          "folder, or an earlier report, which is replaced)."),
     degrees: bool = DegreesOpt,
 ):
     """Residual = measured - model per joint: MAE / RMS / max before (analytic) and after (with the effects)."""
@@ -186,7 +186,8 @@ def _compare_text(m, mb, ma, label, fitted) -> list[str]:
 def diagnose(
     data: Path = typer.Argument(..., help="Measurement CSV.", dir_okay=False),
     params: Optional[Path] = ParamsOpt,
-    report: Optional[Path] = typer.Option(None, "--report", help="Folder for report.md and PNGs.", file_okay=False),
+    report: Optional[Path] = typer.Option(None, "--report", help="Folder for report.md and PNGs (a new folder, or an "
+                                          "earlier report, which is replaced)."),
     json_out: Optional[Path] = typer.Option(None, "--json", help="Write the result as JSON.", dir_okay=False),
     candidates: Optional[str] = typer.Option(None, "--candidates", help="Restrict the candidate effects (comma separated)."),
     degrees: bool = DegreesOpt,

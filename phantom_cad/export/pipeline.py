@@ -41,7 +41,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..atomic import replace_dir
+from ..atomic import check_replaceable, replace_dir
 from ..canon import canonical, plain, sha256
 from ..params import ParamError, load_document, parse
 from ..params.io import DEFAULT_PARAMS
@@ -53,6 +53,16 @@ from .interference import INTERFERENCE_TOL_MM3, interference
 from .results import BuildError, BuildResult, PartFailure, failure_from
 
 __all__ = ["build_hand", "BuildError", "BuildResult", "PartFailure", "INTERFERENCE_TOL_MM3"]
+
+
+def _is_export(folder: Path) -> bool:
+    """Whether ``folder`` holds an earlier export (its manifest.json names our format)."""
+    from .manifest import MANIFEST_FORMAT
+
+    try:
+        return json.loads((folder / "manifest.json").read_text(encoding="utf-8")).get("format") == MANIFEST_FORMAT
+    except (OSError, ValueError, AttributeError):
+        return False
 
 
 def _load(params_path, side):
@@ -281,7 +291,8 @@ def build_hand(params_path: str | os.PathLike | None = None, out_dir: str | os.P
     ``slice`` False = skip (default: slicing every part costs ~1-4 s each, cached after),
     True = slice with PrusaSlicer (error if missing), None = slice when it is installed;
     ``cache_dir`` default ``$PHANTOM_CAD_CACHE`` or ``.cache``.
-    Raises :class:`BuildError` (nothing written) or :class:`ParamError`.
+    Raises :class:`BuildError` (nothing written), :class:`ParamError`, or UserError when ``out_dir``
+    exists and is neither empty nor an earlier export (nothing is ever replaced but our own output).
     """
     from .slicer import config_ini
 
@@ -289,6 +300,7 @@ def build_hand(params_path: str | os.PathLike | None = None, out_dir: str | os.P
     timings: dict[str, float] = {}
     path, document, params, file_side = _load(params_path, side)
     out = Path(out_dir) if out_dir is not None else _default_out(params, side, file_side)
+    check_replaceable(out, _is_export, "a phantom-cad export (manifest.json)")
     jobs = max(1, int(jobs or os.cpu_count() or 1))
     run = _Build(path, document, params, out, jobs, Cache(cache_dir), render, log or (lambda msg: None))
     timings["prepare"] = time.perf_counter() - t_start
