@@ -73,7 +73,7 @@ class Context:
         #: +1 flexing, -1 extending, 0 unknown, per row and servo (N, 6); None = unknown everywhere
         self.direction = direction
         self.u_eff = u.copy()                       # servo stage output
-        self.radius_scale = np.ones(len(CHAINS))              # reference stage: r_eff = r * radius_scale
+        self.radius_scale = np.ones(len(CHAINS))    # reference stage: r_eff = r * radius_scale
         self.s: np.ndarray | None = None            # reference angles (N, 6), after the reference stage
         #: k_s / EA (1/m) felt by each chain's elastic segments (N, chains); 0 = analytic model
         self.compliance = np.full((n, len(CHAINS)), float(compliance))
