@@ -96,6 +96,10 @@ def part_key(params, name: str, part_inputs: Mapping[str, Any]) -> str:
     }))
 
 
+#: the files of every part entry (render.png too unless the build was --no-render)
+PART_FILES = ("part.brep", "part.step", "part.stl", "mesh.npz", "view.npz")
+
+
 class Cache:
     def __init__(self, root: str | os.PathLike | None = None):
         self.root = Path(root) if root is not None else default_root()
@@ -104,8 +108,38 @@ class Cache:
     def part_dir(self, key: str) -> Path:
         return self.root / "parts" / key
 
-    def has_part(self, key: str) -> bool:
-        return (self.part_dir(key) / "meta.json").is_file()
+    def part_problem(self, key: str, render: bool = True) -> str | None:
+        """Why the entry ``key`` cannot be served (None: it can): missing, an unreadable meta.json,
+        a file missing or not matching the SHA-256 recorded when the entry was made, or no render
+        when one is wanted (a --no-render build must not change what a later build writes)."""
+        d = self.part_dir(key)
+        try:
+            meta = json.loads((d / "meta.json").read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            return "missing"
+        except (OSError, ValueError) as exc:
+            return f"meta.json is unreadable ({exc.__class__.__name__})"
+        files = meta.get("files") if isinstance(meta, dict) else None
+        if not isinstance(files, dict):
+            return "meta.json records no file hashes"
+        for need in PART_FILES + (("render.png",) if render else ()):
+            if need not in files:
+                return f"{need} is missing"
+        for name, digest in files.items():
+            try:
+                if sha256((d / name).read_bytes()) != digest:
+                    return f"{name} does not match its SHA-256"
+            except OSError:
+                return f"{name} is missing"
+        return None
+
+    def discard(self, final: Path) -> None:
+        """Remove a bad entry (renamed aside first, so no reader sees half of it)."""
+        if final.exists():
+            aside = self.staging_path(final)
+            shutil.rmtree(aside, ignore_errors=True)
+            os.rename(final, aside)
+            shutil.rmtree(aside, ignore_errors=True)
 
     def part_meta(self, key: str) -> dict:
         return json.loads((self.part_dir(key) / "meta.json").read_text())

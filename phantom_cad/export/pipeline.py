@@ -105,7 +105,15 @@ class _Build:
             except Exception as exc:
                 raise BuildError("cannot compute the part inputs", [failure_from(n, exc, None)]) from exc
             self.keys[n] = cache_mod.part_key(params, n, inputs)
-        self.missing = [n for n in names if not cache.has_part(self.keys[n])]
+        self.missing = []
+        for n in names:
+            problem = cache.part_problem(self.keys[n], render)
+            if problem is None:
+                continue
+            if problem != "missing":   # never serve a bad entry: say so and rebuild it
+                self.log(f"cache: {n} entry {self.keys[n][:12]} not served ({problem}); rebuilding it")
+                cache.discard(cache.part_dir(self.keys[n]))
+            self.missing.append(n)
 
     def get_pool(self) -> ProcessPoolExecutor:
         if self.pool is None:

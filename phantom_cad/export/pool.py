@@ -143,6 +143,8 @@ def part_worker(task: dict) -> dict:
                           f"bbox {np.ptp(vp[:, 0]):.1f} x {np.ptp(vp[:, 1]):.1f} x {np.ptp(vp[:, 2]):.1f} mm"),
                 size_px=700, bed=True)
             timings["render"] = time.perf_counter() - t
+        # what the cache serves is checked against these hashes (Cache.part_problem)
+        meta["files"] = {f.name: sha256(f.read_bytes()) for f in sorted(tmp.iterdir())}
         (tmp / "meta.json").write_text(json.dumps(meta, indent=1, sort_keys=True))
         Cache.commit(tmp, final)
         timings["total"] = time.perf_counter() - t0

@@ -358,3 +358,33 @@ def test_demo_without_prusa_slicer(hand_build, tmp_path, monkeypatch):
     man = json.loads((tmp_path / "o" / "manifest.json").read_text())
     assert man["slicer"]["used"] is False
     assert len(list((tmp_path / "o" / "stl").glob("*.stl"))) == 26
+
+
+def test_cache_serves_only_what_it_verified(standin_build, standin, tmp_path):
+    """Issue 8, defect 2: a truncated part.stl was exported and certified watertight; a truncated
+    meta.json gave a traceback; a --no-render build left entries a later build served without renders."""
+    from phantom_cad.export.pipeline import build_hand
+
+    result, cache = standin_build
+    mine = tmp_path / "cache"
+    shutil.copytree(cache, mine)
+    entries = sorted((mine / "parts").iterdir())
+    by_name = {json.loads((e / "meta.json").read_text())["name"]: e for e in entries}
+    stl = by_name["palm"] / "part.stl"
+    stl.write_bytes(stl.read_bytes()[:1000])
+    (by_name["servo_pulley_2"] / "meta.json").write_text('{"name": "servo_pu')
+    log = []
+    again = build_hand(None, tmp_path / "out", cache_dir=mine, jobs=1, slice=False, log=log.append)
+    assert sorted(again.built) == ["palm", "servo_pulley_2"]
+    assert any("palm" in m and "part.stl does not match its SHA-256" in m for m in log), log
+    assert any("servo_pulley_2" in m and "meta.json is unreadable" in m for m in log), log
+    for name in ("palm", "servo_pulley_2"):
+        assert (again.out_dir / "stl" / f"{name}.stl").read_bytes() == \
+            (result.out_dir / "stl" / f"{name}.stl").read_bytes()
+    # a render-less build into a fresh cache, then a default build: the renders are there
+    bare = tmp_path / "bare"
+    build_hand(None, tmp_path / "out2", cache_dir=bare, jobs=1, slice=False, render=False)
+    full = build_hand(None, tmp_path / "out3", cache_dir=bare, jobs=1, slice=False)
+    assert sorted(full.built) == sorted(result.parts)
+    assert sorted(p.name for p in (full.out_dir / "renders").glob("*.png")) == \
+        sorted(p.name for p in (result.out_dir / "renders").glob("*.png"))
