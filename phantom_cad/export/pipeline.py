@@ -117,7 +117,8 @@ class _Build:
 
     def get_pool(self) -> ProcessPoolExecutor:
         if self.pool is None:
-            self.pool = ProcessPoolExecutor(max_workers=self.jobs, mp_context=pool_mod.mp_context())
+            self.pool = ProcessPoolExecutor(max_workers=self.jobs, mp_context=pool_mod.mp_context(),
+                                            initializer=pool_mod.die_with_parent, initargs=(os.getpid(),))
         return self.pool
 
     def close(self) -> None:

@@ -388,3 +388,33 @@ def test_cache_serves_only_what_it_verified(standin_build, standin, tmp_path):
     assert sorted(full.built) == sorted(result.parts)
     assert sorted(p.name for p in (full.out_dir / "renders").glob("*.png")) == \
         sorted(p.name for p in (result.out_dir / "renders").glob("*.png"))
+
+
+def test_workers_die_with_a_killed_build(tmp_path):
+    """Issue 8, defect 3: killing a build left its workers running forever (parent PID 1, ~550 MB
+    each). Kill the build while its workers import the CAD stack and build parts: they exit."""
+    import signal
+    import subprocess
+    import time
+
+    import psutil
+
+    code = ("from phantom_cad.export.pipeline import build_hand; "
+            f"build_hand(None, {str(tmp_path / 'out')!r}, cache_dir={str(tmp_path / 'cache')!r}, jobs=2)")
+    proc = subprocess.Popen([sys.executable, "-c", code])
+    try:
+        parent = psutil.Process(proc.pid)
+        deadline = time.monotonic() + 60
+        workers = []
+        while time.monotonic() < deadline and len(workers) < 2:
+            workers = parent.children(recursive=True)
+            time.sleep(0.1)
+        assert len(workers) >= 2, "the build started no workers"
+        time.sleep(1.0)   # the workers are busy now (importing build123d, building parts)
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(10)
+        gone, alive = psutil.wait_procs(workers, timeout=10)
+        assert not alive, [p.pid for p in alive]
+    finally:
+        if proc.poll() is None:
+            proc.kill()
