@@ -6,6 +6,7 @@ on any error the temporary file is removed and the target is left as it was.
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import shutil
@@ -61,17 +62,40 @@ def check_replaceable(target: str | os.PathLike, is_ours: Callable[[Path], bool]
 
 def replace_dir(stage: str | os.PathLike, target: str | os.PathLike) -> None:
     """Move the finished folder ``stage`` to ``target`` (a sibling). A previous ``target`` is set
-    aside first and removed only once the new one is in place; if the move fails it is put back."""
+    aside first and removed only once the new one is in place; if the move fails it is put back.
+    A swap an earlier run left half done (killed between the two renames) is finished first."""
+    from .errors import UserError
+
     stage, target = Path(stage), Path(target)
-    if not target.exists():
-        os.rename(stage, target)
-        return
-    old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old.", dir=target.parent)) / target.name
-    os.rename(target, old)
+    recover_swaps(target)
     try:
-        os.rename(stage, target)
-    except BaseException:
-        os.rename(old, target)
-        old.parent.rmdir()
-        raise
+        if not target.exists():
+            os.rename(stage, target)
+            return
+        old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old.", dir=target.parent)) / target.name
+        os.rename(target, old)
+        try:
+            os.rename(stage, target)
+        except BaseException:
+            os.rename(old, target)
+            old.parent.rmdir()
+            raise
+    except OSError as exc:
+        if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST):
+            raise
+        shutil.rmtree(stage, ignore_errors=True)
+        raise UserError(f"{target}: could not be replaced ({exc.strerror}; another command writing it at "
+                        "the same time?); nothing of this run was kept") from None
     shutil.rmtree(old.parent, ignore_errors=True)
+
+
+def recover_swaps(target: str | os.PathLike) -> None:
+    """Finish the swaps of ``target`` that were interrupted between their renames: the output set
+    aside in ``.<name>.old.*/<name>`` is put back when nothing is at ``target``, and removed when a
+    newer one is there."""
+    target = Path(target)
+    for aside in sorted(target.parent.glob(f".{target.name}.old.*")):
+        old = aside / target.name
+        if not os.path.lexists(target) and old.is_dir():
+            os.rename(old, target)
+        shutil.rmtree(aside, ignore_errors=True)

@@ -62,3 +62,47 @@ def test_replace_dir_swaps_a_finished_folder(tmp_path):
         replace_dir(stage2, target)
     assert [p.name for p in target.iterdir()] == ["new.txt"]
     assert [p.name for p in tmp_path.iterdir()] == ["out"]
+
+
+def test_replace_dir_finishes_an_interrupted_swap(tmp_path):
+    """Issue 8, defect 3: a kill between the two renames of a swap left nothing at the export path
+    and a hidden .out.old.* folder no later run cleaned up."""
+    from phantom_cad.atomic import replace_dir
+
+    target = tmp_path / "out"
+    aside = tmp_path / ".out.old.abc123"
+    (aside / "out").mkdir(parents=True)
+    (aside / "out" / "old.txt").write_text("old")
+    stale = tmp_path / ".out.old.zzz999"          # a second, older leftover
+    (stale / "out").mkdir(parents=True)
+    stage = tmp_path / ".out.stage"
+    stage.mkdir()
+    (stage / "new.txt").write_text("new")
+    replace_dir(stage, target)
+    assert [p.name for p in target.iterdir()] == ["new.txt"]
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+
+
+def test_replace_dir_refuses_a_concurrent_writer(tmp_path, monkeypatch):
+    """Two commands swapping the same folder at once: the loser gets one clean error, its stage is
+    removed, the winner's folder stays (was an OSError 'Directory not empty' traceback)."""
+    import phantom_cad.atomic as atomic
+    from phantom_cad.errors import UserError
+
+    target = tmp_path / "out"
+    stage = tmp_path / ".out.stage"
+    stage.mkdir()
+    (stage / "mine.txt").write_text("mine")
+    real_rename = os.rename
+
+    def racing_rename(src, dst):
+        if str(src) == str(stage) and not target.exists():   # the other writer lands first
+            target.mkdir()
+            (target / "theirs.txt").write_text("theirs")
+        return real_rename(src, dst)
+
+    monkeypatch.setattr(atomic.os, "rename", racing_rename)
+    with pytest.raises(UserError, match="could not be replaced"):
+        atomic.replace_dir(stage, target)
+    assert [p.name for p in target.iterdir()] == ["theirs.txt"]
+    assert not stage.exists()
