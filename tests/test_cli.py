@@ -180,3 +180,17 @@ def test_outputs_never_replace_user_data(tmp_path, command, victim):
     assert "refusing to replace it" in r.stderr and "Traceback" not in r.stderr
     after = sorted(p.read_text() for p in ([target] if target.is_file() else target.iterdir()))
     assert after == before
+
+
+def test_params_validate_goes_on_after_a_bad_file(tmp_path):
+    """Issue 8, defect 7: one crashing file aborted a multi-file `params validate`."""
+    from phantom_cad.params import DEFAULT_PARAMS
+
+    binary = tmp_path / "binary.toml"
+    binary.write_bytes(b"\xff\xfe\x00")
+    r = cli("params", "validate", DEFAULT_PARAMS, binary, tmp_path, DEFAULT_PARAMS, check=False)
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert r.stdout.count(f"OK {DEFAULT_PARAMS}") == 2
+    assert r.stderr.splitlines() == [
+        f"FAIL <file> = {str(binary)!r}: is not UTF-8 text (invalid start byte at byte 0)",
+        f"FAIL <file> = {str(tmp_path)!r}: is a folder, not a parameter file"]

@@ -245,3 +245,18 @@ def test_params_are_frozen():
         p.name = "x"
     with pytest.raises(TypeError):
         p.fingers["index"] = None
+
+
+def test_unreadable_parameter_files(tmp_path):
+    """Issue 8, defect 7: a binary file, a folder and a symlink loop gave tracebacks."""
+    binary = tmp_path / "binary.toml"
+    binary.write_bytes(b"\x89PNG\r\n\x1a\n\xff\xfe")
+    loop = tmp_path / "loop.toml"
+    loop.symlink_to(loop)
+    cases = [(binary, "is not UTF-8 text (invalid start byte at byte 0)"),
+             (tmp_path, "is a folder, not a parameter file"),
+             (loop, "cannot be read (Too many levels of symbolic links)")]
+    for path, rule in cases:
+        with pytest.raises(ParamError) as info:
+            load_params(path)
+        assert str(info.value) == f"<file> = {str(path)!r}: {rule}"

@@ -12,6 +12,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Mapping, Sequence
@@ -25,6 +26,11 @@ from ..units import deg, rad
 ANGLE_COLUMNS = frozenset(U_COLUMNS + Q_COLUMNS)
 #: an angle beyond this in a radian file is taken for degrees
 RADIAN_LIMIT = 2.0 * math.pi
+
+
+#: a decimal number as CSV files write it (ASCII digits, optional sign, point, exponent; inf/nan
+#: parse here and are refused as not finite below)
+_NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|[+-]?(inf|infinity|nan)", re.IGNORECASE | re.ASCII)
 
 
 class DataError(ValueError):
@@ -66,11 +72,15 @@ def read_table(path, *, required: Sequence[str], optional: Sequence[str] = (),
     """
     path = Path(path)
     try:
-        raw = path.read_text(encoding="utf-8")
+        raw = path.read_text(encoding="utf-8-sig")    # a byte-order mark is not part of the header
     except FileNotFoundError:
         raise DataError(path, None, None, "no such file") from None
+    except IsADirectoryError:
+        raise DataError(path, None, None, "is a folder, not a CSV file") from None
     except UnicodeDecodeError as exc:
         raise DataError(path, None, None, f"is not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+    except OSError as exc:
+        raise DataError(path, None, None, f"cannot be read ({exc.strerror})") from None
 
     rows: list[tuple[int, list[str]]] = []
     for lineno, line in enumerate(raw.splitlines(), start=1):
@@ -117,10 +127,9 @@ def read_table(path, *, required: Sequence[str], optional: Sequence[str] = (),
                     raise DataError(path, lineno, name, "empty cell (this column is required on every row)")
                 values[name][k] = np.nan
                 continue
-            try:
-                v = float(cell)
-            except ValueError:
-                raise DataError(path, lineno, name, f"'{cell}' is not a number") from None
+            if not _NUMBER.fullmatch(cell.strip()):   # float() also takes '0.0_1' and non-ASCII digits
+                raise DataError(path, lineno, name, f"'{cell}' is not a number")
+            v = float(cell)
             if not math.isfinite(v):
                 raise DataError(path, lineno, name, f"'{cell}' is not a finite number")
             if name in ANGLE_COLUMNS:

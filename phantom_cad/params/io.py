@@ -23,9 +23,15 @@ DEFAULT_PARAMS = Path(__file__).resolve().parents[2] / "params" / "phantom.toml"
 def load_document(path: str | os.PathLike) -> dict[str, Any]:
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise ParamError("<file>", str(path), "no such parameter file") from None
+    except IsADirectoryError:
+        raise ParamError("<file>", str(path), "is a folder, not a parameter file") from None
+    except UnicodeDecodeError as exc:
+        raise ParamError("<file>", str(path), f"is not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+    except OSError as exc:   # permissions, a symlink loop, ...
+        raise ParamError("<file>", str(path), f"cannot be read ({exc.strerror})") from None
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

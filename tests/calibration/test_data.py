@@ -156,3 +156,24 @@ def test_direction_is_per_sweep():
     u[:, 1] = [0.0, 0.3, 0.3, 0.1]
     d = motion_direction(u, np.array([0, 0, 1, 1]))
     assert list(d[:, 1]) == [1, 1, -1, -1]
+
+
+@pytest.mark.parametrize("cell", ["0.0_1", "١٢", "1_000"])
+def test_numbers_are_plain_ascii_decimals(tmp_path, cell):
+    """Issue 8, defect 8: float() accepts underscores and non-ASCII digits; a CSV does not."""
+    path = tmp_path / "m.csv"
+    path.write_text(f"u1,u2,u3,u4,u5,u6\n0,0,0,0,0,0\n0,{cell},0,0,0,0\n", encoding="utf-8")
+    with pytest.raises(DataError) as exc:
+        read_measurements(path)
+    assert str(exc.value) == f"{path}, line 3, column u2: '{cell}' is not a number"
+
+
+def test_byte_order_mark_and_folders(tmp_path):
+    """Issue 8, defect 7: a UTF-8 BOM was reported as "column sweep: unknown column"; a folder
+    given as the file gave a traceback."""
+    path = tmp_path / "bom.csv"
+    path.write_text("\ufeffu1,u2,u3,u4,u5,u6\n0,0,0,0,0,0\n0,0.5,0,0,0,0\n", encoding="utf-8")
+    assert read_measurements(path).u[1, 1] == 0.5
+    with pytest.raises(DataError) as exc:
+        read_measurements(tmp_path)
+    assert str(exc.value) == f"{tmp_path}: is a folder, not a CSV file"
