@@ -368,8 +368,11 @@ def test_cache_serves_only_what_it_verified(standin_build, standin, tmp_path):
     result, cache = standin_build
     mine = tmp_path / "cache"
     shutil.copytree(cache, mine)
-    entries = sorted((mine / "parts").iterdir())
-    by_name = {json.loads((e / "meta.json").read_text())["name"]: e for e in entries}
+    from phantom_cad.export import cache as cache_mod, interface
+
+    asm, params = interface.assembly(), load_params()   # the default hand's entries (the cache holds others)
+    by_name = {n: mine / "parts" / cache_mod.part_key(params, n, asm.part_inputs(params, n))
+               for n in ("palm", "servo_pulley_2")}
     stl = by_name["palm"] / "part.stl"
     stl.write_bytes(stl.read_bytes()[:1000])
     (by_name["servo_pulley_2"] / "meta.json").write_text('{"name": "servo_pu')
