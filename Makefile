@@ -5,7 +5,7 @@ PIP    := $(PY) -m pip
 STAMP  := $(VENV)/.installed-stamp
 export PIP_DISABLE_PIP_VERSION_CHECK := 1
 
-.PHONY: install demo test bench sysdeps clean
+.PHONY: install demo test bench property sysdeps clean
 
 $(STAMP): pyproject.toml
 	@test -x $(PY) || python3 -m venv $(VENV)
@@ -28,6 +28,11 @@ test: install sysdeps
 
 bench: install
 	$(PY) bench/run.py
+
+# The property test on a large sample (make test runs 10 files): every file that validates builds.
+# N files, default 200; about 15-30 s per file that validates (docs/reliability.md).
+property: install
+	PHANTOM_PROPERTY_EXAMPLES=$(or $(N),200) $(PY) -m pytest -q tests/export/test_validation_builds.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache

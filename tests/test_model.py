@@ -25,12 +25,14 @@ Q_REF_STAR = math.pi / 6.0
 def easy_document(document):
     for name, f in document["fingers"].items():
         f["guide"] = {"d1_mm": 10.0, "d2_mm": 10.0, "alpha_deg": 90.0}
+        f["thickness_mm"] = 16.0      # the d2 guide, 7.07 mm palmar of the axis, stays inside the phalanx
         f["servo_pulley_radius_mm"] = 10.0
         f["servo_travel_deg"] = [0.0, 60.0]
         f["pulley_radius_mm"] = {"dip": 5.0, "pip": 4.0, "mcp": 5.0}
         f["path_length_mm"] = {"mcp_pip": 55.0, "pip_dip": 35.0}
     t = document["thumb"]
     t["guide"] = {"d1_mm": 10.0, "d2_mm": 10.0, "alpha_deg": 90.0}
+    t["thickness_mm"] = 16.0
     t["servo_pulley_radius_mm"] = 10.0
     t["servo_travel_deg"] = [0.0, 60.0]
     t["pulley_radius_mm"] = {"ip": 5.0, "mp": 4.0}

@@ -260,3 +260,87 @@ def test_unreadable_parameter_files(tmp_path):
         with pytest.raises(ParamError) as info:
             load_params(path)
         assert str(info.value) == f"<file> = {str(path)!r}: {rule}"
+
+
+# ---------------------------------------------------------------------------
+# issue 8, defect 5: files that validated and did not build are refused, each by the rule
+# the build relied on (the property test, tests/test_validation_builds.py, checks the rest)
+# ---------------------------------------------------------------------------
+
+def _field(document, path, value):
+    node = document
+    keys = path.split(".")
+    for k in keys[:-1]:
+        node = node[k]
+    node[keys[-1]] = value
+
+
+@pytest.mark.parametrize("path, value, field, words", [
+    # 2 x (17 + 0.2) + 2.4 = 36.8 mm across an 18 mm index face
+    ("hardware.magnet.diameter_mm", 17.0, "hardware.magnet.diameter_mm", "36.800 mm) must fit across"),
+    ("palm.wall_mm", 0.001, "palm.wall_mm", "must be >= 0.8 mm"),
+    # 2 x 6.2 + 30 = 42.4 mm
+    ("palm.wall_mm", 30.0, "hardware.magnet.diameter_mm", "(42.400 mm) must fit across"),
+    # 6.2 + 2 x 2.4 = 11 mm
+    ("palm.thickness_mm", 1.0, "palm.thickness_mm", "must be >= 11.000 mm"),
+    # the thickest finger (16) + 2 x 0.2
+    ("palm.thickness_mm", 16.2, "palm.thickness_mm", "must exceed the thickest finger (16 mm)"),
+    ("print.stl_tolerance_mm", 1e-9, "print.stl_tolerance_mm", "must be >= 0.001"),
+    # 0.05 x 189 = 9.45 mm < 16 + 2 x 0.2
+    ("fingers.index.length_fraction.distal", 0.05, "fingers.index.length_fraction.distal", "16.40 mm"),
+    # thumb metacarpal 0.06 x 189 = 11.34 mm < 10 (hub) + 7.5 + 0.2
+    ("thumb.length_fraction.metacarpal", 0.06, "thumb.length_fraction.metacarpal", "CMC hub"),
+    ("hand.hand_length_mm", 1e308, "hand.hand_length_mm", "must lie within +-1e+06"),
+    ("hand.hand_length_mm", 5000.0, "hand.hand_length_mm", "must be <= 1000"),
+    # eq. (13): kappa = 200 / 1e-300 takes the whole PIP motion back
+    ("mechanics.tendon_EA_N", 1e-300, "mechanics.tendon_EA_N", "a coupled joint must flex"),
+    # a groove of radius 8.5 mm does not fit in a 16 mm boss; 1.5 mm cuts into the 3.4 mm axle bore
+    ("fingers.index.pulley_radius_mm.dip", 8.5, "fingers.index.pulley_radius_mm.dip", "joint boss's surface"),
+])
+def test_rules_the_build_relies_on(document, path, value, field, words):
+    _field(document, path, value)
+    with pytest.raises(ParamError) as info:
+        parse(document)
+    assert info.value.field == field
+    assert words in info.value.rule
+
+
+def test_compliance_limit_matches_eq_13_by_hand(document):
+    """The DIP coupling of eq. (13) by hand: A_DIP = 1, v_DIP = (path to the DIP) / R_DIP,
+    R.A = 5 + 4 x 1.25 + 5 = 15 mm, R.v = the sum of the paths to PIP and DIP, so
+    a_DIP = 1 - v_DIP k 15 / (1 + k R.v) vanishes at k = 1 / (15 v_DIP - R.v):
+    index (48 + 29 = 77 mm): k = 1 / (231 - 125) per mm; middle (52 + 34 = 86): 1 / (258 - 138);
+    ring (81): 1 / (243 - 129); pinky (64): 1 / (192 - 104); thumb IP: 0.8 - 8 k 8 / (1 + 40 k),
+    k = 1 / 40. EA = k_s / k with k_s = 200 N/m: 21.2, 24.0, 22.8, 17.6, 8.0 N; the middle DIP goes first."""
+    limit = 200.0 * 0.120
+    document["mechanics"]["tendon_EA_N"] = limit * 1.01
+    parse(document)
+    document["mechanics"]["tendon_EA_N"] = limit * 0.99
+    with pytest.raises(ParamError) as info:
+        parse(document)
+    assert info.value.field == "mechanics.tendon_EA_N" and "middle DIP" in info.value.rule
+
+
+def test_hand_name_makes_a_file_name(document):
+    document["hand"]["name"] = "a" * 65
+    with pytest.raises(ParamError) as info:
+        parse(document)
+    assert info.value.field == "hand.name" and "at most 64 characters" in info.value.rule
+    document["hand"]["name"] = "h\u00e4nd"      # not ASCII
+    with pytest.raises(ParamError):
+        parse(document)
+    document["hand"]["name"] = "a" * 64
+    assert parse(document).name == "a" * 64
+
+
+def test_parallel_fingers(document):
+    """arc_offset_deg = 0 (documented as allowed): a straight row, finger_pitch apart, no division by zero."""
+    import numpy as np
+
+    from phantom_cad.kinematics import frames
+
+    document["palm"]["arc_offset_deg"] = 0.0
+    p = parse(document)
+    assert p.palm.arc_radius == math.inf
+    for i in range(4):
+        assert np.allclose(frames.mcp_position(p, i), [0.0195 * i, 0.0, 0.0], atol=1e-15)

@@ -122,7 +122,7 @@ def eyelet_centres(shape, radius: float, length: float, tol: float = 1e-3) -> li
     returns their axis direction and the centre of the band (the guide point)."""
     out = []
     for c in cylinders(shape):
-        if abs(c["radius"] - radius) < tol and abs(c["length"] - length) < 0.05:
+        if abs(c["radius"] - radius) < tol and abs(c["length"] - length) < 0.005:
             out.append({"centre": c["centre"], "direction": c["direction"], "length": c["length"]})
     return out
 

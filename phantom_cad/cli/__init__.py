@@ -30,14 +30,17 @@ ParamsOpt = typer.Option(None, "--params", "-p", help="Parameter file (default: 
 # -- params --------------------------------------------------------------------
 
 @params_app.command("validate")
-def params_validate(files: list[Path] = typer.Argument(None, help="Parameter files (default: params/phantom.toml).")):
-    """Validate parameter files; print OK or the first broken rule of each."""
+def params_validate(files: list[Path] = typer.Argument(None, help="Parameter files (default: params/phantom.toml)."),
+                    params: list[Path] = typer.Option(None, "--params", "-p", help="More parameter files.")):
+    """Validate parameter files (every rule the build relies on); print OK or the first broken rule of each."""
+    from ..cad import preflight
     from ..params import ParamError, load_params
 
     failed = 0
-    for f in files or [None]:
+    for f in [*(files or []), *(params or [])] or [None]:
         try:
             p = load_params(f)
+            preflight.check(p)
             typer.echo(f"OK {p.source} (digest {p.digest[:12]})")
         except ParamError as exc:
             typer.echo(f"FAIL {exc}", err=True)

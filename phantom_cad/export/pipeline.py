@@ -42,6 +42,7 @@ from typing import Any, Callable
 import numpy as np
 
 from ..atomic import check_replaceable, replace_dir
+from ..cad import preflight
 from ..canon import canonical, plain, sha256
 from ..params import ParamError, load_document, parse
 from ..params.io import DEFAULT_PARAMS
@@ -75,6 +76,7 @@ def _load(params_path, side):
             raise ParamError("hand", document.get("hand"), "must be a table", str(path))
         document["hand"]["side"] = side
     params = parse(document, source=str(path))
+    preflight.check(params)
     return path, document, params, file_side
 
 

@@ -97,10 +97,15 @@ def finger_direction(params, i: int) -> np.ndarray:
 
 
 def mcp_position(params, i: int) -> np.ndarray:
-    """MCP axis centre of finger i in the palm frame (index at the origin), on the palm arc."""
-    R = params.palm.arc_radius
-    centre = -R * finger_direction(params, 0)
-    return centre + R * finger_direction(params, i)
+    """MCP axis centre of finger i in the palm frame (index at the origin), on the palm arc:
+    adjacent MCPs are finger_pitch apart along the chord between them, perpendicular to the mean
+    of their two directions (a straight row when arc_offset = 0)."""
+    p = params.palm.finger_pitch
+    out = np.zeros(3)
+    for k in range(i):
+        m = (finger_angle(params, k) + finger_angle(params, k + 1)) / 2.0
+        out += p * np.array([math.cos(m), -math.sin(m), 0.0])
+    return out
 
 
 def T_palm_finger_base(params, finger: str) -> np.ndarray:

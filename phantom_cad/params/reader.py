@@ -12,6 +12,8 @@ from typing import Any
 from .errors import ParamError
 
 _MISSING = object()
+#: no number in a parameter file is larger: a guard against typos and overflow in derived values
+MAGNITUDE = 1e6
 
 
 class TomlTable:
@@ -49,6 +51,9 @@ class TomlTable:
         raw, value = value, float(value)   # errors show the value as written
         if not math.isfinite(value):
             raise self.error(key, raw, "must be finite")
+        if abs(value) > MAGNITUDE:
+            raise self.error(key, raw, f"must lie within +-{MAGNITUDE:g} (no dimension, angle, stiffness or "
+                             "tolerance of a hand comes near it)")
         if gt is not None and not value > gt:
             raise self.error(key, raw, f"must be > {gt:g}")
         if ge is not None and not value >= ge:

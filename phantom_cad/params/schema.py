@@ -21,6 +21,7 @@ from ..kinematics import topology
 from ..kinematics.topology import FINGERS
 from ..units import DEG, G_PER_CM3, MM
 from .errors import ParamError
+from . import rules
 from .reader import TomlTable
 
 SCHEMA_VERSION = 1
@@ -127,7 +128,10 @@ class Palm:
 
     @property
     def arc_radius(self) -> float:
-        """Radius of the arc on which adjacent MCPs, finger_pitch apart, turn by arc_offset."""
+        """Radius of the arc on which adjacent MCPs, finger_pitch apart, turn by arc_offset
+        (infinite for parallel fingers, arc_offset = 0)."""
+        if self.arc_offset == 0.0:
+            return math.inf
         return self.finger_pitch / (2.0 * math.sin(self.arc_offset / 2.0))
 
 
@@ -308,6 +312,22 @@ def _check_path(t: TomlTable, key: str, length: float, segment: float, r_a: floa
                          f"{segname.split('.')[-1]} segment between its pulleys", t.source)
 
 
+def _check_compliance(mechanics: Mechanics, fingers, thumb, source) -> None:
+    """Eq. (13): the tendon's stretch (compliance k_s / EA) takes back part of each coupled joint's
+    motion; it must not take all of it (a coupled joint that stands still or extends while its
+    reference joint flexes)."""
+    kappa = mechanics.spring_k / mechanics.tendon_EA
+    for d in [*fingers.values(), thumb]:
+        c = d.chain
+        comp = cf.coupling_vector(c.radii, c.path_lengths, kappa)
+        for key, a in zip(c.joints[1:], comp[1:]):
+            if not a > 0.0:
+                raise ParamError("mechanics.tendon_EA_N", mechanics.tendon_EA,
+                                 f"with spring_k_N_per_m = {mechanics.spring_k:g} the tendon stretch leaves "
+                                 f"{c.digit} {key.upper()} a coupling of {a:.4g} (eq. 13): a coupled joint must "
+                                 f"flex with its {c.joints[0].upper()}, so EA must be larger", source)
+
+
 def _fractions(t: TomlTable, names: tuple[str, ...], hand_length: float) -> dict[str, float]:
     ft = t.table("length_fraction")
     out = {n: ft.number(n, gt=0, lt=1) * hand_length for n in names}
@@ -365,7 +385,7 @@ def _thumb(t: TomlTable, hand_length: float) -> Thumb:
                  gain, limits[cmc], cmc_travel, horn)
 
 
-def _cad(c: TomlTable, fingers, thumb, palm, servo, hardware, printing) -> Cad:
+def _cad(c: TomlTable, hand_length, fingers, thumb, palm, servo, hardware, printing) -> Cad:
     """[cad]: the few dimensions only the printable parts need, and the rules that make them fit."""
     cad = Cad(
         finger_base_length=c.number("finger_base_length_mm", gt=0) * MM,
@@ -380,77 +400,7 @@ def _cad(c: TomlTable, fingers, thumb, palm, servo, hardware, printing) -> Cad:
         servo_ear_thickness=c.number("servo_ear_thickness_mm", gt=0) * MM,
     )
     c.done()
-    groove = hardware.tendon_diameter + 2.0 * printing.hole_clearance
-    digits = [(f"fingers.{n}", f.width, f.thickness) for n, f in fingers.items()]
-    digits.append(("thumb", thumb.width, thumb.thickness))
-    for name, width, thick in digits:
-        # the joint tongue between the two cheeks carries two bearings and the tendon groove
-        tongue = width - 2.0 * cad.cheek - 2.0 * printing.hole_clearance
-        need = 2.0 * hardware.bearing_width + groove + 2.0 * printing.hole_clearance
-        if tongue < need - 1e-12:
-            raise c.error("cheek_mm", cad.cheek / MM,
-                          f"leaves a {tongue / MM:.3f} mm joint tongue in {name}.width_mm = {width / MM:g}; "
-                          f"two bearings and the tendon groove need {need / MM:.3f} mm")
-        # magnets, the MCP boss and a wall fit between the base's magnet face and the MCP axis
-        base_need = thick / 2.0 + hardware.magnet_thickness + printing.magnet_clearance + printing.hole_clearance
-        if name != "thumb" and cad.finger_base_length < base_need - 1e-12:
-            raise c.error("finger_base_length_mm", cad.finger_base_length / MM,
-                          f"must be >= {base_need / MM:.3f} mm ({name}: half thickness + magnet "
-                          "thickness + magnet and joint clearances)")
-    names = list(fingers)
-    for a, b in zip(names, names[1:]):
-        # adjacent finger bases converge toward the arc centre: their back corners must clear
-        room = (palm.arc_radius - cad.finger_base_length) * 2.0 * math.sin(palm.arc_offset / 2.0)
-        need = (fingers[a].width + fingers[b].width) / 2.0 + printing.hole_clearance
-        if room < need - 1e-12:
-            raise c.error("finger_base_length_mm", cad.finger_base_length / MM,
-                          f"the {a} and {b} bases are {room / MM:.3f} mm apart at their magnet faces "
-                          f"(palm arc radius {palm.arc_radius / MM:.3f} mm), they need "
-                          f"{need / MM:.3f} mm (half widths + hole_clearance)")
-    for name, d in [(f"fingers.{n}", f) for n, f in fingers.items()] + [("thumb", thumb)]:
-        # the phalanx-side guide eyelet must lie outside the joint's pulley boss
-        g = d.chain.guide
-        need = d.thickness / 2.0 + printing.hole_clearance + cad.eyelet_length / 2.0
-        if g.d2 < need - 1e-12:
-            raise ParamError(f"{name}.guide.d2_mm", round(g.d2 / MM, 6),
-                             f"must be >= {need / MM:.3f} mm (half the thickness + hole_clearance + half "
-                             "cad.eyelet_length): the phalanx guide eyelet must clear the joint boss", c.source)
-    for n, f in fingers.items():
-        # the metacarpal-side guide eyelet (and its relief) must fit inside the finger base
-        g = f.chain.guide
-        r_hole = hardware.tendon_diameter / 2.0 + printing.hole_clearance
-        reach = g.d1 * math.sin(g.alpha / 2.0) + cad.eyelet_length / 2.0 + (math.sqrt(3.0) + 2.0) * r_hole
-        if reach > cad.finger_base_length + 1e-12:
-            raise ParamError(f"fingers.{n}.guide.d1_mm", round(g.d1 / MM, 6),
-                             f"puts the guide eyelet {reach / MM:.3f} mm behind the MCP axis, beyond the finger "
-                             f"base's magnet face (cad.finger_base_length_mm = {cad.finger_base_length / MM:g})",
-                             c.source)
-    for name, r in [(f"fingers.{n}", f.chain.servo_radius) for n, f in fingers.items()] + [
-            ("thumb", thumb.chain.servo_radius), ("thumb.cmc_horn", thumb.cmc_horn_radius)]:
-        limit = r - hardware.screw_diameter / 2.0 - printing.hole_clearance - hardware.tendon_diameter
-        if cad.horn_hole_radius > limit + 1e-12:
-            raise c.error("horn_hole_radius_mm", cad.horn_hole_radius / MM,
-                          f"must be <= {limit / MM:.3f} mm so the horn screws stay inside the "
-                          f"{name} pulley radius {r / MM:g} mm")
-    if cad.spring_diameter + 2.0 * printing.hole_clearance >= cad.cheek - 1e-12:
-        raise c.error("spring_diameter_mm", cad.spring_diameter / MM,
-                      f"its channel ({(cad.spring_diameter + 2.0 * printing.hole_clearance) / MM:g} mm with "
-                      f"clearance) must fit inside a clevis cheek (cheek_mm = {cad.cheek / MM:g})")
-    # each tendon runs under the neighbouring servo's body on its way to its own pulley
-    for name, r in [(f"fingers.{n}.servo_pulley_radius_mm", f.chain.servo_radius) for n, f in fingers.items()] + [
-            ("thumb.servo_pulley_radius_mm", thumb.chain.servo_radius)]:
-        need = servo.body[1] / 2.0 + 2.0 * printing.hole_clearance + hardware.tendon_diameter / 2.0
-        if r <= need + 1e-12:
-            raise ParamError(name, round(r / MM, 6),
-                             f"must exceed {need / MM:.3f} mm (half the servo body width servo.body_mm[1] "
-                             "+ tendon + clearances): the next finger's tendon passes under the servo", c.source)
-    if cad.servo_ear_offset + cad.servo_ear_thickness >= servo.body[2] - 1e-12:
-        raise c.error("servo_ear_offset_mm", cad.servo_ear_offset / MM,
-                      f"with servo_ear_thickness_mm = {cad.servo_ear_thickness / MM:g} the ears must lie on the "
-                      f"servo body (height servo.body_mm[2] = {servo.body[2] / MM:g})")
-    if cad.servo_shaft_offset >= servo.body[0] / 2.0:
-        raise c.error("servo_shaft_offset_mm", cad.servo_shaft_offset / MM,
-                      f"must be < half the servo body length ({servo.body[0] / 2.0 / MM:g} mm)")
+    rules.check_parts(c, hand_length, fingers, thumb, palm, servo, hardware, printing, cad)
     return cad
 
 
@@ -463,10 +413,13 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
 
     h = root.table("hand")
     name = h.string("name")
-    if not name or not all(c.isalnum() or c in "-_" for c in name):
-        raise h.error("name", name, "must be a non-empty name of letters, digits, '-' and '_'")
+    if not name or not all(c.isascii() and (c.isalnum() or c in "-_") for c in name):
+        raise h.error("name", name, "must be a non-empty name of ASCII letters, digits, '-' and '_'")
+    if len(name) > rules.MAX_NAME:
+        raise h.error("name", name[:20] + "...", f"must have at most {rules.MAX_NAME} characters (it names "
+                      f"the export folder and files), not {len(name)}")
     side = h.string("side", ("right", "left"))
-    hand_length = h.number("hand_length_mm", gt=0) * MM
+    hand_length = h.number("hand_length_mm", gt=0, le=1000) * MM
     h.done()
 
     ft = root.table("fingers")
@@ -481,6 +434,7 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
     m = root.table("mechanics")
     mechanics = Mechanics(m.number("spring_k_N_per_m", ge=0), m.number("tendon_EA_N", gt=0))
     m.done()
+    _check_compliance(mechanics, fingers, thumb, source)
 
     p = root.table("palm")
     palm = Palm(
@@ -535,13 +489,13 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
         hole_clearance=pr.number("hole_clearance_mm", ge=0, lt=1) * MM,
         press_fit_interference=pr.number("press_fit_interference_mm", ge=0, lt=0.5) * MM,
         magnet_clearance=pr.number("magnet_clearance_mm", ge=0, lt=1) * MM,
-        stl_tolerance=pr.number("stl_tolerance_mm", gt=0, le=1) * MM,
+        stl_tolerance=pr.number("stl_tolerance_mm", ge=0.001, le=1) * MM,
         density=pr.number("density_g_per_cm3", gt=0, lt=25) * G_PER_CM3,
         infill=pr.number("infill", gt=0, le=1),
     )
     pr.done()
 
-    cad = _cad(root.table("cad"), fingers, thumb, palm, servo, hardware, printing)
+    cad = _cad(root.table("cad"), hand_length, fingers, thumb, palm, servo, hardware, printing)
 
     effects = root.table("effects", default={})
     effect_params = {}

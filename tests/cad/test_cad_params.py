@@ -62,15 +62,16 @@ def test_finger_bases_too_long_collide(document):
     e = _fails(document, lambda d: d["cad"].__setitem__("finger_base_length_mm", 20.0))
     assert e.field == "cad.finger_base_length_mm"
     assert e.rule == (f"the index and middle bases are {room:.3f} mm apart at their magnet faces "
-                      f"(palm arc radius {R:.3f} mm), they need 18.200 mm (half widths + hole_clearance)")
+                      f"(palm.arc_offset_deg = 5), they need 18.200 mm (half widths + hole_clearance)")
     assert f"{room:.3f}" == "17.755"
 
 
 def test_guide_eyelet_inside_the_boss(document):
-    # index 18 mm thick: 9 + 0.2 + 1 = 10.2 mm > d2 = 10
-    e = _fails(document, lambda d: d["fingers"]["index"].__setitem__("thickness_mm", 18.0))
+    # index 17.8 mm thick: 8.9 + 0.2 + 1 = 10.1 mm > d2 = 10 (its 18.33 mm distal still takes
+    # two 17.8 + 2 * 0.2 mm joint bosses)
+    e = _fails(document, lambda d: d["fingers"]["index"].__setitem__("thickness_mm", 17.8))
     assert (e.field, e.value) == ("fingers.index.guide.d2_mm", 10.0)
-    assert e.rule == ("must be >= 10.200 mm (half the thickness + hole_clearance + half cad.eyelet_length): "
+    assert e.rule == ("must be >= 10.100 mm (half the thickness + hole_clearance + half cad.eyelet_length): "
                       "the phalanx guide eyelet must clear the joint boss")
 
 

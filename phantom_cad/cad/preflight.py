@@ -1,0 +1,107 @@
+"""Rules of the palm's layout, checked when a parameter file loads (before any solid is built).
+
+The palm places the servo bay, the thenar housing and the finger sockets from the frames
+(phantom_cad.kinematics.frames); whether they fit together is a question of the parts'
+own dimension classes, so these rules live here, numpy only (no OpenCascade), and raise the
+same :class:`ParamError` as the schema. ``check`` is called by every command that loads a
+parameter file for building or validating (``params validate``, ``build``, ``demo``).
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from ..kinematics.topology import FINGERS, SERVOS
+from ..params import ParamError
+from ..params.rules import MIN_WALL
+from .parts.palm import BAY_SERVOS, Palm
+
+
+def _obb(T: np.ndarray, lo, hi):
+    """(centre, axes as columns, half extents) of the box [lo, hi] placed by T (mm)."""
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    c = T[:3, :3] @ ((lo + hi) / 2.0) + T[:3, 3]
+    return c, T[:3, :3], (hi - lo) / 2.0
+
+
+def overlap(a, b) -> float:
+    """Penetration depth of two oriented boxes (separating-axis theorem): <= 0 when they are
+    apart, else the smallest overlap along the 15 candidate axes (mm)."""
+    ca, Ra, ha = a
+    cb, Rb, hb = b
+    d = cb - ca
+    axes = [Ra[:, i] for i in range(3)] + [Rb[:, i] for i in range(3)]
+    for i, j in itertools.product(range(3), range(3)):
+        n = np.cross(Ra[:, i], Rb[:, j])
+        if np.linalg.norm(n) > 1e-9:
+            axes.append(n / np.linalg.norm(n))
+    depth = np.inf
+    for n in axes:
+        ra = np.sum(ha * np.abs(Ra.T @ n))
+        rb = np.sum(hb * np.abs(Rb.T @ n))
+        depth = min(depth, ra + rb - abs(d @ n))
+        if depth <= 0.0:
+            return float(depth)
+    return float(depth)
+
+
+def servo_tools(palm: Palm, k: int) -> list:
+    """The boxes the palm cuts for servo ``k`` (pocket, ear slots, pulley cavity), palm frame."""
+    c, Tp = palm.tol.clearance, palm.thickness
+    T = palm.T_servo(k)
+    lo, hi = palm.body_box(k, grow=c)
+    elo, ehi = palm.ear_box(k, grow=c)
+    rc = palm.cavity_radius(k)
+    if k in BAY_SERVOS:
+        zc0, zc1 = hi[2] - c, palm.pulley_width / 2.0 + c
+        return [_obb(T, (lo[0], lo[1], lo[2]), (Tp, hi[1], hi[2])),
+                _obb(T, (elo[0], elo[1], elo[2]), (Tp, ehi[1], ehi[2])),
+                _obb(T, (-rc, -rc, zc0), (Tp, rc, zc1))]
+    return [_obb(T, lo, (hi[0], hi[1], hi[2] + 1.0)), _obb(T, elo, (ehi[0], ehi[1], hi[2] + 1.0))]
+
+
+def magnet_pockets(palm: Palm, finger: str) -> list:
+    """The socket's two magnet pockets as boxes around their cylinders, grown by the thinnest
+    printable wall (params.rules.MIN_WALL)."""
+    t = palm.tol
+    T = palm.T_socket(finger)
+    w = MIN_WALL * 1000.0
+    r = t.magnet_pocket_d / 2.0 + w
+    from .parts.finger_base import FingerBase
+    s = FingerBase(palm.params, finger).magnet_offset
+    return [_obb(T, (sx - r, -t.magnet_pocket_depth - w, -r), (sx + r, 0.0, r)) for sx in (-s, s)]
+
+
+def check(params) -> None:
+    """Raise ParamError if the palm's servo pockets reach a finger socket's magnet pockets, or if
+    the thenar housing of the CMC servo does not join the palm."""
+    palm = Palm(params)
+    src = params.source
+    pockets = {f: magnet_pockets(palm, f) for f in FINGERS}
+    for servo in SERVOS:
+        for tool in servo_tools(palm, servo.index):
+            for f, boxes in pockets.items():
+                if any(overlap(tool, b) > 1e-9 for b in boxes):
+                    raise ParamError(
+                        "servo.flange_span_mm", round(params.servo.flange_span * 1000.0, 6),
+                        f"the palm's pocket for servo {servo.label} (body servo.body_mm, ears "
+                        f"flange_span_mm, pulley cavity) leaves less than {MIN_WALL * 1000.0:g} mm (two perimeters) to the "
+                        f"{f} socket's magnet pockets: the servo does not fit behind the finger sockets", src)
+    # the thenar housing (around the CMC servo) must join the palm slab by at least a wall
+    x0, x1, y0, y1 = palm.extents()
+    slab = _obb(np.eye(4), (x0, y0, -palm.thickness / 2.0), (x1, y1, palm.thickness / 2.0))
+    k = next(s.index for s in SERVOS if s.index not in BAY_SERVOS)
+    c, w = palm.tol.clearance, palm.tol.wall
+    hlo, hhi = palm.body_box(k, grow=c + w)
+    glo, ghi = palm.ear_box(k, grow=c + w)
+    lo, hi = palm.body_box(k, grow=c)
+    housing = _obb(palm.T_servo(k), (hlo[0], min(hlo[1], glo[1]), hlo[2]),
+                   (hhi[0], max(hhi[1], ghi[1]), hi[2] - c))
+    depth = overlap(housing, slab)
+    if depth < w - 1e-9:
+        raise ParamError(
+            "palm.thumb_cmc_offset_mm", [round(v * 1000.0, 6) for v in params.palm.thumb_cmc_offset],
+            f"with palm.thumb_cmc_axis_deg the CMC servo's housing overlaps the palm by {max(depth, 0.0):.3f} mm; "
+            f"it must join it by at least a wall ({w:g} mm) or the palm prints in two pieces", src)

@@ -1,0 +1,214 @@
+"""The rules that make the printable parts fit, checked when a parameter file loads.
+
+Every dimension ``phantom-cad build`` relies on is checked here, as a :class:`ParamError` naming
+the field, its value and the rule: a file that validates must build. The derived dimensions
+follow the parts' own (phantom_cad.cad.parts.common: clearance holes d + 2 * hole_clearance,
+magnet pockets (d + 2 * magnet_clearance) x (t + magnet_clearance), joint bosses of radius
+thickness / 2 whose slots reach one hole clearance further). ``tests/test_validation_builds.py``
+checks the claim by building randomly perturbed files that validate.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..units import DEG, MM
+from .errors import ParamError
+
+#: the longest hand name: it names files and folders (``exports/<name>/``, ``<name>_description``)
+MAX_NAME = 64
+#: the thinnest wall an FDM printer makes: two perimeters of a 0.4 mm nozzle
+MIN_WALL = 0.8 * MM
+
+
+def _digits(fingers, thumb):
+    """(field prefix, digit) of the four fingers and the thumb."""
+    return [(f"fingers.{n}", f) for n, f in fingers.items()] + [("thumb", thumb)]
+
+
+def check_parts(c, hand_length, fingers, thumb, palm, servo, hardware, printing, cad) -> None:
+    """Every rule linking the [cad] dimensions, the digits, the palm and the hardware."""
+    _joints(c, fingers, thumb, hardware, printing, cad)
+    _segments(c, fingers, thumb, printing, hand_length)
+    _magnets(c, fingers, palm, hardware, printing, cad)
+    _guides(c, fingers, thumb, palm, hardware, printing, cad)
+    _servos(c, fingers, thumb, servo, hardware, printing, cad)
+
+
+def _joints(c, fingers, thumb, hardware, printing, cad) -> None:
+    groove = hardware.tendon_diameter + 2.0 * printing.hole_clearance
+    for name, d in _digits(fingers, thumb):
+        width, thick = d.width, d.thickness
+        # the joint tongue between the two cheeks carries two bearings and the tendon groove
+        tongue = width - 2.0 * cad.cheek - 2.0 * printing.hole_clearance
+        need = 2.0 * hardware.bearing_width + groove + 2.0 * printing.hole_clearance
+        if tongue < need - 1e-12:
+            raise c.error("cheek_mm", cad.cheek / MM,
+                          f"leaves a {tongue / MM:.3f} mm joint tongue in {name}.width_mm = {width / MM:g}; "
+                          f"two bearings and the tendon groove need {need / MM:.3f} mm")
+        # each joint's tendon groove of radius R lies in the tongue's boss (radius thickness / 2)
+        # and outside the axle's clearance bore
+        axle = hardware.axle_diameter / 2.0 + printing.hole_clearance
+        for key, R in zip(d.chain.joints, d.chain.radii):
+            if not axle < R < thick / 2.0 - 1e-12:
+                raise ParamError(f"{name}.pulley_radius_mm.{key}", round(R / MM, 6),
+                                 f"the tendon groove must lie between the axle bore (radius {axle / MM:.3f} mm) "
+                                 f"and the joint boss's surface ({name}.thickness_mm / 2 = {thick / 2.0 / MM:g} mm)",
+                                 c.source)
+    if cad.spring_diameter + 2.0 * printing.hole_clearance >= cad.cheek - 1e-12:
+        raise c.error("spring_diameter_mm", cad.spring_diameter / MM,
+                      f"its channel ({(cad.spring_diameter + 2.0 * printing.hole_clearance) / MM:g} mm with "
+                      f"clearance) must fit inside a clevis cheek (cheek_mm = {cad.cheek / MM:g})")
+
+
+def _segments(c, fingers, thumb, printing, hand_length) -> None:
+    """A phalanx reaches past the clevis slots of its two joints; the thumb metacarpal carries the
+    CMC hub and the MP clevis."""
+    for name, d in _digits(fingers, thumb):
+        slot_back = d.thickness / 2.0 + printing.hole_clearance
+        # the phalanges follow the metacarpal; the k-th starts at joint k and ends at joint k + 1
+        segments = d.chain.spec.segments[1:]
+        far = dict(zip(segments, [*d.chain.joints[1:], None]))
+        for seg in segments:
+            length = getattr(d, seg)
+            need = 2.0 * slot_back
+            j = far[seg]
+            if j is not None and d.chain.limits[d.chain.joints.index(j)][1] > math.pi / 2.0:
+                need += d.thickness / 2.0     # beyond 90 degrees the far clevis is recessed by T/2
+            if length <= need + 1e-12:
+                raise ParamError(f"{name}.length_fraction.{seg}", round(length / hand_length, 6),
+                                 f"the {seg} phalanx ({length / MM:.2f} mm at hand_length_mm = {hand_length / MM:g}) "
+                                 f"must be longer than its two joint bosses and their clearances "
+                                 f"({need / MM:.2f} mm: {name}.thickness_mm + 2 hole_clearance"
+                                 f"{', + half the thickness for a far joint flexing past 90 degrees' if need > 2.0 * slot_back else ''})",
+                                 c.source)
+    slot_back = thumb.thickness / 2.0 + printing.hole_clearance
+    if thumb.metacarpal <= thumb.cmc_horn_radius + slot_back + 1e-12:
+        raise ParamError("thumb.length_fraction.metacarpal", round(thumb.metacarpal / hand_length, 6),
+                         f"the thumb metacarpal ({thumb.metacarpal / MM:.2f} mm) must be longer than the CMC hub "
+                         f"(thumb.cmc_horn_radius_mm = {thumb.cmc_horn_radius / MM:g}) and the MP clevis "
+                         f"({slot_back / MM:.2f} mm)", c.source)
+
+
+def _magnets(c, fingers, palm, hardware, printing, cad) -> None:
+    """Two magnet pockets side by side, one wall apart, on every finger base's magnet face and the
+    palm socket facing it; the tendon enters below them."""
+    if palm.wall < MIN_WALL - 1e-12:
+        raise ParamError("palm.wall_mm", round(palm.wall / MM, 6),
+                         f"must be >= {MIN_WALL / MM:g} mm, two perimeters of a 0.4 mm nozzle "
+                         "(the thinnest wall an FDM printer makes)", c.source)
+    pocket = hardware.magnet_diameter + 2.0 * printing.magnet_clearance
+    depth = hardware.magnet_thickness + printing.magnet_clearance
+    span = 2.0 * pocket + palm.wall          # both pockets and the wall between them
+    tendon_z = -min(f.thickness for f in fingers.values()) / 2.0 + palm.wall
+    relief = 2.0 * (hardware.tendon_diameter + 2.0 * printing.hole_clearance)
+    for n, f in fingers.items():
+        if span >= f.width - 1e-12:
+            raise ParamError("hardware.magnet.diameter_mm", round(hardware.magnet_diameter / MM, 6),
+                             f"two magnet pockets ({pocket / MM:.3f} mm with magnet_clearance) and the "
+                             f"palm.wall_mm between them ({span / MM:.3f} mm) must fit across the fingers.{n} "
+                             f"magnet face (width_mm = {f.width / MM:g})", c.source)
+        if pocket >= f.thickness - 1e-12:
+            raise ParamError("hardware.magnet.diameter_mm", round(hardware.magnet_diameter / MM, 6),
+                             f"a magnet pocket ({pocket / MM:.3f} mm) must fit in the fingers.{n} magnet face "
+                             f"(thickness_mm = {f.thickness / MM:g})", c.source)
+        if tendon_z + relief / 2.0 > -pocket / 2.0 + 1e-12:
+            raise ParamError("hardware.magnet.diameter_mm", round(hardware.magnet_diameter / MM, 6),
+                             f"the tendon enters the fingers.{n} base {-tendon_z / MM:.3f} mm below its centre "
+                             f"(one palm.wall_mm above the thinnest finger's palmar face); its channel "
+                             f"({relief / MM:.3f} mm) must pass below the magnet pockets ({pocket / MM:.3f} mm)",
+                             c.source)
+    if pocket + 2.0 * palm.wall > palm.thickness + 1e-12:
+        raise ParamError("palm.thickness_mm", round(palm.thickness / MM, 6),
+                         f"a finger socket holds a magnet pocket ({pocket / MM:.3f} mm) with a wall each side: "
+                         f"must be >= {(pocket + 2.0 * palm.wall) / MM:.3f} mm", c.source)
+    thickest = max(f.thickness for f in fingers.values())
+    if palm.thickness <= thickest + 2.0 * printing.hole_clearance + 1e-12:
+        raise ParamError("palm.thickness_mm", round(palm.thickness / MM, 6),
+                         f"must exceed the thickest finger ({thickest / MM:g} mm) + 2 hole_clearance: the palm's "
+                         "flexion limiter sits under each finger base", c.source)
+
+
+def _guides(c, fingers, thumb, palm, hardware, printing, cad) -> None:
+    names = list(fingers)
+    for a, b in zip(names, names[1:]):
+        # adjacent finger bases converge toward the arc centre: their back corners must clear
+        # (finger_pitch apart at the MCPs, 2 sin(arc_offset / 2) closer per unit of base length)
+        room = palm.finger_pitch - 2.0 * cad.finger_base_length * math.sin(palm.arc_offset / 2.0)
+        need = (fingers[a].width + fingers[b].width) / 2.0 + printing.hole_clearance
+        if room < need - 1e-12:
+            raise c.error("finger_base_length_mm", cad.finger_base_length / MM,
+                          f"the {a} and {b} bases are {room / MM:.3f} mm apart at their magnet faces "
+                          f"(palm.arc_offset_deg = {palm.arc_offset / DEG:g}), they need "
+                          f"{need / MM:.3f} mm (half widths + hole_clearance)")
+    for n, f in fingers.items():
+        # magnets, the MCP boss and a wall fit between the base's magnet face and the MCP axis
+        base_need = f.thickness / 2.0 + hardware.magnet_thickness + printing.magnet_clearance + printing.hole_clearance
+        if cad.finger_base_length < base_need - 1e-12:
+            raise c.error("finger_base_length_mm", cad.finger_base_length / MM,
+                          f"must be >= {base_need / MM:.3f} mm (fingers.{n}: half thickness + magnet "
+                          "thickness + magnet and joint clearances)")
+    for n, f in fingers.items():
+        # the MCP clevis in the finger base: its slot (and, past 90 degrees of the module's stop,
+        # its recess of half a thickness) leaves a wall before the magnet face
+        q_stop = f.chain.limits[0][1] + cad.module_stop_margin
+        need = f.thickness / 2.0 + printing.hole_clearance + palm.wall
+        if q_stop > math.pi / 2.0:
+            need += f.thickness / 2.0
+        if cad.finger_base_length < need - 1e-12:
+            raise ParamError(f"fingers.{n}.limits_rad.mcp", [round(v, 6) for v in f.chain.limits[0]],
+                             f"with cad.module_stop_margin_deg the MCP clevis stops at {q_stop / DEG:.2f} deg; its slot"
+                             f"{' and recess (past 90 degrees)' if q_stop > math.pi / 2.0 else ''} need "
+                             f"{need / MM:.3f} mm of the finger base (cad.finger_base_length_mm = "
+                             f"{cad.finger_base_length / MM:g})", c.source)
+    for name, d in _digits(fingers, thumb):
+        # the phalanx-side guide eyelet lies inside the phalanx: above its palmar face
+        g = d.chain.guide
+        depth = g.d2 * math.cos(g.alpha / 2.0)
+        room = d.thickness / 2.0 - (hardware.tendon_diameter / 2.0 + printing.hole_clearance)
+        if depth > room + 1e-12:
+            raise ParamError(f"{name}.guide.d2_mm", round(g.d2 / MM, 6),
+                             f"puts the phalanx guide eyelet {depth / MM:.3f} mm below the joint axis "
+                             f"(d2 cos(alpha / 2)); its hole must stay inside the phalanx's palmar face "
+                             f"(<= {room / MM:.3f} mm: half the thickness - half the tendon hole)", c.source)
+        # the phalanx-side guide eyelet must lie outside the joint's pulley boss
+        need = d.thickness / 2.0 + printing.hole_clearance + cad.eyelet_length / 2.0
+        if g.d2 < need - 1e-12:
+            raise ParamError(f"{name}.guide.d2_mm", round(g.d2 / MM, 6),
+                             f"must be >= {need / MM:.3f} mm (half the thickness + hole_clearance + half "
+                             "cad.eyelet_length): the phalanx guide eyelet must clear the joint boss", c.source)
+    for n, f in fingers.items():
+        # the metacarpal-side guide eyelet (and its relief) must fit inside the finger base
+        g = f.chain.guide
+        r_hole = hardware.tendon_diameter / 2.0 + printing.hole_clearance
+        reach = g.d1 * math.sin(g.alpha / 2.0) + cad.eyelet_length / 2.0 + (math.sqrt(3.0) + 2.0) * r_hole
+        if reach > cad.finger_base_length + 1e-12:
+            raise ParamError(f"fingers.{n}.guide.d1_mm", round(g.d1 / MM, 6),
+                             f"puts the guide eyelet {reach / MM:.3f} mm behind the MCP axis, beyond the finger "
+                             f"base's magnet face (cad.finger_base_length_mm = {cad.finger_base_length / MM:g})",
+                             c.source)
+
+
+def _servos(c, fingers, thumb, servo, hardware, printing, cad) -> None:
+    for name, r in [(f"fingers.{n}", f.chain.servo_radius) for n, f in fingers.items()] + [
+            ("thumb", thumb.chain.servo_radius), ("thumb.cmc_horn", thumb.cmc_horn_radius)]:
+        limit = r - hardware.screw_diameter / 2.0 - printing.hole_clearance - hardware.tendon_diameter
+        if cad.horn_hole_radius > limit + 1e-12:
+            raise c.error("horn_hole_radius_mm", cad.horn_hole_radius / MM,
+                          f"must be <= {limit / MM:.3f} mm so the horn screws stay inside the "
+                          f"{name} pulley radius {r / MM:g} mm")
+    # each tendon runs under the neighbouring servo's body on its way to its own pulley
+    for name, r in [(f"fingers.{n}.servo_pulley_radius_mm", f.chain.servo_radius) for n, f in fingers.items()] + [
+            ("thumb.servo_pulley_radius_mm", thumb.chain.servo_radius)]:
+        need = servo.body[1] / 2.0 + 2.0 * printing.hole_clearance + hardware.tendon_diameter / 2.0
+        if r <= need + 1e-12:
+            raise ParamError(name, round(r / MM, 6),
+                             f"must exceed {need / MM:.3f} mm (half the servo body width servo.body_mm[1] "
+                             "+ tendon + clearances): the next finger's tendon passes under the servo", c.source)
+    if cad.servo_ear_offset + cad.servo_ear_thickness >= servo.body[2] - 1e-12:
+        raise c.error("servo_ear_offset_mm", cad.servo_ear_offset / MM,
+                      f"with servo_ear_thickness_mm = {cad.servo_ear_thickness / MM:g} the ears must lie on the "
+                      f"servo body (height servo.body_mm[2] = {servo.body[2] / MM:g})")
+    if cad.servo_shaft_offset >= servo.body[0] / 2.0:
+        raise c.error("servo_shaft_offset_mm", cad.servo_shaft_offset / MM,
+                      f"must be < half the servo body length ({servo.body[0] / 2.0 / MM:g} mm)")
