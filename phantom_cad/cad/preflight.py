@@ -16,6 +16,7 @@ import numpy as np
 from ..kinematics.topology import FINGERS, SERVOS
 from ..params import ParamError
 from ..params.rules import MIN_WALL
+from .parts.common import mm
 from .parts.palm import BAY_SERVOS, Palm
 
 
@@ -48,18 +49,15 @@ def overlap(a, b) -> float:
 
 
 def servo_tools(palm: Palm, k: int) -> list:
-    """The boxes the palm cuts for servo ``k`` (pocket, ear slots, pulley cavity), palm frame."""
-    c, Tp = palm.tol.clearance, palm.thickness
+    """The boxes the palm cuts for servo ``k`` (pocket, ear slots; a bay servo's pulley cavity by
+    its bounding box), as oriented boxes in the palm frame."""
     T = palm.T_servo(k)
-    lo, hi = palm.body_box(k, grow=c)
-    elo, ehi = palm.ear_box(k, grow=c)
-    rc = palm.cavity_radius(k)
+    boxes = [_obb(T, lo, hi) for lo, hi in palm.pocket_boxes(k)]
     if k in BAY_SERVOS:
-        zc0, zc1 = hi[2] - c, palm.pulley_width / 2.0 + c
-        return [_obb(T, (lo[0], lo[1], lo[2]), (Tp, hi[1], hi[2])),
-                _obb(T, (elo[0], elo[1], elo[2]), (Tp, ehi[1], ehi[2])),
-                _obb(T, (-rc, -rc, zc0), (Tp, rc, zc1))]
-    return [_obb(T, lo, (hi[0], hi[1], hi[2] + 1.0)), _obb(T, elo, (ehi[0], ehi[1], hi[2] + 1.0))]
+        rc = palm.cavity_radius(k)
+        zc0, zc1 = palm.cavity_span(k)
+        boxes.append(_obb(T, (-rc, -rc, zc0), (palm.thickness, rc, zc1)))
+    return boxes
 
 
 def magnet_pockets(palm: Palm, finger: str) -> list:
@@ -67,7 +65,7 @@ def magnet_pockets(palm: Palm, finger: str) -> list:
     printable wall (params.rules.MIN_WALL)."""
     t = palm.tol
     T = palm.T_socket(finger)
-    w = MIN_WALL * 1000.0
+    w = mm(MIN_WALL)
     r = t.magnet_pocket_d / 2.0 + w
     from .parts.finger_base import FingerBase
     s = FingerBase(palm.params, finger).magnet_offset
@@ -85,23 +83,19 @@ def check(params) -> None:
             for f, boxes in pockets.items():
                 if any(overlap(tool, b) > 1e-9 for b in boxes):
                     raise ParamError(
-                        "servo.flange_span_mm", round(params.servo.flange_span * 1000.0, 6),
+                        "servo.flange_span_mm", round(mm(params.servo.flange_span), 6),
                         f"the palm's pocket for servo {servo.label} (body servo.body_mm, ears "
-                        f"flange_span_mm, pulley cavity) leaves less than {MIN_WALL * 1000.0:g} mm (two perimeters) to the "
+                        f"flange_span_mm, pulley cavity) leaves less than {mm(MIN_WALL):g} mm (two perimeters) to the "
                         f"{f} socket's magnet pockets: the servo does not fit behind the finger sockets", src)
     # the thenar housing (around the CMC servo) must join the palm slab by at least a wall
     x0, x1, y0, y1 = palm.extents()
     slab = _obb(np.eye(4), (x0, y0, -palm.thickness / 2.0), (x1, y1, palm.thickness / 2.0))
     k = next(s.index for s in SERVOS if s.index not in BAY_SERVOS)
-    c, w = palm.tol.clearance, palm.tol.wall
-    hlo, hhi = palm.body_box(k, grow=c + w)
-    glo, ghi = palm.ear_box(k, grow=c + w)
-    lo, hi = palm.body_box(k, grow=c)
-    housing = _obb(palm.T_servo(k), (hlo[0], min(hlo[1], glo[1]), hlo[2]),
-                   (hhi[0], max(hhi[1], ghi[1]), hi[2] - c))
+    w = palm.tol.wall
+    housing = _obb(palm.T_servo(k), *palm.housing_box(k))
     depth = overlap(housing, slab)
     if depth < w - 1e-9:
         raise ParamError(
-            "palm.thumb_cmc_offset_mm", [round(v * 1000.0, 6) for v in params.palm.thumb_cmc_offset],
+            "palm.thumb_cmc_offset_mm", [round(mm(v), 6) for v in params.palm.thumb_cmc_offset],
             f"with palm.thumb_cmc_axis_deg the CMC servo's housing overlaps the palm by {max(depth, 0.0):.3f} mm; "
             f"it must join it by at least a wall ({w:g} mm) or the palm prints in two pieces", src)

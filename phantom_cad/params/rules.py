@@ -68,12 +68,12 @@ def _segments(c, fingers, thumb, printing, hand_length) -> None:
         slot_back = d.thickness / 2.0 + printing.hole_clearance
         # the phalanges follow the metacarpal; the k-th starts at joint k and ends at joint k + 1
         segments = d.chain.spec.segments[1:]
-        far = dict(zip(segments, [*d.chain.joints[1:], None]))
+        far_limits = dict(zip(segments, [*d.chain.limits[1:], None]))
         for seg in segments:
             length = getattr(d, seg)
             need = 2.0 * slot_back
-            j = far[seg]
-            if j is not None and d.chain.limits[d.chain.joints.index(j)][1] > math.pi / 2.0:
+            far = far_limits[seg]
+            if far is not None and far[1] > math.pi / 2.0:
                 need += d.thickness / 2.0     # beyond 90 degrees the far clevis is recessed by T/2
             if length <= need + 1e-12:
                 raise ParamError(f"{name}.length_fraction.{seg}", round(length / hand_length, 6),
@@ -190,19 +190,18 @@ def _guides(c, fingers, thumb, palm, hardware, printing, cad) -> None:
 
 
 def _servos(c, fingers, thumb, servo, hardware, printing, cad) -> None:
-    for name, r in [(f"fingers.{n}", f.chain.servo_radius) for n, f in fingers.items()] + [
-            ("thumb", thumb.chain.servo_radius), ("thumb.cmc_horn", thumb.cmc_horn_radius)]:
+    pulleys = [(name, d.chain.servo_radius) for name, d in _digits(fingers, thumb)]
+    for name, r in pulleys + [("thumb.cmc_horn", thumb.cmc_horn_radius)]:
         limit = r - hardware.screw_diameter / 2.0 - printing.hole_clearance - hardware.tendon_diameter
         if cad.horn_hole_radius > limit + 1e-12:
             raise c.error("horn_hole_radius_mm", cad.horn_hole_radius / MM,
                           f"must be <= {limit / MM:.3f} mm so the horn screws stay inside the "
                           f"{name} pulley radius {r / MM:g} mm")
     # each tendon runs under the neighbouring servo's body on its way to its own pulley
-    for name, r in [(f"fingers.{n}.servo_pulley_radius_mm", f.chain.servo_radius) for n, f in fingers.items()] + [
-            ("thumb.servo_pulley_radius_mm", thumb.chain.servo_radius)]:
+    for name, r in pulleys:
         need = servo.body[1] / 2.0 + 2.0 * printing.hole_clearance + hardware.tendon_diameter / 2.0
         if r <= need + 1e-12:
-            raise ParamError(name, round(r / MM, 6),
+            raise ParamError(f"{name}.servo_pulley_radius_mm", round(r / MM, 6),
                              f"must exceed {need / MM:.3f} mm (half the servo body width servo.body_mm[1] "
                              "+ tendon + clearances): the next finger's tendon passes under the servo", c.source)
     if cad.servo_ear_offset + cad.servo_ear_thickness >= servo.body[2] - 1e-12:

@@ -127,3 +127,29 @@ def test_servo_ears_off_the_body(document):
     assert e.field == "cad.servo_ear_offset_mm"
     assert e.rule == ("with servo_ear_thickness_mm = 2.5 the ears must lie on the servo body "
                       "(height servo.body_mm[2] = 25.3)")
+
+
+# the palm's layout (phantom_cad.cad.preflight), run by `params validate` and every build
+def test_servo_flange_span_cuts_into_the_magnet_pockets(tmp_path, document):
+    import subprocess
+    import sys
+
+    import tomli_w
+
+    doc = copy.deepcopy(document)
+    doc["servo"]["flange_span_mm"] = 36.0      # the ear slots of servo u2 reach the middle socket's pockets
+    path = tmp_path / "long_ears.toml"
+    path.write_text(tomli_w.dumps(doc))
+    r = subprocess.run([sys.executable, "-m", "phantom_cad", "params", "validate", str(path)],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert "servo.flange_span_mm = 36.0" in r.stderr and "magnet pockets" in r.stderr
+
+
+def test_cmc_housing_off_the_palm(variant):
+    from phantom_cad.cad import preflight
+
+    p = variant(lambda d: d["palm"].__setitem__("thumb_cmc_offset_mm", [-102.7, -45.0, -2.0]))
+    with pytest.raises(ParamError) as exc:
+        preflight.check(p)
+    assert exc.value.field == "palm.thumb_cmc_offset_mm" and "prints in two pieces" in exc.value.rule

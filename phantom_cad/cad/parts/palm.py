@@ -133,6 +133,33 @@ class Palm(Part):
     def cavity_radius(self, servo: int) -> float:
         return self.pulley_radius(servo) + mm(F.pulley_cavity_margin(self.params))
 
+    def pocket_boxes(self, servo: int) -> list:
+        """(lo, hi) corners, servo frame, of the boxes the palm cuts for the servo's body and its
+        flange ears: open toward the dorsal face in the bay (drop-in from the back, ears in slots),
+        open on the shaft side in the thenar housing (the servo drops in before the hub goes on)."""
+        c = self.tol.clearance
+        lo, hi = self.body_box(servo, grow=c)
+        elo, ehi = self.ear_box(servo, grow=c)
+        if servo in BAY_SERVOS:
+            Tp = self.thickness
+            return [(lo, np.array([Tp, hi[1], hi[2]])), (elo, np.array([Tp, ehi[1], ehi[2]]))]
+        return [(lo, np.array([hi[0], hi[1], hi[2] + 1.0])), (elo, np.array([ehi[0], ehi[1], hi[2] + 1.0]))]
+
+    def cavity_span(self, servo: int) -> tuple[float, float]:
+        """z extent (servo frame) of a bay servo's pulley cavity: from the body's top to past the pulley."""
+        c = self.tol.clearance
+        return self.body_box(servo, grow=c)[1][2] - c, self.pulley_width / 2.0 + c
+
+    def housing_box(self, servo: int):
+        """(lo, hi) corners, servo frame, of the thenar housing around a servo outside the bay: a
+        wall around its body and ears, up to its output face."""
+        c, w = self.tol.clearance, self.tol.wall
+        hlo, hhi = self.body_box(servo, grow=c + w)
+        glo, ghi = self.ear_box(servo, grow=c + w)
+        top = self.body_box(servo, grow=c)[1][2] - c
+        return (np.array([hlo[0], min(hlo[1], glo[1]), hlo[2]]),
+                np.array([hhi[0], max(hhi[1], ghi[1]), top]))
+
     def screw_points(self, servo: int) -> list[np.ndarray]:
         """Flange screw centres (servo frame) on the ears' underside, mid-ear, one each end."""
         L, W, H = self.servo_body
@@ -304,24 +331,16 @@ class Palm(Part):
         for servo in SERVOS:
             k = servo.index
             Ts = self.T_servo(k)
-            lo, hi = self.body_box(k, grow=c)
-            rc = self.cavity_radius(k)
-            elo, ehi = self.ear_box(k, grow=c)
+            for lo, hi in self.pocket_boxes(k):      # body pocket and ear slots
+                tools.append(transform(box(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]), Ts))
             if k in BAY_SERVOS:
-                # open toward the dorsal face (servo x = palm z): drop-in from the back, ears in slots
-                tools.append(transform(box(lo[0], Tp, lo[1], hi[1], lo[2], hi[2]), Ts))
-                tools.append(transform(box(elo[0], Tp, elo[1], ehi[1], elo[2], ehi[2]), Ts))
-                zc0, zc1 = hi[2] - c, self.pulley_width / 2.0 + c
+                rc = self.cavity_radius(k)
+                zc0, zc1 = self.cavity_span(k)
                 tools.append(transform(cylinder((0, 0, zc0), (0, 0, zc1), rc), Ts))
                 tools.append(transform(box(0.0, Tp, -rc, rc, zc0, zc1), Ts))
             else:
-                hlo, hhi = self.body_box(k, grow=c + w)
-                glo, ghi = self.ear_box(k, grow=c + w)
-                body.append(transform(box(hlo[0], hhi[0], min(hlo[1], glo[1]), max(hhi[1], ghi[1]),
-                                          hlo[2], hi[2] - c), Ts))
-                # open on the shaft side: the servo drops in before the hub goes on, ears in a step
-                tools.append(transform(box(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2] + 1.0), Ts))
-                tools.append(transform(box(elo[0], ehi[0], elo[1], ehi[1], elo[2], hi[2] + 1.0), Ts))
+                lo, hi = self.housing_box(k)
+                body.append(transform(box(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]), Ts))
             for p in self.screw_points(k):
                 tools.append(transform(cylinder(p + np.array([0, 0, 1.0]), p - np.array([0, 0, c + t.screw_engagement]),
                                                 t.screw_pilot / 2.0), Ts))
