@@ -22,6 +22,7 @@ os.umask(_UMASK)
 def write_atomic(path: str | os.PathLike, data: str | bytes) -> None:
     """Write ``data`` (text as UTF-8, or bytes) to ``path`` atomically, creating its folder."""
     path = Path(path)
+    check_writable(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
@@ -38,6 +39,24 @@ def write_json_atomic(path: str | os.PathLike, obj: Any, indent: int = 2, sort_k
     write_atomic(path, json.dumps(obj, indent=indent, sort_keys=sort_keys) + "\n")
 
 
+def check_writable(target: str | os.PathLike) -> None:
+    """Refuse (UserError naming ``target``) an output path that cannot be written: a parent that is
+    a file, a read-only or forbidden folder. Probed by creating and removing an empty folder in the
+    nearest existing ancestor, so nothing is left behind; called before a command does its work."""
+    from .errors import UserError
+
+    target = Path(os.path.abspath(target))
+    ancestor = target.parent
+    while not os.path.lexists(ancestor) and ancestor != ancestor.parent:
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        raise UserError(f"{target}: cannot be written: {ancestor} is a file, not a folder")
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=f".{target.name}.probe.", dir=ancestor))
+    except OSError as exc:
+        raise UserError(f"{target}: cannot be written ({exc.strerror} in {ancestor})") from None
+
+
 def check_replaceable(target: str | os.PathLike, is_ours: Callable[[Path], bool], what: str) -> None:
     """Refuse (UserError naming the path) to replace ``target`` unless it does not exist, is an
     empty folder, or is an earlier output of the same kind (``is_ours(target)``, read from its
@@ -45,6 +64,7 @@ def check_replaceable(target: str | os.PathLike, is_ours: Callable[[Path], bool]
     from .errors import UserError
 
     target = Path(target)
+    check_writable(target)
     if not os.path.lexists(target):
         return
     if target.is_symlink() or not target.is_dir():
@@ -58,6 +78,27 @@ def check_replaceable(target: str | os.PathLike, is_ours: Callable[[Path], bool]
     if not ours:
         raise UserError(f"{target}: exists and is not {what} (its marker file is missing); refusing to "
                         "replace it (choose another output path, or remove the folder yourself)")
+
+
+def check_file_replaceable(target: str | os.PathLike, marker: str, what: str) -> None:
+    """Refuse (UserError naming the path) to write the file ``target`` unless it can be written and
+    does not exist or is an earlier output of the same kind: its text starts with ``marker``."""
+    from .errors import UserError
+
+    target = Path(target)
+    check_writable(target)
+    if not os.path.lexists(target):
+        return
+    if target.is_dir():
+        raise UserError(f"{target}: is a folder; {what} is written to a file (choose a file name)")
+    try:
+        with open(target, "rb") as fh:
+            head = fh.read(len(marker.encode("utf-8")))
+    except OSError as exc:
+        raise UserError(f"{target}: cannot be read ({exc.strerror}); refusing to replace it") from None
+    if head != marker.encode("utf-8"):
+        raise UserError(f"{target}: exists and is not {what} (it does not start with {marker.strip()!r}); "
+                        "refusing to replace it (choose another output path, or remove the file yourself)")
 
 
 def replace_dir(stage: str | os.PathLike, target: str | os.PathLike) -> None:

@@ -194,3 +194,30 @@ def test_params_validate_goes_on_after_a_bad_file(tmp_path):
     assert r.stderr.splitlines() == [
         f"FAIL <file> = {str(binary)!r}: is not UTF-8 text (invalid start byte at byte 0)",
         f"FAIL <file> = {str(tmp_path)!r}: is a folder, not a parameter file"]
+
+
+def test_model_warns_outside_the_travel_and_strict_refuses(tmp_path):
+    """Issue 8, defect 8: `model forward` returned angles from -80 to 100 degrees for servo angles
+    far outside the travel without a word. 5 rad of servo 2 is beyond any travel (the cosine law
+    of the default index has its end at 1.62 rad); a joint target of -0.5 rad is below the joint's
+    lower limit of 0 in the parameter file."""
+    far = tmp_path / "far.csv"
+    far.write_text("u1,u2,u3,u4,u5,u6\n0,0,0,0,0,0\n0,5,0,0,0,0\n")
+    r = cli("model", "forward", "--in", far, "--out", tmp_path / "q.csv")
+    assert r.stderr.startswith(f"warning: {far}, line 3, column u2: 5 rad is outside [0, ")
+    assert "1 of 2 rows have servo angles outside the travel; the model extrapolates there" in r.stderr
+    r = cli("model", "forward", "--in", far, "--out", tmp_path / "strict.csv", "--strict", check=False)
+    assert r.returncode == 2 and r.stderr.startswith(f"error: {far}, line 3, column u2: 5 rad is outside")
+    assert not (tmp_path / "strict.csv").exists()
+    inside = tmp_path / "inside.csv"
+    inside.write_text("u1,u2,u3,u4,u5,u6\n0,0,0,0,0,0\n0,0.5,0,0,0,0\n")
+    r = cli("model", "forward", "--in", inside, "--out", tmp_path / "q2.csv", "--strict")
+    assert r.stderr == ""
+    targets = tmp_path / "targets.csv"
+    targets.write_text(",".join(f"q{i}" for i in range(1, 16)) + "\n" + ",".join(["0"] * 2 + ["-0.5"] + ["0"] * 12)
+                       + "\n")
+    r = cli("model", "inverse", "--in", targets, "--out", tmp_path / "u.csv")
+    assert r.stderr.startswith(f"warning: {targets}, line 2, column q3: -0.5 rad is outside [0, ")
+    assert "joint targets outside the workspace; the control law clips them" in r.stderr
+    r = cli("model", "inverse", "--in", targets, "--out", tmp_path / "u2.csv", "--strict", check=False)
+    assert r.returncode == 2 and not (tmp_path / "u2.csv").exists()

@@ -109,6 +109,7 @@ class Diagnosis:
                                for k, v in vals[name].items()},
             }
         return {
+            "generator": "phantom-cad diagnose",
             "source": self.measurements.source,
             "rows": len(self.measurements),
             "measured_cells": int(self.before.m),

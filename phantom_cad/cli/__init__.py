@@ -12,7 +12,8 @@ from typing import Optional
 
 import typer
 
-from ..errors import UserError
+from ..errors import UserError, one_line
+from .calibration import CSV_MARKER, check_output
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="The PHANTOM Hand from one parameter file: model, parts, calibration.")
@@ -25,6 +26,32 @@ ParamsOpt = typer.Option(None, "--params", "-p", help="Parameter file (default: 
                          dir_okay=False)
 
 
+
+
+StrictOpt = typer.Option(False, "--strict", help="Refuse input outside the travel / workspace instead of warning.")
+RANGE_TOL = 1e-6  # rad: a value written at the end of the travel and read back is inside
+
+
+def _outside(values, lo, hi, columns, lines, path, degrees: bool, strict: bool, what: str, consequence: str) -> None:
+    """Warn on stderr (or, ``strict``, refuse) when cells of ``values`` (rows x columns, radians)
+    lie outside [lo, hi]; the message names the file, the first such line and column, the value
+    and the range, in the file's unit."""
+    import numpy as np
+
+    from ..units import deg
+
+    bad = (values < lo - RANGE_TOL) | (values > hi + RANGE_TOL)
+    if not bad.any():
+        return
+    r, c = map(int, np.argwhere(bad)[0])
+    show = deg if degrees else (lambda x: x)
+    unit = "deg" if degrees else "rad"
+    message = (f"{path}, line {int(lines[r])}, column {columns[c]}: {show(values[r, c]):.6g} {unit} is outside "
+               f"[{show(lo[c]):.6g}, {show(hi[c]):.6g}] {unit}; {int(bad.any(axis=1).sum())} of {len(values)} rows "
+               f"have {what}")
+    if strict:
+        raise UserError(message)
+    typer.echo(f"warning: {one_line(message)}; {consequence} (--strict refuses such input)", err=True)
 
 
 # -- params --------------------------------------------------------------------
@@ -43,7 +70,7 @@ def params_validate(files: list[Path] = typer.Argument(None, help="Parameter fil
             preflight.check(p)
             typer.echo(f"OK {p.source} (digest {p.digest[:12]})")
         except ParamError as exc:
-            typer.echo(f"FAIL {exc}", err=True)
+            typer.echo(f"FAIL {one_line(exc)}", err=True)
             failed += 1
     if failed:
         raise typer.Exit(2)
@@ -95,14 +122,23 @@ def model_forward(
     out: Path = typer.Option(..., "--out", help="CSV to write: u1..u6 and the model's q1..q15.", dir_okay=False),
     compensated: bool = typer.Option(False, "--compensated", help="Spring + tendon-elasticity compensation (eq. 11-14)."),
     degrees: bool = typer.Option(False, "--degrees", help="Angles in the input and output are degrees."),
+    strict: bool = StrictOpt,
     params: Optional[Path] = ParamsOpt,
 ):
-    """Joint angles the model predicts for the servo angles of a measurement CSV."""
+    """Joint angles the model predicts for the servo angles of a measurement CSV.
+
+    Servo angles outside the travel in the parameter file are extrapolated with a warning
+    (refused with --strict)."""
     from .. import load_hand
     from ..calibration.data import read_measurements, write_measurements
 
+    check_output(out, CSV_MARKER, "a CSV written by phantom-cad")
     hand = load_hand(params)
     m = read_measurements(inp, degrees=degrees, sweeps=False)
+    from ..kinematics.topology import U_COLUMNS
+
+    _outside(m.u, hand.u_min, hand.u_max, U_COLUMNS, m.lines, inp, degrees, strict,
+             "servo angles outside the travel", "the model extrapolates there")
     q = hand.forward(m.u, compensated=compensated)
     sweep = [m.sweep_ids[k] for k in m.sweep] if m.has_sweep_column else None
     write_measurements(out, m.u, q, sweep=sweep, t=m.t, degrees=degrees,
@@ -117,19 +153,27 @@ def model_inverse(
     out: Path = typer.Option(..., "--out", help="CSV to write: u1..u6.", dir_okay=False),
     ideal: bool = typer.Option(False, "--ideal", help="Use the analytic model without compensation."),
     degrees: bool = typer.Option(False, "--degrees", help="Angles in the input and output are degrees."),
+    strict: bool = StrictOpt,
     params: Optional[Path] = ParamsOpt,
 ):
-    """Servo angles of the control law (eq. 15) for target joint angles: clipped, projected, in travel."""
+    """Servo angles of the control law (eq. 15) for target joint angles: clipped, projected, in travel.
+
+    Targets outside the workspace (what the travel reaches) are clipped with a warning (refused
+    with --strict)."""
     import numpy as np
 
     from .. import load_hand
     from ..calibration.data import read_table, write_table
     from ..kinematics.topology import Q_COLUMNS, U_COLUMNS
 
+    check_output(out, CSV_MARKER, "a CSV written by phantom-cad")
     hand = load_hand(params)
     table = read_table(inp, required=Q_COLUMNS, optional=U_COLUMNS + ("t",), text_columns=("sweep",),
                        degrees=degrees)
     q = np.column_stack([table.values[c] for c in Q_COLUMNS])
+    lo, hi = hand.workspace(compensated=not ideal)
+    _outside(q, lo, hi, Q_COLUMNS, table.lines, inp, degrees, strict,
+             "joint targets outside the workspace", "the control law clips them to the travel")
     u = hand.inverse(q, compensated=not ideal)
     cols = {}
     if "sweep" in table.text:
@@ -191,16 +235,52 @@ app.command("diagnose")(_calibration_cli.diagnose)
 app.command("fit")(_calibration_cli.fit)
 
 
-def main() -> None:
-    """Entry point: click handles usage errors and exit codes; our errors print one line, exit 2."""
+def main(argv: Optional[list[str]] = None) -> None:
+    """Entry point. Every failure is one line on stderr and nothing else:
+
+    - our errors (a bad parameter file, CSV, option value or output path) and click's usage errors
+      (unknown option, value of the wrong type): ``error: ...``, exit 2;
+    - an operating-system error nothing else caught (disk full, a file vanishing under us):
+      ``error: <path>: <reason>``, exit 2;
+    - a defect of phantom-cad itself: ``error: internal error ...``, exit 1; ``PHANTOM_CAD_DEBUG=1``
+      shows its traceback.
+    """
+    import os
+
     from ..calibration.data import DataError
     from ..params import ParamError
 
+    def fail(message: str, code: int = 2) -> None:
+        typer.echo(f"error: {one_line(message)}", err=True)
+        sys.exit(code)
+
     try:
-        app()
+        code = app(args=argv, standalone_mode=False)
     except (ParamError, DataError, UserError) as exc:
-        typer.echo(f"error: {exc}", err=True)
-        sys.exit(2)
+        fail(str(exc))
+    except typer.Abort:
+        fail("interrupted", 130)
+    except typer.TyperException as exc:  # click's usage errors: unknown option, bad value, missing argument
+        ctx = getattr(exc, "ctx", None)
+        if type(exc).__name__ == "NoArgsIsHelpError":  # a command group alone: its help, as click prints it
+            typer.echo(exc.format_message())
+            sys.exit(2)
+        where = f"{ctx.command_path}: " if ctx is not None else ""
+        hint = f" (see '{ctx.command_path} --help')" if ctx is not None else ""
+        fail(f"{where}{exc.format_message()}{hint}")
+    except KeyboardInterrupt:
+        fail("interrupted", 130)
+    except OSError as exc:
+        if os.environ.get("PHANTOM_CAD_DEBUG"):
+            raise
+        where = f"{exc.filename}: " if exc.filename else ""
+        fail(f"{where}{exc.strerror or exc}")
+    except Exception as exc:
+        if os.environ.get("PHANTOM_CAD_DEBUG"):
+            raise
+        fail(f"internal error ({type(exc).__name__}: {exc}); please report it with the command that caused it "
+             "(PHANTOM_CAD_DEBUG=1 shows the traceback)", 1)
+    sys.exit(code if isinstance(code, int) else 0)
 
 
 if __name__ == "__main__":

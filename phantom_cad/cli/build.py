@@ -35,7 +35,7 @@ def build(
 
     Parts are cached by their inputs: a rebuild with unchanged parameters takes about a second, changing one finger rebuilds only its parts. Every part is checked (one valid solid, STEP re-import, watertight manifold STL, no unplanned interference, slicing) before anything is written. See docs/exports.md.
     """
-    from ..errors import UserError
+    from ..errors import UserError, one_line
     from ..export.pipeline import BuildError, build_hand
     from ..params import ParamError
 
@@ -47,10 +47,10 @@ def build(
         result = build_hand(params, out, side=side, jobs=jobs, slice=slice_, render=render,
                             cache_dir=cache_dir, log=log)
     except (ParamError, UserError) as exc:
-        typer.echo(f"error: {exc}", err=True)
+        typer.echo(f"error: {one_line(exc)}", err=True)
         raise typer.Exit(2)
     except BuildError as exc:
-        typer.echo(f"error: {exc}", err=True)
+        typer.echo(f"error: {one_line(exc)}", err=True)
         raise typer.Exit(1)
     if not quiet:
         typer.echo(result.summary())

@@ -36,6 +36,19 @@ def _effect_names(text: Optional[str], option: str = "--effects") -> list[str]:
     return names
 
 
+CSV_MARKER = "# phantom-cad "               # the first line of every CSV the commands write
+JSON_MARKER = '{\n  "generator": "phantom-cad diagnose"'
+FIT_MARKER = "# Calibrated by `phantom-cad fit"
+
+
+def check_output(path: Optional[Path], marker: str, what: str) -> None:
+    """Before any work: ``path`` is writable and new, or an earlier output of the same kind."""
+    from ..atomic import check_file_replaceable
+
+    if path is not None:
+        check_file_replaceable(path, marker, what)
+
+
 def _write_json(path: Path, obj) -> None:
     from ..atomic import write_json_atomic
 
@@ -64,6 +77,7 @@ def simulate(
     from ..calibration.data import write_measurements
     from ..calibration.simulate import SimulationError, parse_effect_params, simulate as run
 
+    check_output(out, CSV_MARKER, "a CSV written by phantom-cad")
     hand = load_hand(params)
     names = _effect_names(effects)
     cols = None if joints is None else [c.strip() for c in joints.split(",") if c.strip()]
@@ -197,6 +211,7 @@ def diagnose(
     from ..calibration.data import read_measurements
     from ..calibration.diagnose import diagnose as run
 
+    check_output(json_out, JSON_MARKER, "a JSON written by phantom-cad diagnose")
     hand = load_hand(params)
     m = read_measurements(data, degrees=degrees).require_joints()
     names = _effect_names(candidates, "--candidates") if candidates else None
@@ -284,11 +299,13 @@ def fit(
     from ..calibration.data import read_measurements
     from ..calibration.diagnose import mae
     from ..calibration.effects import validate_effects
+    from ..errors import one_line
     from ..calibration.fitting import Model, Problem, fit as run_fit
 
     names = _effect_names(effects)
     if not names:
         raise _user_error("--effects: name at least one effect to fit")
+    check_output(out, FIT_MARKER, "a parameter file written by phantom-cad fit")
     hand = load_hand(params)
     m = read_measurements(data, degrees=degrees).require_joints()
     problem = Problem(hand, m)
@@ -302,8 +319,8 @@ def fit(
     validate_effects(table, str(out))
     doc = plain(hand.params.document)
     doc["effects"] = table
-    header = [f"# Calibrated by `phantom-cad fit {data} --effects {','.join(names)}`",
-              f"# from {hand.params.source} (digest {hand.params.digest[:12]}), {len(m)} rows.",
+    header = [f"{FIT_MARKER} {one_line(data)} --effects {','.join(names)}`",
+              f"# from {one_line(hand.params.source)} (digest {hand.params.digest[:12]}), {len(m)} rows.",
               f"# MAE {mae(before):.4f} deg (analytic) -> {mae(res):.4f} deg (with the effects).",
               "# Fitted on the analytic model; [effects.tendon_elasticity] compliance_per_m replaces k_s/EA",
               "# in the compensated model (0 when not fitted). Uncertainties (1 sd):"]

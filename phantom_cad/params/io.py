@@ -53,4 +53,8 @@ def dumps(document: Mapping[str, Any]) -> str:
 def dump_params(document: Mapping[str, Any], path: str | os.PathLike, header: str = "") -> None:
     """Validate ``document`` and write it atomically to ``path`` (nothing is written if invalid)."""
     parse(document, source=str(path))
-    write_atomic(path, header + dumps(document))
+    text = header + dumps(document)
+    if any(line.strip() and not line.lstrip().startswith("#") for line in header.splitlines()):
+        raise ValueError(f"dump_params: the header must be comment lines, got {header!r}")
+    tomllib.loads(text)  # what is written reads back (a header line broken by a newline would not)
+    write_atomic(path, text)
