@@ -177,3 +177,115 @@ def test_byte_order_mark_and_folders(tmp_path):
     with pytest.raises(DataError) as exc:
         read_measurements(tmp_path)
     assert str(exc.value) == f"{tmp_path}: is a folder, not a CSV file"
+
+
+# -- the column-wise reader and writer (issue 8, defect 10) ---------------------------------
+
+def _exact(path, monkeypatch, **kw):
+    """The table as the exact cell-by-cell reader reads it (the column-wise one switched off)."""
+    from phantom_cad.calibration import data
+
+    with monkeypatch.context() as m:
+        m.setattr(data, "_read_fast", lambda *a, **k: None)
+        try:
+            return data.read_measurements(path, **kw)
+        except DataError as exc:
+            return str(exc)
+
+
+def _both(path, monkeypatch, **kw):
+    fast = _exact_or_fast(path, **kw)
+    return fast, _exact(path, monkeypatch, **kw)
+
+
+def _exact_or_fast(path, **kw):
+    try:
+        return read_measurements(path, **kw)
+    except DataError as exc:
+        return str(exc)
+
+
+def _same(a, b):
+    if isinstance(a, str) or isinstance(b, str):
+        return a == b
+    return (np.array_equal(a.u, b.u) and np.array_equal(a.q, b.q, equal_nan=True)
+            and np.array_equal(a.measured, b.measured) and np.array_equal(a.sweep, b.sweep)
+            and a.sweep_ids == b.sweep_ids and np.array_equal(a.lines, b.lines)
+            and ((a.t is None and b.t is None) or np.array_equal(a.t, b.t)))
+
+
+_CELLS = ["0", "0.5", "-0.25", "+.5", "1e-3", "2.5E+0", "", "1.", "3.14159265358979", "7", "0.0_1", "1e999",
+          "٣", "nan", " 0.5", "abc", "-", "1e", "6.3", "-6.29", ".", "1,5", '"0.5"', "0x1"]
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_column_reader_agrees_with_the_exact_reader(tmp_path, monkeypatch, seed):
+    """Random files, mostly plain grids with a few bad cells, comments, blank lines, quotes:
+    the column-wise reader returns the exact reader's table or leaves the file to it (same
+    error). Known answer: the exact reader, cell by cell with float() and a regex."""
+    rng = np.random.default_rng(seed)
+    cols = ["sweep", *U.split(","), "q3", "q4", "t"][: 7 + int(rng.integers(0, 4))]
+    if rng.random() < 0.3:
+        cols = cols[1:]
+    lines = ["# a comment"] * int(rng.integers(0, 3)) + [",".join(cols)]
+    rows = int(rng.integers(2, 40))
+    for k in range(rows):
+        cells = []
+        for c in cols:
+            if c == "sweep":
+                cells.append(str(rng.choice(["a", "b", "up 1", "a"])))
+            elif rng.random() < 0.02 * (seed % 4):
+                cells.append(str(rng.choice(_CELLS)))
+            elif c.startswith("q") and rng.random() < 0.3:
+                cells.append("")
+            else:
+                cells.append(repr(float(rng.uniform(-6, 6))) if rng.random() < 0.5 else f"{rng.uniform(-3, 3):.6f}")
+        lines.append(",".join(cells))
+        if seed % 5 == 0 and rng.random() < 0.05:
+            lines.append(str(rng.choice(["", "# comment between rows", "   "])))
+    p = write(tmp_path, "\n".join(lines) + ("\n" if seed % 2 else ""))
+    for kw in ({}, {"degrees": True}, {"sweeps": False}):
+        fast, exact = _both(p, monkeypatch, **kw)
+        assert _same(fast, exact), (kw, fast, exact)
+
+
+def test_column_reader_reads_a_plain_grid(tmp_path, monkeypatch):
+    """The fast path is taken (not only the fallback) and gives the exact values: a file of
+    70,000 rows (two chunks), a sweep column, empty cells, degrees."""
+    from phantom_cad.calibration import data, fastcsv
+
+    n = 70_000
+    rng = np.random.default_rng(0)
+    u = rng.uniform(0, 1.5, (n, 6))
+    q = rng.uniform(0, 1, (n, 15))
+    q[rng.random((n, 15)) < 0.4] = np.nan
+    q[:, 0] = np.nan
+    sweep = ["up" if k < n // 2 else "down" for k in range(n)]
+    p = tmp_path / "big.csv"
+    write_measurements(p, u, q, sweep=sweep)
+    calls = []
+    real = fastcsv.parse_grid
+    monkeypatch.setattr(fastcsv, "parse_grid", lambda *a: calls.append(real(*a)) or calls[-1])
+    m = read_measurements(p)
+    assert calls and calls[0] is not None
+    exact = _exact(p, monkeypatch)
+    assert _same(m, exact)
+    assert m.sweep_ids == ("up", "down") and m.lines[0] == 2 and m.lines[-1] == n + 1
+    # written in fixed point with 12 decimals: within 0.5e-12 rad (+ the rounding of the scaling)
+    assert np.abs(m.u - u).max() <= 0.51e-12
+    assert np.array_equal(np.isnan(m.q), np.isnan(q))
+    assert np.abs(m.q - q)[~np.isnan(q)].max() <= 0.51e-12
+
+
+def test_fixed_point_text_known_answers():
+    """The writer's number format, against values written by hand."""
+    from phantom_cad.calibration.fastcsv import format_grid
+
+    x = np.array([0.0, -0.0, 1.0, -1.5, 0.5, 4e-13, 6e-13, -6e-13, 0.9999999999999, 10.0, 100.5, 1000.25,
+                  np.nan, -2.5e-5, 0.1 + 0.2, 3.14159265358979, 2.5e6, -np.inf])
+    text = format_grid({"a": x, "s": ["a", "b,c", ' d', 'e"f', "g", "h", "i", "j", "k", "l", "m", "n", "o", "p", "q",
+                                      "r", "s", "t"]}).decode()
+    assert text.splitlines() == [
+        "0.0,a", "0.0,\"b,c\"", "1.0, d", "-1.5,\"e\"\"f\"", "0.5,g", "0.0,h", "0.000000000001,i",
+        "-0.000000000001,j", "1.0,k", "10.0,l", "100.5,m", "1000.25,n", ",o", "-0.000025,p", "0.3,q",
+        "3.14159265359,r", "2500000,s", "-inf,t"]
