@@ -167,7 +167,7 @@ def _read_fast(path, raw: str, required, optional, text_columns, degrees: bool, 
     allowed = set(required) | set(optional) | set(text_columns)
     if len(set(header)) != len(header) or not set(header) <= allowed or not set(required) <= set(header):
         return None
-    got = fastcsv.parse_grid(raw[end + 1:], header, text_columns, allow_empty)
+    got = fastcsv.parse_grid(raw[end + 1:].encode("utf-8"), header, text_columns, allow_empty)
     if got is None:
         return None
     values, text = got

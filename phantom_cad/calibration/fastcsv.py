@@ -33,51 +33,53 @@ _COMMA, _NEWLINE, _SPACE = 44, 10, 32
 
 # -- reading ------------------------------------------------------------------
 
-def parse_grid(body: str, header: Sequence[str], text_columns: Sequence[str], allow_empty: Sequence[str]):
-    """Parse the data lines ``body`` of a CSV whose header is ``header``.
+def parse_grid(data: bytes, header: Sequence[str], text_columns: Sequence[str], allow_empty: Sequence[str]):
+    """Parse the data lines ``data`` (UTF-8 bytes) of a CSV whose header is ``header``.
 
     Returns ``(values, text)``: ``values`` {numeric column: float array, NaN for an empty cell},
     ``text`` {text column: tuple of str}; or None when the fast reader cannot vouch for the text
     (the exact reader decides then). Range checks (finite, radians) are the caller's."""
-    if not body.isascii():
+    if not data.isascii():
         return None
-    data = body.encode("ascii")
-    if data.endswith(b"\n"):
-        data = data[:-1]
-    if not data or data.startswith(b"\n") or b"\n\n" in data or any(c in data for c in (b"#", b'"', b"\r")):
+    view = memoryview(data)
+    stop = len(data) - 1 if data.endswith(b"\n") else len(data)
+    if (stop <= 0 or data.startswith(b"\n") or data.find(b"\n\n", 0, stop) >= 0
+            or any(data.find(c) >= 0 for c in (b"#", b'"', b"\r"))):
         return None
     numeric = [j for j, c in enumerate(header) if c not in text_columns]
     texts = [j for j, c in enumerate(header) if c in text_columns]
     empty_ok = np.array([header[j] in allow_empty for j in numeric])
-    parts_v: list[np.ndarray] = []
-    parts_t: list[list[np.ndarray]] = []
-    start = 0
-    while start < len(data):
-        end = _chunk_end(data, start)
-        got = _parse_chunk(data[start:end], len(header), numeric, texts, empty_ok)
+    n = data.count(b"\n", 0, stop) + 1
+    values = {header[j]: np.empty(n) for j in numeric}     # filled chunk by chunk: no second copy
+    labels: list[list[np.ndarray]] = [[] for _ in texts]
+    start, row = 0, 0
+    while start < stop:
+        end = _chunk_end(data, start, stop)
+        got = _parse_chunk(view[start:end], len(header), numeric, texts, empty_ok)
         if got is None:
             return None
-        parts_v.append(got[0])
-        parts_t.append(got[1])
+        v, lab = got
+        for k, j in enumerate(numeric):
+            values[header[j]][row:row + len(v)] = v[:, k]
+        for k in range(len(texts)):
+            labels[k].append(lab[k])
+        row += len(v)
         start = end + 1
-    v = np.concatenate(parts_v) if len(parts_v) > 1 else parts_v[0]
-    values = {header[j]: np.ascontiguousarray(v[:, k]) for k, j in enumerate(numeric)}
     text = {}
     for k, j in enumerate(texts):
-        labels = np.concatenate([p[k] for p in parts_t])
-        uniq, inverse = np.unique(labels, return_inverse=True)
+        uniq, inverse = np.unique(np.concatenate(labels[k]), return_inverse=True)
         names = [u.decode("ascii") for u in uniq]
         text[header[j]] = tuple(names[i] for i in inverse)
     return values, text
 
 
-def _chunk_end(data: bytes, start: int) -> int:
-    """End (a newline or the end of the data) of the chunk of about CHUNK_ROWS lines from ``start``."""
+def _chunk_end(data: bytes, start: int, stop: int) -> int:
+    """End (a newline, or ``stop``) of the chunk of about CHUNK_ROWS lines from ``start``."""
     guess = start + CHUNK_ROWS * 64
-    if guess >= len(data):
-        return len(data)
-    end = data.find(b"\n", guess)
-    return len(data) if end < 0 else end
+    if guess >= stop:
+        return stop
+    end = data.find(b"\n", guess, stop)
+    return stop if end < 0 else end
 
 
 def _parse_chunk(chunk: bytes, ncols: int, numeric: list[int], texts: list[int], empty_ok: np.ndarray):
