@@ -144,12 +144,6 @@ class FitResult:
         return self.model.values(self.std)
 
 
-def residual_matrix(problem: Problem, residual: np.ndarray) -> np.ndarray:
-    R = np.full(problem.q.shape, np.nan)
-    R[problem.mask] = residual
-    return R
-
-
 def effective_size(problem: Problem, residual: np.ndarray) -> float:
     """Effective number of independent residuals, n_eff = m (1 - rho) / (1 + rho).
 

@@ -131,12 +131,11 @@ def model_forward(
     (refused with --strict)."""
     from .. import load_hand
     from ..calibration.data import read_measurements, write_measurements
+    from ..kinematics.topology import U_COLUMNS
 
     check_output(out, CSV_MARKER, "a CSV written by phantom-cad")
     hand = load_hand(params)
     m = read_measurements(inp, degrees=degrees, sweeps=False)
-    from ..kinematics.topology import U_COLUMNS
-
     _outside(m.u, hand.u_min, hand.u_max, U_COLUMNS, m.lines, inp, degrees, strict,
              "servo angles outside the travel", "the model extrapolates there")
     q = hand.forward(m.u, compensated=compensated)
