@@ -10,6 +10,7 @@ export PIP_DISABLE_PIP_VERSION_CHECK := 1
 $(STAMP): pyproject.toml
 	@test -x $(PY) || python3 -m venv $(VENV)
 	$(PIP) install -q -e '.[dev]'
+	$(PY) -c "from phantom_cad.calibration import fastcsv; fastcsv.compile()"   # numba's cache: once
 	@touch $(STAMP)
 
 install: $(STAMP)

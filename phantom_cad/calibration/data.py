@@ -9,8 +9,10 @@ comments. Every refusal names the line and the column.
 
 from __future__ import annotations
 
+import codecs
 import csv
 import io
+import itertools
 import math
 import re
 from dataclasses import dataclass
@@ -22,6 +24,7 @@ import numpy as np
 from ..atomic import write_atomic
 from ..kinematics.topology import N_JOINTS, Q_COLUMNS, U_COLUMNS
 from ..units import deg, rad
+from .labels import Labels
 
 ANGLE_COLUMNS = frozenset(U_COLUMNS + Q_COLUMNS)
 #: an angle beyond this in a radian file is taken for degrees
@@ -72,19 +75,24 @@ def read_table(path, *, required: Sequence[str], optional: Sequence[str] = (),
     """
     path = Path(path)
     try:
-        raw = path.read_text(encoding="utf-8-sig")    # a byte-order mark is not part of the header
+        data = path.read_bytes()
     except FileNotFoundError:
         raise DataError(path, None, None, "no such file") from None
     except IsADirectoryError:
         raise DataError(path, None, None, "is a folder, not a CSV file") from None
-    except UnicodeDecodeError as exc:
-        raise DataError(path, None, None, f"is not UTF-8 text ({exc.reason} at byte {exc.start})") from None
     except OSError as exc:
         raise DataError(path, None, None, f"cannot be read ({exc.strerror})") from None
-
-    fast = _read_fast(path, raw, required, optional, text_columns, degrees, allow_empty)
-    if fast is not None:
-        return fast
+    if data.startswith(codecs.BOM_UTF8):     # a byte-order mark is not part of the header
+        data = data[len(codecs.BOM_UTF8):]
+    if data.isascii():
+        fast = _read_fast(path, data, required, optional, text_columns, degrees, allow_empty)
+        if fast is not None:
+            return fast
+    try:
+        raw = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise DataError(path, None, None, f"is not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+    del data
     rows: list[tuple[int, list[str]]] = []
     for lineno, line in enumerate(raw.splitlines(), start=1):
         if not line.strip() or line.lstrip().startswith("#"):
@@ -146,28 +154,28 @@ def read_table(path, *, required: Sequence[str], optional: Sequence[str] = (),
     return Table(str(path), tuple(header), values, {c: tuple(v) for c, v in text.items()}, lines)
 
 
-def _read_fast(path, raw: str, required, optional, text_columns, degrees: bool, allow_empty) -> Table | None:
-    """The table of a plain grid file, read column-wise (fastcsv), when every rule of the exact
-    reader below is seen to hold; None otherwise, and the exact reader reads the file (and names
-    the line and column of what is wrong)."""
+def _read_fast(path, raw: bytes, required, optional, text_columns, degrees: bool, allow_empty) -> Table | None:
+    """The table of a plain grid file (ASCII bytes), read column-wise (fastcsv), when every rule
+    of the exact reader below is seen to hold; None otherwise, and the exact reader reads the file
+    (and names the line and column of what is wrong)."""
     from . import fastcsv
 
     pos, lineno = 0, 1
     while True:   # skip the comment and blank lines before the header
-        end = raw.find("\n", pos)
+        end = raw.find(b"\n", pos)
         line = raw[pos:] if end < 0 else raw[pos:end]
-        if line.strip() and not line.lstrip().startswith("#"):
+        if line.strip() and not line.lstrip().startswith(b"#"):
             break
         if end < 0:
             return None
         pos, lineno = end + 1, lineno + 1
-    if end < 0 or "\r" in line or '"' in line:
+    if end < 0 or b"\r" in line or b'"' in line:
         return None
-    header = [h.strip() for h in line.split(",")]
+    header = [h.strip() for h in line.decode("ascii").split(",")]
     allowed = set(required) | set(optional) | set(text_columns)
     if len(set(header)) != len(header) or not set(header) <= allowed or not set(required) <= set(header):
         return None
-    got = fastcsv.parse_grid(raw[end + 1:].encode("utf-8"), header, text_columns, allow_empty)
+    got = fastcsv.parse_grid(raw, header, text_columns, allow_empty, start=end + 1)
     if got is None:
         return None
     values, text = got
@@ -278,9 +286,13 @@ def read_measurements(path, degrees: bool = False, sweeps: bool = True) -> Measu
             measured[i] = True
     if "sweep" in table.text:
         labels = table.text["sweep"]
-        ids = tuple(dict.fromkeys(labels))
-        code = {s: k for k, s in enumerate(ids)}
-        sweep = np.array([code[s] for s in labels], dtype=int)
+        if isinstance(labels, Labels):
+            labels = labels.in_order_of_appearance()
+            ids, sweep = labels.labels, labels.codes
+        else:
+            ids = tuple(dict.fromkeys(labels))
+            code = {s: k for k, s in enumerate(ids)}
+            sweep = np.array([code[s] for s in labels], dtype=int)
     else:
         ids, sweep = ("0",), np.zeros(n, dtype=int)
     for k, sid in enumerate(ids if sweeps else ()):
@@ -301,13 +313,15 @@ def write_table(path, columns: Mapping[str, Iterable], comments: Sequence[str] =
     rad; magnitudes of 1e6 or more in %.12g), NaN as an empty cell, text as the csv module quotes
     it (fastcsv.format_grid). With ``degrees`` the angle columns (u*, q*), given in radians, are
     written in degrees, as ``read_table(..., degrees=True)`` reads them back."""
-    from .fastcsv import format_grid
+    from .fastcsv import iter_grid
 
     path = Path(path)
     data = {}
     for c, col in columns.items():
-        if isinstance(col, np.ndarray) and col.dtype.kind in "fiu":
-            col = col.astype(float)
+        if isinstance(col, Labels):
+            pass
+        elif isinstance(col, np.ndarray) and col.dtype.kind in "fiu":
+            col = np.asarray(col, dtype=float)
         elif not isinstance(col, np.ndarray) and all(isinstance(v, (int, float, np.number)) for v in col):
             col = np.asarray(col, dtype=float)
         else:
@@ -320,7 +334,7 @@ def write_table(path, columns: Mapping[str, Iterable], comments: Sequence[str] =
     for c in comments:
         fh.write(f"# {c}\n")
     csv.writer(fh, lineterminator="\n").writerow(list(data))
-    write_atomic(path, fh.getvalue().encode("utf-8") + format_grid(data))
+    write_atomic(path, itertools.chain([fh.getvalue().encode("utf-8")], iter_grid(data)))
 
 
 def write_measurements(path, u, q=None, sweep=None, t=None, q_columns: Sequence[str] | None = None,
@@ -329,7 +343,7 @@ def write_measurements(path, u, q=None, sweep=None, t=None, q_columns: Sequence[
     u = np.asarray(u, dtype=float)
     cols: dict[str, Iterable] = {}
     if sweep is not None:
-        cols["sweep"] = [str(s) for s in sweep]
+        cols["sweep"] = sweep if isinstance(sweep, Labels) else [str(s) for s in sweep]
     if t is not None:
         cols["t"] = np.asarray(t, dtype=float)
     for i, c in enumerate(U_COLUMNS):

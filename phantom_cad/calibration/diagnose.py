@@ -26,7 +26,7 @@ import numpy as np
 from ..kinematics.topology import Q_COLUMNS
 from .data import Measurements
 from .effects import REGISTRY, get_effect
-from .fitting import FitResult, Model, Problem, fit, folds, heldout_sse, single_threaded_blas
+from .fitting import FitResult, Model, Problem, fit, fit_streamed, folds, heldout_sse, single_threaded_blas
 
 #: a candidate must bring the held-out sum of squares below this fraction of the model's without it
 HELDOUT_RATIO = 0.99
@@ -225,7 +225,7 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
     before = fit(Model(hand, [], full), full)
     if problem is not full:
         model = Model(hand, current, full)
-        base = fit(model, full, model.start(base))
+        base = fit_streamed(model, full, model.start(base))
         notes.append(f"the effects were selected on every {step}th row ({problem.rows.size:,} of {len(m):,} rows; "
                      f"the ranking above is theirs); the selected effects were then fitted on all rows, and the "
                      f"MAE and parameters below are of that fit")

@@ -170,18 +170,28 @@ def effective_size(problem: Problem, residual: np.ndarray) -> float:
 PREDICT_ROWS = 65536
 
 
-def _residual_fn(model: Model, problem: Problem):
+def _chunks(problem: Problem):
+    """(rows a:b, their measured cells ca:cb in the residual) in blocks of PREDICT_ROWS rows."""
     n = len(problem.rows)
     bounds = list(range(0, n, PREDICT_ROWS)) + [n]
     # where each chunk's measured cells start in the residual (cells are in row-major order)
     cells = np.concatenate([[0], np.cumsum(problem.mask.sum(axis=1))])[bounds]
+    return list(zip(bounds[:-1], bounds[1:], cells[:-1], cells[1:]))
+
+
+def _chunk_residual(model: Model, problem: Problem, theta, a, b, ca, cb) -> np.ndarray:
+    q = model.predict(theta, problem.u[a:b], problem.direction[a:b])
+    return (problem.meas[ca:cb] - q[problem.mask[a:b]]) * DEG_PER_RAD
+
+
+def _residual_fn(model: Model, problem: Problem):
+    chunks = _chunks(problem)
 
     def fun(theta):
         out = np.empty(problem.m)
-        for a, b, ca, cb in zip(bounds[:-1], bounds[1:], cells[:-1], cells[1:]):
-            q = model.predict(theta, problem.u[a:b], problem.direction[a:b])
-            out[ca:cb] = q[problem.mask[a:b]]
-        return (problem.meas - out) * DEG_PER_RAD
+        for a, b, ca, cb in chunks:
+            out[ca:cb] = _chunk_residual(model, problem, theta, a, b, ca, cb)
+        return out
     return fun
 
 
@@ -212,19 +222,98 @@ def fit(model: Model, problem: Problem, x0=None, uncertainty: bool = True) -> Fi
         kw["tr_solver"] = "lsmr"
     res = least_squares(fun, x0, **kw)
     r = res.fun
-    std = np.full(model.p, np.nan)
     if uncertainty:
         # J^T J through scipy.sparse (no BLAS call: multithreaded BLAS wake-up costs more than the product)
         J = sparse.csr_matrix(res.jac)
-        JTJ = (J.T @ J).toarray()
-        dof = max(r.size - model.p, 1)
-        s2 = float(r @ r) / dof
-        out = FitResult(model, res.x, std, r, problem)
-        inflate = r.size / max(out.n_eff, 1.0)
-        cov = np.linalg.pinv(JTJ) * s2 * inflate
-        out.std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-        return out
-    return FitResult(model, res.x, std, r, problem)
+        return _result(model, problem, res.x, r, (J.T @ J).toarray())
+    return FitResult(model, res.x, np.full(model.p, np.nan), r, problem)
+
+
+def _result(model: Model, problem: Problem, theta, r, JTJ) -> FitResult:
+    """The fit at ``theta`` with the uncertainties of the module docstring."""
+    dof = max(r.size - model.p, 1)
+    s2 = float(r @ r) / dof
+    out = FitResult(model, theta, np.full(model.p, np.nan), r, problem)
+    inflate = r.size / max(out.n_eff, 1.0)
+    cov = np.linalg.pinv(JTJ) * s2 * inflate
+    out.std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    return out
+
+
+def fit_streamed(model: Model, problem: Problem, x0=None, max_iter: int = 50) -> FitResult:
+    """:func:`fit` in bounded memory, for problems of millions of cells: Levenberg-Marquardt on
+    the normal equations, J^T J and J^T r summed over blocks of PREDICT_ROWS rows, so that no
+    m x p Jacobian is ever held (scipy's least_squares holds several: about 600 MB for 2.5 M cells).
+
+    The Jacobian is the same forward difference as ``least_squares(jac="2-point")`` (step
+    sqrt(eps) max(1, |x|), turned back at an upper bound), taken for groups of parameters whose
+    joints do not overlap at once. A step that leaves the bounds is clipped to them; the fit stops
+    when the linearized model promises a decrease of the sum of squares below 1e-10 of it."""
+    if model.p == 0:
+        return fit(model, problem, x0)
+    lo, hi = model.lower, model.upper
+    theta = model.start() if x0 is None else np.clip(x0, lo, hi)
+    chunks = _chunks(problem)
+    groups: list[tuple[list[int], set[int]]] = []     # structurally orthogonal columns
+    for k, (_, _, par) in enumerate(model.free):
+        joints = set(par.joints)
+        for members, used in groups:
+            if not used & joints:
+                members.append(k)
+                used |= joints
+                break
+        else:
+            groups.append(([k], set(joints)))
+    joint_of = [np.array(sorted(par.joints)) for _, _, par in model.free]
+
+    def sse(x) -> float:
+        return float(sum(np.sum(_chunk_residual(model, problem, x, *c) ** 2) for c in chunks))
+
+    def normal_equations(x):
+        """J^T J, J^T r and r at x."""
+        h = np.sqrt(np.finfo(float).eps) * np.maximum(1.0, np.abs(x))
+        h = np.where(x + h > hi, -h, h)
+        JTJ, g, r = np.zeros((model.p, model.p)), np.zeros(model.p), np.empty(problem.m)
+        for a, b, ca, cb in chunks:
+            r0 = r[ca:cb] = _chunk_residual(model, problem, x, a, b, ca, cb)
+            j = problem.j_idx[ca:cb]
+            J = np.zeros((r0.size, model.p))
+            for members, _ in groups:
+                step = np.zeros(model.p)
+                step[members] = h[members]
+                diff = _chunk_residual(model, problem, x + step, a, b, ca, cb) - r0
+                for k in members:
+                    cells = np.isin(j, joint_of[k])
+                    J[cells, k] = diff[cells] / h[k]
+            JTJ += J.T @ J
+            g += J.T @ r0
+        return JTJ, g, r
+
+    JTJ, g, r = normal_equations(theta)
+    rss = float(r @ r)
+    lam = 1e-3
+    for _ in range(max_iter):
+        d = np.diag(JTJ).copy()
+        d[d <= 0] = 1.0
+        try:
+            delta = np.linalg.solve(JTJ + lam * np.diag(d), -g)
+        except np.linalg.LinAlgError:
+            delta = -np.linalg.pinv(JTJ + lam * np.diag(d)) @ g
+        delta = np.clip(theta + delta, lo, hi) - theta
+        # the decrease the linearized model promises: |r + J delta|^2 = rss + 2 g.delta + delta' J'J delta
+        promised = -(2.0 * g @ delta + delta @ JTJ @ delta)
+        if promised <= 1e-10 * rss:
+            break
+        new = sse(theta + delta)
+        if new < rss:
+            theta, lam = theta + delta, max(lam / 10.0, 1e-12)
+            JTJ, g, r = normal_equations(theta)
+            rss = float(r @ r)
+        else:
+            lam *= 10.0
+            if lam > 1e12:
+                break
+    return _result(model, problem, theta, r, JTJ)
 
 
 def fit_effects(hand, m: Measurements, names) -> FitResult:

@@ -131,6 +131,7 @@ def model_forward(
     (refused with --strict)."""
     from .. import load_hand
     from ..calibration.data import read_measurements, write_measurements
+    from ..calibration.labels import Labels
     from ..kinematics.topology import U_COLUMNS
 
     check_output(out, CSV_MARKER, "a CSV written by phantom-cad")
@@ -139,7 +140,7 @@ def model_forward(
     _outside(m.u, hand.u_min, hand.u_max, U_COLUMNS, m.lines, inp, degrees, strict,
              "servo angles outside the travel", "the model extrapolates there")
     q = hand.forward(m.u, compensated=compensated)
-    sweep = [m.sweep_ids[k] for k in m.sweep] if m.has_sweep_column else None
+    sweep = Labels(m.sweep_ids, m.sweep) if m.has_sweep_column else None
     write_measurements(out, m.u, q, sweep=sweep, t=m.t, degrees=degrees,
                        comments=[f"phantom-cad model forward{' --compensated' if compensated else ''}, "
                                  f"params digest {hand.params.digest[:12]}, {'degrees' if degrees else 'radians'}"])

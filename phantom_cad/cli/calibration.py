@@ -75,6 +75,7 @@ def simulate(
     """Sweep every servo (flex, then extend, others at 0) and write what a hand with hidden effects would measure."""
     from .. import load_hand
     from ..calibration.data import write_measurements
+    from ..calibration.labels import Labels
     from ..calibration.simulate import SimulationError, parse_effect_params, simulate as run
 
     check_output(out, CSV_MARKER, "a CSV written by phantom-cad")
@@ -88,7 +89,7 @@ def simulate(
         raise _user_error(str(exc)) from None
     m = sim.measurements
     hidden = "; ".join(f"{n}: " + ", ".join(f"{k}={v:.6g}" for k, v in kv.items()) for n, kv in sim.hidden.items())
-    write_measurements(out, m.u, m.q, sweep=[m.sweep_ids[k] for k in m.sweep],
+    write_measurements(out, m.u, m.q, sweep=Labels(m.sweep_ids, m.sweep),
                        q_columns=m.q_columns, degrees=degrees,
                        comments=[f"phantom-cad simulate --effects {','.join(names) or 'none'} --noise-deg {noise_deg:g} "
                                  f"--seed {seed} --points {points}, params digest {hand.params.digest[:12]}, "

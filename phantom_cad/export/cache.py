@@ -5,8 +5,11 @@ Layout (default root ``.cache`` in the working directory, or ``$PHANTOM_CAD_CACH
     .cache/parts/<key>/       one built part: part.brep, part.step, part.stl,
                               mesh.npz (link frame), view.npz (coarse, for pictures),
                               render.png, meta.json
-    .cache/assembly/<key>/    hand_assembly.step, render.png, interference.json
-    .cache/slice/<key>.json   PrusaSlicer estimates of one STL with one config
+    .cache/assembly/<key>/    hand_assembly.step, render.png, interference.json, meta.json
+    .cache/slice/<key>.json   PrusaSlicer estimates of one STL with one config, and their SHA-256
+
+Every entry records the SHA-256 of what it holds when it is made, and is served only when its
+files still match (anything else is rebuilt, and the build log says why).
 
 A part's key is the SHA-256 of its name, ``assembly.part_inputs(params, name)`` (the
 plain values the part depends on, declared by its part family), the hand side, the STL
@@ -98,6 +101,42 @@ def part_key(params, name: str, part_inputs: Mapping[str, Any]) -> str:
 
 #: the files of every part entry (render.png too unless the build was --no-render)
 PART_FILES = ("part.brep", "part.step", "part.stl", "mesh.npz", "view.npz")
+#: the files of every assembly entry (render.png too unless the build was --no-render)
+ASSEMBLY_FILES = ("hand_assembly.step", "interference.json")
+
+
+def seal(entry: Path) -> None:
+    """Record the SHA-256 of every file of a staged entry in its meta.json (merged into what
+    meta.json already holds), for :func:`entry_problem` to check before the entry is served."""
+    meta_path = entry / "meta.json"
+    meta = json.loads(meta_path.read_text(encoding="utf-8")) if meta_path.is_file() else {}
+    meta["files"] = {f.name: sha256(f.read_bytes()) for f in sorted(entry.iterdir()) if f.name != "meta.json"}
+    write_json_atomic(meta_path, meta, indent=1, sort_keys=True)
+
+
+def entry_problem(entry: Path, need: tuple[str, ...]) -> str | None:
+    """Why the cache entry folder ``entry`` cannot be served (None: it can): missing, an
+    unreadable meta.json, a file of ``need`` not recorded, or a recorded file missing or not
+    matching the SHA-256 recorded when the entry was made."""
+    try:
+        meta = json.loads((entry / "meta.json").read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        return "meta.json is missing" if entry.exists() else "missing"
+    except (OSError, ValueError) as exc:
+        return f"meta.json is unreadable ({exc.__class__.__name__})"
+    files = meta.get("files") if isinstance(meta, dict) else None
+    if not isinstance(files, dict):
+        return "meta.json records no file hashes"
+    for name in need:
+        if name not in files:
+            return f"{name} is missing"
+    for name, digest in files.items():
+        try:
+            if sha256((entry / name).read_bytes()) != digest:
+                return f"{name} does not match its SHA-256"
+        except OSError:
+            return f"{name} is missing"
+    return None
 
 
 class Cache:
@@ -109,29 +148,10 @@ class Cache:
         return self.root / "parts" / key
 
     def part_problem(self, key: str, render: bool = True) -> str | None:
-        """Why the entry ``key`` cannot be served (None: it can): missing, an unreadable meta.json,
-        a file missing or not matching the SHA-256 recorded when the entry was made, or no render
-        when one is wanted (a --no-render build must not change what a later build writes)."""
-        d = self.part_dir(key)
-        try:
-            meta = json.loads((d / "meta.json").read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            return "missing"
-        except (OSError, ValueError) as exc:
-            return f"meta.json is unreadable ({exc.__class__.__name__})"
-        files = meta.get("files") if isinstance(meta, dict) else None
-        if not isinstance(files, dict):
-            return "meta.json records no file hashes"
-        for need in PART_FILES + (("render.png",) if render else ()):
-            if need not in files:
-                return f"{need} is missing"
-        for name, digest in files.items():
-            try:
-                if sha256((d / name).read_bytes()) != digest:
-                    return f"{name} does not match its SHA-256"
-            except OSError:
-                return f"{name} is missing"
-        return None
+        """Why the entry ``key`` cannot be served (None: it can): see :func:`entry_problem`; a
+        render is wanted unless the build is --no-render (a --no-render build must not change
+        what a later build writes)."""
+        return entry_problem(self.part_dir(key), PART_FILES + (("render.png",) if render else ()))
 
     def discard(self, final: Path) -> None:
         """Remove a bad entry (renamed aside first, so no reader sees half of it)."""
@@ -148,9 +168,30 @@ class Cache:
     def assembly_dir(self, key: str) -> Path:
         return self.root / "assembly" / key
 
+    def assembly_problem(self, key: str, render: bool = True) -> str | None:
+        """Why the assembly entry ``key`` cannot be served (None: it can): see :func:`entry_problem`."""
+        return entry_problem(self.assembly_dir(key), ASSEMBLY_FILES + (("render.png",) if render else ()))
+
     # slicing ------------------------------------------------------------------
     def slice_file(self, key: str) -> Path:
         return self.root / "slice" / f"{key}.json"
+
+    def read_slice(self, key: str) -> tuple[dict | None, str | None]:
+        """(the PrusaSlicer estimate cached under ``key``, None) or (None, why it cannot be
+        served: missing, unreadable, or not matching the SHA-256 recorded with it)."""
+        try:
+            doc = json.loads(self.slice_file(key).read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            return None, "missing"
+        except (OSError, ValueError) as exc:
+            return None, f"unreadable ({exc.__class__.__name__})"
+        est = doc.get("estimate") if isinstance(doc, dict) else None
+        if not isinstance(est, dict) or doc.get("sha256") != sha256(canonical(est)):
+            return None, "does not match its SHA-256"
+        return est, None
+
+    def write_slice(self, key: str, estimate: dict) -> None:
+        self.write_json(self.slice_file(key), {"estimate": estimate, "sha256": sha256(canonical(estimate))})
 
     # helpers -------------------------------------------------------------------
     @staticmethod

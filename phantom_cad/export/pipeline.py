@@ -178,7 +178,11 @@ class _Build:
         }))
         adir = cache.assembly_dir(akey)
         futures: dict[str, Future] = {}
-        if not (adir / "interference.json").is_file():
+        problem = cache.assembly_problem(akey, self.render)
+        if problem not in (None, "missing"):
+            self.log(f"cache: assembly entry {akey[:12]} not served ({problem}); rebuilding it")
+            cache.discard(adir)
+        if problem is not None:
             self.astage = astage = cache.staging(adir)
             parts_arg = [(n, str(cache.part_dir(keys[n])), poses[n].tolist(), metas[n]["color"]) for n in names]
             futures["step"] = self.get_pool().submit(pool_mod.assembly_step_worker, {
@@ -209,6 +213,7 @@ class _Build:
                     f"parts intersect at the rest pose (overlap > {INTERFERENCE_TOL_MM3} mm^3, not in "
                     f"assembly.designed_contacts); {self.out} was left untouched:\n" + "\n".join(lines))
             cache.write_json(astage / "interference.json", inter)
+            cache_mod.seal(astage)
             Cache.commit(astage, adir)
             self.astage = None
         inter = json.loads((adir / "interference.json").read_text())
@@ -236,14 +241,16 @@ class _Build:
         def one(n):
             stl_path = cache.part_dir(keys[n]) / "part.stl"
             skey = slicer.estimate_key(stl_path.read_bytes(), ini, version)
-            sfile = cache.slice_file(skey)
-            if sfile.is_file():
-                return n, json.loads(sfile.read_text())
+            est, problem = cache.read_slice(skey)
+            if est is not None:
+                return n, est
+            if problem != "missing":
+                self.log(f"cache: slicer estimate of {n} ({skey[:12]}) not served ({problem}); slicing again")
             try:
                 est = slicer.slice_stl(stl_path, ini, exe).as_dict()
             except Exception as exc:
                 return n, {"error": f"{type(exc).__name__}: {exc}"}
-            cache.write_json(sfile, est)
+            cache.write_slice(skey, est)
             return n, dict(sorted(est.items()))     # the same key order as a cache hit
 
         with ThreadPoolExecutor(max_workers=self.jobs) as tp:

@@ -19,6 +19,12 @@ from .errors import ParamError
 MAX_NAME = 64
 #: the thinnest wall an FDM printer makes: two perimeters of a 0.4 mm nozzle
 MIN_WALL = 0.8 * MM
+#: the largest hinge flexion limit the phalanges are modelled and checked for (built and verified at
+#: 120 degrees; at 156 degrees a middle phalanx's recess cut splits it in two: the property test)
+MAX_FLEXION = 120.0 * DEG
+#: the largest finger pitch the palm layout is modelled and checked for (built and verified at 21 mm;
+#: from 22 mm the palm's solid is not valid: the property test, docs/reliability.md)
+MAX_FINGER_PITCH = 21.0 * MM
 
 
 def _digits(fingers, thumb):

@@ -236,6 +236,9 @@ def _limits(t: TomlTable, joints: tuple[str, ...]) -> dict[str, tuple[float, flo
         lo, hi = lt.interval(j)
         if lo > 0:
             raise lt.error(j, [lo, hi], "low must be <= 0 (the rest pose q = 0 must lie in the workspace)")
+        if j != "cmc" and hi > rules.MAX_FLEXION + 1e-12:
+            raise lt.error(j, [lo, hi], f"high must be <= {rules.MAX_FLEXION:.4f} rad (120 deg): the phalanges "
+                           "are modelled and checked for flexion up to 120 deg")
         out[j] = (lo, hi)
     lt.done()
     return out
@@ -446,6 +449,10 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
         thumb_cmc_axis=tuple(v * DEG for v in p.vector("thumb_cmc_axis_deg", 3, ge=-180, le=180)),
     )
     p.done()
+    if palm.finger_pitch > rules.MAX_FINGER_PITCH + 1e-12:
+        raise ParamError("palm.finger_pitch_mm", palm.finger_pitch / MM,
+                         f"must be <= {rules.MAX_FINGER_PITCH / MM:g} mm: the palm layout is modelled and checked "
+                         "up to it (from 22 mm its solid is not valid)", source)
     for n in FINGERS:
         if fingers[n].width >= palm.finger_pitch + 1e-12:
             raise ParamError(f"fingers.{n}.width_mm", fingers[n].width / MM,

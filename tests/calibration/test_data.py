@@ -215,7 +215,8 @@ def _same(a, b):
 
 
 _CELLS = ["0", "0.5", "-0.25", "+.5", "1e-3", "2.5E+0", "", "1.", "3.14159265358979", "7", "0.0_1", "1e999",
-          "٣", "nan", " 0.5", "abc", "-", "1e", "6.3", "-6.29", ".", "1,5", '"0.5"', "0x1"]
+          "٣", "nan", " 0.5", "abc", "-", "1e", "6.3", "-6.29", ".", "1,5", '"0.5"', "0x1", "-0", "+0.000",
+          "1e-30", "12345678901234567890.5", "0.1234567890123456789", "1e22", "5e-23", "9007199254740993", "1E+1"]
 
 
 @pytest.mark.parametrize("seed", range(40))
@@ -265,7 +266,7 @@ def test_column_reader_reads_a_plain_grid(tmp_path, monkeypatch):
     write_measurements(p, u, q, sweep=sweep)
     calls = []
     real = fastcsv.parse_grid
-    monkeypatch.setattr(fastcsv, "parse_grid", lambda *a: calls.append(real(*a)) or calls[-1])
+    monkeypatch.setattr(fastcsv, "parse_grid", lambda *a, **k: calls.append(real(*a, **k)) or calls[-1])
     m = read_measurements(p)
     assert calls and calls[0] is not None
     exact = _exact(p, monkeypatch)
@@ -289,3 +290,28 @@ def test_fixed_point_text_known_answers():
         "0.0,a", "0.0,\"b,c\"", "1.0, d", "-1.5,\"e\"\"f\"", "0.5,g", "0.0,h", "0.000000000001,i",
         "-0.000000000001,j", "1.0,k", "10.0,l", "100.5,m", "1000.25,n", ",o", "-0.000025,p", "0.3,q",
         "3.14159265359,r", "2500000,s", "-inf,t"]
+
+
+def test_compiled_parser_converts_numbers_as_float_does():
+    """Every plain decimal form, on the compiled fast path (one multiplication or division by an
+    exact power of ten) and on its fallback (numpy's parser for 17-digit mantissas and large
+    exponents): the same double as Python's float(), bit for bit, signed zeros included."""
+    from phantom_cad.calibration import fastcsv
+
+    cells = ["0", "-0", "+0.000", "0.5", "-0.25", "+.5", "1.", "1e-3", "2.5E+0", "1E+1", "6.3", "-6.29",
+             "3.14159265358979", "0.1", "0.30000000000000004", "1e-30", "5e-23", "1e22", "1e23",
+             "12345678901234567890.5", "0.1234567890123456789", "9007199254740993", "9007199254740992",
+             "0.000000000001", "-0.000025", "1000.25", "123456.123456789012", "4.9e-324", "1.7976931348623157e308"]
+    rng = np.random.default_rng(0)
+    cells += [repr(float(v)) for v in rng.normal(size=200) * 10.0 ** rng.integers(-30, 30, 200)]
+    cells += [f"{v:.12f}" for v in rng.normal(size=200)]
+    data = "".join(f"a,{c}\n" for c in cells).encode()
+    got = fastcsv.parse_grid(data, ["sweep", "u1"], ["sweep"], [])
+    assert got is not None
+    values, text = got
+    want = np.array([float(c) for c in cells])
+    assert values["u1"].view(np.uint64).tolist() == want.view(np.uint64).tolist()
+    assert list(text["sweep"]) == ["a"] * len(cells)
+    # not plain decimal numbers: left to the exact reader
+    for bad in ["0.0_1", "nan", "inf", "1e", ".", "-", "+", "0x1", " 1", "1 ", "1e+", "--1", "1.2.3", "1e5.5"]:
+        assert fastcsv.parse_grid(f"a,0\na,{bad}\n".encode(), ["sweep", "u1"], ["sweep"], []) is None, bad
