@@ -72,12 +72,12 @@ def parse_grid(data: bytes, header: Sequence[str], text_columns: Sequence[str], 
     nrows = data.count(b"\n", start, stop) + 1
     values = np.empty((nrows, len(numeric)))
     spans = np.empty((nrows, len(texts), 2), dtype=np.int64)
-    slow = _parse(arr, slot, is_text, empty_ok, values, spans)
+    slow_text = np.empty(arr.size + 1, dtype=np.uint8)    # pages are touched only where written
+    slow, size = _parse(arr, slot, is_text, empty_ok, values, spans, slow_text)
     if slow < 0:
         return None
-    if slow:
-        if not _parse_slow(arr, slot, is_text, values, slow):
-            return None
+    if slow and not _parse_slow(slow_text[:size], values, slow):
+        return None
     text = {}
     for k, j in enumerate(texts):
         s, w = spans[:, k, 0], spans[:, k, 1] - spans[:, k, 0]
@@ -89,13 +89,11 @@ def parse_grid(data: bytes, header: Sequence[str], text_columns: Sequence[str], 
     return {header[j]: values[:, k] for k, j in enumerate(numeric)}, text
 
 
-def _parse_slow(arr, slot, is_text, values, count: int) -> bool:
-    """Convert the cells :func:`_parse` left (marked ``_SLOW``) with numpy's correctly rounded
-    parser; False when numpy refuses one."""
-    buf = np.empty(arr.size + count, dtype=np.uint8)
-    size = _gather_slow(arr, slot, is_text, values, buf)
+def _parse_slow(text, values, count: int) -> bool:
+    """Convert the cells :func:`_parse` left (marked ``_SLOW``, their text one per line in
+    ``text``) with numpy's correctly rounded parser; False when numpy refuses one."""
     try:
-        got = np.loadtxt(io.StringIO(buf[:size].tobytes().decode("ascii")), dtype=float, ndmin=1,
+        got = np.loadtxt(io.StringIO(text.tobytes().decode("ascii")), dtype=float, ndmin=1,
                          comments=None, quotechar=None)
     except ValueError:
         return False
@@ -174,16 +172,19 @@ def _number(arr, s, e):
 
 
 @numba.njit(cache=True, nogil=True)
-def _parse(arr, slot, is_text, empty_ok, values, spans):
+def _parse(arr, slot, is_text, empty_ok, values, spans, slow_text):
     """Fill ``values`` (rows x numeric columns) and ``spans`` (rows x text columns x [start, end))
-    from the grid in ``arr``. Returns the number of cells left to the exact parser (marked
-    ``_SLOW`` in ``values``), or -1 when the text is not a plain grid of these columns."""
+    from the grid in ``arr``. Returns (the number of cells left to the exact parser, the bytes of
+    ``slow_text`` used): those cells are marked ``_SLOW`` in ``values`` and their text copied to
+    ``slow_text``, one per line, in row order. (-1, 0) when the text is not a plain grid of these
+    columns."""
     n = arr.size
     ncols = slot.size
     marks = values.reshape(-1).view(np.uint64)
     nnum = values.shape[1]
     pos = 0
     slow = 0
+    size = 0
     for row in range(values.shape[0]):
         for j in range(ncols):
             s = pos
@@ -192,57 +193,37 @@ def _parse(arr, slot, is_text, empty_ok, values, spans):
                 e += 1
             if j < ncols - 1:
                 if e >= n or arr[e] != 44:
-                    return -1
+                    return -1, 0
             elif e < n and arr[e] != 10:
-                return -1
+                return -1, 0
             k = slot[j]
             if is_text[j]:
                 if e == s or arr[s] == 32 or arr[e - 1] == 32:
-                    return -1
+                    return -1, 0
                 spans[row, k, 0] = s
                 spans[row, k, 1] = e
             elif e == s:
                 if not empty_ok[j]:
-                    return -1
+                    return -1, 0
                 values[row, k] = np.nan
             else:
                 status, v = _number(arr, s, e)
                 if status < 0:
-                    return -1
+                    return -1, 0
                 if status == 1:
                     values[row, k] = v
                 else:
                     marks[row * nnum + k] = _SLOW
                     slow += 1
+                    for i in range(s, e):
+                        slow_text[size] = arr[i]
+                        size += 1
+                    slow_text[size] = 10
+                    size += 1
             pos = e + 1
     if pos < n:
-        return -1
-    return slow
-
-
-@numba.njit(cache=True, nogil=True)
-def _gather_slow(arr, slot, is_text, values, buf):
-    """Copy the text of the cells marked ``_SLOW`` into ``buf``, one per line, in row order."""
-    n = arr.size
-    ncols = slot.size
-    marks = values.reshape(-1).view(np.uint64)
-    nnum = values.shape[1]
-    pos = 0
-    size = 0
-    for row in range(values.shape[0]):
-        for j in range(ncols):
-            s = pos
-            e = s
-            while e < n and arr[e] != 44 and arr[e] != 10:
-                e += 1
-            if not is_text[j] and marks[row * nnum + slot[j]] == _SLOW:
-                for i in range(s, e):
-                    buf[size] = arr[i]
-                    size += 1
-                buf[size] = 10
-                size += 1
-            pos = e + 1
-    return size
+        return -1, 0
+    return slow, size
 
 
 # -- writing ------------------------------------------------------------------
