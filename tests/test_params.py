@@ -299,6 +299,14 @@ def _field(document, path, value):
     # found by the property test (seed 4): these validated and did not build
     ("fingers.pinky.limits_rad.dip", [0.0, 2.728821], "fingers.pinky.limits_rad.dip", "flexion up to 120 deg"),
     ("palm.finger_pitch_mm", 22.0, "palm.finger_pitch_mm", "must be <= 21 mm"),
+    # found by the property test (seed 4): a thumb eyelet 43.2 cos 50 = 27.768 mm below the MP axis
+    # floats below the 15 mm metacarpal (2 solids) and the proximal phalanx's boolean ran out of memory;
+    # room = 7.5 + 2 x 0.5 = 8.5 mm
+    ("thumb.guide.d1_mm", 43.2, "thumb.guide.d1_mm", "27.768 mm below the joint axis"),
+    ("thumb.guide.d1_mm", 13.3, "thumb.guide.d1_mm", "(<= 8.500 mm"),        # 13.3 cos 50 = 8.549
+    # a 0.11 x 189 = 20.79 mm metacarpal leaves 10.79 mm of arm in front of the 10 mm hub; the eyelet
+    # reaches 11 sin 50 + 2 / 2 + (sqrt 3 + 2) 0.5 = 8.4265 + 1 + 1.8660 = 11.2925 mm behind the MP axis
+    ("thumb.length_fraction.metacarpal", 0.11, "thumb.guide.d1_mm", "11.293 mm behind the MP axis"),
 ])
 def test_rules_the_build_relies_on(document, path, value, field, words):
     _field(document, path, value)
@@ -306,6 +314,23 @@ def test_rules_the_build_relies_on(document, path, value, field, words):
         parse(document)
     assert info.value.field == field
     assert words in info.value.rule
+
+
+def test_thumb_eyelet_depth_bound_by_hand(document):
+    """13.2 cos 50 deg = 8.485 mm <= 8.5 mm: the deepest thumb eyelet at the default alpha validates
+    (and builds: all three thumb parts were built at 13.2 mm, one valid solid each)."""
+    _field(document, "thumb.guide.d1_mm", 13.2)
+    parse(document)
+
+
+def test_finger_eyelet_depth_bound_by_hand(document):
+    """At alpha = 92 deg the base's reach allows d1 up to (13 - 2.866) / sin 46 = 14.09 mm, but
+    14 cos 46 = 9.725 mm is deeper than 16 / 2 + 1 = 9 mm."""
+    _field(document, "fingers.index.guide", {"d1_mm": 14.0, "d2_mm": 10.0, "alpha_deg": 92.0})
+    with pytest.raises(ParamError) as info:
+        parse(document)
+    assert info.value.field == "fingers.index.guide.d1_mm" and "9.725 mm below" in info.value.rule
+    assert "(<= 9.000 mm" in info.value.rule
 
 
 def test_compliance_limit_matches_eq_13_by_hand(document):
