@@ -18,6 +18,8 @@ DEG_PER_RAD = 180.0 / math.pi
 CM3_PER_MM3 = 1e-3
 #: kg/m^3 per g/cm^3
 G_PER_CM3 = 1000.0
+#: kilograms per gram
+KG_PER_G = 1e-3
 
 
 def mm(metres):

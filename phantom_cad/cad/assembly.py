@@ -9,7 +9,9 @@ names the module the pipeline uses; its tests install a stand-in with the same f
 * ``pose_transforms(params, q=None) -> {name: 4x4}``: T_hand_link (mm) at joint angles q;
 * ``designed_contacts(params) -> [(a, b, why)]``: pairs that touch by design;
 * ``bill_of_materials(params) -> [row]``: rows with item, spec, quantity, used_in;
-* optionally ``verify_part(params, name, shape) -> [problem]``: measured verification.
+* optionally ``verify_part(params, name, shape) -> [problem]``: measured verification;
+* optionally ``tip_frames(params) -> {frame: (link, T_link_frame)}`` (metres): the fingertip pad
+  frames of the robot description (an interface without it gets no description).
 
 Everything but ``build_part`` is numpy only; ``build_part`` imports build123d (lazily,
 through the part families). Units: millimetres. Each part is modelled in its own link frame
@@ -25,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from ..kinematics import frames as F
-from ..kinematics.topology import CMC_Q, CMC_SERVO, JOINTS, LINKS, N_JOINTS, SERVOS
+from ..kinematics.topology import CMC_Q, CMC_SERVO, DIGITS, JOINTS, LINKS, N_JOINTS, SERVOS, digit_links
 from . import registry, verify
 from .materials import bill_of_materials  # noqa: F401  (part of the interface)
 
@@ -62,6 +64,18 @@ def pose_transforms(params, q=None) -> dict[str, np.ndarray]:
             raise ValueError(f"q must have shape ({N_JOINTS},), got {q.shape}")
     links = F.link_transforms(params, q)
     return {n: F.to_mm(links[n]) for n in part_names(params)}
+
+
+def tip_frames(params) -> dict[str, tuple[str, np.ndarray]]:
+    """``<digit>_tip`` -> (its distal link, T_link_tip in metres): the centre of each fingertip pad,
+    z along the pad normal (what retargeting and grasp tools look for); mirrored for a left hand."""
+    out = {}
+    for d in DIGITS:
+        distal = digit_links(d)[-1]
+        T = registry.part(params, distal.name).pad()
+        T = F.mirror(F.from_mm(T)) if params.side == "left" else F.from_mm(T)
+        out[f"{d}_tip"] = (distal.name, T)
+    return out
 
 
 def build_part(params, name: str) -> Built:

@@ -36,6 +36,20 @@ def solid_report(shape) -> dict:
     }
 
 
+def mass_properties(shape) -> dict:
+    """Volume (mm^3), centre of mass (mm) and the inertia tensor about it (mm^5, unit density)
+    of a solid, in the shape's own frame (OpenCascade's volume properties)."""
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
+
+    props = GProp_GProps()
+    BRepGProp.VolumeProperties_s(shape.wrapped, props)
+    c = props.CentreOfMass()
+    m = props.MatrixOfInertia()          # about the centre of mass, for density 1
+    inertia = [[m.Value(i, j) for j in (1, 2, 3)] for i in (1, 2, 3)]
+    return {"volume_mm3": float(props.Mass()), "com_mm": [c.X(), c.Y(), c.Z()], "inertia_mm5": inertia}
+
+
 def placed(shape, T: np.ndarray):
     """The shape moved by a 4x4 rigid transform (mm)."""
     from .parts.common import transform

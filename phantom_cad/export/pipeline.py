@@ -263,6 +263,21 @@ class _Build:
         return estimates, info
 
     # 4. write the export into a staging directory, then replace the target ---------------
+    def description(self, metas, estimates, folder: Path) -> dict | None:
+        """The robot description package (export/description.py) when the assembly interface
+        gives the fingertip frames (the stand-in of the pipeline tests does not)."""
+        if not hasattr(self.asm, "tip_frames"):
+            return None
+        from .description import write_description
+        from .robot import robot_model
+
+        meshes = {}
+        for n in self.names:
+            with np.load(self.cache.part_dir(self.keys[n]) / "mesh.npz") as z:
+                meshes[n] = (z["vertices"], z["faces"])
+        model = robot_model(self.params, metas, self.asm.tip_frames(self.params), estimates)
+        return write_description(folder, model, meshes)
+
     def write(self, metas, poses, contacts, inter, adir: Path, estimates, slicer_info, ini: str) -> dict:
         from . import manifest as manifest_mod
 
@@ -284,12 +299,15 @@ class _Build:
             if render and (adir / "render.png").is_file():
                 shutil.copyfile(adir / "render.png", stage / "renders" / "hand_assembly.png")
             (stage / "slicer" / "config.ini").write_text(ini)
+            description = self.description(metas, estimates, stage / "description")
             bom = list(self.asm.bill_of_materials(self.params))
             (stage / "bom.csv").write_text(bom_csv(bom), encoding="utf-8")
             man = manifest_mod.build_manifest(
                 stage=stage, params=self.params, params_path=self.path, names=names, keys=keys, metas=metas,
                 poses=poses, estimates=estimates, slicer_info=slicer_info, interference=inter,
                 contacts=contacts, bom=bom)
+            if description is not None:
+                man["description"] = description
             (stage / "manifest.json").write_text(json.dumps(man, indent=1, sort_keys=False) + "\n")
             replace_dir(stage, out)
         except BaseException:

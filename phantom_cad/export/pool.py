@@ -103,6 +103,8 @@ def part_worker(task: dict) -> dict:
         verified = _check(asm, params, name, shape)
         volume = float(shape.volume)
         area = float(shape.area)
+        from ..cad.measure import mass_properties
+        mass_props = mass_properties(shape)     # link frame: the description's inertials
 
         cache = Cache(task["cache_root"])
         final = cache.part_dir(task["key"])
@@ -142,6 +144,7 @@ def part_worker(task: dict) -> dict:
             "print_transform": T_print.tolist(),
             "T_hand_link": np.asarray(built.T_hand_link, dtype=float).tolist(),
             "volume_mm3": volume,
+            "mass_properties": mass_props,
             "area_mm2": area,
             "bbox_mm": _bbox(v),
             "print_bbox_mm": _bbox(vp),

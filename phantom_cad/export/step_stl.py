@@ -271,7 +271,7 @@ def to_print_pose(vertices: np.ndarray, rotation: np.ndarray) -> tuple[np.ndarra
     return v + shift, T
 
 
-def stl_bytes(vertices: np.ndarray, faces: np.ndarray, name: str) -> bytes:
+def stl_bytes(vertices: np.ndarray, faces: np.ndarray, name: str, unit: str = "mm") -> bytes:
     """Binary STL with a fixed header (no timestamp): byte-identical for the same mesh."""
     v = np.asarray(vertices, dtype=np.float64)
     tri = v[faces]
@@ -282,7 +282,7 @@ def stl_bytes(vertices: np.ndarray, faces: np.ndarray, name: str) -> bytes:
     data = np.zeros(len(faces), dtype=record)
     data["n"] = normals
     data["v"] = tri
-    header = f"phantom_cad binary STL: {name} (mm)".encode("ascii", "replace")[:80].ljust(80, b" ")
+    header = f"phantom_cad binary STL: {name} ({unit})".encode("ascii", "replace")[:80].ljust(80, b" ")
     return header + struct.pack("<I", len(faces)) + data.tobytes()
 
 

@@ -77,6 +77,13 @@ def to_mm(T: np.ndarray) -> np.ndarray:
     return out
 
 
+def from_mm(T: np.ndarray) -> np.ndarray:
+    """The same rigid transform with its translation in metres (from millimetres)."""
+    out = np.array(T, float)
+    out[:3, 3] = out[:3, 3] * units.MM
+    return out
+
+
 def mirror(T: np.ndarray) -> np.ndarray:
     """The left-hand counterpart of a right-hand transform (S T S)."""
     return MIRROR @ T @ MIRROR

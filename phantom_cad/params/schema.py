@@ -142,6 +142,9 @@ class ServoBody:
     body: tuple[float, float, float]
     flange_span: float
     screw_diameter: float
+    #: stall torque (N m) and no-load speed (rad/s) at the output: joint efforts and velocities
+    stall_torque: float
+    speed: float
 
 
 @dataclass(frozen=True)
@@ -461,7 +464,8 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
 
     s = root.table("servo")
     servo = ServoBody(tuple(v * MM for v in s.vector("body_mm", 3, gt=0)),
-                  s.number("flange_span_mm", gt=0) * MM, s.number("screw_diameter_mm", gt=0) * MM)
+                  s.number("flange_span_mm", gt=0) * MM, s.number("screw_diameter_mm", gt=0) * MM,
+                  s.number("stall_torque_Nm", gt=0, le=100.0), s.number("speed_deg_s", gt=0, le=1e4) * DEG)
     s.done()
     if servo.flange_span <= servo.body[0]:
         raise ParamError("servo.flange_span_mm", servo.flange_span / MM,

@@ -179,6 +179,28 @@ class Phalanx(Part):
         """Far end of the part along y: the fingertip, or the clevis boss beyond the distal axis."""
         return self.length if self.distal_joint is None else self.length + self.sec.boss_radius
 
+    @property
+    def tip_radius(self) -> float:
+        """Radius of the fingertip's half cylinder (distal phalanx): half the thickness, or less."""
+        return min(self.sec.thickness / 2.0, self.length - self.sec.slot_back)
+
+    #: where the pad centre sits on the fingertip's round: this far from palmar toward the tip
+    PAD_ANGLE = math.pi / 4.0
+
+    def pad(self) -> np.ndarray:
+        """T_link_pad (mm) of a fingertip: the centre of its contact pad, on the tip's half cylinder
+        PAD_ANGLE (45 deg) from the palmar face toward the tip (the flat palmar face carries the
+        tendon's knot well), its z axis the outward surface normal there, its x the link's x."""
+        if self.distal_joint is not None:
+            raise ValueError(f"{self.name} is not a fingertip")
+        r, a = self.tip_radius, self.PAD_ANGLE
+        n = np.array([0.0, math.sin(a), -math.cos(a)])          # outward normal, link frame
+        T = np.eye(4)
+        T[:3, 0], T[:3, 2] = (1.0, 0.0, 0.0), n
+        T[:3, 1] = np.cross(n, T[:3, 0])
+        T[:3, 3] = np.array([0.0, self.length - r, 0.0]) + r * n
+        return T
+
     def verify(self, shape) -> list[str]:
         """The proximal joint's groove radius R; on the guide link, the eyelet at d2."""
         out: list[str] = []
@@ -200,7 +222,7 @@ class Phalanx(Part):
         W, T, L = sec.width, sec.thickness, self.length
         body, tools = tongue(sec, self.proximal_joint)
         if self.distal_joint is None:       # fingertip: a half-cylinder of radius T/2 (or less)
-            r_tip = min(T / 2.0, L - sec.slot_back)
+            r_tip = self.tip_radius
             y_c = L - r_tip
             body.append(box(-W / 2.0, W / 2.0, sec.slot_back, y_c, -T / 2.0, T / 2.0))
             tip = cyl_x(r_tip, -W / 2.0, W / 2.0, y_c, 0.0).cut(

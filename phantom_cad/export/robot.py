@@ -1,0 +1,167 @@
+"""The format-neutral robot model between the parts and the description writers (URDF, ...).
+
+One ``RobotModel`` per build: links with their inertials and meshes, joints with origins, axes,
+limits, efforts, velocities and mimic couplings, and the massless fingertip frames. It is made
+from the topology (``kinematics.topology``), the frames the parts were modelled in
+(``kinematics.frames``), each part's mass properties measured on its solid (the part cache's
+meta) and, where known, the slicer's mass estimate. The writers only format it.
+
+Conventions (SI, link frames as in docs/frames.md):
+* the 15 revolute joints keep the names of the topology (``index_mcp``, ..., ``thumb_cmc``);
+  fixed mounts are ``<child>_joint``;
+* a coupled joint (PIP, DIP, thumb IP) mimics its chain's reference joint (MCP, thumb MP) with
+  the analytic multiplier of eq. (2), R_ref / R_i; never a mimic of a mimic;
+* effort: the servo's stall torque through the tendon (tension tau / r_j times the joint's
+  pulley radius R_i), or tau / g for the directly driven CMC; velocity: the servo's no-load
+  speed times the largest dq/du over the travel (eq. 6; times the multiplier for a coupled joint),
+  or g times the speed for the CMC;
+* inertials: mass from the slicer estimate when the build sliced the part, else volume x density
+  x infill; the tensor is the solid's (uniform density) scaled to that mass, about the centre of
+  mass, in the link frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import units
+from ..kinematics import closed_form as cf
+from ..kinematics import frames as F
+from ..kinematics.topology import CHAINS, CMC_SERVO, JOINTS, LINKS, SERVOS, servo_joints
+from .manifest import mass_g
+
+#: dense grid of the servo travel on which the largest joint rate is taken
+RATE_SAMPLES = 2001
+
+
+@dataclass(frozen=True)
+class Inertial:
+    mass: float                  # kg
+    com: tuple[float, float, float]          # m, link frame
+    inertia: tuple[float, ...]   # ixx, ixy, ixz, iyy, iyz, izz about the centre of mass, kg m^2
+    source: str                  # "slicer" or "volume x density x infill"
+
+
+@dataclass(frozen=True)
+class RobotLink:
+    name: str
+    inertial: Inertial | None    # None: a massless frame
+    mesh: str | None             # mesh file stem (the part name), None for a frame
+    color: tuple[float, float, float] = (0.7, 0.7, 0.7)
+
+
+@dataclass(frozen=True)
+class Mimic:
+    joint: str
+    multiplier: float
+    offset: float = 0.0
+
+
+@dataclass(frozen=True)
+class RobotJoint:
+    name: str
+    type: str                    # "revolute" or "fixed"
+    parent: str
+    child: str
+    origin: np.ndarray           # 4x4 T_parent_child at q = 0, metres
+    axis: tuple[float, float, float] = (1.0, 0.0, 0.0)
+    lower: float = 0.0
+    upper: float = 0.0
+    effort: float = 0.0          # N m
+    velocity: float = 0.0        # rad/s
+    mimic: Mimic | None = None
+
+
+@dataclass(frozen=True)
+class RobotModel:
+    name: str                    # the hand's name (the robot's name in the descriptions)
+    side: str
+    links: tuple[RobotLink, ...]
+    joints: tuple[RobotJoint, ...]
+
+    def link(self, name: str) -> RobotLink:
+        return next(ln for ln in self.links if ln.name == name)
+
+    def joint(self, name: str) -> RobotJoint:
+        return next(j for j in self.joints if j.name == name)
+
+
+def inertial(meta: dict, printing, estimate: dict | None = None) -> Inertial:
+    """The inertial of a part from its measured mass properties (``meta["mass_properties"]``:
+    volume mm^3, centre of mass mm, tensor about it in mm^5 at unit density)."""
+    mp = meta["mass_properties"]
+    volume = float(mp["volume_mm3"])
+    if estimate and estimate.get("filament_g"):
+        grams, source = float(estimate["filament_g"]), "slicer"
+    else:
+        grams, source = mass_g(volume, printing), "volume x density x infill"
+    mass = grams * units.KG_PER_G
+    density = mass / volume                                  # kg / mm^3
+    I = np.asarray(mp["inertia_mm5"], float) * density * units.MM ** 2     # kg m^2
+    I = (I + I.T) / 2.0
+    com = tuple(float(v) * units.MM for v in mp["com_mm"])
+    return Inertial(mass, com, (I[0, 0], I[0, 1], I[0, 2], I[1, 1], I[1, 2], I[2, 2]), source)
+
+
+def _max_rate(chain) -> float:
+    """The largest dq_ref/du over the chain's servo travel (eq. 6), on a dense grid."""
+    u = np.linspace(chain.travel[0], chain.travel[1], RATE_SAMPLES)
+    g = chain.guide
+    return float(np.max(np.abs(cf.reference_angle_rate(u, g.d1, g.d2, g.alpha, chain.servo_radius))))
+
+
+def _drives(params) -> dict[str, tuple[float, float, Mimic | None]]:
+    """joint name -> (effort N m, velocity rad/s, mimic) of the 15 actuated joints."""
+    tau, speed = params.servo.stall_torque, params.servo.speed
+    out = {}
+    for spec, chain in zip(CHAINS, params.chains):
+        tension = tau / chain.servo_radius
+        rate = _max_rate(chain)
+        A = cf.ideal_coupling(chain.radii)
+        ref = spec.joint_names[0]
+        for k, (name, R) in enumerate(zip(spec.joint_names, chain.radii)):
+            mimic = None if k == 0 else Mimic(ref, float(A[k]))
+            out[name] = (tension * R, speed * rate * float(A[k]), mimic)
+    g = params.thumb.cmc_gain
+    (cmc,) = servo_joints(CMC_SERVO)
+    out[JOINTS[cmc].name] = (tau / g, speed * g, None)
+    return out
+
+
+def _fixed_parent(ln) -> str:
+    """Where a fixed link hangs: the palm, or for the hub of a direct drive (coaxial with its
+    joint and turning with it) the link that joint moves."""
+    if ln.segment == "servo_pulley" and SERVOS[ln.servo].drive == "direct":
+        (qi,) = servo_joints(ln.servo)
+        return JOINTS[qi].child
+    return ln.parent
+
+
+def robot_model(params, metas: dict[str, dict], tips: dict[str, tuple[str, np.ndarray]],
+                estimates: dict[str, dict | None] | None = None) -> RobotModel:
+    """The robot model of a built hand: ``metas`` the part metas (by link name), ``tips`` the
+    fingertip frames (``assembly.tip_frames``), ``estimates`` the slicer's per-part estimates."""
+    estimates = estimates or {}
+    links = [RobotLink(ln.name, inertial(metas[ln.name], params.print, estimates.get(ln.name)), ln.name,
+                       tuple(float(c) for c in metas[ln.name].get("color", (0.7, 0.7, 0.7))))
+             for ln in LINKS]
+    rest = F.link_transforms(params, None)              # T_palm_link, mirrored for a left hand
+    revolute = {j["name"]: j for j in F.joints(params)}
+    drives = _drives(params)
+    joints = []
+    for ln in LINKS[1:]:
+        if ln.parent_joint is not None:
+            j = revolute[ln.parent_joint]
+            effort, velocity, mimic = drives[j["name"]]
+            joints.append(RobotJoint(j["name"], "revolute", j["parent"], j["child"], np.asarray(j["origin"], float),
+                                     tuple(float(a) for a in j["axis"]), *j["limits"], effort, velocity, mimic))
+        else:
+            parent = _fixed_parent(ln)
+            origin = np.linalg.inv(rest[parent]) @ rest[ln.name]
+            joints.append(RobotJoint(f"{ln.name}_joint", "fixed", parent, ln.name, origin))
+    for frame, (parent, T) in tips.items():
+        links.append(RobotLink(frame, None, None))
+        joints.append(RobotJoint(f"{frame}_joint", "fixed", parent, frame, np.asarray(T, float)))
+    return RobotModel(params.name, params.side, tuple(links), tuple(joints))
