@@ -271,12 +271,8 @@ class _Build:
         from .description import write_description
         from .robot import robot_model
 
-        meshes = {}
-        for n in self.names:
-            with np.load(self.cache.part_dir(self.keys[n]) / "mesh.npz") as z:
-                meshes[n] = (z["vertices"], z["faces"])
         model = robot_model(self.params, metas, self.asm.tip_frames(self.params), estimates)
-        return write_description(folder, model, meshes)
+        return write_description(folder, model, {n: self.cache.part_dir(self.keys[n]) for n in self.names})
 
     def write(self, metas, poses, contacts, inter, adir: Path, estimates, slicer_info, ini: str) -> dict:
         from . import manifest as manifest_mod

@@ -93,7 +93,7 @@ def part_worker(task: dict) -> dict:
         params = parse(task["document"], source=task["source"])
         asm = interface.assembly(task.get("assembly_module"))
         inputs = asm.part_inputs(params, name)
-        from . import render, step_stl
+        from . import description, render, step_stl
 
         built = asm.build_part(params, name)
         timings["build_part"] = time.perf_counter() - t0
@@ -133,6 +133,8 @@ def part_worker(task: dict) -> dict:
         mesh_checks = step_stl.check_mesh(name, sv, sf, volume, STL_VOLUME_RTOL)
         (tmp / "part.stl").write_bytes(stl)
         np.savez(tmp / "mesh.npz", vertices=v, faces=f.astype(np.int32))
+        for kind, data in description.part_meshes(v, f, name).items():     # the robot description's
+            (tmp / description.MESH_FILES[kind]).write_bytes(data)
         np.savez(tmp / "view.npz", vertices=vv, faces=fv.astype(np.int32))
         timings["stl"] = time.perf_counter() - t
 

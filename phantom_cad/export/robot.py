@@ -29,7 +29,7 @@ import numpy as np
 from .. import units
 from ..kinematics import closed_form as cf
 from ..kinematics import frames as F
-from ..kinematics.topology import CHAINS, CMC_SERVO, JOINTS, LINKS, SERVOS, servo_joints
+from ..kinematics.topology import CHAINS, CMC_Q, JOINTS, LINKS, SERVOS, servo_joints
 from .manifest import mass_g
 
 #: dense grid of the servo travel on which the largest joint rate is taken
@@ -81,12 +81,6 @@ class RobotModel:
     links: tuple[RobotLink, ...]
     joints: tuple[RobotJoint, ...]
 
-    def link(self, name: str) -> RobotLink:
-        return next(ln for ln in self.links if ln.name == name)
-
-    def joint(self, name: str) -> RobotJoint:
-        return next(j for j in self.joints if j.name == name)
-
 
 def inertial(meta: dict, printing, estimate: dict | None = None) -> Inertial:
     """The inertial of a part from its measured mass properties (``meta["mass_properties"]``:
@@ -125,8 +119,7 @@ def _drives(params) -> dict[str, tuple[float, float, Mimic | None]]:
             mimic = None if k == 0 else Mimic(ref, float(A[k]))
             out[name] = (tension * R, speed * rate * float(A[k]), mimic)
     g = params.thumb.cmc_gain
-    (cmc,) = servo_joints(CMC_SERVO)
-    out[JOINTS[cmc].name] = (tau / g, speed * g, None)
+    out[JOINTS[CMC_Q].name] = (tau / g, speed * g, None)
     return out
 
 
@@ -145,7 +138,7 @@ def robot_model(params, metas: dict[str, dict], tips: dict[str, tuple[str, np.nd
     fingertip frames (``assembly.tip_frames``), ``estimates`` the slicer's per-part estimates."""
     estimates = estimates or {}
     links = [RobotLink(ln.name, inertial(metas[ln.name], params.print, estimates.get(ln.name)), ln.name,
-                       tuple(float(c) for c in metas[ln.name].get("color", (0.7, 0.7, 0.7))))
+                       tuple(float(c) for c in metas[ln.name]["color"]))
              for ln in LINKS]
     rest = F.link_transforms(params, None)              # T_palm_link, mirrored for a left hand
     revolute = {j["name"]: j for j in F.joints(params)}

@@ -80,7 +80,7 @@ def to_mm(T: np.ndarray) -> np.ndarray:
 def from_mm(T: np.ndarray) -> np.ndarray:
     """The same rigid transform with its translation in metres (from millimetres)."""
     out = np.array(T, float)
-    out[:3, 3] = out[:3, 3] * units.MM
+    out[:3, 3] = units.m(out[:3, 3])
     return out
 
 

@@ -184,13 +184,17 @@ def _guides(c, fingers, thumb, palm, hardware, printing, cad) -> None:
                              f"must be >= {need / MM:.3f} mm (half the thickness + hole_clearance + half "
                              "cad.eyelet_length): the phalanx guide eyelet must clear the joint boss", c.source)
     r_hole = hardware.tendon_diameter / 2.0 + printing.hole_clearance
+
+    def reach(g):
+        """How far behind its joint axis the metacarpal-side eyelet and its relief reach."""
+        return g.d1 * math.sin(g.alpha / 2.0) + cad.eyelet_length / 2.0 + (math.sqrt(3.0) + 2.0) * r_hole
+
     for n, f in fingers.items():
         # the metacarpal-side guide eyelet (and its relief) must fit inside the finger base
         g = f.chain.guide
-        reach = g.d1 * math.sin(g.alpha / 2.0) + cad.eyelet_length / 2.0 + (math.sqrt(3.0) + 2.0) * r_hole
-        if reach > cad.finger_base_length + 1e-12:
+        if reach(g) > cad.finger_base_length + 1e-12:
             raise ParamError(f"fingers.{n}.guide.d1_mm", round(g.d1 / MM, 6),
-                             f"puts the guide eyelet {reach / MM:.3f} mm behind the MCP axis, beyond the finger "
+                             f"puts the guide eyelet {reach(g) / MM:.3f} mm behind the MCP axis, beyond the finger "
                              f"base's magnet face (cad.finger_base_length_mm = {cad.finger_base_length / MM:g})",
                              c.source)
     for name, d in _digits(fingers, thumb):
@@ -207,11 +211,10 @@ def _guides(c, fingers, thumb, palm, hardware, printing, cad) -> None:
                              f"(<= {room / MM:.3f} mm: half the thickness + the eyelet's relief radius)", c.source)
     # the thumb's metacarpal-side eyelet (and its relief) lies on the arm, in front of the CMC hub
     g = thumb.chain.guide
-    reach = g.d1 * math.sin(g.alpha / 2.0) + cad.eyelet_length / 2.0 + (math.sqrt(3.0) + 2.0) * r_hole
     arm = thumb.metacarpal - thumb.cmc_horn_radius
-    if reach > arm + 1e-12:
+    if reach(g) > arm + 1e-12:
         raise ParamError("thumb.guide.d1_mm", round(g.d1 / MM, 6),
-                         f"puts the guide eyelet {reach / MM:.3f} mm behind the MP axis, into the CMC hub: the "
+                         f"puts the guide eyelet {reach(g) / MM:.3f} mm behind the MP axis, into the CMC hub: the "
                          f"arm between the hub (thumb.cmc_horn_radius_mm = {thumb.cmc_horn_radius / MM:g}) and "
                          f"the MP axis is {arm / MM:.3f} mm long", c.source)
 
