@@ -164,7 +164,12 @@ def test_bom_csv(standin_build):
 def test_deterministic_fresh_cache(standin_build, standin, tmp_path):
     from phantom_cad.export.pipeline import build_hand
 
-    result, _ = standin_build
+    result, cache = standin_build
+    # every part and the assembly built again from nothing; the slicer's estimates are kept
+    # (PrusaSlicer is not run-to-run deterministic, docs/reliability.md): they are served only
+    # because the new STL files have the same SHA-256 as the first ones
+    if (cache / "slice").is_dir():
+        shutil.copytree(cache / "slice", tmp_path / "cache" / "slice")
     again = build_hand(None, tmp_path / "out", cache_dir=tmp_path / "cache", jobs=2, slice=None)
     assert again.built == result.parts
     a, b = tree(result.out_dir), tree(again.out_dir)
@@ -447,7 +452,15 @@ def test_slicer_estimates_served_only_when_verified(standin_build, standin, tmp_
     assert any("not served (unreadable (JSONDecodeError))" in m for m in log), log
     want = {p["name"]: p["print"] for p in first.manifest["parts"]}
     got = {p["name"]: p["print"] for p in again.manifest["parts"]}
-    assert got == want and all(want.values())
+    assert got.keys() == want.keys() and all(want.values())
+    # the refused entries were sliced again: PrusaSlicer is not run-to-run deterministic (the
+    # last digit of filament_mm changes in a few runs of ten under load; docs/reliability.md),
+    # so the true estimate is matched within that spread, far tighter than the edit (x0.5 + 1 g)
+    for name, w in want.items():
+        g = got[name]
+        for key in ("filament_mm", "filament_cm3", "filament_g"):
+            assert g[key] == pytest.approx(w[key], rel=1e-4, abs=0.011), (name, key)
+        assert abs(g["time_s"] - w["time_s"]) <= max(2.0, 1e-4 * w["time_s"]), name
 
 
 def test_concurrent_builds_share_one_cache(tmp_path):
