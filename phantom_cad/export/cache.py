@@ -4,7 +4,7 @@ Layout (default root ``.cache`` in the working directory, or ``$PHANTOM_CAD_CACH
 
     .cache/parts/<key>/       one built part: part.brep, part.step, part.stl,
                               mesh.npz (link frame), view.npz (coarse, for pictures),
-                              visual.stl, collision.stl (the robot description's, metres),
+                              visual.stl, collision.npz (the robot description's, metres),
                               render.png, meta.json
     .cache/assembly/<key>/    hand_assembly.step, render.png, interference.json, meta.json
     .cache/slice/<key>.json   PrusaSlicer estimates of one STL with one config, and their SHA-256
@@ -101,7 +101,7 @@ def part_key(params, name: str, part_inputs: Mapping[str, Any]) -> str:
 
 
 #: the files of every part entry (render.png too unless the build was --no-render)
-PART_FILES = ("part.brep", "part.step", "part.stl", "mesh.npz", "view.npz", "visual.stl", "collision.stl")
+PART_FILES = ("part.brep", "part.step", "part.stl", "mesh.npz", "view.npz", "visual.stl", "collision.npz")
 #: the files of every assembly entry (render.png too unless the build was --no-render)
 ASSEMBLY_FILES = ("hand_assembly.step", "interference.json")
 

@@ -3,6 +3,7 @@
 A ROS 2 package named ``<hand>_description`` that is also usable without ROS::
 
     package.xml  CMakeLists.txt  README.md
+    mjcf/<hand>.xml  mjcf/scene.xml  MuJoCo (built with MjSpec, export/mjcf.py); scene: floor, light
     urdf/<hand>.urdf            package:// mesh URIs (ROS, RViz)
     urdf/<hand>.local.urdf      the same with paths relative to the file (yourdfpy, PyBullet, MuJoCo, Pinocchio)
     meshes/visual/<link>.stl    metres, in the link frame (the solid's tessellation, not the print pose)
@@ -21,8 +22,10 @@ from pathlib import Path
 import numpy as np
 
 from .. import units
+from ..kinematics.topology import link
 from . import step_stl
-from .robot import RobotModel
+from .mjcf import mjcf_bytes, scene_bytes
+from .robot import RobotModel, collision_stems
 from .urdf import urdf_bytes
 
 #: the package's version, bumped when its layout changes
@@ -37,8 +40,15 @@ def package_name(hand: str) -> str:
     return f"{base}_description"
 
 
-#: the description's meshes of a part, as its part-cache entry holds them
-MESH_FILES = {"visual": "visual.stl", "collision": "collision.stl"}
+#: the description's meshes of a part, as its part-cache entry holds them: the visual STL and
+#: the convex collision pieces (``c<k>_vertices`` / ``c<k>_faces``, metres)
+MESH_FILES = {"visual": "visual.stl", "collision": "collision.npz"}
+#: link segments whose collision shape is a convex decomposition (CoACD) rather than one hull:
+#: the palm, whose hull would fill the servo bay and reach the fingers' proximal phalanges
+DECOMPOSED_SEGMENTS = ("palm",)
+#: CoACD's settings (deterministic for a fixed seed; about 25 s for the default palm)
+COACD = {"threshold": 0.08, "preprocess_mode": "off", "mcts_iterations": 60, "mcts_max_depth": 2,
+         "seed": 1}
 
 
 def collision_hull(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -49,12 +59,40 @@ def collision_hull(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray,
     return np.asarray(hull.vertices, float), np.asarray(hull.faces, np.int64)
 
 
+def convex_pieces(vertices: np.ndarray, faces: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """A convex decomposition of a mesh (CoACD), each piece its convex hull, in a fixed order."""
+    import coacd
+
+    coacd.set_log_level("error")
+    parts = coacd.run_coacd(coacd.Mesh(np.asarray(vertices, float), np.asarray(faces, np.int64)), **COACD)
+    pieces = [collision_hull(np.asarray(v, float), np.asarray(f, np.int64)) for v, f in parts]
+    return sorted(pieces, key=lambda p: tuple(np.round(p[0].mean(axis=0), 9)))
+
+
 def part_meshes(vertices_mm: np.ndarray, faces: np.ndarray, name: str) -> dict[str, bytes]:
-    """The description's meshes of one part (binary STL, metres, link frame), by MESH_FILES kind:
-    made once per part by the build worker and kept in its cache entry."""
+    """The description's meshes of one part (metres, link frame), by MESH_FILES kind: made once
+    per part by the build worker and kept in its cache entry. The collision shape is the convex
+    hull, or a convex decomposition for the links of DECOMPOSED_SEGMENTS."""
+    import io
+
     v = np.asarray(vertices_mm, float) * units.MM
-    hv, hf = collision_hull(v, faces)
-    return {"visual": step_stl.stl_bytes(v, faces, name, "m"), "collision": step_stl.stl_bytes(hv, hf, name, "m")}
+    pieces = (convex_pieces(v, faces) if link(name).segment in DECOMPOSED_SEGMENTS
+              else [collision_hull(v, faces)])
+    arrays = {}
+    for k, (pv, pf) in enumerate(pieces):
+        arrays[f"c{k}_vertices"], arrays[f"c{k}_faces"] = pv, pf.astype(np.int32)
+    buf = io.BytesIO()
+    np.savez(buf, **arrays)
+    return {"visual": step_stl.stl_bytes(v, faces, name, "m"), "collision": buf.getvalue()}
+
+
+def collision_pieces(data: bytes) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The convex pieces of a cached ``collision.npz``, in order."""
+    import io
+
+    with np.load(io.BytesIO(data)) as z:
+        n = len(z.files) // 2
+        return [(z[f"c{k}_vertices"], z[f"c{k}_faces"]) for k in range(n)]
 
 
 def _package_xml(pkg: str, hand: str) -> bytes:
@@ -77,7 +115,7 @@ def _package_xml(pkg: str, hand: str) -> bytes:
 
 def _cmakelists(pkg: str) -> str:
     return (f"cmake_minimum_required(VERSION 3.8)\nproject({pkg})\n\nfind_package(ament_cmake REQUIRED)\n\n"
-            "install(DIRECTORY urdf meshes DESTINATION share/${PROJECT_NAME})\n\nament_package()\n")
+            "install(DIRECTORY urdf mjcf meshes DESTINATION share/${PROJECT_NAME})\n\nament_package()\n")
 
 
 def _readme(pkg: str, model: RobotModel) -> str:
@@ -98,20 +136,31 @@ def write_description(folder: Path, model: RobotModel, part_dirs: dict[str, Path
     the manifest."""
     pkg = package_name(model.name)
     (folder / "urdf").mkdir(parents=True)
-    for kind, file in MESH_FILES.items():
+    for kind in MESH_FILES:
         (folder / "meshes" / kind).mkdir(parents=True)
-        for ln in model.links:
-            if ln.mesh is not None:
-                shutil.copyfile(part_dirs[ln.mesh] / file, folder / "meshes" / kind / f"{ln.mesh}.stl")
+    for ln in model.links:
+        if ln.mesh is None:
+            continue
+        shutil.copyfile(part_dirs[ln.mesh] / MESH_FILES["visual"], folder / "meshes" / "visual" / f"{ln.mesh}.stl")
+        pieces = collision_pieces((part_dirs[ln.mesh] / MESH_FILES["collision"]).read_bytes())
+        if collision_stems(ln.mesh, len(pieces)) != ln.collision:
+            raise ValueError(f"{ln.name}: {len(pieces)} collision pieces in the cache, the model has "
+                             f"{len(ln.collision)}")
+        for stem, (v, f) in zip(ln.collision, pieces):
+            (folder / "meshes" / "collision" / f"{stem}.stl").write_bytes(step_stl.stl_bytes(v, f, stem, "m"))
     note = f"generated by phantom_cad: {model.name} hand ({model.side}); do not edit"
     (folder / "urdf" / f"{model.name}.urdf").write_bytes(
         urdf_bytes(model, lambda kind, stem: f"package://{pkg}/meshes/{kind}/{stem}.stl", note))
     (folder / "urdf" / f"{model.name}.local.urdf").write_bytes(
         urdf_bytes(model, lambda kind, stem: f"../meshes/{kind}/{stem}.stl", note))
+    (folder / "mjcf").mkdir()
+    (folder / "mjcf" / f"{model.name}.xml").write_bytes(mjcf_bytes(model, folder / "mjcf"))
+    (folder / "mjcf" / "scene.xml").write_bytes(scene_bytes(f"{model.name}.xml", model.name))
     (folder / "package.xml").write_bytes(_package_xml(pkg, model.name))
     (folder / "CMakeLists.txt").write_text(_cmakelists(pkg), encoding="utf-8")
     (folder / "README.md").write_text(_readme(pkg, model), encoding="utf-8")
     return {"package": pkg, "urdf": f"description/urdf/{model.name}.urdf",
             "local_urdf": f"description/urdf/{model.name}.local.urdf",
+            "mjcf": f"description/mjcf/{model.name}.xml", "scene": "description/mjcf/scene.xml",
             "masses_kg": {ln.name: round(ln.inertial.mass, 9) for ln in model.links if ln.inertial},
             "mass_source": sorted({ln.inertial.source for ln in model.links if ln.inertial})}

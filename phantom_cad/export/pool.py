@@ -133,8 +133,10 @@ def part_worker(task: dict) -> dict:
         mesh_checks = step_stl.check_mesh(name, sv, sf, volume, STL_VOLUME_RTOL)
         (tmp / "part.stl").write_bytes(stl)
         np.savez(tmp / "mesh.npz", vertices=v, faces=f.astype(np.int32))
-        for kind, data in description.part_meshes(v, f, name).items():     # the robot description's
+        meshes = description.part_meshes(v, f, name)          # the robot description's
+        for kind, data in meshes.items():
             (tmp / description.MESH_FILES[kind]).write_bytes(data)
+        n_collision = len(description.collision_pieces(meshes["collision"]))
         np.savez(tmp / "view.npz", vertices=vv, faces=fv.astype(np.int32))
         timings["stl"] = time.perf_counter() - t
 
@@ -142,6 +144,7 @@ def part_worker(task: dict) -> dict:
             "name": name,
             "digit": built.digit,
             "color": [float(c) for c in built.color],
+            "collision_pieces": n_collision,
             "print_rotation": R.tolist(),
             "print_transform": T_print.tolist(),
             "T_hand_link": np.asarray(built.T_hand_link, dtype=float).tolist(),

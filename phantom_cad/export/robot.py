@@ -29,7 +29,7 @@ import numpy as np
 from .. import units
 from ..kinematics import closed_form as cf
 from ..kinematics import frames as F
-from ..kinematics.topology import CHAINS, CMC_Q, JOINTS, LINKS, SERVOS, servo_joints
+from ..kinematics.topology import CHAINS, CMC_Q, JOINTS, LINK_NAMES, LINKS, SERVOS, TENDONS, servo_joints
 from .manifest import mass_g
 
 #: dense grid of the servo travel on which the largest joint rate is taken
@@ -48,8 +48,14 @@ class Inertial:
 class RobotLink:
     name: str
     inertial: Inertial | None    # None: a massless frame
-    mesh: str | None             # mesh file stem (the part name), None for a frame
+    mesh: str | None             # visual mesh file stem (the part name), None for a frame
     color: tuple[float, float, float] = (0.7, 0.7, 0.7)
+    collision: tuple[str, ...] = ()          # collision mesh file stems (convex pieces)
+
+
+def collision_stems(stem: str, n: int) -> tuple[str, ...]:
+    """File stems of a link's collision meshes: ``palm`` for one hull, ``palm_0``.. for pieces."""
+    return (stem,) if n == 1 else tuple(f"{stem}_{k}" for k in range(n))
 
 
 @dataclass(frozen=True)
@@ -75,11 +81,60 @@ class RobotJoint:
 
 
 @dataclass(frozen=True)
+class Site:
+    name: str
+    link: str
+    pos: tuple[float, float, float]        # m, link frame
+
+
+@dataclass(frozen=True)
+class TendonDrive:
+    """A servo that winds a drive tendon: the tendon's straight span between the guides G1 and
+    G2 is the chord L of eq. (4)-(5), and the servo angle is u = (L0 - L) / r."""
+    actuator: str                # "servo1", ...
+    servo: str                   # topology name ("index_flexion", ...)
+    tendon: str                  # topology tendon name ("index_drive", ...)
+    sites: tuple[Site, Site]     # G1 (reference joint's parent), G2 (its child)
+    radius: float                # r_j, m
+    rest_length: float           # L0, m
+    travel: tuple[float, float]  # servo travel, rad
+    torque: float                # stall torque, N m
+    stiffness: float             # position gain, N m / rad of servo angle
+    damping: float               # N m s / rad: stall torque / no-load speed (the motor's line)
+
+
+@dataclass(frozen=True)
+class JointDrive:
+    """A servo that turns a joint directly: q = ratio u."""
+    actuator: str
+    servo: str
+    joint: str
+    ratio: float
+    travel: tuple[float, float]
+    torque: float
+    stiffness: float
+    damping: float
+
+
+@dataclass(frozen=True)
+class ReturnSpring:
+    """The dorsal cable-spring of a chain (eq. 11): tension k_s sum R_i q_i over its joints."""
+    tendon: str                  # topology tendon name ("index_return", ...)
+    joints: tuple[str, ...]
+    radii: tuple[float, ...]     # R_i, m
+    stiffness: float             # k_s, N / m
+
+
+@dataclass(frozen=True)
 class RobotModel:
     name: str                    # the hand's name (the robot's name in the descriptions)
     side: str
     links: tuple[RobotLink, ...]
     joints: tuple[RobotJoint, ...]
+    drives: tuple[TendonDrive | JointDrive, ...] = ()     # servo order
+    springs: tuple[ReturnSpring, ...] = ()
+    #: pairs of links in contact by design (a joint, a mount): no collision between them
+    adjacent: tuple[tuple[str, str], ...] = ()
 
 
 def inertial(meta: dict, printing, estimate: dict | None = None) -> Inertial:
@@ -123,6 +178,32 @@ def _drives(params) -> dict[str, tuple[float, float, Mimic | None]]:
     return out
 
 
+def transmissions(params) -> tuple[tuple[TendonDrive | JointDrive, ...], tuple[ReturnSpring, ...]]:
+    """The six servo drives (servo order) and the chains' return springs, from the topology's
+    servos and tendons and the parameters."""
+    tau, speed = params.servo.stall_torque, params.servo.speed
+    kp, kv = tau / params.servo.stall_error, tau / speed
+    by_tendon = {(t.digit, t.kind): t for t in TENDONS}
+    drives, springs = [], []
+    for servo in SERVOS:
+        if servo.drive == "direct":
+            (qi,) = servo_joints(servo.index)
+            drives.append(JointDrive(servo.actuator, servo.name, JOINTS[qi].name, params.thumb.cmc_gain,
+                                     params.thumb.cmc_travel, tau, kp, kv))
+            continue
+        ch = params.digit(servo.digit).chain
+        (l1, p1), (l2, p2) = F.guide_sites(params, servo.digit)
+        tendon = by_tendon[(servo.digit, "drive")].name
+        sites = (Site(f"{tendon}_g1", l1, tuple(float(v) for v in p1)),
+                 Site(f"{tendon}_g2", l2, tuple(float(v) for v in p2)))
+        g = ch.guide
+        drives.append(TendonDrive(servo.actuator, servo.name, tendon, sites, ch.servo_radius,
+                                  float(cf.chord_rest(g.d1, g.d2, g.alpha)), ch.travel, tau, kp, kv))
+        ret = by_tendon[(servo.digit, "return")]
+        springs.append(ReturnSpring(ret.name, ret.joints, tuple(ch.radii), params.mechanics.spring_k))
+    return tuple(drives), tuple(springs)
+
+
 def _fixed_parent(ln) -> str:
     """Where a fixed link hangs: the palm, or for the hub of a direct drive (coaxial with its
     joint and turning with it) the link that joint moves."""
@@ -138,7 +219,8 @@ def robot_model(params, metas: dict[str, dict], tips: dict[str, tuple[str, np.nd
     fingertip frames (``assembly.tip_frames``), ``estimates`` the slicer's per-part estimates."""
     estimates = estimates or {}
     links = [RobotLink(ln.name, inertial(metas[ln.name], params.print, estimates.get(ln.name)), ln.name,
-                       tuple(float(c) for c in metas[ln.name]["color"]))
+                       tuple(float(c) for c in metas[ln.name]["color"]),
+                       collision_stems(ln.name, int(metas[ln.name]["collision_pieces"])))
              for ln in LINKS]
     rest = F.link_transforms(params, None)              # T_palm_link, mirrored for a left hand
     revolute = {j["name"]: j for j in F.joints(params)}
@@ -157,4 +239,8 @@ def robot_model(params, metas: dict[str, dict], tips: dict[str, tuple[str, np.nd
     for frame, (parent, T) in tips.items():
         links.append(RobotLink(frame, None, None))
         joints.append(RobotJoint(f"{frame}_joint", "fixed", parent, frame, np.asarray(T, float)))
-    return RobotModel(params.name, params.side, tuple(links), tuple(joints))
+    drives, springs = transmissions(params)
+    adjacent = [(j.parent, j.child) for j in joints if j.type == "revolute" or j.child in LINK_NAMES]
+    # a direct drive's hub hangs on the joint it turns but sits in its servo, on the palm
+    adjacent += [(ln.parent, ln.name) for ln in LINKS[1:] if (ln.parent, ln.name) not in adjacent]
+    return RobotModel(params.name, params.side, tuple(links), tuple(joints), drives, springs, tuple(adjacent))

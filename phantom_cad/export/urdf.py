@@ -57,11 +57,13 @@ def _link(ln: RobotLink, mesh_uri: Callable[[str, str], str]) -> ET.Element:
         ET.SubElement(ine, "inertia", dict(zip(("ixx", "ixy", "ixz", "iyy", "iyz", "izz"),
                                                (num(v) for v in i.inertia))))
     if ln.mesh is not None:
-        for kind in ("visual", "collision"):
-            g = ET.SubElement(e, kind, {"name": f"{ln.name}_{kind}"})
+        shapes = [("visual", f"{ln.name}_visual", ln.mesh)]
+        shapes += [("collision", f"{stem}_collision", stem) for stem in ln.collision]
+        for kind, name, stem in shapes:
+            g = ET.SubElement(e, kind, {"name": name})
             ET.SubElement(g, "origin", {"xyz": "0 0 0", "rpy": "0 0 0"})
             geo = ET.SubElement(g, "geometry")
-            ET.SubElement(geo, "mesh", {"filename": mesh_uri(kind, ln.mesh)})
+            ET.SubElement(geo, "mesh", {"filename": mesh_uri(kind, stem)})
             if kind == "visual":
                 mat = ET.SubElement(g, "material", {"name": f"{ln.name}_color"})
                 ET.SubElement(mat, "color", {"rgba": nums((*ln.color, 1.0))})

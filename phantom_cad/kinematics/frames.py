@@ -35,7 +35,7 @@ import math
 import numpy as np
 
 from .. import units
-from .topology import CMC_Q, FINGERS, JOINTS, LINKS, N_JOINTS, SERVOS, joint, link, servo_joints
+from .topology import CMC_Q, FINGERS, JOINTS, LINKS, N_JOINTS, SERVOS, chain, joint, link, servo_joints
 
 MIRROR = np.diag([-1.0, 1.0, 1.0, 1.0])
 
@@ -209,6 +209,32 @@ def T_palm_servo(params, servo: int) -> np.ndarray:
 def socket_tendon_point(params, finger: str) -> np.ndarray:
     """Where the finger's tendon crosses the magnet face (palm frame, metres)."""
     return (T_palm_socket(params, finger) @ np.array([0.0, 0.0, tendon_height(params), 1.0]))[:3]
+
+
+def guide_offsets(guide) -> tuple[np.ndarray, np.ndarray]:
+    """The drive tendon's guide eyelets G1 and G2 as (y, z) from the reference joint's (MCP /
+    thumb MP) axis at rest, metres: G1 on the metacarpal side at d1, G2 on the phalanx at d2,
+    symmetric about the palmar direction (-z) and alpha apart, so that their chord at rest is
+    L0 (eq. 4) and flexion by q closes the angle between them to alpha - q (eq. 5)."""
+    h = guide.alpha / 2.0
+    G1 = guide.d1 * np.array([-math.sin(h), -math.cos(h)])
+    G2 = guide.d2 * np.array([math.sin(h), -math.cos(h)])
+    return G1, G2
+
+
+def guide_sites(params, digit: str) -> tuple[tuple[str, np.ndarray], tuple[str, np.ndarray]]:
+    """(link, point) of G1 and G2 of a digit's drive tendon, each in its own link frame (metres,
+    mirrored for a left hand): G1 on the reference joint's parent link, G2 on its child. The
+    straight line between them is the chord of eq. (4)-(5) in every pose."""
+    ch = chain(digit)
+    ref = joint(ch.joint_names[0])
+    G1, G2 = guide_offsets(params.digit(digit).chain.guide)
+    L = _segment_length(params, link(ref.parent))
+    p1 = np.array([0.0, L + G1[0], G1[1]])
+    p2 = np.array([0.0, G2[0], G2[1]])
+    if params.side == "left":
+        p1, p2 = MIRROR[:3, :3] @ p1, MIRROR[:3, :3] @ p2
+    return (ref.parent, p1), (ref.child, p2)
 
 
 def rest_transforms(params) -> dict[str, np.ndarray]:

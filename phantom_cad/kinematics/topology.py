@@ -46,6 +46,11 @@ class Servo:
         """The servo's pulley (or hub) link, fixed to the palm."""
         return f"servo_pulley_{self.index + 1}"
 
+    @property
+    def actuator(self) -> str:
+        """``servo1``..``servo6``: the actuator's name in the MJCF."""
+        return f"servo{self.index + 1}"
+
 
 @dataclass(frozen=True)
 class Joint:

@@ -145,6 +145,9 @@ class ServoBody:
     #: stall torque (N m) and no-load speed (rad/s) at the output: joint efforts and velocities
     stall_torque: float
     speed: float
+    #: position error (rad) at which the servo's controller gives its stall torque: the
+    #: simulation's position gain kp = stall_torque / stall_error
+    stall_error: float = 1.0 * math.pi / 180.0
 
 
 @dataclass(frozen=True)
@@ -465,7 +468,8 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
     s = root.table("servo")
     servo = ServoBody(tuple(v * MM for v in s.vector("body_mm", 3, gt=0)),
                   s.number("flange_span_mm", gt=0) * MM, s.number("screw_diameter_mm", gt=0) * MM,
-                  s.number("stall_torque_Nm", gt=0, le=100.0), s.number("speed_deg_s", gt=0, le=1e4) * DEG)
+                  s.number("stall_torque_Nm", gt=0, le=100.0), s.number("speed_deg_s", gt=0, le=1e4) * DEG,
+                  s.number("stall_error_deg", gt=0, le=30.0, default=1.0) * DEG)
     s.done()
     if servo.flange_span <= servo.body[0]:
         raise ParamError("servo.flange_span_mm", servo.flange_span / MM,

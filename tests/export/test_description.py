@@ -46,8 +46,13 @@ def test_package_layout_and_uris_resolve(pkg):
     assert "ament_package()" in (pkg / "CMakeLists.txt").read_text()
     for name, resolve in (("phantom.urdf", lambda u: pkg / u.removeprefix("package://phantom_description/")),
                           ("phantom.local.urdf", lambda u: pkg / "urdf" / u)):
-        uris = [m.get("filename") for m in ET.parse(pkg / "urdf" / name).getroot().iter("mesh")]
-        assert len(uris) == 2 * 26
+        root = ET.parse(pkg / "urdf" / name).getroot()
+        assert [len(ln.findall("visual")) for ln in root.iter("link") if ln.find("visual") is not None] == [1] * 26
+        pieces = {ln.get("name"): len(ln.findall("collision")) for ln in root.iter("link")
+                  if ln.find("visual") is not None}
+        # one convex hull per link, a convex decomposition of the palm
+        assert pieces.pop("palm") > 4 and set(pieces.values()) == {1}
+        uris = [m.get("filename") for m in root.iter("mesh")]
         for u in uris:
             path = resolve(u).resolve()
             assert path.is_file() and pkg.resolve() in path.parents, u

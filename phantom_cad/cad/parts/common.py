@@ -17,6 +17,7 @@ import math
 import numpy as np
 
 from ... import units
+from ...kinematics import frames as F
 from ...kinematics import topology
 
 
@@ -168,15 +169,10 @@ class DigitSection:
         return self.tol.tendon_relief / 2.0 + self.tol.wall / 2.0
 
     def guide_points(self) -> tuple[np.ndarray, np.ndarray]:
-        """Guide eyelet centres (y, z) relative to the reference joint (MCP / MP) axis at rest:
-        G1 on the metacarpal side at d1, G2 on the phalanx at d2, symmetric about the palmar
-        direction and alpha apart (eq. 4: their chord at rest is L0)."""
-        g = self.guide
-        psi1 = math.pi / 2.0 + g.alpha / 2.0
-        psi2 = math.pi / 2.0 - g.alpha / 2.0
-        G1 = mm(g.d1) * np.array([math.cos(psi1), -math.sin(psi1)])
-        G2 = mm(g.d2) * np.array([math.cos(psi2), -math.sin(psi2)])
-        return G1, G2
+        """Guide eyelet centres (y, z) relative to the reference joint (MCP / MP) axis at rest,
+        mm (``frames.guide_offsets``: G1 at d1, G2 at d2, alpha apart about the palmar side)."""
+        G1, G2 = F.guide_offsets(self.guide)
+        return units.mm(G1), units.mm(G2)
 
     def recess(self, q_max: float) -> float:
         """Beyond 90 degrees of flexion the child's palmar face would reach the slot's back wall
