@@ -5,6 +5,7 @@
   (three parts of known geometry; faults can be injected) for the pipeline tests.
 * ``standin_build``: the stand-in hand built once per session into a tmp dir.
 * ``hand_build``: the real default hand (phantom_cad.cad's parts) built once per session.
+* ``pkg``: its robot description package (``description/``).
 """
 
 from __future__ import annotations
@@ -71,3 +72,10 @@ def hand_build(tmp_path_factory):
     result = build_hand(None, root / "exports" / "phantom", cache_dir=root / "cache", jobs=2,
                         slice=None)
     return result, root / "cache"
+
+
+@pytest.fixture(scope="session")
+def pkg(hand_build):
+    """The description package of the default hand (``hand_build``)."""
+    result, _ = hand_build
+    return result.out_dir / "description"

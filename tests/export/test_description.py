@@ -27,12 +27,6 @@ REFERENCE = ("thumb_mp", "index_mcp", "middle_mcp", "ring_mcp", "pinky_mcp", "th
 
 
 @pytest.fixture(scope="module")
-def pkg(hand_build):
-    result, _ = hand_build
-    return result.out_dir / "description"
-
-
-@pytest.fixture(scope="module")
 def urdf(pkg):
     return pkg / "urdf" / "phantom.local.urdf"
 

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from phantom_cad.kinematics.topology import JOINT_NAMES
 from phantom_cad.params.io import load_params
 
 mujoco = pytest.importorskip("mujoco")
@@ -26,12 +27,6 @@ MIMIC["thumb_ip"] = ("thumb_mp", 4.0 / 5.0)
 SERVO_JOINT = {"servo1": "thumb_mp", "servo2": "index_mcp", "servo3": "middle_mcp", "servo4": "ring_mcp",
                "servo5": "pinky_mcp", "servo6": "thumb_cmc"}
 SERVO_DIGIT = {"servo1": "thumb", "servo2": "index", "servo3": "middle", "servo4": "ring", "servo5": "pinky"}
-
-
-@pytest.fixture(scope="module")
-def pkg(hand_build):
-    result, _ = hand_build
-    return result.out_dir / "description"
 
 
 @pytest.fixture(scope="module")
@@ -74,7 +69,7 @@ def _set_q(m, d, q: dict):
     mujoco.mj_tendon(m, d)
 
 
-def _coupled_q(rng, m, lo=0.0, hi=0.9):
+def _coupled_q(rng, lo=0.0, hi=0.9):
     """Random reference angles, the followers at their multipliers."""
     ref = {j: rng.uniform(lo, hi) for j in SERVO_JOINT.values()}
     return {**ref, **{f: k * ref[r] for f, (r, k) in MIMIC.items()}}
@@ -132,7 +127,7 @@ def test_bodies_where_the_urdf_puts_its_links(pkg, model):
     rng = np.random.default_rng(11)
     palm = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "palm")
     for _ in range(5):
-        q = _coupled_q(rng, m)
+        q = _coupled_q(rng)
         _set_q(m, d, q)
         robot.update_cfg({n: q[n] for n in robot.actuated_joint_names})
         T_w_palm = np.eye(4)
@@ -154,7 +149,7 @@ def test_drive_tendon_length_is_the_chord(model, doc):
     m, d = model, mujoco.MjData(model)
     rng = np.random.default_rng(3)
     for _ in range(5):
-        q = _coupled_q(rng, m, 0.0, 1.2)
+        q = _coupled_q(rng, 0.0, 1.2)
         _set_q(m, d, q)
         for act, digit in SERVO_DIGIT.items():
             d1, d2, alpha = _guide(doc, digit)
@@ -201,7 +196,6 @@ def test_static_equilibrium_is_the_cosine_law(model, doc):
                     by_hand[joint] = doc["thumb"]["cmc_gain"] * u[k]
             by_hand.update({f: k * by_hand[r] for f, (r, k) in MIMIC.items()})
             analytic = hand.forward(u)
-            from phantom_cad.kinematics.topology import JOINT_NAMES
             for i, name in enumerate(JOINT_NAMES):
                 q = d.qpos[_qadr(m, name)]
                 assert abs(q - by_hand[name]) < 0.01, (name, q, by_hand[name])
