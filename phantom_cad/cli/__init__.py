@@ -233,6 +233,11 @@ app.command("simulate")(_calibration_cli.simulate)
 app.command("compare")(_calibration_cli.compare)
 app.command("diagnose")(_calibration_cli.diagnose)
 app.command("fit")(_calibration_cli.fit)
+from .view import view  # noqa: E402
+app.command("view")(view)
+from .check import check  # noqa: E402
+
+app.command("check")(check)
 
 
 def main(argv: Optional[list[str]] = None) -> None:

@@ -8,6 +8,8 @@ Layout (default root ``.cache`` in the working directory, or ``$PHANTOM_CAD_CACH
                               render.png, meta.json
     .cache/assembly/<key>/    hand_assembly.step, render.png, interference.json, meta.json
     .cache/slice/<key>.json   PrusaSlicer estimates of one STL with one config, and their SHA-256
+    .cache/mjcf/<key>.json    a compiled MJCF (export/mjcf.py) of one robot model and its meshes,
+                              and its SHA-256 (MuJoCo compiled it before it was kept)
 
 Every entry records the SHA-256 of what it holds when it is made, and is served only when its
 files still match (anything else is rebuilt, and the build log says why).
@@ -85,6 +87,8 @@ def cad_versions() -> dict[str, str | None]:
         "trimesh": package_version("trimesh"),
         "manifold3d": package_version("manifold3d"),
         "matplotlib": package_version("matplotlib"),
+        "mujoco": package_version("mujoco"),
+        "coacd": package_version("coacd"),
     }
 
 
@@ -193,6 +197,26 @@ class Cache:
 
     def write_slice(self, key: str, estimate: dict) -> None:
         self.write_json(self.slice_file(key), {"estimate": estimate, "sha256": sha256(canonical(estimate))})
+
+    # compiled MJCF -------------------------------------------------------------
+    def mjcf_file(self, key: str) -> Path:
+        return self.root / "mjcf" / f"{key}.json"
+
+    def read_mjcf(self, key: str) -> tuple[str | None, str | None]:
+        """(the MJCF text cached under ``key``, None) or (None, why it cannot be served)."""
+        try:
+            doc = json.loads(self.mjcf_file(key).read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            return None, "missing"
+        except (OSError, ValueError) as exc:
+            return None, f"unreadable ({exc.__class__.__name__})"
+        xml = doc.get("xml") if isinstance(doc, dict) else None
+        if not isinstance(xml, str) or doc.get("sha256") != sha256(xml.encode("utf-8")):
+            return None, "does not match its SHA-256"
+        return xml, None
+
+    def write_mjcf(self, key: str, xml: str) -> None:
+        self.write_json(self.mjcf_file(key), {"xml": xml, "sha256": sha256(xml.encode("utf-8"))})
 
     # helpers -------------------------------------------------------------------
     @staticmethod

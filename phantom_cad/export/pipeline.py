@@ -272,7 +272,8 @@ class _Build:
         from .robot import robot_model
 
         model = robot_model(self.params, metas, self.asm.tip_frames(self.params), estimates)
-        return write_description(folder, model, {n: self.cache.part_dir(self.keys[n]) for n in self.names})
+        return write_description(folder, model, {n: self.cache.part_dir(self.keys[n]) for n in self.names},
+                                 self.cache, self.params.digest)
 
     def write(self, metas, poses, contacts, inter, adir: Path, estimates, slicer_info, ini: str) -> dict:
         from . import manifest as manifest_mod
@@ -360,3 +361,22 @@ def build_hand(params_path: str | os.PathLike | None = None, out_dir: str | os.P
     return BuildResult(out_dir=out, hand=params.name, side=params.side, params_digest=params.digest,
                        parts=run.names, built=run.missing, cached=[n for n in run.names if n not in run.missing],
                        manifest=man, timings=timings, sliced=slicer_info["used"], part_timings=part_timings)
+
+
+def ensure_export(params_path: str | os.PathLike | None = None, out_dir: str | os.PathLike | None = None,
+                  side: str | None = None, log: Callable[[str], None] | None = None, **build_kwargs):
+    """(export folder, params) of an export of ``params_path`` (``side`` overriding the file's),
+    built first (:func:`build_hand`, cached) when ``out_dir`` holds none or one built from other
+    parameters. For the commands that read an export (check, view)."""
+    path, _document, params, file_side = _load(params_path, side)
+    out = Path(out_dir) if out_dir is not None else _default_out(params, side, file_side)
+    try:
+        man = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
+        built = (man["params"]["digest"], man["hand"]["side"])
+    except (OSError, ValueError, KeyError, TypeError):
+        built = None
+    if built != (params.digest, params.side) or not (out / "description").is_dir():
+        (log or (lambda msg: None))(f"building {out} from {path} (the export is missing or was built from "
+                                    "other parameters)")
+        build_hand(path, out, side=side, log=log, **build_kwargs)
+    return out, params

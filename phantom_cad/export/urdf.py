@@ -90,6 +90,10 @@ def urdf_bytes(model: RobotModel, mesh_uri: Callable[[str, str], str], comment: 
     root = ET.Element("robot", {"name": model.name})
     if comment:
         root.append(ET.Comment(f" {comment} "))
+    # MuJoCo's URDF import: keep the mesh paths, the fixed links (servo pulleys, tip frames) and
+    # the visual geoms; other URDF readers ignore the element
+    mj = ET.SubElement(root, "mujoco")
+    ET.SubElement(mj, "compiler", {"strippath": "false", "fusestatic": "false", "discardvisual": "false"})
     for ln in model.links:
         root.append(_link(ln, mesh_uri))
     for j in model.joints:

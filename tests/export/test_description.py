@@ -181,3 +181,38 @@ def test_pinocchio_and_pybullet_load_it(urdf):
         assert sum(j[2] == pybullet.JOINT_REVOLUTE for j in revolute) == 15
     finally:
         pybullet.disconnect(cid)
+
+
+def test_mujoco_loads_the_urdf(urdf):
+    """MuJoCo's own URDF import (the <mujoco> compiler element keeps paths, fixed links and
+    visuals): every link a body, the 15 hinges, the 9 mimic joints as joint equalities with
+    the multipliers by hand, and the same masses and link poses as yourdfpy."""
+    mujoco = pytest.importorskip("mujoco")
+    yourdfpy = pytest.importorskip("yourdfpy")
+    m = mujoco.MjModel.from_xml_path(str(urdf))
+    robot = yourdfpy.URDF.load(str(urdf), load_meshes=False, build_collision_scene_graph=False)
+    body = {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, i): i for i in range(1, m.nbody)}
+    assert set(body) == set(robot.link_map)
+    assert m.njnt == 15 and all(t == mujoco.mjtJoint.mjJNT_HINGE for t in m.jnt_type)
+    name = lambda obj, i: mujoco.mj_id2name(m, obj, i)                               # noqa: E731
+    eqs = {name(mujoco.mjtObj.mjOBJ_JOINT, m.eq_obj1id[k]): (name(mujoco.mjtObj.mjOBJ_JOINT, m.eq_obj2id[k]),
+                                                             m.eq_data[k][1]) for k in range(m.neq)}
+    assert eqs == {f: (r, pytest.approx(k)) for f, (r, k) in MIMIC.items()}
+    for ln, ine in ((ln.name, ln.inertial) for ln in robot.robot.links if ln.inertial is not None):
+        assert m.body_mass[body[ln]] == pytest.approx(ine.mass, rel=1e-6), ln
+    d = mujoco.MjData(m)
+    cfg = {n: 0.3 + 0.1 * k for k, n in enumerate(REFERENCE)}
+    robot.update_cfg(cfg)
+    for jn, v in cfg.items():
+        d.qpos[m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, jn)]] = v
+    for f, (r, k) in MIMIC.items():
+        d.qpos[m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f)]] = k * cfg[r]
+    mujoco.mj_kinematics(m, d)
+    palm = body["palm"]
+    Tp = np.eye(4)
+    Tp[:3, :3], Tp[:3, 3] = d.xmat[palm].reshape(3, 3), d.xpos[palm]
+    for ln, i in body.items():
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = d.xmat[i].reshape(3, 3), d.xpos[i]
+        T = np.linalg.inv(Tp) @ T
+        assert np.allclose(T, robot.get_transform(ln, "palm"), atol=1e-8), ln

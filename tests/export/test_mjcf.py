@@ -268,3 +268,26 @@ def test_home_keyframe_has_no_contact(model):
     pairs = [(_name(m, mujoco.mjtObj.mjOBJ_BODY, m.geom_bodyid[c.geom1]),
               _name(m, mujoco.mjtObj.mjOBJ_BODY, m.geom_bodyid[c.geom2])) for c in d.contact[:d.ncon]]
     assert pairs == []
+
+
+def test_compiled_mjcf_is_served_from_the_cache_only_when_it_matches(hand_build, pkg, tmp_path):
+    """A warm rebuild takes the compiled MJCF from the cache (MuJoCo not run again); an entry whose
+    text no longer matches its SHA-256 is compiled again, and the package gets the same bytes."""
+    import json
+
+    from phantom_cad.export.pipeline import build_hand
+
+    result, cache = hand_build
+    written = (pkg / "mjcf" / "phantom.xml").read_bytes()
+    entries = sorted((cache / "mjcf").glob("*.json"))
+    assert len(entries) == 1
+    doc = json.loads(entries[0].read_text())
+    assert doc["xml"].encode() == written
+    mujoco.MjModel.from_xml_path(str(pkg / "mjcf" / "scene.xml"))      # what was kept compiles
+
+    doc["xml"] = doc["xml"].replace('name="index_mcp"', 'name="corrupted"', 1)
+    entries[0].write_text(json.dumps(doc))
+    again = build_hand(None, tmp_path / "again", cache_dir=cache, jobs=1, slice=None, render=False)
+    assert again.built == []
+    assert (tmp_path / "again" / "description" / "mjcf" / "phantom.xml").read_bytes() == written
+    assert json.loads(entries[0].read_text())["xml"].encode() == written     # the entry was rewritten

@@ -1,0 +1,451 @@
+"""``phantom-cad check``: the parts, the descriptions and the model of an export describe the same
+mechanism, measured by other tools.
+
+Every row compares what one source says with what another measures, at random servo commands
+``u`` (the analytic model ``Hand(params).forward(u)`` gives the joint angles ``q``):
+
+- the URDF's link poses (yourdfpy, mimic applied) and the MJCF's body poses (MuJoCo) against the
+  posed CAD assembly (``cad.assembly.pose_transforms``);
+- the URDF's joint angles (read back from yourdfpy's link transforms) against ``q``; the MJCF
+  settled under its six actuators (contacts and gravity off) against ``q``;
+- each joint axis against the bearing bores measured in the exported STEP solids;
+- URDF and MJCF inertials against the STEP solids' mass properties (mass: the slicer's filament
+  estimate when the export was sliced, else volume x density x infill);
+- each visual mesh against its solid (volume, centre, bounding box);
+- every mesh reference resolves, ``check_urdf`` accepts the URDF, MuJoCo's model test.
+
+A row names the worst item (link, joint, file); ``ok`` None = not run (a tool missing).
+Needs the ``cad`` extra (build123d, trimesh, mujoco, yourdfpy); imports them inside the checks.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+import subprocess
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .. import units
+from ..errors import UserError
+from ..kinematics.model import Hand
+from ..kinematics.topology import CMC_Q, CMC_SERVO, JOINTS, LINK_NAMES, SERVOS, joint
+
+#: poses: position (mm) and rotation (deg) tolerances of the issue
+TOL_MM, TOL_DEG = 0.01, 0.01
+#: joint angles read back from the URDF (rad): arithmetic only
+TOL_Q = 1e-6
+#: the MJCF's static equilibrium against the analytic model (rad)
+TOL_EQUILIBRIUM = 0.01
+#: inertials: relative, of the mass and of the largest tensor entry; the STEP round trip and the
+#: 6-7 significant digits the files keep
+TOL_MASS, TOL_TENSOR = 1e-4, 1e-3
+#: a visual mesh against its solid: volume (relative) and centre (mm); the tessellation's chord
+#: error is stl_tolerance (0.02 mm), the bounding box may differ by it
+TOL_MESH_VOLUME, TOL_MESH_CENTRE = 5e-3, 0.01
+
+
+@dataclass(frozen=True)
+class Row:
+    check: str
+    item: str
+    expected: str
+    measured: str
+    tolerance: str
+    ok: bool | None
+
+
+@dataclass
+class Export:
+    """The files of one export and what the check reads from them."""
+
+    folder: Path
+    manifest: dict
+    urdf: Path                 # package:// URIs
+    local_urdf: Path           # relative paths
+    mjcf: Path
+    scene: Path
+
+    @classmethod
+    def open(cls, folder: Path) -> "Export":
+        try:
+            manifest = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            raise UserError(f"{folder / 'manifest.json'}: not a phantom-cad export ({exc.__class__.__name__}); "
+                            "run phantom-cad build first")
+        d = manifest.get("description")
+        if not isinstance(d, dict):
+            raise UserError(f"{folder / 'manifest.json'}: the export has no description package; rebuild it")
+        return cls(folder, manifest, folder / d["urdf"], folder / d["local_urdf"], folder / d["mjcf"],
+                   folder / d["scene"])
+
+
+def _worst(errors: dict[str, float]) -> tuple[str, float]:
+    item = max(errors, key=lambda k: errors[k])
+    return item, errors[item]
+
+
+def _row(check: str, errors: dict[str, float], tol: float, unit: str, fmt: str = ".4g") -> Row:
+    """A row of the largest of ``errors`` (item -> |measured - expected|) against ``tol``."""
+    item, err = _worst(errors)
+    ok = bool(np.isfinite(err) and err <= tol)
+    return Row(check, item, f"0 {unit}", f"{err:{fmt}} {unit}", f"{tol:g} {unit}", ok)
+
+
+def _rotation_deg(Ra: np.ndarray, Rb: np.ndarray) -> float:
+    c = (np.trace(Ra.T @ Rb) - 1.0) / 2.0
+    return math.degrees(math.acos(max(-1.0, min(1.0, c))))
+
+
+def _pose_errors(poses: dict[str, np.ndarray], posed_mm: dict[str, np.ndarray], pos: dict, rot: dict) -> None:
+    for name, T in poses.items():
+        P = posed_mm[name]
+        pos[name] = max(pos.get(name, 0.0), float(np.linalg.norm(T[:3, 3] / units.MM - P[:3, 3])))
+        rot[name] = max(rot.get(name, 0.0), _rotation_deg(T[:3, :3], P[:3, :3]))
+
+
+def commands(hand: Hand, n: int, seed: int, margin: float = 0.05) -> np.ndarray:
+    """``n`` random servo commands inside the travel (``margin`` of it from either end)."""
+    rng = np.random.default_rng(seed)
+    lo, hi = np.asarray(hand.u_min, float), np.asarray(hand.u_max, float)
+    return lo + rng.uniform(margin, 1.0 - margin, (n, len(lo))) * (hi - lo)
+
+
+# -- URDF -----------------------------------------------------------------------------------------
+
+def _urdf_joint_angle(robot, j) -> float:
+    """The angle of a revolute joint read from yourdfpy's link transforms: T_parent_child =
+    origin . rot(axis, q)."""
+    T = robot.get_transform(j.child, j.parent)
+    R = (np.linalg.inv(j.origin) @ T)[:3, :3]
+    a = np.asarray(j.axis, float) / np.linalg.norm(j.axis)
+    s = 0.5 * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]]) @ a
+    c = (np.trace(R) - 1.0) / 2.0         # R = cI + s[a]x + (1 - c) a a^T: trace = 1 + 2c
+    return math.atan2(s, c)
+
+
+def urdf_rows(export: Export, params, hand: Hand, U: np.ndarray) -> list[Row]:
+    import yourdfpy
+
+    from ..cad.assembly import pose_transforms
+
+    robot = yourdfpy.URDF.load(str(export.local_urdf), load_meshes=False, build_collision_scene_graph=False)
+    names = {j.name: j for j in robot.robot.joints}
+    missing = [j.name for j in JOINTS if j.name not in names]
+    if missing:
+        return [Row("URDF joints = topology", ", ".join(missing), "present", "missing", "-", False)]
+    pos, rot, dq = {}, {}, {}
+    for u in U:
+        q = hand.forward(u)
+        robot.update_cfg({n: float(q[joint(n).index]) for n in robot.actuated_joint_names})
+        poses = {ln: robot.get_transform(ln, robot.base_link) for ln in LINK_NAMES}
+        _pose_errors(poses, pose_transforms(params, q), pos, rot)
+        for j in JOINTS:
+            dq[j.name] = max(dq.get(j.name, 0.0), abs(_urdf_joint_angle(robot, names[j.name]) - q[j.index]))
+    return [_row("URDF link positions (yourdfpy) = posed CAD assembly", pos, TOL_MM, "mm"),
+            _row("URDF link rotations (yourdfpy) = posed CAD assembly", rot, TOL_DEG, "deg"),
+            _row("URDF joint angles (mimic applied) = hand.forward(u)", dq, TOL_Q, "rad")]
+
+
+def urdf_files_rows(export: Export) -> list[Row]:
+    """Both URDFs name the same meshes, every mesh reference resolves inside the package, and
+    check_urdf accepts the URDF."""
+    pkg = export.urdf.parent.parent
+    name = export.manifest["description"]["package"]
+    bad: dict[str, float] = {}
+    texts = {}
+    for path, resolve in ((export.urdf, lambda u: pkg / u.removeprefix(f"package://{name}/")),
+                          (export.local_urdf, lambda u: path.parent / u)):
+        root = ET.parse(path).getroot()
+        uris = [m.get("filename") for m in root.iter("mesh")]
+        for u in uris:
+            p = resolve(u).resolve()
+            bad[f"{path.name}: {u}"] = 0.0 if (p.is_file() and pkg.resolve() in p.parents) else 1.0
+        for m in root.iter("mesh"):
+            m.set("filename", Path(m.get("filename")).name)
+        texts[path] = ET.tostring(root)
+    if not bad:
+        bad["(no mesh)"] = 1.0
+    item, err = _worst(bad)
+    rows = [Row("URDF mesh references resolve in the package", item if err else f"{len(bad)} references",
+                "all", "missing" if err else "all", "-", err == 0.0),
+            Row("URDF (package://) = local URDF but for mesh paths", export.urdf.name,
+                "same", "same" if len(set(texts.values())) == 1 else "differ", "-", len(set(texts.values())) == 1)]
+    tool = shutil.which("check_urdf")
+    if tool is None:
+        rows.append(Row("check_urdf accepts the URDF", export.urdf.name, "accepted", "not run (check_urdf "
+                        "missing: apt-get install liburdfdom-tools)", "-", None))
+    else:
+        proc = subprocess.run([tool, str(export.urdf)], capture_output=True, text=True)
+        msg = (proc.stderr.strip().splitlines() or ["accepted"])[-1] if proc.returncode else "accepted"
+        rows.append(Row("check_urdf accepts the URDF", export.urdf.name, "accepted", msg[:60], "-",
+                        proc.returncode == 0))
+    return rows
+
+
+# -- MJCF -----------------------------------------------------------------------------------------
+
+def _mj_name(mujoco, m, obj, i) -> str:
+    return mujoco.mj_id2name(m, obj, i) or ""
+
+
+def mjcf_rows(export: Export, params, hand: Hand, U: np.ndarray, settle: int) -> tuple[list[Row], dict]:
+    """The MJCF's rows, and its inertials by body (for :func:`inertial_rows`)."""
+    import mujoco
+
+    from ..cad.assembly import pose_transforms
+
+    try:
+        m = mujoco.MjModel.from_xml_path(str(export.scene))
+    except ValueError as exc:
+        return [Row("MuJoCo compiles the MJCF", export.scene.name, "compiles", str(exc).splitlines()[0][:60],
+                    "-", False)], {}
+    d = mujoco.MjData(m)
+    B = mujoco.mjtObj.mjOBJ_BODY
+    jid = {j.name: mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j.name) for j in JOINTS}
+    missing = [n for n, i in jid.items() if i < 0]
+    if missing:
+        return [Row("MJCF joints = topology", ", ".join(missing), "present", "missing", "-", False)], {}
+    bid = {ln: mujoco.mj_name2id(m, B, ln) for ln in LINK_NAMES}
+    root = next(ln for ln in LINK_NAMES if ln == _mj_name(mujoco, m, B, 1))
+
+    def body(i):
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = d.xmat[i].reshape(3, 3), d.xpos[i]
+        return T
+
+    pos, rot = {}, {}
+    for u in U:
+        q = hand.forward(u)
+        d.qpos[:] = 0.0
+        for j in JOINTS:
+            d.qpos[m.jnt_qposadr[jid[j.name]]] = q[j.index]
+        mujoco.mj_kinematics(m, d)
+        T_root = np.linalg.inv(body(bid[root]))
+        poses = {ln: T_root @ body(i) for ln, i in bid.items() if i >= 0}
+        _pose_errors(poses, pose_transforms(params, q), pos, rot)
+    for ln, i in bid.items():
+        if i < 0:
+            pos[ln] = rot[ln] = math.inf
+    rows = [_row("MJCF body positions (MuJoCo) = posed CAD assembly", pos, TOL_MM, "mm"),
+            _row("MJCF body rotations (MuJoCo) = posed CAD assembly", rot, TOL_DEG, "deg")]
+
+    # static equilibrium under the actuators: the transmission, not the grasp
+    off = mujoco.mjtDisableBit.mjDSBL_CONTACT | mujoco.mjtDisableBit.mjDSBL_GRAVITY
+    m.opt.disableflags |= off
+    key = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_KEY, "home")
+    act = {s.index: mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, s.actuator) for s in SERVOS}
+    dq: dict[str, float] = {}
+    for u in U[:settle]:
+        mujoco.mj_resetDataKeyframe(m, d, max(key, 0))
+        for k, a in act.items():
+            d.ctrl[a] = u[k]
+        for _ in range(int(2.0 / m.opt.timestep)):
+            mujoco.mj_step(m, d)
+        q = hand.forward(u)
+        for j in JOINTS:
+            dq[j.name] = max(dq.get(j.name, 0.0), abs(d.qpos[m.jnt_qposadr[jid[j.name]]] - q[j.index]))
+    m.opt.disableflags &= ~off
+    if dq:
+        rows.append(_row(f"MJCF settled under the actuators = hand.forward(u) ({len(U[:settle])} commands)",
+                         dq, TOL_EQUILIBRIUM, "rad"))
+
+    # MuJoCo Menagerie's model test: 1 s of random controls, contacts on
+    mujoco.mj_resetDataKeyframe(m, d, max(key, 0))
+    rng = np.random.default_rng(0)
+    lo, hi = m.actuator_ctrlrange[:, 0], m.actuator_ctrlrange[:, 1]
+    finite = True
+    for k in range(int(1.0 / m.opt.timestep)):
+        if k % int(0.1 / m.opt.timestep) == 0:
+            d.ctrl[:] = lo + rng.random(m.nu) * (hi - lo)
+        mujoco.mj_step(m, d)
+        finite = finite and bool(np.isfinite(d.qpos).all() and np.isfinite(d.qvel).all())
+    warnings = {mujoco.mjtWarning(i).name: int(d.warning[i].number) for i in range(len(d.warning))
+                if d.warning[i].number}
+    rows.append(Row("MuJoCo model test: 1 s of random controls", ", ".join(warnings) or export.scene.name,
+                    "no warning, finite", ("finite" if finite else "NaN/inf") + (f", {warnings}" if warnings else
+                                                                                 ", no warning"), "-",
+                    finite and not warnings))
+    inertials = {}
+    for i in range(1, m.nbody):                  # (mass, centre, tensor about it) in the body frame
+        R = np.zeros(9)
+        mujoco.mju_quat2Mat(R, m.body_iquat[i])
+        R = R.reshape(3, 3)
+        inertials[_mj_name(mujoco, m, B, i)] = (float(m.body_mass[i]), np.array(m.body_ipos[i]),
+                                                 R @ np.diag(m.body_inertia[i]) @ R.T)
+    return rows, inertials
+
+
+# -- the solids -----------------------------------------------------------------------------------
+
+def _solids(export: Export) -> dict[str, object]:
+    import build123d as bd
+
+    return {p["name"]: bd.import_step(export.folder / "step" / f"{p['name']}.step") for p in export.manifest["parts"]}
+
+
+def axis_rows(export: Export, params, solids: dict) -> list[Row]:
+    """Each joint's axis (URDF, at rest) on the bores measured in the solids, each solid placed
+    where the CAD assembly puts it at rest: the parent's axle press bore and the child's bearing
+    seats; for the CMC the servo hub's round."""
+    import yourdfpy
+
+    from ..cad.assembly import pose_transforms
+    from ..cad.measure import cylinders
+
+    hw, pr = params.hardware, params.print
+    press = (hw.axle_diameter - pr.press_fit_interference) / 2 / units.MM
+    seat = (hw.bearing_outer - pr.press_fit_interference) / 2 / units.MM
+    hub = params.thumb.cmc_horn_radius / units.MM
+    robot = yourdfpy.URDF.load(str(export.local_urdf), load_meshes=False, build_collision_scene_graph=False)
+    robot.update_cfg(np.zeros(len(robot.actuated_joint_names)))
+    names = {j.name: j for j in robot.robot.joints}
+    rest = pose_transforms(params, np.zeros(len(JOINTS)))
+    cyl = {}
+    dist, ang = {}, {}
+    for j in JOINTS:
+        uj = names.get(j.name)
+        if uj is None:
+            dist[j.name] = ang[j.name] = math.inf
+            continue
+        T = robot.get_transform(j.child, robot.base_link)
+        a = T[:3, :3] @ (np.asarray(uj.axis, float) / np.linalg.norm(uj.axis))
+        p = T[:3, 3] / units.MM
+        seats = ([(SERVOS[CMC_SERVO].link, hub, "horn hub")] if j.index == CMC_Q
+                 else [(j.parent, press, "axle press bore"), (j.child, seat, "bearing seat")])
+        for part, radius, what in seats:
+            if part not in cyl:
+                cyl[part] = cylinders(solids[part])
+            Tp = rest[part]
+            found = [(np.linalg.norm(np.cross(Tp[:3, :3] @ c["point"] + Tp[:3, 3] - p, a)),
+                      math.degrees(math.acos(min(1.0, abs(float((Tp[:3, :3] @ c["direction"]) @ a))))))
+                     for c in cyl[part] if abs(c["radius"] - radius) < 1e-6]
+            key = f"{j.name} / {part} {what}"
+            if not found:
+                dist[key] = ang[key] = math.inf
+                continue
+            best = min(found, key=lambda f: f[0] + f[1])
+            dist[key], ang[key] = best
+    return [_row("joint axes (URDF) on the bores measured in the solids: offset", dist, TOL_MM, "mm"),
+            _row("joint axes (URDF) on the bores measured in the solids: angle", ang, TOL_DEG, "deg")]
+
+
+def _expected_inertials(export: Export, params, solids: dict) -> dict[str, tuple[float, np.ndarray, np.ndarray]]:
+    """(mass kg, centre m, tensor kg m^2 about it) of each part from its STEP solid."""
+    from ..cad.measure import mass_properties
+
+    out = {}
+    for p in export.manifest["parts"]:
+        mp = mass_properties(solids[p["name"]])
+        vol = float(mp["volume_mm3"])
+        sliced = (p.get("print") or {}).get("filament_g")
+        mass = (float(sliced) * units.KG_PER_G if sliced
+                else vol * units.MM ** 3 * params.print.density * params.print.infill)
+        density = mass / vol
+        I = np.asarray(mp["inertia_mm5"], float) * density * units.MM ** 2
+        out[p["name"]] = (mass, np.asarray(mp["com_mm"], float) * units.MM, (I + I.T) / 2)
+    return out
+
+
+def _urdf_inertials(path: Path) -> dict[str, tuple[float, np.ndarray, np.ndarray]]:
+    out = {}
+    for ln in ET.parse(path).getroot().iter("link"):
+        ine = ln.find("inertial")
+        if ine is None:
+            continue
+        o = ine.find("origin")
+        com = np.array([float(v) for v in (o.get("xyz") if o is not None else "0 0 0").split()])
+        a = {k: float(v) for k, v in ine.find("inertia").attrib.items()}
+        I = np.array([[a["ixx"], a["ixy"], a["ixz"]], [a["ixy"], a["iyy"], a["iyz"]], [a["ixz"], a["iyz"], a["izz"]]])
+        if o is not None and o.get("rpy") and any(float(v) for v in o.get("rpy").split()):
+            r, pch, y = (float(v) for v in o.get("rpy").split())
+            cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(pch), math.sin(pch), math.cos(y), math.sin(y)
+            R = np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                          [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], [-sp, cp * sr, cp * cr]])
+            I = R @ I @ R.T
+        out[ln.get("name")] = (float(ine.find("mass").get("value")), com, I)
+    return out
+
+
+def inertial_rows(export: Export, params, solids: dict, mjcf_inertials: dict) -> list[Row]:
+    expected = _expected_inertials(export, params, solids)
+    rows = []
+    for label, got in (("URDF", _urdf_inertials(export.local_urdf)), ("MJCF", mjcf_inertials)):
+        if label == "MJCF" and not got:
+            continue
+        mass, com, ten = {}, {}, {}
+        for name, (m0, c0, I0) in expected.items():
+            if name not in got:
+                mass[name] = com[name] = ten[name] = math.inf
+                continue
+            m1, c1, I1 = got[name]
+            mass[name] = abs(m1 - m0) / m0
+            com[name] = float(np.linalg.norm(c1 - c0)) / units.MM
+            ten[name] = float(np.abs(I1 - I0).max() / np.abs(I0).max())
+        rows += [_row(f"{label} masses = the solids' (relative)", mass, TOL_MASS, "", ".2e"),
+                 _row(f"{label} centres of mass = the solids'", com, TOL_MM, "mm"),
+                 _row(f"{label} inertia tensors = the solids' (relative)", ten, TOL_TENSOR, "", ".2e")]
+    return rows
+
+
+def mesh_rows(export: Export, solids: dict) -> list[Row]:
+    """Each visual mesh (metres, link frame) against its solid: volume and centre."""
+    import trimesh
+
+    from ..cad.measure import mass_properties
+
+    pkg = export.urdf.parent.parent
+    vol, centre = {}, {}
+    for name, shape in solids.items():
+        path = pkg / "meshes" / "visual" / f"{name}.stl"
+        if not path.is_file():
+            vol[name] = centre[name] = math.inf
+            continue
+        mesh = trimesh.load(path, force="mesh")
+        mp = mass_properties(shape)
+        v0 = float(mp["volume_mm3"])
+        vol[name] = abs(mesh.volume / units.MM ** 3 - v0) / v0
+        centre[name] = float(np.linalg.norm(mesh.center_mass / units.MM - np.asarray(mp["com_mm"], float)))
+    return [_row("visual meshes: volume = the solid's (relative)", vol, TOL_MESH_VOLUME, "", ".2e"),
+            _row("visual meshes: centre = the solid's", centre, TOL_MESH_CENTRE, "mm")]
+
+
+def check_export(export_dir: Path, params, samples: int = 8, settle: int = 3, seed: int = 0,
+                 log=lambda msg: None) -> list[Row]:
+    """Every row of the check of the export in ``export_dir`` built from ``params``."""
+    export = Export.open(Path(export_dir))
+    recorded = export.manifest.get("params", {}).get("digest")
+    if recorded != params.digest or export.manifest.get("hand", {}).get("side") != params.side:
+        raise UserError(f"{export.folder}: built from other parameters (digest {str(recorded)[:12]}, side "
+                        f"{export.manifest.get('hand', {}).get('side')}) than {params.source} (digest "
+                        f"{params.digest[:12]}, side {params.side}); build it again")
+    hand = Hand(params)
+    U = commands(hand, samples, seed)
+    rows = []
+    log("check: URDF (yourdfpy)")
+    rows += urdf_rows(export, params, hand, U)
+    rows += urdf_files_rows(export)
+    log("check: MJCF (MuJoCo)")
+    mj_rows, mj_inertials = mjcf_rows(export, params, hand, U, settle)
+    rows += mj_rows
+    log("check: the solids (STEP)")
+    solids = _solids(export)
+    rows += axis_rows(export, params, solids)
+    rows += inertial_rows(export, params, solids, mj_inertials)
+    rows += mesh_rows(export, solids)
+    return rows
+
+
+def table(rows: list[Row]) -> str:
+    """The rows as a plain-text table (check, item, expected, measured, tolerance, ok)."""
+    head = ("check", "worst item", "expected", "measured", "tolerance", "ok")
+    cells = [head] + [(r.check, r.item, r.expected, r.measured, r.tolerance,
+                       {True: "ok", False: "FAIL", None: "not run"}[r.ok]) for r in rows]
+    widths = [max(len(c[i]) for c in cells) for i in range(len(head))]
+    lines = ["  ".join(c[i].ljust(widths[i]) for i in range(len(head))).rstrip() for c in cells]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(lines)

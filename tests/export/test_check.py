@@ -1,0 +1,157 @@
+"""``phantom-cad check``: all green on the default hand, the left hand and a second parameter
+file, and each deliberate corruption of an export is caught and named.
+
+The corruptions are made here with ElementTree / numpy on copies of a built export: a joint
+origin shifted by 0.1 mm, a mimic multiplier changed, a mass scaled, a mesh moved by 0.3 mm,
+an MJCF coupling changed. The check measures with yourdfpy, MuJoCo and the STEP solids.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from phantom_cad.params.io import load_params
+
+ROOT = Path(__file__).resolve().parents[2]
+PARAMS = ROOT / "params" / "phantom.toml"
+
+pytest.importorskip("mujoco")
+pytest.importorskip("yourdfpy")
+
+
+def _copy(export: Path, dest: Path) -> Path:
+    shutil.copytree(export, dest, ignore=shutil.ignore_patterns("renders", "stl", "slicer"))
+    return dest
+
+
+def _failed(rows) -> dict[str, str]:
+    """check -> worst item of the rows that failed."""
+    return {r.check: r.item for r in rows if r.ok is False}
+
+
+def _edit_urdfs(export: Path, edit) -> None:
+    """Apply ``edit(root)`` to both URDFs (the package:// one and the local one)."""
+    for path in (export / "description" / "urdf").glob("*.urdf"):
+        tree = ET.parse(path)
+        edit(tree.getroot())
+        tree.write(path, encoding="utf-8", xml_declaration=True)
+
+
+def _joint(root, name):
+    return next(j for j in root.iter("joint") if j.get("name") == name)
+
+
+@pytest.fixture(scope="module")
+def export(hand_build):
+    result, _ = hand_build
+    return result.out_dir
+
+
+def _check(export, **kw):
+    from phantom_cad.export.check import check_export
+
+    return check_export(export, load_params(PARAMS), **kw)
+
+
+def test_the_default_hand_is_all_green(export):
+    rows = _check(export, samples=8, settle=3)
+    # every row ok; check_urdf may be "not run" where liburdfdom-tools is missing
+    assert [(r.check, r.item, r.measured) for r in rows if not r.ok and not r.check.startswith("check_urdf")] == []
+    checks = " | ".join(r.check for r in rows)
+    for what in ("URDF link positions", "MJCF body positions", "URDF joint angles", "MJCF settled",
+                 "bores measured in the solids", "URDF masses", "MJCF inertia tensors", "visual meshes",
+                 "mesh references", "MuJoCo model test"):
+        assert what in checks
+
+
+def test_a_shifted_joint_origin_is_named(export, tmp_path):
+    ex = _copy(export, tmp_path / "x")
+
+    def shift(root):
+        o = _joint(root, "index_pip").find("origin")
+        xyz = np.array([float(v) for v in o.get("xyz").split()]) + [0.0, 1e-4, 0.0]     # 0.1 mm
+        o.set("xyz", " ".join(repr(float(v)) for v in xyz))
+
+    _edit_urdfs(ex, shift)
+    failed = _failed(_check(ex, samples=3, settle=0))
+    assert failed["URDF link positions (yourdfpy) = posed CAD assembly"] in ("index_middle", "index_distal")
+    assert failed["joint axes (URDF) on the bores measured in the solids: offset"].startswith("index_pip /")
+    assert not any(c.startswith("MJCF") for c in failed)           # the MJCF was left alone
+
+
+def test_a_changed_multiplier_is_named(export, tmp_path):
+    ex = _copy(export, tmp_path / "x")
+    _edit_urdfs(ex, lambda root: _joint(root, "middle_dip").find("mimic").set("multiplier", "1.1"))
+    failed = _failed(_check(ex, samples=3, settle=0))
+    assert failed["URDF joint angles (mimic applied) = hand.forward(u)"] == "middle_dip"
+    assert failed["URDF link rotations (yourdfpy) = posed CAD assembly"] == "middle_distal"
+
+
+def test_a_scaled_mass_is_named(export, tmp_path):
+    ex = _copy(export, tmp_path / "x")
+
+    def scale(root):
+        link = next(ln for ln in root.iter("link") if ln.get("name") == "ring_distal")
+        m = link.find("inertial/mass")
+        m.set("value", repr(1.5 * float(m.get("value"))))
+
+    _edit_urdfs(ex, scale)
+    failed = _failed(_check(ex, samples=2, settle=0))
+    assert failed == {"URDF masses = the solids' (relative)": "ring_distal"}
+
+
+def test_a_moved_mesh_is_named(export, tmp_path):
+    from phantom_cad.export.step_stl import read_stl, stl_bytes
+
+    ex = _copy(export, tmp_path / "x")
+    path = ex / "description" / "meshes" / "visual" / "pinky_middle.stl"
+    v, f = read_stl(path.read_bytes())
+    path.write_bytes(stl_bytes(v + [3e-4, 0.0, 0.0], f, "pinky_middle", "m"))        # 0.3 mm
+    failed = _failed(_check(ex, samples=2, settle=0))
+    assert failed == {"visual meshes: centre = the solid's": "pinky_middle"}
+
+
+def test_a_changed_mjcf_coupling_is_named(export, tmp_path):
+    ex = _copy(export, tmp_path / "x")
+    path = ex / "description" / "mjcf" / "phantom.xml"
+    tree = ET.parse(path)
+    eq = next(e for e in tree.getroot().iter("joint") if e.get("joint1") == "ring_pip")
+    eq.set("polycoef", "0 1.1 0 0 0")
+    tree.write(path, encoding="utf-8")
+    failed = _failed(_check(ex, samples=2, settle=1))
+    assert failed == {"MJCF settled under the actuators = hand.forward(u) (1 commands)": "ring_pip"}
+
+
+def _cli_check(tmp_path, *args) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PHANTOM_CAD_CACHE": str(tmp_path / "cache")}
+    return subprocess.run([sys.executable, "-m", "phantom_cad", "check", "--samples", "4", "--settle", "2",
+                           "--out", str(tmp_path / "export"), *args], capture_output=True, text=True, env=env,
+                          cwd=ROOT)
+
+
+@pytest.mark.parametrize("args", [("--side", "left"), ("--params", str(ROOT / "params" / "examples" / "slender.toml"))],
+                         ids=["left", "slender"])
+def test_check_builds_and_passes_the_left_hand_and_a_second_file(tmp_path, args):
+    proc = _cli_check(tmp_path, *args)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-2000:]
+    assert " 0 failed" in proc.stdout and "FAIL" not in proc.stdout
+    assert ("(left)" in proc.stdout) == ("left" in args)
+
+
+def test_check_exits_1_on_a_mismatch_and_2_on_an_error(export, tmp_path):
+    ex = _copy(export, tmp_path / "export")
+    _edit_urdfs(ex, lambda root: _joint(root, "thumb_ip").find("mimic").set("multiplier", "0.5"))
+    proc = subprocess.run([sys.executable, "-m", "phantom_cad", "check", "--samples", "2", "--settle", "0",
+                           "--out", str(ex)], capture_output=True, text=True, cwd=ROOT)
+    assert proc.returncode == 1 and "FAIL" in proc.stdout and "thumb_ip" in proc.stdout
+    proc = subprocess.run([sys.executable, "-m", "phantom_cad", "check", "--params", str(tmp_path / "none.toml")],
+                          capture_output=True, text=True, cwd=ROOT)
+    assert proc.returncode == 2 and proc.stderr.startswith("error: ") and len(proc.stderr.splitlines()) == 1
