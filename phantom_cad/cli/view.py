@@ -55,23 +55,6 @@ CAMERA_SHIFT = 0.12
 
 # -- the export ------------------------------------------------------------------
 
-def _stale(export: Path, digest: str) -> Optional[str]:
-    """Why ``export`` cannot be shown for parameters of ``digest`` (None: it can)."""
-    manifest = export / "manifest.json"
-    if not manifest.is_file():
-        return f"no export in {export}"
-    try:
-        man = json.loads(manifest.read_text(encoding="utf-8"))
-        built = man["params"]["digest"]
-    except (OSError, ValueError, KeyError, TypeError):
-        return f"{manifest} is unreadable or records no parameter digest"
-    if built != digest:
-        return f"the export {export} was built from parameter digest {str(built)[:12]}, the file has {digest[:12]}"
-    if not local_urdf(export, man).is_file():
-        return f"the export {export} has no robot description (description/urdf/*.local.urdf)"
-    return None
-
-
 def local_urdf(export: Path, manifest: Optional[dict] = None) -> Path:
     """The robot description's URDF with relative mesh paths (meshes in metres) of ``export``."""
     if manifest is None:
@@ -86,20 +69,12 @@ def local_urdf(export: Path, manifest: Optional[dict] = None) -> Path:
 def ensure_export(params_path, out, log: Callable[[str], None]):
     """(params, export folder, local URDF) of the hand in ``params_path`` (default
     params/phantom.toml); builds the export into ``out`` (default the build's default,
-    exports/<hand>) first when it is missing or was built from other parameters."""
-    from ..export.pipeline import _default_out, build_hand
-    from ..params import load_params
+    exports/<hand>) first when it is missing or was built from other parameters
+    (export.pipeline.ensure_export, not sliced: the viewer needs no print estimates)."""
+    from ..export import pipeline
 
     path = Path(params_path) if params_path is not None else DEFAULT_PARAMS
-    params = load_params(path)
-    export = Path(out) if out is not None else _default_out(params, None, params.side)
-    reason = _stale(export, params.digest)
-    if reason is not None:
-        log(f"view: {reason}; building it first (cached parts are reused; phantom-cad build -o {export})")
-        build_hand(path, export, slice=False)
-        reason = _stale(export, params.digest)
-        if reason is not None:  # pragma: no cover - the build wrote what it checks
-            raise UserError(f"after building: {reason}")
+    export, params = pipeline.ensure_export(path, out, None, lambda msg: log(f"view: {msg}"), slice=False)
     return params, export, local_urdf(export)
 
 

@@ -144,6 +144,31 @@ def entry_problem(entry: Path, need: tuple[str, ...]) -> str | None:
     return None
 
 
+def _digest(value: dict | str) -> str:
+    """The SHA-256 recorded with a cached value: of its text, or of a dict's canonical JSON."""
+    return sha256(value.encode("utf-8") if isinstance(value, str) else canonical(value))
+
+
+def _sealed(field: str, value: dict | str) -> dict:
+    """A small cache file's document: the value under ``field`` and its SHA-256."""
+    return {field: value, "sha256": _digest(value)}
+
+
+def _read_sealed(path: Path, field: str, kind: type) -> tuple[Any, str | None]:
+    """(the value a _sealed document at ``path`` holds, None) or (None, why it cannot be served:
+    missing, unreadable, or not matching the SHA-256 recorded with it)."""
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        return None, "missing"
+    except (OSError, ValueError) as exc:
+        return None, f"unreadable ({exc.__class__.__name__})"
+    value = doc.get(field) if isinstance(doc, dict) else None
+    if not isinstance(value, kind) or doc.get("sha256") != _digest(value):
+        return None, "does not match its SHA-256"
+    return value, None
+
+
 class Cache:
     def __init__(self, root: str | os.PathLike | None = None):
         self.root = Path(root) if root is not None else default_root()
@@ -184,19 +209,10 @@ class Cache:
     def read_slice(self, key: str) -> tuple[dict | None, str | None]:
         """(the PrusaSlicer estimate cached under ``key``, None) or (None, why it cannot be
         served: missing, unreadable, or not matching the SHA-256 recorded with it)."""
-        try:
-            doc = json.loads(self.slice_file(key).read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            return None, "missing"
-        except (OSError, ValueError) as exc:
-            return None, f"unreadable ({exc.__class__.__name__})"
-        est = doc.get("estimate") if isinstance(doc, dict) else None
-        if not isinstance(est, dict) or doc.get("sha256") != sha256(canonical(est)):
-            return None, "does not match its SHA-256"
-        return est, None
+        return _read_sealed(self.slice_file(key), "estimate", dict)
 
     def write_slice(self, key: str, estimate: dict) -> None:
-        self.write_json(self.slice_file(key), {"estimate": estimate, "sha256": sha256(canonical(estimate))})
+        self.write_json(self.slice_file(key), _sealed("estimate", estimate))
 
     # compiled MJCF -------------------------------------------------------------
     def mjcf_file(self, key: str) -> Path:
@@ -204,19 +220,10 @@ class Cache:
 
     def read_mjcf(self, key: str) -> tuple[str | None, str | None]:
         """(the MJCF text cached under ``key``, None) or (None, why it cannot be served)."""
-        try:
-            doc = json.loads(self.mjcf_file(key).read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            return None, "missing"
-        except (OSError, ValueError) as exc:
-            return None, f"unreadable ({exc.__class__.__name__})"
-        xml = doc.get("xml") if isinstance(doc, dict) else None
-        if not isinstance(xml, str) or doc.get("sha256") != sha256(xml.encode("utf-8")):
-            return None, "does not match its SHA-256"
-        return xml, None
+        return _read_sealed(self.mjcf_file(key), "xml", str)
 
     def write_mjcf(self, key: str, xml: str) -> None:
-        self.write_json(self.mjcf_file(key), {"xml": xml, "sha256": sha256(xml.encode("utf-8"))})
+        self.write_json(self.mjcf_file(key), _sealed("xml", xml))
 
     # helpers -------------------------------------------------------------------
     @staticmethod

@@ -128,12 +128,17 @@ def _urdf_joint_angle(robot, j) -> float:
     return math.atan2(s, c)
 
 
-def urdf_rows(export: Export, params, hand: Hand, U: np.ndarray) -> list[Row]:
+def load_urdf(export: Export):
+    """The export's local URDF read by yourdfpy (meshes not loaded): loaded once per check."""
     import yourdfpy
 
+    return yourdfpy.URDF.load(str(export.local_urdf), load_meshes=False, build_collision_scene_graph=False)
+
+
+def urdf_rows(robot, params, hand: Hand, U: np.ndarray) -> list[Row]:
+    """Link poses and joint angles of the URDF (``robot``, yourdfpy) at the commands ``U``."""
     from ..cad.assembly import pose_transforms
 
-    robot = yourdfpy.URDF.load(str(export.local_urdf), load_meshes=False, build_collision_scene_graph=False)
     names = {j.name: j for j in robot.robot.joints}
     missing = [j.name for j in JOINTS if j.name not in names]
     if missing:
@@ -282,18 +287,20 @@ def mjcf_rows(export: Export, params, hand: Hand, U: np.ndarray, settle: int) ->
 
 # -- the solids -----------------------------------------------------------------------------------
 
-def _solids(export: Export) -> dict[str, object]:
+def _solids(export: Export) -> tuple[dict[str, object], dict[str, dict]]:
+    """({part: its STEP solid}, {part: its mass properties}), each measured once."""
     import build123d as bd
 
-    return {p["name"]: bd.import_step(export.folder / "step" / f"{p['name']}.step") for p in export.manifest["parts"]}
+    from ..cad.measure import mass_properties
+
+    solids = {p["name"]: bd.import_step(export.folder / "step" / f"{p['name']}.step") for p in export.manifest["parts"]}
+    return solids, {name: mass_properties(shape) for name, shape in solids.items()}
 
 
-def axis_rows(export: Export, params, solids: dict) -> list[Row]:
+def axis_rows(robot, params, solids: dict) -> list[Row]:
     """Each joint's axis (URDF, at rest) on the bores measured in the solids, each solid placed
     where the CAD assembly puts it at rest: the parent's axle press bore and the child's bearing
     seats; for the CMC the servo hub's round."""
-    import yourdfpy
-
     from ..cad.assembly import pose_transforms
     from ..cad.measure import cylinders
 
@@ -301,7 +308,6 @@ def axis_rows(export: Export, params, solids: dict) -> list[Row]:
     press = (hw.axle_diameter - pr.press_fit_interference) / 2 / units.MM
     seat = (hw.bearing_outer - pr.press_fit_interference) / 2 / units.MM
     hub = params.thumb.cmc_horn_radius / units.MM
-    robot = yourdfpy.URDF.load(str(export.local_urdf), load_meshes=False, build_collision_scene_graph=False)
     robot.update_cfg(np.zeros(len(robot.actuated_joint_names)))
     names = {j.name: j for j in robot.robot.joints}
     rest = pose_transforms(params, np.zeros(len(JOINTS)))
@@ -334,13 +340,12 @@ def axis_rows(export: Export, params, solids: dict) -> list[Row]:
             _row("joint axes (URDF) on the bores measured in the solids: angle", ang, TOL_DEG, "deg")]
 
 
-def _expected_inertials(export: Export, params, solids: dict) -> dict[str, tuple[float, np.ndarray, np.ndarray]]:
-    """(mass kg, centre m, tensor kg m^2 about it) of each part from its STEP solid."""
-    from ..cad.measure import mass_properties
-
+def _expected_inertials(export: Export, params, props: dict) -> dict[str, tuple[float, np.ndarray, np.ndarray]]:
+    """(mass kg, centre m, tensor kg m^2 about it) of each part from its STEP solid's mass
+    properties ``props``."""
     out = {}
     for p in export.manifest["parts"]:
-        mp = mass_properties(solids[p["name"]])
+        mp = props[p["name"]]
         vol = float(mp["volume_mm3"])
         sliced = (p.get("print") or {}).get("filament_g")
         mass = (float(sliced) * units.KG_PER_G if sliced
@@ -351,30 +356,24 @@ def _expected_inertials(export: Export, params, solids: dict) -> dict[str, tuple
     return out
 
 
-def _urdf_inertials(path: Path) -> dict[str, tuple[float, np.ndarray, np.ndarray]]:
+def _urdf_inertials(robot) -> dict[str, tuple[float, np.ndarray, np.ndarray]]:
+    """(mass kg, centre m, tensor kg m^2 about the centre in the link frame) of each URDF link
+    with an inertial (``robot``, yourdfpy)."""
     out = {}
-    for ln in ET.parse(path).getroot().iter("link"):
-        ine = ln.find("inertial")
+    for ln in robot.robot.links:
+        ine = ln.inertial
         if ine is None:
             continue
-        o = ine.find("origin")
-        com = np.array([float(v) for v in (o.get("xyz") if o is not None else "0 0 0").split()])
-        a = {k: float(v) for k, v in ine.find("inertia").attrib.items()}
-        I = np.array([[a["ixx"], a["ixy"], a["ixz"]], [a["ixy"], a["iyy"], a["iyz"]], [a["ixz"], a["iyz"], a["izz"]]])
-        if o is not None and o.get("rpy") and any(float(v) for v in o.get("rpy").split()):
-            r, pch, y = (float(v) for v in o.get("rpy").split())
-            cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(pch), math.sin(pch), math.cos(y), math.sin(y)
-            R = np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-                          [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], [-sp, cp * sr, cp * cr]])
-            I = R @ I @ R.T
-        out[ln.get("name")] = (float(ine.find("mass").get("value")), com, I)
+        T = np.eye(4) if ine.origin is None else np.asarray(ine.origin, float)
+        I = np.asarray(ine.inertia, float)
+        out[ln.name] = (float(ine.mass), T[:3, 3].copy(), T[:3, :3] @ I @ T[:3, :3].T)
     return out
 
 
-def inertial_rows(export: Export, params, solids: dict, mjcf_inertials: dict) -> list[Row]:
-    expected = _expected_inertials(export, params, solids)
+def inertial_rows(export: Export, robot, params, props: dict, mjcf_inertials: dict) -> list[Row]:
+    expected = _expected_inertials(export, params, props)
     rows = []
-    for label, got in (("URDF", _urdf_inertials(export.local_urdf)), ("MJCF", mjcf_inertials)):
+    for label, got in (("URDF", _urdf_inertials(robot)), ("MJCF", mjcf_inertials)):
         if label == "MJCF" and not got:
             continue
         mass, com, ten = {}, {}, {}
@@ -392,21 +391,19 @@ def inertial_rows(export: Export, params, solids: dict, mjcf_inertials: dict) ->
     return rows
 
 
-def mesh_rows(export: Export, solids: dict) -> list[Row]:
-    """Each visual mesh (metres, link frame) against its solid: volume and centre."""
+def mesh_rows(export: Export, props: dict) -> list[Row]:
+    """Each visual mesh (metres, link frame) against its solid's mass properties ``props``:
+    volume and centre."""
     import trimesh
-
-    from ..cad.measure import mass_properties
 
     pkg = export.urdf.parent.parent
     vol, centre = {}, {}
-    for name, shape in solids.items():
+    for name, mp in props.items():
         path = pkg / "meshes" / "visual" / f"{name}.stl"
         if not path.is_file():
             vol[name] = centre[name] = math.inf
             continue
         mesh = trimesh.load(path, force="mesh")
-        mp = mass_properties(shape)
         v0 = float(mp["volume_mm3"])
         vol[name] = abs(mesh.volume / units.MM ** 3 - v0) / v0
         centre[name] = float(np.linalg.norm(mesh.center_mass / units.MM - np.asarray(mp["com_mm"], float)))
@@ -427,16 +424,17 @@ def check_export(export_dir: Path, params, samples: int = 8, settle: int = 3, se
     U = commands(hand, samples, seed)
     rows = []
     log("check: URDF (yourdfpy)")
-    rows += urdf_rows(export, params, hand, U)
+    robot = load_urdf(export)
+    rows += urdf_rows(robot, params, hand, U)
     rows += urdf_files_rows(export)
     log("check: MJCF (MuJoCo)")
     mj_rows, mj_inertials = mjcf_rows(export, params, hand, U, settle)
     rows += mj_rows
     log("check: the solids (STEP)")
-    solids = _solids(export)
-    rows += axis_rows(export, params, solids)
-    rows += inertial_rows(export, params, solids, mj_inertials)
-    rows += mesh_rows(export, solids)
+    solids, props = _solids(export)
+    rows += axis_rows(robot, params, solids)
+    rows += inertial_rows(export, robot, params, props, mj_inertials)
+    rows += mesh_rows(export, props)
     return rows
 
 

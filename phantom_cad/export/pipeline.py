@@ -363,20 +363,38 @@ def build_hand(params_path: str | os.PathLike | None = None, out_dir: str | os.P
                        manifest=man, timings=timings, sliced=slicer_info["used"], part_timings=part_timings)
 
 
+def export_problem(out: Path, digest: str, side: str) -> str | None:
+    """Why ``out`` is not an export of the parameters of ``digest`` for ``side`` with its robot
+    description (None: it is)."""
+    try:
+        man = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
+        built, built_side = man["params"]["digest"], man["hand"]["side"]
+        local = out / man["description"]["local_urdf"]
+    except FileNotFoundError:
+        return f"no export in {out}"
+    except (OSError, ValueError, KeyError, TypeError):
+        return f"{out / 'manifest.json'} is unreadable or records no parameter digest and description"
+    if (built, built_side) != (digest, side):
+        return (f"the export {out} was built from parameter digest {str(built)[:12]} ({built_side}), "
+                f"the file has {digest[:12]} ({side})")
+    if not local.is_file():
+        return f"the export {out} has no robot description ({local.relative_to(out)})"
+    return None
+
+
 def ensure_export(params_path: str | os.PathLike | None = None, out_dir: str | os.PathLike | None = None,
                   side: str | None = None, log: Callable[[str], None] | None = None, **build_kwargs):
     """(export folder, params) of an export of ``params_path`` (``side`` overriding the file's),
-    built first (:func:`build_hand`, cached) when ``out_dir`` holds none or one built from other
-    parameters. For the commands that read an export (check, view)."""
+    built first (:func:`build_hand`, cached) when ``out_dir`` holds none, one built from other
+    parameters or one without its robot description (:func:`export_problem`). For the commands
+    that read an export (check, view)."""
     path, _document, params, file_side = _load(params_path, side)
     out = Path(out_dir) if out_dir is not None else _default_out(params, side, file_side)
-    try:
-        man = json.loads((out / "manifest.json").read_text(encoding="utf-8"))
-        built = (man["params"]["digest"], man["hand"]["side"])
-    except (OSError, ValueError, KeyError, TypeError):
-        built = None
-    if built != (params.digest, params.side) or not (out / "description").is_dir():
-        (log or (lambda msg: None))(f"building {out} from {path} (the export is missing or was built from "
-                                    "other parameters)")
+    reason = export_problem(out, params.digest, params.side)
+    if reason is not None:
+        (log or (lambda msg: None))(f"{reason}; building it first from {path} (cached parts are reused)")
         build_hand(path, out, side=side, log=log, **build_kwargs)
+        reason = export_problem(out, params.digest, params.side)
+        if reason is not None:  # the build wrote what this reads: a defect, not a user error
+            raise RuntimeError(f"after building: {reason}")
     return out, params
