@@ -153,3 +153,18 @@ def test_cmc_housing_off_the_palm(variant):
     with pytest.raises(ParamError) as exc:
         preflight.check(p)
     assert exc.value.field == "palm.thumb_cmc_offset_mm" and "prints in two pieces" in exc.value.rule
+
+
+@pytest.mark.parametrize("x, what", [(-19.66, "hub"), (-30.0, "hub"), (-42.0, "hub"), (-44.0, "tendon post")])
+def test_cmc_hub_or_post_into_the_palm(variant, x, what):
+    """palm.thumb_cmc_offset_mm[0] = -19.66 validated (property test, seed 5) and the build found
+    servo pulley 6 (the CMC hub) 1161 mm^3 inside the palm. Measured on the solids (default -46):
+    the hub cuts the palm from about -40 mm; the tendon post on the housing's end wall enters the
+    palm slab at -43.9 mm by its bounding box, and the palm is no valid solid at -43.5 mm."""
+    from phantom_cad.cad import preflight
+
+    p = variant(lambda d: d["palm"].__setitem__("thumb_cmc_offset_mm", [x, -45.0, -2.0]))
+    with pytest.raises(ParamError) as exc:
+        preflight.check(p)
+    assert exc.value.field == "palm.thumb_cmc_offset_mm" and what in exc.value.rule
+    assert exc.value.value == [x, -45.0, -2.0]

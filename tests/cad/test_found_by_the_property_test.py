@@ -37,3 +37,23 @@ def test_parallel_fingers_palm(variant):
 
     facing = {tuple(np.round(p["facing"], 9)) for p in circular_pockets(shape, pt.tol.magnet_pocket_d / 2.0)}
     assert facing == {(0.0, 1.0, 0.0)}
+
+
+def test_cmc_hub_and_post_clear_the_palm_where_the_rule_accepts(variant):
+    """Near the closest CMC offset the hub and post rule accepts along x (-44.2 mm; -44 is
+    refused, tests/cad/test_cad_params.py) the palm is a valid solid (it is not at -43.5) and
+    the hub stays at least one clearance from it, measured on the solids (OpenCascade's distance
+    between the palm and the hub where the assembly places them)."""
+    from phantom_cad.cad import preflight
+    from phantom_cad.cad.assembly import pose_transforms
+    from phantom_cad.cad.measure import placed
+    from phantom_cad.kinematics.topology import CMC_SERVO, JOINTS, SERVOS
+
+    p = variant(lambda d: d["palm"].__setitem__("thumb_cmc_offset_mm", [-44.2, -45.0, -2.0]))
+    preflight.check(p)
+    hub_name = SERVOS[CMC_SERVO].link
+    rest = pose_transforms(p, np.zeros(len(JOINTS)))        # where the assembly places the parts (mm)
+    _, palm = _build(p, "palm")
+    hub_part, hub = _build(p, hub_name)
+    gap = placed(palm, rest["palm"]).distance_to(placed(hub, rest[hub_name]))
+    assert gap >= hub_part.tol.clearance - 1e-6
