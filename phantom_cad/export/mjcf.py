@@ -3,27 +3,24 @@
 Written from the format-neutral :class:`~phantom_cad.export.robot.RobotModel` (the same tree,
 names, inertials and meshes as the URDF). What MuJoCo adds (docs/descriptions.md):
 
-* **Joint limits** carry the same stiff constraint as the couplings.
-* **Couplings** (this issue; the transmission issue replaces them by the tendons themselves):
-  each follower joint (PIP, DIP, thumb IP) is tied to its chain's reference joint by a joint
-  equality q_f = m q_ref with the multiplier of eq. (2) and a stiff ``solref``/``solimp``
-  (:data:`COUPLING_SOLREF`, :data:`COUPLING_SOLIMP`): MuJoCo's defaults let the coupling give
-  way under load without a warning.
-* **Drive tendons**: a spatial tendon from the guide G1 (on the reference joint's parent) to G2
-  (on its child). Its length is the chord L of eq. (4)-(5), so the servo angle is
-  u = (L0 - L) / r: the actuator ``servo<n>`` has gear -1/r on the tendon (actuator length
-  -L / r) and an affine bias, force = kp (u_cmd - (L0 - L) / r) - kv du/dt, limited to
-  [0, stall torque] (a tendon pulls, it does not push).
-* **Direct drive**: ``servo6`` turns the CMC with gear 1 / cmc_gain (q = cmc_gain u), force
-  within +-stall torque.
-* **Return springs** (eq. 11): a fixed tendon sum R_i q_i over each chain's joints with
-  stiffness k_s and rest length 0, so its tension is k_s sum R_i q_i.
+* **Joint limits** carry a stiff constraint (:data:`LIMIT_SOLREF`, :data:`LIMIT_SOLIMP`).
+* **The transmission is the routed tendons** (``kinematics.routing``, docs/transmission.md), as
+  printed: no joint equality couples any joint. Every strand is a spatial tendon through sites at
+  its anchors and via points, wrapping cylinders (class ``pulley``: group 4, no contact, no mass)
+  at its pulleys, a side site choosing the side. A strand pulls and never pushes: its spring has
+  the dead band [0, rest length] (``springlength``), stiffness EA / rest length (a tendon) or k_s
+  (the return cord, whose tension is then k_s sum R_i q_i, eq. 11), damping stiffness x
+  :data:`~phantom_cad.export.robot.STRAND_TAU`.
+* **Servos**: each tendon servo's pulley turns on a hinge (named after the servo,
+  ``index_flexion``, ...) with the servo's reflected inertia as armature, driven by a position
+  actuator ``servo<n>`` (control = u in radians); the drive tendon is clamped on the pulley and
+  wound by it. ``servo6`` turns the CMC directly (q = cmc_gain u).
 * kp = stall torque / stall error (``servo.stall_error_deg``), kv = stall torque / no-load speed.
 * Geoms: the visual mesh (class ``visual``: group 2, no contact) and the convex collision mesh
   (class ``collision``: group 3); contact excluded between every parent and child body.
-* Sensors: joint positions, actuator forces; sites ``<digit>_tip`` (the URDF's tip frames) and
-  the guides ``<digit>_drive_g1`` / ``_g2``; a ``home`` keyframe (q = 0, every servo at the
-  start of its travel).
+* Sensors: joint positions, actuator forces, tendon lengths; sites ``<digit>_tip`` (the URDF's tip
+  frames) and every strand's points (``<strand>_<role>``, e.g. ``index_drive_guide_g1``); a
+  ``home`` keyframe (q = 0, every servo at the start of its travel).
 """
 
 from __future__ import annotations
@@ -32,13 +29,18 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from .robot import JointDrive, RobotModel, TendonDrive
+from ..kinematics.routing import Point
+from .robot import JointDrive, RobotModel, ServoDrive
 
 #: simulation step (s) and integrator: implicit in the velocity terms (actuator damping)
 TIMESTEP = 0.0005
-#: the couplings' constraint: time constant of two steps, critically damped; impedance near 1
-COUPLING_SOLREF = (2 * TIMESTEP, 1.0)
-COUPLING_SOLIMP = (0.99, 0.999, 0.001, 0.5, 2.0)
+#: the joint limits' constraint: time constant of two steps, critically damped; impedance near 1
+LIMIT_SOLREF = (2 * TIMESTEP, 1.0)
+LIMIT_SOLIMP = (0.99, 0.999, 0.001, 0.5, 2.0)
+#: colour of the tendons and of the pulleys they wrap (group 4)
+TENDON_RGBA = (0.9, 0.75, 0.2, 1.0)
+RETURN_RGBA = (0.2, 0.6, 0.9, 1.0)
+PULLEY_RGBA = (0.9, 0.75, 0.2, 0.3)
 #: colour of the collision geoms (shown in group 3)
 COLLISION_RGBA = (0.8, 0.3, 0.3, 0.35)
 
@@ -51,6 +53,14 @@ def _quat(R: np.ndarray) -> list[float]:
     return [float(v) for v in q]
 
 
+def _frame_z(axis) -> np.ndarray:
+    """A rotation whose z is ``axis`` (a cylinder's axis)."""
+    z = np.asarray(axis, float) / np.linalg.norm(axis)
+    x = np.cross([0.0, 1.0, 0.0], z) if abs(z[1]) < 0.9 else np.cross([1.0, 0.0, 0.0], z)
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(z, x), z])
+
+
 def _children(model: RobotModel) -> dict[str, list]:
     out: dict[str, list] = {}
     for j in model.joints:
@@ -58,8 +68,26 @@ def _children(model: RobotModel) -> dict[str, list]:
     return out
 
 
-def mjcf_spec(model: RobotModel, meshdir: str = "../meshes", coupling_solref=COUPLING_SOLREF,
-              coupling_solimp=COUPLING_SOLIMP):
+def _slug(text: str) -> str:
+    return "".join(ch if ch.isalnum() else "_" for ch in text.lower()).strip("_")
+
+
+def _strand_names(strand) -> tuple[list[str | None], list[str | None]]:
+    """Site names of a strand's points and geom/side-site names of its pulleys (None elsewhere)."""
+    sites, geoms, seen = [], [], {}
+    for e in strand.elements:
+        if isinstance(e, Point):
+            base = f"{strand.name}_{_slug(e.role)}"
+            seen[base] = seen.get(base, 0) + 1
+            sites.append(base if seen[base] == 1 else f"{base}_{seen[base]}")
+            geoms.append(None)
+        else:
+            sites.append(None)
+            geoms.append(f"{strand.tendon}_{_slug(e.role)}_{e.joint}")
+    return sites, geoms
+
+
+def mjcf_spec(model: RobotModel, meshdir: str = "../meshes"):
     """The ``mujoco.MjSpec`` of the hand (not compiled). ``meshdir``: the folder of the
     ``visual/`` and ``collision/`` meshes, relative to the MJCF file."""
     import mujoco
@@ -87,12 +115,25 @@ def mjcf_spec(model: RobotModel, meshdir: str = "../meshes", coupling_solref=COU
             for stem in ln.collision:
                 spec.add_mesh(name=f"{stem}_collision", file=f"collision/{stem}.stl")
 
+    pulley = spec.add_default("pulley", spec.default)
+    pulley.geom.group, pulley.geom.contype, pulley.geom.conaffinity = 4, 0, 0
+    pulley.geom.type = mujoco.mjtGeom.mjGEOM_CYLINDER
+    pulley.geom.rgba = PULLEY_RGBA
+
     children = _children(model)
-    sites = {}
-    for d in model.drives:
-        if isinstance(d, TendonDrive):
-            for s in d.sites:
-                sites.setdefault(s.link, []).append(s)
+    servo_hinge = {d.link: d for d in model.drives if isinstance(d, ServoDrive)}
+    # per link: the strands' sites (name, pos) and pulley cylinders (name, centre, axis, radius, width)
+    sites: dict[str, list] = {}
+    cylinders: dict[str, dict] = {}
+    for st in model.strands:
+        names, geoms = _strand_names(st)
+        for k, e in enumerate(st.elements):
+            if names[k] is not None:
+                sites.setdefault(e.link, []).append((names[k], e.pos))
+            else:
+                cylinders.setdefault(e.link, {})[geoms[k]] = e
+                link, pos = st.sides[k]
+                sites.setdefault(link, []).append((f"{st.name}_side_{k}", pos))
 
     def add_link(body, name: str) -> None:
         ln = links[name]
@@ -108,8 +149,11 @@ def mjcf_spec(model: RobotModel, meshdir: str = "../meshes", coupling_solref=COU
                           rgba=[*ln.color, 1.0])
             for stem in ln.collision:
                 body.add_geom(name=f"{stem}_collision", default=collision, meshname=f"{stem}_collision")
-        for s in sites.get(name, []):
-            body.add_site(name=s.name, pos=list(s.pos), size=[0.0008, 0, 0])
+        for sname, pos in sites.get(name, []):
+            body.add_site(name=sname, pos=list(pos), size=[0.0004, 0, 0], group=4)
+        for gname, e in cylinders.get(name, {}).items():
+            body.add_geom(name=gname, default=pulley, pos=list(e.centre), quat=_quat(_frame_z(e.axis)),
+                          size=[e.radius, e.width / 2.0, 0.0])
         for j in children.get(name, []):
             child = links[j.child]
             if child.inertial is None and child.mesh is None:        # a massless frame: a site
@@ -121,7 +165,13 @@ def mjcf_spec(model: RobotModel, meshdir: str = "../meshes", coupling_solref=COU
             if j.type == "revolute":
                 b.add_joint(name=j.name, type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(j.axis),
                             range=[j.lower, j.upper], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
-                            solref_limit=list(coupling_solref), solimp_limit=list(coupling_solimp))
+                            solref_limit=list(LIMIT_SOLREF), solimp_limit=list(LIMIT_SOLIMP))
+            elif j.child in servo_hinge:                               # a tendon servo's pulley turns
+                sd = servo_hinge[j.child]
+                b.add_joint(name=sd.joint, type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(sd.axis),
+                            range=list(sd.travel), limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+                            armature=sd.armature, solref_limit=list(LIMIT_SOLREF),
+                            solimp_limit=list(LIMIT_SOLIMP))
             add_link(b, j.child)
 
     root = model.joints[0].parent
@@ -129,19 +179,16 @@ def mjcf_spec(model: RobotModel, meshdir: str = "../meshes", coupling_solref=COU
 
     for a, b in model.adjacent:
         spec.add_exclude(bodyname1=a, bodyname2=b)
-    for j in model.joints:
-        if j.mimic is not None:
-            data = np.zeros(mujoco.mjNEQDATA)
-            data[1] = j.mimic.multiplier
-            data[0] = j.mimic.offset
-            spec.add_equality(name=f"{j.name}_coupling", type=mujoco.mjtEq.mjEQ_JOINT,
-                              name1=j.name, name2=j.mimic.joint, data=list(data),
-                              solref=list(coupling_solref), solimp=list(coupling_solimp))
-
-    for sp in model.springs:
-        t = spec.add_tendon(name=sp.tendon, stiffness=sp.stiffness, springlength=[0.0, 0.0])
-        for jn, R in zip(sp.joints, sp.radii):
-            t.wrap_joint(jn, R)
+    for st in model.strands:
+        names, geoms = _strand_names(st)
+        t = spec.add_tendon(name=st.name, stiffness=st.stiffness, damping=st.damping,
+                            springlength=[0.0, st.rest_length], width=0.0003,
+                            rgba=list(RETURN_RGBA if st.kind == "return" else TENDON_RGBA))
+        for k, e in enumerate(st.elements):
+            if names[k] is not None:
+                t.wrap_site(names[k])
+            else:
+                t.wrap_geom(geoms[k], f"{st.name}_side_{k}")
 
     for d in model.drives:
         act = spec.add_actuator(name=d.actuator, ctrlrange=list(d.travel),
@@ -153,15 +200,12 @@ def mjcf_spec(model: RobotModel, meshdir: str = "../meshes", coupling_solref=COU
         gain[0] = d.stiffness
         bias = np.zeros(10)
         gear = np.zeros(6)
-        if isinstance(d, TendonDrive):
-            t = spec.add_tendon(name=d.tendon)
-            for s in d.sites:
-                t.wrap_site(s.name)
-            act.trntype = mujoco.mjtTrn.mjTRN_TENDON
-            act.target = d.tendon
-            gear[0] = -1.0 / d.radius
-            bias[:3] = (-d.stiffness * d.rest_length / d.radius, -d.stiffness, -d.damping)
-            act.forcerange = [0.0, d.torque]
+        if isinstance(d, ServoDrive):
+            act.trntype = mujoco.mjtTrn.mjTRN_JOINT
+            act.target = d.joint
+            gear[0] = 1.0
+            bias[:3] = (0.0, -d.stiffness, -d.damping)
+            act.forcerange = [-d.torque, d.torque]
         elif isinstance(d, JointDrive):
             act.trntype = mujoco.mjtTrn.mjTRN_JOINT
             act.target = d.joint
@@ -178,7 +222,11 @@ def mjcf_spec(model: RobotModel, meshdir: str = "../meshes", coupling_solref=COU
         spec.add_sensor(name=f"{d.actuator}_force", type=mujoco.mjtSensor.mjSENS_ACTUATORFRC,
                         objtype=mujoco.mjtObj.mjOBJ_ACTUATOR, objname=d.actuator)
 
-    n_q = sum(1 for j in model.joints if j.type == "revolute")
+    for st in model.strands:
+        spec.add_sensor(name=f"{st.name}_length", type=mujoco.mjtSensor.mjSENS_TENDONPOS,
+                        objtype=mujoco.mjtObj.mjOBJ_TENDON, objname=st.name)
+
+    n_q = sum(1 for j in model.joints if j.type == "revolute") + len(servo_hinge)
     spec.add_key(name="home", qpos=[0.0] * n_q, ctrl=[float(d.travel[0]) for d in model.drives])
     return spec
 

@@ -5,6 +5,7 @@
 
 Writes ``exports/<hand>/`` (see docs/exports.md): ``step/<part>.step``,
 ``step/hand_assembly.step``, ``stl/<part>.stl`` (print orientation), ``bom.csv``,
+``routing.json`` (every tendon's path, ``kinematics.routing``; docs/transmission.md),
 ``manifest.json``, ``renders/*.png`` and ``slicer/config.ini``.
 
 Pipeline
@@ -44,6 +45,7 @@ import numpy as np
 from ..atomic import check_replaceable, replace_dir
 from ..cad import preflight
 from ..canon import canonical, plain, sha256
+from ..kinematics import routing
 from ..params import ParamError, load_document, parse
 from ..params.io import DEFAULT_PARAMS
 from . import cache as cache_mod
@@ -299,6 +301,8 @@ class _Build:
             description = self.description(metas, estimates, stage / "description")
             bom = list(self.asm.bill_of_materials(self.params))
             (stage / "bom.csv").write_text(bom_csv(bom), encoding="utf-8")
+            (stage / "routing.json").write_text(json.dumps(routing.document(self.params), indent=1) + "\n",
+                                                encoding="utf-8")
             man = manifest_mod.build_manifest(
                 stage=stage, params=self.params, params_path=self.path, names=names, keys=keys, metas=metas,
                 poses=poses, estimates=estimates, slicer_info=slicer_info, interference=inter,

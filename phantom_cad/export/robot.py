@@ -29,7 +29,8 @@ import numpy as np
 from .. import units
 from ..kinematics import closed_form as cf
 from ..kinematics import frames as F
-from ..kinematics.topology import CHAINS, CMC_Q, JOINTS, LINK_NAMES, LINKS, SERVOS, TENDONS, servo_joints
+from ..kinematics import routing
+from ..kinematics.topology import CHAINS, CMC_Q, JOINTS, LINK_NAMES, LINKS, SERVOS, servo_joints
 from .manifest import mass_g
 
 #: dense grid of the servo travel on which the largest joint rate is taken
@@ -88,19 +89,22 @@ class Site:
 
 
 @dataclass(frozen=True)
-class TendonDrive:
-    """A servo that winds a drive tendon: the tendon's straight span between the guides G1 and
-    G2 is the chord L of eq. (4)-(5), and the servo angle is u = (L0 - L) / r."""
+class ServoDrive:
+    """A tendon servo: its pulley (link ``link``) turns on a hinge ``joint`` about ``axis`` (its own
+    frame); the angle u winds the digit's drive tendon (``kinematics.routing``) onto it."""
     actuator: str                # "servo1", ...
-    servo: str                   # topology name ("index_flexion", ...)
-    tendon: str                  # topology tendon name ("index_drive", ...)
-    sites: tuple[Site, Site]     # G1 (reference joint's parent), G2 (its child)
-    radius: float                # r_j, m
-    rest_length: float           # L0, m
+    servo: str                   # topology name ("index_flexion", ...): also the hinge's name
+    link: str                    # the servo pulley link
+    axis: tuple[float, float, float]
     travel: tuple[float, float]  # servo travel, rad
     torque: float                # stall torque, N m
     stiffness: float             # position gain, N m / rad of servo angle
     damping: float               # N m s / rad: stall torque / no-load speed (the motor's line)
+    armature: float              # reflected rotor inertia, kg m^2
+
+    @property
+    def joint(self) -> str:
+        return self.servo
 
 
 @dataclass(frozen=True)
@@ -117,12 +121,18 @@ class JointDrive:
 
 
 @dataclass(frozen=True)
-class ReturnSpring:
-    """The dorsal cable-spring of a chain (eq. 11): tension k_s sum R_i q_i over its joints."""
-    tendon: str                  # topology tendon name ("index_return", ...)
-    joints: tuple[str, ...]
-    radii: tuple[float, ...]     # R_i, m
-    stiffness: float             # k_s, N / m
+class Strand:
+    """One strand of a routed tendon (``kinematics.routing``) as the simulator models it: a cord
+    through its path elements that pulls (never pushes) with ``stiffness`` once longer than
+    ``rest_length``."""
+    name: str
+    tendon: str                  # the topology tendon ("index_mcp_pip", ...)
+    kind: str                    # "drive", "coupling", "return"
+    elements: tuple              # routing.Point / routing.Pulley, link frames (mirrored for a left hand)
+    sides: tuple                 # per element: None, or (link, pos) of the pulley's side site
+    rest_length: float           # m: the routed length at rest (q = 0, u = 0)
+    stiffness: float             # N/m: EA / rest length for a tendon, k_s for the return cord
+    damping: float               # N s/m
 
 
 @dataclass(frozen=True)
@@ -131,8 +141,8 @@ class RobotModel:
     side: str
     links: tuple[RobotLink, ...]
     joints: tuple[RobotJoint, ...]
-    drives: tuple[TendonDrive | JointDrive, ...] = ()     # servo order
-    springs: tuple[ReturnSpring, ...] = ()
+    drives: tuple[ServoDrive | JointDrive, ...] = ()     # servo order
+    strands: tuple[Strand, ...] = ()                     # every routed tendon strand
     #: pairs of links in contact by design (a joint, a mount): no collision between them
     adjacent: tuple[tuple[str, str], ...] = ()
 
@@ -178,13 +188,19 @@ def _drives(params) -> dict[str, tuple[float, float, Mimic | None]]:
     return out
 
 
-def transmissions(params) -> tuple[tuple[TendonDrive | JointDrive, ...], tuple[ReturnSpring, ...]]:
-    """The six servo drives (servo order) and the chains' return springs, from the topology's
-    servos and tendons and the parameters."""
+#: reflected rotor inertia of a micro servo's motor through its gearbox (about 5e-9 kg m^2 times a
+#: ratio of about 300, squared): what the servo's hinge carries in a simulation
+SERVO_ARMATURE = 4e-4
+#: a strand's damping is its stiffness times this time constant (s): a few simulation steps
+STRAND_TAU = 0.002
+
+
+def transmissions(params) -> tuple[tuple[ServoDrive | JointDrive, ...], tuple[Strand, ...]]:
+    """The six servo drives (servo order) and every routed tendon strand, from the topology's
+    servos, the routing model and the parameters."""
     tau, speed = params.servo.stall_torque, params.servo.speed
     kp, kv = tau / params.servo.stall_error, tau / speed
-    by_tendon = {(t.digit, t.kind): t for t in TENDONS}
-    drives, springs = [], []
+    drives = []
     for servo in SERVOS:
         if servo.drive == "direct":
             (qi,) = servo_joints(servo.index)
@@ -192,16 +208,18 @@ def transmissions(params) -> tuple[tuple[TendonDrive | JointDrive, ...], tuple[R
                                      params.thumb.cmc_travel, tau, kp, kv))
             continue
         ch = params.digit(servo.digit).chain
-        (l1, p1), (l2, p2) = F.guide_sites(params, servo.digit)
-        tendon = by_tendon[(servo.digit, "drive")].name
-        sites = (Site(f"{tendon}_g1", l1, tuple(float(v) for v in p1)),
-                 Site(f"{tendon}_g2", l2, tuple(float(v) for v in p2)))
-        g = ch.guide
-        drives.append(TendonDrive(servo.actuator, servo.name, tendon, sites, ch.servo_radius,
-                                  float(cf.chord_rest(g.d1, g.d2, g.alpha)), ch.travel, tau, kp, kv))
-        ret = by_tendon[(servo.digit, "return")]
-        springs.append(ReturnSpring(ret.name, ret.joints, tuple(ch.radii), params.mechanics.spring_k))
-    return tuple(drives), tuple(springs)
+        drives.append(ServoDrive(servo.actuator, servo.name, servo.link,
+                                 tuple(float(v) for v in routing.servo_axis(params)), ch.travel, tau, kp, kv,
+                                 SERVO_ARMATURE))
+    rest = routing.lengths(params)
+    strands = []
+    for r in routing.routes(params):
+        for st in r.strands:
+            L = rest[st.name]
+            k = params.mechanics.spring_k if r.stiffness == "k_s" else params.mechanics.tendon_EA / L
+            strands.append(Strand(st.name, r.name, r.tendon.kind, st.elements,
+                                  tuple(routing.side_sites(params, st)), L, k, k * STRAND_TAU))
+    return tuple(drives), tuple(strands)
 
 
 def _fixed_parent(ln) -> str:
@@ -239,8 +257,8 @@ def robot_model(params, metas: dict[str, dict], tips: dict[str, tuple[str, np.nd
     for frame, (parent, T) in tips.items():
         links.append(RobotLink(frame, None, None))
         joints.append(RobotJoint(f"{frame}_joint", "fixed", parent, frame, np.asarray(T, float)))
-    drives, springs = transmissions(params)
+    drives, strands = transmissions(params)
     adjacent = [(j.parent, j.child) for j in joints if j.type == "revolute" or j.child in LINK_NAMES]
     # a direct drive's hub hangs on the joint it turns but sits in its servo, on the palm
     adjacent += [(ln.parent, ln.name) for ln in LINKS[1:] if (ln.parent, ln.name) not in adjacent]
-    return RobotModel(params.name, params.side, tuple(links), tuple(joints), drives, springs, tuple(adjacent))
+    return RobotModel(params.name, params.side, tuple(links), tuple(joints), drives, strands, tuple(adjacent))

@@ -1,8 +1,9 @@
 """The MJCF of the default hand (description/mjcf), loaded and simulated by MuJoCo.
 
 Known answers: the URDF read by yourdfpy (tree, forward kinematics, inertials), the cosine law
-of eq. (4)-(6) computed here by hand from params/phantom.toml, the multipliers 5:4:5 and 5:4 by
-hand, and MuJoCo itself (lengths, equilibria, warnings); never the writer.
+of eq. (4)-(6) computed here by hand from params/phantom.toml, the radii 5:4:5 and 5:4 by hand,
+and MuJoCo itself (tendon lengths along its own wrapping, equilibria, tendon forces, warnings);
+never the writer. No joint equality couples the joints: the routed tendons do.
 """
 
 from __future__ import annotations
@@ -93,7 +94,12 @@ def test_same_tree_names_and_limits_as_the_urdf(pkg, model):
         assert _name(m, mujoco.mjtObj.mjOBJ_BODY, m.jnt_bodyid[jid]) == j.child
         assert np.allclose(m.jnt_axis[jid], j.axis, atol=1e-12)
         assert np.allclose(m.jnt_range[jid], [j.limit.lower, j.limit.upper], atol=1e-12)
-    assert m.njnt == 15 and m.nu == 6
+    # 15 joints and the 5 tendon servos' pulleys, each on its hinge; no equality
+    assert m.njnt == 20 and m.nu == 6 and m.neq == 0
+    for servo, digit in SERVO_DIGIT.items():
+        jid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"{digit}_flexion")
+        assert _name(m, mujoco.mjtObj.mjOBJ_BODY, m.jnt_bodyid[jid]) == f"servo_pulley_{servo[-1]}"
+        assert m.actuator_trnid[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, servo)][0] == jid
     assert [_name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, i) for i in range(m.nu)] == list(SERVO_JOINT)
 
 
@@ -143,19 +149,75 @@ def test_bodies_where_the_urdf_puts_its_links(pkg, model):
             assert math.degrees(math.acos(min(1.0, cos))) <= 0.01, name
 
 
-def test_drive_tendon_length_is_the_chord(model, doc):
-    """MuJoCo's own length of each drive tendon is the chord of eq. (4)-(5),
-    L = sqrt(d1^2 + d2^2 - 2 d1 d2 cos(alpha - q_ref)), computed here by hand."""
+def _radii(doc, digit):
+    t = doc["thumb"] if digit == "thumb" else doc["fingers"][digit]
+    return {k: v / 1000.0 for k, v in t["pulley_radius_mm"].items()}
+
+
+#: chain joints proximal first, and the loops between them
+CHAIN_KEYS = {"thumb": ("mp", "ip"), **{f: ("mcp", "pip", "dip") for f in FINGERS}}
+
+
+def _set_qu(m, d, q: dict, u: dict):
+    _set_q(m, d, q)
+    for digit, v in u.items():
+        d.qpos[_qadr(m, f"{digit}_flexion")] = v
+    mujoco.mj_kinematics(m, d)
+    mujoco.mj_comPos(m, d)
+    mujoco.mj_tendon(m, d)
+
+
+def _length(m, d, name):
+    return d.ten_length[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_TENDON, name)]
+
+
+def test_tendon_lengths_are_the_mechanism(model, doc):
+    """MuJoCo's own lengths of the routed tendons (its wrapping of the sites and pulley cylinders),
+    at random joint and servo angles, against the mechanism by hand from the TOML: each strand of
+    the loop between joints a and b changes by +-(R_a q_a - R_b q_b) (so it keeps its length
+    exactly when eq. (2) holds), the drive by chord(q_ref) - chord(0) + r u (eq. 4-5: winding
+    r u onto the servo takes up the chord's shortening), the return cord by sum R_i q_i (eq. 11)."""
     m, d = model, mujoco.MjData(model)
-    rng = np.random.default_rng(3)
-    for _ in range(5):
-        q = _coupled_q(rng, 0.0, 1.2)
-        _set_q(m, d, q)
-        for act, digit in SERVO_DIGIT.items():
+    _set_qu(m, d, {}, {})
+    rest = {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_TENDON, t): d.ten_length[t] for t in range(m.ntendon)}
+    rng = np.random.default_rng(7)
+    for _ in range(6):
+        q = {j: rng.uniform(0.0, 1.2) for j in JOINT_NAMES}
+        u = {digit: rng.uniform(0.0, 1.4) for digit in SERVO_DIGIT.values()}
+        _set_qu(m, d, q, u)
+        for digit, keys in CHAIN_KEYS.items():
+            R = _radii(doc, digit)
+            for a, b in zip(keys, keys[1:]):
+                want = R[a] * q[f"{digit}_{a}"] - R[b] * q[f"{digit}_{b}"]
+                da = _length(m, d, f"{digit}_{a}_{b}_a") - rest[f"{digit}_{a}_{b}_a"]
+                db = _length(m, d, f"{digit}_{a}_{b}_b") - rest[f"{digit}_{a}_{b}_b"]
+                assert da == pytest.approx(want, abs=2e-5) and db == pytest.approx(-want, abs=2e-5), (digit, a, b)
             d1, d2, alpha = _guide(doc, digit)
-            want = math.sqrt(d1 * d1 + d2 * d2 - 2 * d1 * d2 * math.cos(alpha - q[SERVO_JOINT[act]]))
-            tid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_TENDON, f"{digit}_drive")
-            assert d.ten_length[tid] == pytest.approx(want, abs=1e-7), digit   # 0.1 um: MJCF's digits
+            chord = lambda qr: math.sqrt(d1 * d1 + d2 * d2 - 2 * d1 * d2 * math.cos(alpha - qr))  # noqa: E731
+            want = chord(q[f"{digit}_{keys[0]}"]) - chord(0.0) + _servo_radius(doc, digit) * u[digit]
+            assert _length(m, d, f"{digit}_drive") - rest[f"{digit}_drive"] == pytest.approx(want, abs=2e-5), digit
+            want = sum(R[k] * q[f"{digit}_{k}"] for k in keys)
+            assert _length(m, d, f"{digit}_return") - rest[f"{digit}_return"] == pytest.approx(want, abs=2e-5), digit
+
+
+def test_loops_hold_the_coupling_and_only_it(model, doc):
+    """Along the coupled motion (eq. 2 by hand) every loop strand keeps its length within 0.02 mm
+    over the whole travel; one joint leaving the coupling by 1 degree changes it by >= 0.05 mm."""
+    m, d = model, mujoco.MjData(model)
+    _set_qu(m, d, {}, {})
+    rest = {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_TENDON, t): d.ten_length[t] for t in range(m.ntendon)}
+    loops = [n for n in rest if n.endswith(("_a", "_b"))]
+    assert len(loops) == 2 * (1 + 2 * len(FINGERS))
+    for ref in np.linspace(0.0, 1.2, 13):
+        q = {j: ref for j in SERVO_JOINT.values() if j != "thumb_cmc"}
+        q.update({f: k * q[r] for f, (r, k) in MIMIC.items()})
+        _set_qu(m, d, q, {})
+        assert max(abs(_length(m, d, n) - rest[n]) for n in loops) < 2e-5
+        for j in MIMIC:
+            _set_qu(m, d, {**q, j: q[j] + math.radians(1.0)}, {})
+            moved = [n for n in loops if abs(_length(m, d, n) - rest[n]) >= 5e-5]
+            digit = j.split("_")[0]
+            assert moved and all(n.startswith(digit) for n in moved), j
 
 
 def _settle(m, d, u, seconds=2.0):
@@ -165,84 +227,133 @@ def _settle(m, d, u, seconds=2.0):
         mujoco.mj_step(m, d)
 
 
-def test_static_equilibrium_is_the_cosine_law(model, doc):
-    """Under the six actuators and the return springs alone (contacts and gravity off: the
-    transmission, not the grasp; gravity would flex a finger past a slack tendon), the joints
-    settle where the cosine law puts them: q_ref = alpha - arccos((d1^2 + d2^2 - (L0 - r u)^2) /
-    (2 d1 d2)) by hand, the followers at their multipliers, the CMC at cmc_gain u; and where
-    hand.forward puts them (0.01 rad)."""
+def test_near_rigid_twin_is_the_cosine_law(pkg, doc):
+    """The tendons made near-rigid (every strand but the return cord 300x stiffer, the step
+    shortened to stay stable), contacts and gravity off: at 20 commands over each servo's travel
+    the joints settle where the cosine law puts them at the angle the servo reached, q_ref =
+    alpha - arccos((d1^2 + d2^2 - (L0 - r u)^2) / (2 d1 d2)) by hand, the others at the radius
+    ratios (eq. 2), the CMC at cmc_gain u: within 0.1 degree, and hand.forward agrees."""
     from phantom_cad.kinematics.model import Hand
 
+    m = mujoco.MjModel.from_xml_path(str(pkg / "mjcf" / "scene.xml"))
+    m.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT | mujoco.mjtDisableBit.mjDSBL_GRAVITY
+    for t in range(m.ntendon):
+        if not mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_TENDON, t).endswith("_return"):
+            m.tendon_stiffness[t] *= 300.0
+            m.tendon_damping[t] *= 300.0
+    m.opt.timestep = 3e-5
+    d = mujoco.MjData(m)
+    hand = Hand(load_params(PARAMS))
+    lo, hi = m.actuator_ctrlrange[:, 0], m.actuator_ctrlrange[:, 1]
+    worst = 0.0
+    for frac in np.linspace(0.0, 1.0, 20):
+        u = lo + frac * (hi - lo)
+        _settle(m, d, u, seconds=1.2)
+        assert np.abs(d.qvel).max() < 1e-2
+        reached = u.copy()
+        by_hand = {}
+        for k, (act, jn) in enumerate(SERVO_JOINT.items()):
+            if act in SERVO_DIGIT:
+                digit = SERVO_DIGIT[act]
+                reached[k] = d.qpos[_qadr(m, f"{digit}_flexion")]
+                d1, d2, alpha = _guide(doc, digit)
+                r = _servo_radius(doc, digit)
+                L0 = math.sqrt(d1 * d1 + d2 * d2 - 2 * d1 * d2 * math.cos(alpha))
+                by_hand[jn] = alpha - math.acos((d1 * d1 + d2 * d2 - (L0 - r * reached[k]) ** 2) / (2 * d1 * d2))
+            else:
+                by_hand[jn] = doc["thumb"]["cmc_gain"] * u[k]
+        by_hand.update({f: k * by_hand[r] for f, (r, k) in MIMIC.items()})
+        analytic = hand.forward(reached)
+        for i, name in enumerate(JOINT_NAMES):
+            q = d.qpos[_qadr(m, name)]
+            worst = max(worst, abs(q - by_hand[name]))
+            assert abs(q - by_hand[name]) < math.radians(0.1), (frac, name, math.degrees(q - by_hand[name]))
+            assert abs(q - analytic[i]) < math.radians(0.1), (frac, name)
+    assert worst > 0.0
+
+
+def test_twin_compliance_is_the_statics_of_the_routing(model, doc):
+    """With the file's EA and k_s the twin leaves the cosine law by the stretch of its strands,
+    and by exactly what the statics of the printed routing say, computed here by hand from the
+    settled angles: the return cord pulls with T = k_s sum R_i q_i on every joint (eq. 11); the
+    last loop carries T, each loop before it T more (it also holds every joint beyond it), the
+    drive (3 T R_MCP + ...) / its moment arm d1 d2 sin(alpha - q) / L; each strand stretches by its
+    tension times rest length / EA, which the joints give up: R_a q_a - R_b q_b = stretch and
+    L(q_ref) = L0 - r u + stretch. Within 0.05 degree for every chain at 4 commands
+    (docs/transmission.md: why this is not the paper's eq. 12-13)."""
     m = model
     off = mujoco.mjtDisableBit.mjDSBL_CONTACT | mujoco.mjtDisableBit.mjDSBL_GRAVITY
     m.opt.disableflags |= off
     try:
         d = mujoco.MjData(m)
-        hand = Hand(load_params(PARAMS))
-        rng = np.random.default_rng(5)
+        EA, k_s = doc["mechanics"]["tendon_EA_N"], doc["mechanics"]["spring_k_N_per_m"]
         lo, hi = m.actuator_ctrlrange[:, 0], m.actuator_ctrlrange[:, 1]
-        for _ in range(4):
-            u = lo + rng.uniform(0.05, 0.95, m.nu) * (hi - lo)
-            _settle(m, d, u)
-            assert np.abs(d.qvel).max() < 1e-3
-            by_hand = {}
-            for k, (act, joint) in enumerate(SERVO_JOINT.items()):
-                if act in SERVO_DIGIT:
-                    d1, d2, alpha = _guide(doc, SERVO_DIGIT[act])
-                    r = _servo_radius(doc, SERVO_DIGIT[act])
-                    L0 = math.sqrt(d1 * d1 + d2 * d2 - 2 * d1 * d2 * math.cos(alpha))
-                    by_hand[joint] = alpha - math.acos((d1 * d1 + d2 * d2 - (L0 - r * u[k]) ** 2) / (2 * d1 * d2))
-                else:
-                    by_hand[joint] = doc["thumb"]["cmc_gain"] * u[k]
-            by_hand.update({f: k * by_hand[r] for f, (r, k) in MIMIC.items()})
-            analytic = hand.forward(u)
-            for i, name in enumerate(JOINT_NAMES):
-                q = d.qpos[_qadr(m, name)]
-                assert abs(q - by_hand[name]) < 0.01, (name, q, by_hand[name])
-                assert abs(q - analytic[i]) < 0.01, (name, q, analytic[i])
+        rest = lambda name: m.tendon_lengthspring[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_TENDON, name)][1]  # noqa: E731
+        for frac in (0.25, 0.5, 0.75, 1.0):
+            _settle(m, d, lo + frac * (hi - lo))
+            for act, digit in SERVO_DIGIT.items():
+                keys = CHAIN_KEYS[digit]
+                R = _radii(doc, digit)
+                q = {k: d.qpos[_qadr(m, f"{digit}_{k}")] for k in keys}
+                T = k_s * sum(R[k] * q[k] for k in keys)
+                n = len(keys)
+                # loop k (between keys[k] and keys[k+1]) holds the return on joints k+1..n-1
+                for k in range(n - 1):
+                    F = T * (n - 1 - k)
+                    loop = f"{digit}_{keys[k]}_{keys[k + 1]}"
+                    taut = max("ab", key=lambda x: _length(m, d, f"{loop}_{x}") - rest(f"{loop}_{x}"))
+                    stretch = F * rest(f"{loop}_{taut}") / EA
+                    give = R[keys[k]] * q[keys[k]] - R[keys[k + 1]] * q[keys[k + 1]]
+                    assert math.degrees(abs(give - stretch) / R[keys[k + 1]]) < 0.05, (frac, digit, keys[k])
+                d1, d2, alpha = _guide(doc, digit)
+                r = _servo_radius(doc, digit)
+                L = math.sqrt(d1 * d1 + d2 * d2 - 2 * d1 * d2 * math.cos(alpha - q[keys[0]]))
+                arm = d1 * d2 * math.sin(alpha - q[keys[0]]) / L
+                F_drive = T * n * R[keys[0]] / arm
+                u = d.qpos[_qadr(m, f"{digit}_flexion")]
+                L0 = math.sqrt(d1 * d1 + d2 * d2 - 2 * d1 * d2 * math.cos(alpha))
+                want = L0 - r * u + F_drive * rest(f"{digit}_drive") / EA
+                assert math.degrees(abs(L - want) / arm) < 0.05, (frac, digit, L, want)
     finally:
         m.opt.disableflags &= ~off
 
 
-def test_coupling_holds_under_servo_load(pkg, doc):
-    """A fingertip load (a torque against flexion on the index DIP) of half what the servo holds
-    at stall through its tendon: tension 0.226 N m / r times the moment arm of the chord about
-    the MCP, d1 d2 sin(phi) / L (by hand). The followers stay on q_f = k q_ref within 0.01 rad
-    (measured: about 0.001 rad); with MuJoCo's default solref/solimp the same load tears the
-    coupling apart (the drift this test guards)."""
-    spec_path = pkg / "mjcf" / "phantom.xml"
-    d1, d2, alpha = _guide(doc, "index")
-    r = _servo_radius(doc, "index")
-
-    def run(default_constraint: bool):
-        spec = mujoco.MjSpec.from_file(str(spec_path))
-        if default_constraint:
-            for e in spec.equalities:
-                e.solref = [0.02, 1.0]
-                e.solimp = [0.9, 0.95, 0.001, 0.5, 2.0]
-        m = spec.compile()
-        m.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT | mujoco.mjtDisableBit.mjDSBL_GRAVITY
+def test_the_loops_carry_a_fingertip_load(model, doc):
+    """A torque against flexion on the index DIP, with the file's EA: only the loops couple the
+    joints, so the PIP-DIP loop's taut strand carries it. Measured in MuJoCo: its stretch is the
+    coupling's give, R_PIP q_PIP - R_DIP q_DIP (by hand), and its tension times R_DIP balances the
+    load plus the return cord's pull on the DIP, k_s sum R_i q_i times R_DIP (statics by hand, 2 %)."""
+    m = model
+    off = mujoco.mjtDisableBit.mjDSBL_CONTACT | mujoco.mjtDisableBit.mjDSBL_GRAVITY
+    m.opt.disableflags |= off
+    try:
         d = mujoco.MjData(m)
-        mujoco.mj_resetDataKeyframe(m, d, 0)
         aid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, "servo2")
-        u = float(m.actuator_ctrlrange[aid].mean())
-        d.ctrl[aid] = u
-        L0 = math.sqrt(d1 * d1 + d2 * d2 - 2 * d1 * d2 * math.cos(alpha))
-        L = L0 - r * u
-        phi = math.acos((d1 * d1 + d2 * d2 - L * L) / (2 * d1 * d2))
-        load = 0.5 * (0.226 / r) * d1 * d2 * math.sin(phi) / L
+        mujoco.mj_resetDataKeyframe(m, d, 0)
+        d.ctrl[aid] = float(m.actuator_ctrlrange[aid].mean())
         dip = m.jnt_dofadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, "index_dip")]
+        load = 0.02                                                    # N m
         for _ in range(int(2.0 / m.opt.timestep)):
             d.qfrc_applied[dip] = -load
             mujoco.mj_step(m, d)
-        q_ref = d.qpos[_qadr(m, "index_mcp")]
-        err = max(abs(d.qpos[_qadr(m, f)] - MIMIC[f][1] * q_ref) for f in ("index_pip", "index_dip"))
-        return err, d.actuator_force[aid], q_ref
-
-    err, force, q_ref = run(False)
-    assert 0.0 < force < 0.226 and q_ref > 0.3            # the servo holds the loaded finger
-    assert err < 0.01
-    assert run(True)[0] > 0.01
+        assert np.abs(d.qvel).max() < 1e-3
+        assert 0.0 < d.actuator_force[aid] < 0.226                    # the servo holds the finger
+        R = _radii(doc, "index")
+        q = {k: d.qpos[_qadr(m, f"index_{k}")] for k in ("mcp", "pip", "dip")}
+        give = R["pip"] * q["pip"] - R["dip"] * q["dip"]
+        tid = {s: mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_TENDON, f"index_pip_dip_{s}") for s in "ab"}
+        stretch = {s: d.ten_length[t] - m.tendon_lengthspring[t][1] for s, t in tid.items()}
+        taut = max(stretch, key=lambda s: stretch[s])
+        assert stretch[taut] > 0.0 and min(stretch.values()) < 0.0      # one strand pulls, one is slack
+        assert abs(give) == pytest.approx(stretch[taut], rel=1e-3)
+        tension = m.tendon_stiffness[tid[taut]] * stretch[taut]
+        k_s = doc["mechanics"]["spring_k_N_per_m"]
+        T = k_s * sum(R[k] * q[k] for k in R)
+        assert tension * R["dip"] == pytest.approx(load + T * R["dip"], rel=0.02)
+        assert tension == pytest.approx(doc["mechanics"]["tendon_EA_N"] / m.tendon_lengthspring[tid[taut]][1]
+                                        * stretch[taut], rel=1e-5)     # the XML keeps 6-7 digits
+    finally:
+        m.opt.disableflags &= ~off
 
 
 def test_menagerie_model_test(model):

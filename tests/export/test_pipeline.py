@@ -52,7 +52,7 @@ def test_layout_and_manifest_checksums(standin_build):
     assert result.parts == names
     expected = {f"step/{n}.step" for n in names} | {f"stl/{n}.stl" for n in names} \
         | {f"renders/{n}.png" for n in names} \
-        | {"step/hand_assembly.step", "renders/hand_assembly.png", "bom.csv", "manifest.json",
+        | {"step/hand_assembly.step", "renders/hand_assembly.png", "bom.csv", "routing.json", "manifest.json",
            "slicer/config.ini"}
     assert set(tree(out)) == expected
     man = json.loads((out / "manifest.json").read_text())

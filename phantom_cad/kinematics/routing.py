@@ -1,0 +1,523 @@
+"""The routing model: every tendon of the hand as path elements in link frames. numpy only.
+
+One model, derived from the parameters, from which the MJCF's spatial tendons, the tendon
+lengths of the BOM, ``routing.json`` and the checks come (and, in the CAD layer, the channels and
+grooves cut into the parts). docs/transmission.md describes the mechanism and the file format.
+
+A tendon (a ``topology.Tendon``) is one or two *strands*; a strand is a sequence of elements,
+each in the frame of the link it is fixed to (metres, mirrored for a left hand):
+
+* :class:`Point`: an ``anchor`` (a knot, a clamp: the strand ends there) or a ``via`` point
+  (an eyelet, a channel bend, the crossing of a figure-eight loop);
+* :class:`Pulley`: a circle the strand wraps (a hub, a groove, the servo pulley): centre, axis and
+  radius of the tendon's *centreline* (the pulley radius R_i of the paper is the moment arm, so the
+  groove floor lies half a tendon diameter inside it). The strand turns positively (right-hand
+  rule) about ``axis`` from where it arrives to where it leaves. A pulley always lies between two
+  points (as MuJoCo's spatial tendons require).
+
+The mechanism (right hand; x ulnar, y along the link, z dorsal in every link frame):
+
+* **Drive** (one per tendon servo): clamped on the servo pulley (radius r_j) and wound on it by
+  the servo's angle u, through the palm to the digit's interface (the magnet face, where the drive
+  is split by a coupler), through the metacarpal-side guide G1 (d1) to the phalanx-side guide G2
+  (d2) on the proximal phalanx, where it is anchored. Its length is
+  const + chord(q_ref) - r_j u: the free chord G1-G2 is the L of eq. (4)-(6).
+* **Coupling loops** (one per pair of adjacent joints a, b, carried by the link C between them):
+  a closed cord clamped on a hub fixed to the link *before* a (radius R_a) and on the groove of
+  the link *after* b (radius R_b), crossed once between them (figure eight). Each of its two
+  strands has length const +- (R_a q_a - R_b q_b): the loop holds R_a q_a = R_b q_b (eq. 2).
+  Loops alternate sides: the MCP-PIP loop in the ulnar half of the slot, the PIP-DIP loop in the
+  radial half, each in one plane.
+* **Return** (the dorsal cable-spring): anchored on the digit's first link, over the dorsal side
+  of every chain joint at its radius R_i, anchored on the distal phalanx. Via points on each link
+  hold it tangent to every groove even at rest, so its length is const + sum R_i q_i exactly and
+  its tension k_s sum R_i q_i (eq. 11).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import frames as F
+from .topology import CHAINS, SERVOS, TENDONS, Tendon, chain, digit_links, joint, link
+
+#: two perimeters of a 0.4 mm nozzle: the thinnest flank beside a groove (m)
+FLANK = 0.8e-3
+#: every wrap stays this far inside (0, 180 deg) over the joint's whole travel (rad)
+WRAP_MARGIN = math.radians(8.0)
+#: a clamp sits this far outside its pulley's centreline circle (m): a simulator's wrapping needs the
+#: strand's end outside the cylinder; the length this changes is of order (2 rho e)^1.5 / rho, < 1 nm
+CLAMP_OFFSET = 1e-6
+#: a loop's clamps are placed for a travel this far past the joint's upper limit (rad)
+TRAVEL_MARGIN = math.radians(3.0)
+
+
+@dataclass(frozen=True)
+class Point:
+    kind: str                    # "anchor" or "via"
+    link: str
+    pos: tuple[float, float, float]
+    role: str                    # "clamp", "interface", "guide", "crossing", "channel", "knot", ...
+
+
+@dataclass(frozen=True)
+class Pulley:
+    link: str
+    centre: tuple[float, float, float]
+    axis: tuple[float, float, float]      # the strand turns positively about it
+    radius: float                          # of the tendon centreline (the moment arm)
+    width: float                           # the groove's width along the axis
+    role: str                              # "servo", "hub", "groove", "return"
+    joint: str | None = None               # the joint (or servo) it sits on
+
+
+@dataclass(frozen=True)
+class Strand:
+    name: str
+    elements: tuple[Point | Pulley, ...]
+
+
+@dataclass(frozen=True)
+class Route:
+    """One tendon of the topology, routed: its strands, and what it is made of."""
+    tendon: Tendon
+    strands: tuple[Strand, ...]
+    diameter: float              # the cord's diameter (m)
+    stiffness: str               # "EA" (a tendon) or "k_s" (the elastic return cord)
+
+    @property
+    def name(self) -> str:
+        return self.tendon.name
+
+
+# ---------------------------------------------------------------------------
+# layout: the planes of the loops and the return cord in a digit's slot
+# ---------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Layout:
+    """Where a digit's tendons run across its joints (x in every link frame of the digit,
+    right hand, metres)."""
+    slot_half: float             # half the clevis slot (between the cheeks)
+    groove: float                # width of a tendon groove (tendon + two clearances)
+    return_groove: float         # width of the return cord's groove
+    loop_x: tuple[float, ...]    # plane of each coupling loop, chain order
+    return_x: float              # plane of the return cord
+    hub_width: float             # a hub beside the cheek: from the cheek face to its inner flank
+
+
+def layout(params, digit: str) -> Layout:
+    """The planes: loop k in the slot's half of sign (-1)^k (ulnar first), its groove one flank
+    and one clearance inside the slot's edge; its hub on the cheek of that side, one flank wider
+    than the groove; the return cord one flank inside the tongue that the second hub leaves."""
+    d = params.digit(digit)
+    c = params.print.hole_clearance
+    g = params.hardware.tendon_diameter + 2.0 * c
+    gr = params.cad.spring_diameter + 2.0 * c
+    s = (d.width - 2.0 * params.cad.cheek) / 2.0
+    x_loop = s - c - FLANK - g / 2.0
+    hub = c + 2.0 * FLANK + g
+    n_loops = len(chain(digit).keys) - 1
+    loops = tuple((1.0 if k % 2 == 0 else -1.0) * x_loop for k in range(n_loops))
+    x_ret = -(s - hub - c - FLANK - gr / 2.0)
+    return Layout(s, g, gr, loops, x_ret, hub)
+
+
+# ---------------------------------------------------------------------------
+# plane geometry
+# ---------------------------------------------------------------------------
+
+def _polar(p) -> float:
+    """Polar angle of (y, z) measured from +y toward +z."""
+    return math.atan2(p[1], p[0])
+
+
+def _yz(angle: float, r: float, centre=(0.0, 0.0)) -> np.ndarray:
+    return np.array([centre[0] + r * math.cos(angle), centre[1] + r * math.sin(angle)])
+
+
+def _clamp_angle(lo: float, hi: float, what: str) -> float:
+    if hi - lo < 0.0:
+        raise ValueError(f"{what}: no clamp position keeps every wrap inside (0, 180 deg) over the travel")
+    return (lo + hi) / 2.0
+
+
+def _joint_travel(params, jname: str) -> float:
+    j = joint(jname)
+    lim = dict(zip(params.digit(j.digit).chain.joints, params.digit(j.digit).chain.limits))[j.key]
+    return lim[1] + TRAVEL_MARGIN + (params.cad.module_stop_margin if link(j.parent).segment == "base" else 0.0)
+
+
+def _rest(params) -> dict[str, np.ndarray]:
+    return F.rest_transforms(params)
+
+
+def _child_origin(params, jname: str) -> np.ndarray:
+    """The joint's axis point (its child's origin) in its parent's frame, at rest."""
+    j = joint(jname)
+    return _rest(params)[f"T_{j.parent}_{j.child}"][:3, 3].copy()
+
+
+def _segment(params, link_name: str) -> float:
+    """Distance (m) from a link's proximal joint to its distal one."""
+    ln = link(link_name)
+    return 0.0 if ln.length_key is None else float(getattr(params.digit(ln.digit), ln.length_key))
+
+
+# ---------------------------------------------------------------------------
+# the routes
+# ---------------------------------------------------------------------------
+
+X = np.array([1.0, 0.0, 0.0])
+
+
+def _p(x: float, yz) -> tuple[float, float, float]:
+    return (float(x), float(yz[0]), float(yz[1]))
+
+
+def _loop(params, digit: str, k: int, lay: Layout) -> tuple[Strand, Strand]:
+    """The figure-eight loop between chain joints k and k+1 (see the module doc)."""
+    ch = params.digit(digit).chain
+    spec = chain(digit)
+    ja, jb = spec.joint_names[k], spec.joint_names[k + 1]
+    A, C, B = joint(ja).parent, joint(ja).child, joint(jb).child
+    Ra, Rb = ch.radii[k], ch.radii[k + 1]
+    L = _segment(params, C)
+    x = lay.loop_x[k]
+    gamma = math.acos((Ra + Rb) / L)                  # tangent points' polar angle (from X)
+    Xc = np.array([L * Ra / (Ra + Rb), 0.0])          # the crossing, on the carrier
+    # clamp on the hub (fixed to A), polar angle in C at rest phi: strand a wraps phi - gamma + q_a,
+    # strand b 2 pi - gamma - phi - q_a; both inside (margin, pi - margin) over the travel
+    qa, qb, m = _joint_travel(params, ja), _joint_travel(params, jb), WRAP_MARGIN
+    phi = _clamp_angle(max(gamma + m, math.pi - gamma + m), min(math.pi + gamma - qa - m, 2 * math.pi - gamma - qa - m),
+                       f"{digit} loop {ja}-{jb} hub")
+    # clamp on the groove (fixed to B, centre at y = L of C), polar angle psi about B's centre:
+    # strand a wraps psi - pi - gamma - q_b, strand b 2 pi - 2 gamma minus that
+    wa = _clamp_angle(math.pi - 2 * gamma + qb + m, math.pi - m, f"{digit} loop {ja}-{jb} groove")
+    psi = wa + math.pi + gamma
+    hub_c = _child_origin(params, ja)                 # joint a's axis in A's frame
+    cA = hub_c + np.array([x, 0.0, 0.0])
+    clamp_A = cA + np.array([0.0, *_yz(phi, Ra + CLAMP_OFFSET)])   # A's frame = C's frame at rest
+    clamp_B = np.array([x, *_yz(psi, Rb + CLAMP_OFFSET)])
+    hub = lambda axis: Pulley(A, _p(x, cA[1:]), axis, Ra, lay.groove, "hub", ja)  # noqa: E731
+    groove = lambda axis: Pulley(B, (float(x), 0.0, 0.0), axis, Rb, lay.groove, "groove", jb)  # noqa: E731
+    cross = Point("via", C, _p(x, Xc), "crossing")
+    name = f"{digit}_{spec.keys[k]}_{spec.keys[k + 1]}"
+    # strand a: clamp on the hub, over its dorsal side (turning clockwise in (y, z): about -x),
+    # across, under the groove (about -x again: from pi + gamma on to psi)
+    a = Strand(f"{name}_a", (Point("anchor", A, _p(x, clamp_A[1:]), "clamp"), hub(tuple(-X)), cross,
+                             groove(tuple(X)), Point("anchor", B, _p(x, clamp_B[1:]), "clamp")))
+    b = Strand(f"{name}_b", (Point("anchor", A, _p(x, clamp_A[1:]), "clamp"), hub(tuple(X)), cross,
+                             groove(tuple(-X)), Point("anchor", B, _p(x, clamp_B[1:]), "clamp")))
+    return a, b
+
+
+def _return(params, digit: str, lay: Layout) -> Strand:
+    """The dorsal cable-spring: tangent to every joint's groove at its radius, on both sides."""
+    spec = chain(digit)
+    ch = params.digit(digit).chain
+    d = params.digit(digit)
+    links = [ln.name for ln in digit_links(digit) if ln.segment != "servo_pulley"]
+    x = lay.return_x
+    first = links[0]
+    # anchored on the first link, half way between its start and the first joint
+    ja0 = _child_origin(params, spec.joint_names[0])
+    y0 = ja0[1] - (_segment(params, first) / 2.0 if _segment(params, first) > 0 else params.cad.finger_base_length / 2.0)
+    els: list = [Point("anchor", first, (float(x), float(y0), float(ch.radii[0])), "knot")]
+    e = lay.return_groove      # the cord leaves / reaches each groove tangentially over this run
+    for k, jn in enumerate(spec.joint_names):
+        j = joint(jn)
+        R = ch.radii[k]
+        c = _child_origin(params, jn)
+        # tangent on the parent's side, then the groove on the child (the cord slides on it)
+        els.append(Point("via", j.parent, (float(x), float(c[1] - e), float(R)), "channel"))
+        els.append(Pulley(j.child, (float(x), 0.0, 0.0), tuple(-X), R, lay.return_groove, "return", jn))
+        els.append(Point("via", j.child, (float(x), float(e), float(R)), "channel"))
+    last = links[-1]
+    y_end = max(2.0 * e, _segment(params, last) - d.thickness / 2.0)
+    els.append(Point("anchor", last, (float(x), float(y_end), float(ch.radii[-1])), "knot"))
+    return Strand(f"{digit}_return", tuple(els))
+
+
+def thumb_arch(params) -> dict[str, float]:
+    """The post and arch on the palm that carry the thumb's drive onto the CMC axis above the CMC
+    base (CMC base frame at rest, metres), so that turning the CMC leaves its length alone. The
+    post stands on the end wall of servo 6's housing, on the side the thumb never sweeps (q15
+    turns the thumb from +y toward -x); the arch clears the CMC base by one clearance."""
+    c, w = params.print.hole_clearance, params.palm.wall
+    relief = 2.0 * (params.hardware.tendon_diameter + 2.0 * c)
+    T = params.thumb.thickness
+    r_hub = params.thumb.cmc_horn_radius
+    r_post = w
+    y_post = -max(params.cad.servo_shaft_offset + params.servo.flange_span / 2.0 + 2.0 * c + r_post,
+                  r_hub + c + r_post)
+    z_floor = -(T / 2.0 + 2.0 * c + params.cad.servo_pulley_width)   # servo 6 housing top
+    z_lo = T / 2.0 + c                                               # arch underside
+    z_hi = z_lo + 2.0 * w
+    return {"r_post": r_post, "y_post": y_post, "z_floor": z_floor, "z_lo": z_lo, "z_hi": z_hi,
+            "z_mid": (z_lo + z_hi) / 2.0, "z_entry": z_floor + relief + w}
+
+
+def servo_clamp_wrap(params, servo: int) -> float:
+    """Wrap (rad) of a drive on its servo pulley at u = 0: the middle of what keeps the wrap inside
+    (margin, 180 deg - margin) over the servo's travel."""
+    travel = params.digit(SERVOS[servo].digit).chain.travel[1]
+    return _clamp_angle(WRAP_MARGIN, math.pi - WRAP_MARGIN - travel, f"servo {servo + 1} pulley")
+
+
+def _drive(params, digit: str) -> Strand:
+    spec = chain(digit)
+    servo = SERVOS[spec.servo]
+    r = F.servo_radius(params, servo.index)
+    w0 = servo_clamp_wrap(params, servo.index)
+    # servo frame: the tendon leaves the pulley at (-r, 0, 0) along +y, so it winds clockwise in
+    # (x, y) seen from +z: from the clamp at polar angle pi + w0 (x toward y) down to pi
+    rc = r + CLAMP_OFFSET
+    clamp = (rc * math.cos(math.pi + w0), rc * math.sin(math.pi + w0), 0.0)
+    els: list = [Point("anchor", servo.link, clamp, "clamp"),
+                 Pulley(servo.link, (0.0, 0.0, 0.0), (0.0, 0.0, -1.0), r,
+                        params.cad.servo_pulley_width, "servo", servo.name)]
+    (l1, g1), (l2, g2) = F.guide_sites(params, digit)
+    if params.side == "left":        # guide_sites mirrors; the routes are right-handed until the end
+        g1, g2 = F.MIRROR[:3, :3] @ g1, F.MIRROR[:3, :3] @ g2
+    first = spec.joint_names[0]
+    base = joint(first).parent
+    if digit == "thumb":
+        a = thumb_arch(params)
+        # on the palm (CMC base frame at rest = its pose in the palm with q15 = 0)
+        T = F.T_palm_thumb_cmc_base(params)
+        P = lambda *v: tuple(float(t) for t in (T @ np.array([*v, 1.0]))[:3])  # noqa: E731
+        # the drive leaves the pulley in its plane (along the servo's y) and turns toward the post
+        # just outside the pulley's cavity
+        Ts = F.T_palm_servo(params, servo.index)
+        turn = Ts @ np.array([-r, r + F.pulley_cavity_margin(params), 0.0, 1.0])
+        els += [Point("via", "palm", tuple(float(t) for t in turn[:3]), "turn"),
+                Point("via", "palm", P(0.0, a["y_post"], a["z_entry"]), "post entry"),
+                Point("via", "palm", P(0.0, a["y_post"], a["z_mid"]), "post top"),
+                Point("via", "palm", P(0.0, 0.0, a["z_mid"]), "over the CMC axis"),
+                Point("via", "palm", P(0.0, 0.0, a["z_lo"]), "CMC axis")]
+        # down the CMC axis through the hub into the CMC base, and along it to G1
+        els.append(Point("via", base, (0.0, 0.0, float(g1[2])), "interface"))
+    else:
+        z = F.tendon_height(params)
+        els.append(Point("via", base, (0.0, -params.cad.finger_base_length, float(z)), "interface"))
+    els += [Point("via", base, tuple(float(v) for v in g1), "guide G1"),
+            Point("anchor", l2, tuple(float(v) for v in g2), "guide G2")]
+    return Strand(f"{digit}_drive", tuple(els))
+
+
+def _mirror_element(e):
+    S = F.MIRROR[:3, :3]
+    mirror = lambda v: tuple(float(t) for t in S @ np.asarray(v, float))  # noqa: E731
+    if isinstance(e, Point):
+        return Point(e.kind, e.link, mirror(e.pos), e.role)
+    # a reflection turns a positive rotation about a into a positive one about -S a
+    return Pulley(e.link, mirror(e.centre), tuple(-v for v in mirror(e.axis)), e.radius, e.width, e.role, e.joint)
+
+
+_ROUTES: dict = {}
+
+
+def routes(params) -> tuple[Route, ...]:
+    """Every tendon of the topology (``TENDONS`` order), routed for this hand (memoised by the
+    parameters' digest and side: the routes are pure functions of them)."""
+    key = (params.digest, params.side)
+    if key not in _ROUTES:
+        if len(_ROUTES) > 16:
+            _ROUTES.clear()
+        _ROUTES[key] = _routes(params)
+    return _ROUTES[key]
+
+
+def _routes(params) -> tuple[Route, ...]:
+    out = []
+    lays = {ch.digit: layout(params, ch.digit) for ch in CHAINS}
+    for t in TENDONS:
+        lay = lays[t.digit]
+        if t.kind == "drive":
+            strands, d, k = (_drive(params, t.digit),), params.hardware.tendon_diameter, "EA"
+        elif t.kind == "coupling":
+            keys = chain(t.digit).keys
+            k0 = keys.index(t.joints[0].split("_", 1)[1])
+            strands, d, k = _loop(params, t.digit, k0, lay), params.hardware.tendon_diameter, "EA"
+        else:
+            strands, d, k = (_return(params, t.digit, lay),), params.cad.spring_diameter, "k_s"
+        if params.side == "left":
+            strands = tuple(Strand(s.name, tuple(_mirror_element(e) for e in s.elements)) for s in strands)
+        out.append(Route(t, strands, d, k))
+    return tuple(out)
+
+
+# ---------------------------------------------------------------------------
+# posing and lengths
+# ---------------------------------------------------------------------------
+
+def servo_axis(params) -> np.ndarray:
+    """A tendon servo's axis in its own (mirrored) frame: positive u winds its drive."""
+    return np.array([0.0, 0.0, 1.0 if params.side == "right" else -1.0])
+
+
+def _rotation(axis, angle: float) -> np.ndarray:
+    a = np.asarray(axis, float)
+    K = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
+    R = np.eye(4)
+    R[:3, :3] = np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
+    return R
+
+
+def pose(params, q=None, u=None) -> dict[str, np.ndarray]:
+    """T_palm_link of every link at joint angles q (15) and servo angles u (6): the tendon servos'
+    pulleys turned by u about :func:`servo_axis`."""
+    Ts = F.link_transforms(params, q)
+    if u is not None:
+        ax = servo_axis(params)
+        for s in SERVOS:
+            if s.drive == "tendon":
+                Ts[s.link] = Ts[s.link] @ _rotation(ax, float(u[s.index]))
+    return Ts
+
+
+def _world(Ts, link_name, v, w=1.0) -> np.ndarray:
+    return (Ts[link_name] @ np.array([*v, w]))[:3]
+
+
+def _wrap(P, N, centre, axis, rho):
+    """Composite path P -> tangent -> arc (positive about axis) -> tangent -> N. Returns
+    (length, list of points along it). The cord lifts off (straight P-N) when the arc would
+    exceed 180 degrees (a wrap the routes never ask for) or vanish."""
+    a = axis / np.linalg.norm(axis)
+    e1 = np.cross(a, [1.0, 0.0, 0.0])
+    if np.linalg.norm(e1) < 1e-6:
+        e1 = np.cross(a, [0.0, 1.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(a, e1)
+    loc = lambda p: np.array([np.dot(p - centre, e1), np.dot(p - centre, e2), np.dot(p - centre, a)])  # noqa: E731
+    p, n = loc(P), loc(N)
+    dp, dn = math.hypot(p[0], p[1]), math.hypot(n[0], n[1])
+    if dp < rho * (1.0 - 1e-9) or dn < rho * (1.0 - 1e-9):
+        raise ValueError("a route point lies inside its pulley")
+    t_in = math.atan2(p[1], p[0]) + math.acos(min(1.0, rho / dp))
+    t_out = math.atan2(n[1], n[0]) - math.acos(min(1.0, rho / dn))
+    arc = (t_out - t_in) % (2.0 * math.pi)
+    if arc > math.pi:
+        return float(np.linalg.norm(N - P)), [P, N]
+    s1 = math.hypot(dp, 0.0) ** 2 - rho * rho
+    l1 = math.sqrt(max(0.0, s1))
+    l3 = math.sqrt(max(0.0, dn * dn - rho * rho))
+    planar = l1 + rho * arc + l3
+    dz = n[2] - p[2]
+    length = math.hypot(planar, dz)
+    # points: the two tangent points and the arc, heights interpolated along the planar length
+    pts = [P]
+    k = max(2, int(arc / math.radians(5.0)) + 1)
+    for i, t in enumerate(np.linspace(t_in, t_in + arc, k)):
+        s = (l1 + rho * (t - t_in)) / planar if planar > 0 else 0.0
+        h = p[2] + s * dz
+        pts.append(centre + rho * math.cos(t) * e1 + rho * math.sin(t) * e2 + h * a)
+    pts.append(N)
+    return length, pts
+
+
+def strand_path(params, strand: Strand, Ts) -> tuple[float, np.ndarray]:
+    """Length (m) and polyline (palm frame, metres) of a strand with the links at ``Ts``."""
+    els = strand.elements
+    total, pts = 0.0, []
+    cur = None
+    i = 0
+    while i < len(els):
+        e = els[i]
+        if isinstance(e, Point):
+            p = _world(Ts, e.link, e.pos)
+            if cur is not None:
+                total += float(np.linalg.norm(p - cur))
+            pts.append(p)
+            cur = p
+            i += 1
+            continue
+        nxt = els[i + 1]
+        N = _world(Ts, nxt.link, nxt.pos)
+        length, wp = _wrap(cur, N, _world(Ts, e.link, e.centre), _world(Ts, e.link, e.axis, 0.0), e.radius)
+        total += length
+        pts.extend(wp[1:])
+        cur = N
+        i += 2
+    return total, np.array(pts)
+
+
+def lengths(params, q=None, u=None, which=None) -> dict[str, float]:
+    """Every strand's length (m) at joint angles q and servo angles u."""
+    Ts = pose(params, q, np.zeros(len(SERVOS)) if u is None else u)
+    out = {}
+    for r in which or routes(params):
+        for s in r.strands:
+            out[s.name] = strand_path(params, s, Ts)[0]
+    return out
+
+
+# ---------------------------------------------------------------------------
+# routing.json
+# ---------------------------------------------------------------------------
+
+def _element_doc(e) -> dict:
+    if isinstance(e, Point):
+        return {"type": e.kind, "role": e.role, "link": e.link, "pos_mm": [round(v * 1e3, 6) for v in e.pos]}
+    return {"type": "pulley", "role": e.role, "link": e.link, "joint": e.joint,
+            "centre_mm": [round(v * 1e3, 6) for v in e.centre], "axis": [round(v, 9) for v in e.axis],
+            "radius_mm": round(e.radius * 1e3, 6), "width_mm": round(e.width * 1e3, 6)}
+
+
+def document(params) -> dict:
+    """``routing.json``: per tendon its kind, links, joints, servo, cord and strands (each a list of
+    path elements in link frames, millimetres), and the rest length of every strand."""
+    rest = lengths(params)
+    tendons = []
+    for r in routes(params):
+        t = r.tendon
+        tendons.append({
+            "name": t.name, "kind": t.kind, "digit": t.digit, "links": list(t.links), "joints": list(t.joints),
+            "servo": None if t.servo is None else SERVOS[t.servo].name,
+            "cord": {"diameter_mm": round(r.diameter * 1e3, 6), "stiffness": r.stiffness},
+            "strands": [{"name": s.name, "rest_length_mm": round(rest[s.name] * 1e3, 6),
+                         "elements": [_element_doc(e) for e in s.elements]} for s in r.strands],
+        })
+    return {"format": "phantom_cad routing 1", "hand": params.name, "side": params.side,
+            "frames": "link frames of docs/frames.md; millimetres; a pulley's strand turns positively about its axis",
+            "tendons": tendons}
+
+
+def side_sites(params, strand: Strand) -> list[tuple[str, tuple[float, float, float]] | None]:
+    """For each element of ``strand``: None for a point; for a pulley, a point on the side its
+    strand wraps (MuJoCo's ``sidesite``), fixed to the link that carries the strand's straight
+    runs beside it, half a radius outside the arc's middle at the middle of every travel."""
+    from .topology import JOINTS, N_JOINTS
+
+    q = np.zeros(N_JOINTS)
+    for j in JOINTS:
+        if j.key != "cmc":
+            q[j.index] = _joint_travel(params, j.name) / 2.0
+    u = np.array([sum(params.digit(s.digit).chain.travel) / 2.0 if s.drive == "tendon" else 0.0 for s in SERVOS])
+    Ts = pose(params, q, u)
+    els = strand.elements
+    out: list = []
+    for i, e in enumerate(els):
+        if isinstance(e, Point):
+            out.append(None)
+            continue
+        prev, nxt = els[i - 1], els[i + 1]
+        carrier = nxt.link if nxt.link != e.link else prev.link
+        P, N = _world(Ts, prev.link, prev.pos), _world(Ts, nxt.link, nxt.pos)
+        c = _world(Ts, e.link, e.centre)
+        _, pts = _wrap(P, N, c, _world(Ts, e.link, e.axis, 0.0), e.radius)
+        arc = pts[1:-1]
+        mid = arc[len(arc) // 2] if len(arc) else (P + N) / 2.0
+        a = _world(Ts, e.link, e.axis, 0.0)
+        radial = (mid - c) - np.dot(mid - c, a) * a
+        if np.linalg.norm(radial) < 1e-12:
+            radial = np.cross(a, N - P)
+        s = c + np.dot(mid - c, a) * a + 1.5 * e.radius * radial / np.linalg.norm(radial)
+        local = np.linalg.inv(Ts[carrier]) @ np.array([*s, 1.0])
+        out.append((carrier, tuple(float(v) for v in local[:3])))
+    return out

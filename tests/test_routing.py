@@ -1,0 +1,142 @@
+"""The routing model (kinematics/routing.py): every tendon's path, against the mechanism by hand.
+
+Known answers from the parameter files' numbers and the paper's equations, computed here: a loop
+strand between joints a and b changes by +-(R_a q_a - R_b q_b) (eq. 2 holds exactly when it keeps
+its length), the drive by chord(q_ref) - chord(0) + r u (held joints, the servo winding r u
+would stretch it by r u: the chord must shorten by r u, eq. 4-5), the return cord by sum R_i q_i
+(eq. 11). MuJoCo's own wrapping of the same routes is compared in tests/export/test_mjcf.py.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from phantom_cad.kinematics import routing
+from phantom_cad.kinematics.model import Hand
+from phantom_cad.kinematics.topology import JOINT_NAMES, SERVOS, TENDONS
+from phantom_cad.params.io import load_params
+
+ROOT = Path(__file__).resolve().parents[1]
+FILES = (ROOT / "params" / "phantom.toml", ROOT / "params" / "examples" / "slender.toml")
+DIGITS = ("thumb", "index", "middle", "ring", "pinky")
+KEYS = {"thumb": ("mp", "ip"), **{f: ("mcp", "pip", "dip") for f in DIGITS[1:]}}
+
+
+def _table(doc, digit):
+    return doc["thumb"] if digit == "thumb" else doc["fingers"][digit]
+
+
+def _params(path, side):
+    from phantom_cad.params import load_document, parse
+
+    doc = load_document(path)
+    doc["hand"]["side"] = side
+    return parse(doc, str(path))
+
+
+CASES = [(path, side) for path in FILES for side in ("right", "left")]
+
+
+@pytest.mark.parametrize("path,side", CASES, ids=[f"{p.stem}-{s}" for p, s in CASES])
+def test_lengths_are_the_mechanism(path, side):
+    p = _params(path, side)
+    doc = tomllib.loads(path.read_text())
+    rest = routing.lengths(p)
+    assert {s for r in routing.routes(p) for s in [r.name]} == {t.name for t in TENDONS}
+    rng = np.random.default_rng(11)
+    for _ in range(8):
+        q = rng.uniform(0.0, 1.3, len(JOINT_NAMES))
+        u = rng.uniform(0.0, 1.4, len(SERVOS))
+        got = routing.lengths(p, q, u)
+        qn = dict(zip(JOINT_NAMES, q))
+        for k, digit in enumerate(DIGITS):
+            t = _table(doc, digit)
+            R = {j: v / 1000.0 for j, v in t["pulley_radius_mm"].items()}
+            keys = KEYS[digit]
+            for a, b in zip(keys, keys[1:]):
+                want = R[a] * qn[f"{digit}_{a}"] - R[b] * qn[f"{digit}_{b}"]
+                assert got[f"{digit}_{a}_{b}_a"] - rest[f"{digit}_{a}_{b}_a"] == pytest.approx(want, abs=1e-9)
+                assert got[f"{digit}_{a}_{b}_b"] - rest[f"{digit}_{a}_{b}_b"] == pytest.approx(-want, abs=1e-9)
+            g = t["guide"]
+            d1, d2, alpha = g["d1_mm"] / 1000.0, g["d2_mm"] / 1000.0, math.radians(g["alpha_deg"])
+            chord = lambda x: math.sqrt(d1 * d1 + d2 * d2 - 2.0 * d1 * d2 * math.cos(alpha - x))  # noqa: E731
+            r = t["servo_pulley_radius_mm"] / 1000.0
+            want = chord(qn[f"{digit}_{keys[0]}"]) - chord(0.0) + r * u[k]
+            assert got[f"{digit}_drive"] - rest[f"{digit}_drive"] == pytest.approx(want, abs=1e-9), digit
+            want = sum(R[j] * qn[f"{digit}_{j}"] for j in keys)
+            assert got[f"{digit}_return"] - rest[f"{digit}_return"] == pytest.approx(want, abs=1e-9), digit
+
+
+@pytest.mark.parametrize("path", FILES, ids=[p.stem for p in FILES])
+def test_over_the_travel_the_loops_hold_and_the_drive_winds(path):
+    """Along the model's coupled motion (hand.forward, uncompensated) at 20 commands over each
+    servo's travel: every loop strand within 0.02 mm of its rest length, the drive's free part
+    shortened by exactly what the servo winds (its whole length within 0.02 mm); a joint leaving
+    the coupling by 1 degree changes its loops by >= 0.05 mm."""
+    p = load_params(path)
+    hand = Hand(p)
+    rest = routing.lengths(p)
+    loops = [n for n in rest if n.endswith(("_a", "_b"))]
+    for frac in np.linspace(0.0, 1.0, 20):
+        u = np.array([lo + frac * (hi - lo) for lo, hi in
+                      [p.digit(s.digit).chain.travel if s.drive == "tendon" else p.thumb.cmc_travel for s in SERVOS]])
+        q = hand.forward(u, compensated=False)
+        got = routing.lengths(p, q, u)
+        assert max(abs(got[n] - rest[n]) for n in loops) < 2e-5
+        assert max(abs(got[f"{d}_drive"] - rest[f"{d}_drive"]) for d in DIGITS) < 2e-5
+        for j, name in enumerate(JOINT_NAMES):
+            if name.endswith(("_mcp", "_mp", "_cmc")):
+                continue
+            q2 = q.copy()
+            q2[j] += math.radians(1.0)
+            moved = routing.lengths(p, q2, u)
+            digit = name.split("_")[0]
+            assert max(abs(moved[n] - got[n]) for n in loops if n.startswith(digit)) >= 5e-5, name
+
+
+@pytest.mark.parametrize("path", FILES, ids=[p.stem for p in FILES])
+def test_layout_keeps_the_planes_apart(path):
+    """In every digit: the loop planes lie inside the slot, one groove and a flank from its edge,
+    on alternating sides; the return cord's groove lies in the tongue the second hub leaves,
+    a flank from it and from every loop groove."""
+    p = load_params(path)
+    doc = tomllib.loads(path.read_text())
+    for digit in DIGITS:
+        t = _table(doc, digit)
+        c = doc["print"]["hole_clearance_mm"]
+        g = doc["hardware"]["tendon_diameter_mm"] + 2 * c
+        gr = doc["cad"]["spring_diameter_mm"] + 2 * c
+        s = (t["width_mm"] - 2 * doc["cad"]["cheek_mm"]) / 2
+        lay = routing.layout(p, digit)
+        xs = [x * 1000 for x in lay.loop_x]
+        assert [math.copysign(1, x) for x in xs] == [(-1) ** k for k in range(len(xs))]
+        for x in xs:
+            assert abs(x) + g / 2 + 0.8 + c == pytest.approx(s, abs=1e-9)
+        xr = lay.return_x * 1000
+        for x in xs:
+            assert abs(xr - x) >= (g + gr) / 2 + 0.8 - 1e-9, digit
+
+
+def test_routing_document_round_trips(tmp_path):
+    p = load_params(FILES[0])
+    doc = routing.document(p)
+    text = json.dumps(doc)
+    back = json.loads(text)
+    assert [t["name"] for t in back["tendons"]] == [t.name for t in TENDONS]
+    rest = routing.lengths(p)
+    for t in back["tendons"]:
+        assert t["kind"] in ("drive", "coupling", "return")
+        assert len(t["strands"]) == (2 if t["kind"] == "coupling" else 1)
+        for s in t["strands"]:
+            assert s["rest_length_mm"] == pytest.approx(rest[s["name"]] * 1000, abs=1e-6)
+            kinds = [e["type"] for e in s["elements"]]
+            assert kinds[0] == "anchor" and kinds[-1] == "anchor"
+            for k, e in enumerate(s["elements"]):
+                if e["type"] == "pulley":       # bracketed by points, as MuJoCo's spatial tendons need
+                    assert kinds[k - 1] != "pulley" and kinds[k + 1] != "pulley"
