@@ -26,6 +26,7 @@ import numpy as np
 from ..kinematics.topology import Q_COLUMNS
 from .data import Measurements
 from .effects import REGISTRY, get_effect
+from .residual import NoiseFloor, noise_floor, signature, verdict
 from .fitting import FitResult, Model, Problem, fit, fit_streamed, folds, heldout_sse, single_threaded_blas
 
 #: a candidate must bring the held-out sum of squares below this fraction of the model's without it
@@ -91,6 +92,16 @@ class Diagnosis:
     rounds: list[list[Candidate]]
     ambiguities: list[dict]
     notes: list[str]
+    noise: NoiseFloor = None
+    hand: object = field(repr=False, default=None)
+
+    def verdict(self) -> dict:
+        return verdict(self.after, self.noise)
+
+    def signatures(self) -> dict:
+        """Signature of the analytic model's residual (before) and of what is left (after)."""
+        return {"before": signature(self.before, self.measurements, self.hand),
+                "after": signature(self.after, self.measurements, self.hand)}
 
     @property
     def ranking(self) -> list[Candidate]:
@@ -111,6 +122,16 @@ class Diagnosis:
                 "parameters": {k: {"value": round(v, 6), "std": round(errs[name][k], 6)}
                                for k, v in vals[name].items()},
             }
+        v = self.verdict()
+        sig = self.signatures()
+        left = {}
+        if not v["explained"]:
+            for c, pj in v["per_joint"].items():
+                if not pj["consistent"]:
+                    left[c] = {"mae_deg": pj["mae_deg"], "tolerance_deg": pj["tolerance_deg"],
+                               "structured_rms_deg": pj["structured_rms_deg"],
+                               "structured_mae_deg": pj["structured_mae_deg"],
+                               "signature": sig["after"]["per_joint"].get(c)}
         return {
             "generator": "phantom-cad diagnose",
             "source": self.measurements.source,
@@ -118,6 +139,13 @@ class Diagnosis:
             "measured_cells": int(self.before.m),
             "mae_deg_before": round(mae(self.before), 5),
             "mae_deg_after": round(mae(self.after), 5),
+            "noise_floor_deg": round(self.noise.overall_deg, 5),
+            "noise_floor_per_joint_deg": {c: round(x, 5) for c, x in self.noise.floor_deg.items()},
+            "noise": self.noise.to_json(),
+            "explained": v["explained"],
+            "verdict": v,
+            "left": left,
+            "signature": sig,
             "selected": list(self.selected),
             "effects": effects,
             "ranking": [c.to_json() for c in self.ranking],
@@ -229,7 +257,8 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
         notes.append(f"the effects were selected on every {step}th row ({problem.rows.size:,} of {len(m):,} rows; "
                      f"the ranking above is theirs); the selected effects were then fitted on all rows, and the "
                      f"MAE and parameters below are of that fit")
-    return Diagnosis(m, before, base, current[len(start):], rounds, ambiguities, [n for n in notes if n])
+    return Diagnosis(m, before, base, current[len(start):], rounds, ambiguities, [n for n in notes if n],
+                     noise_floor(m), hand)
 
 
 def _prune(hand, problem, current: list[str], base: FitResult, keep: int):

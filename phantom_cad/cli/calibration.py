@@ -261,7 +261,7 @@ def diagnosis_text(d, result) -> list[str]:
                    f"{c.n_eff:8.0f} {'yes' if c.passes else 'no':>5s}")
     out.append("")
     if not d.selected:
-        out.append("selected: nothing - the analytic model explains these data down to their noise")
+        out.append("selected: nothing (no library effect passes)")
     for name in d.selected:
         eff = get_effect(name)
         out.append(f"selected: {name}")
@@ -275,9 +275,40 @@ def diagnosis_text(d, result) -> list[str]:
     for n in d.notes:
         out.append(f"note: {n}")
     out.append("")
-    out.append(f"{'joint':18s} {'MAE before':>10s} {'after':>8s}  (deg)")
+    out.append(f"{'joint':18s} {'MAE before':>10s} {'after':>8s} {'noise floor':>11s} {'tolerance':>9s}  (deg)")
+    verdict = result["verdict"]["per_joint"]
     for c, v in result["per_joint"].items():
-        out.append(f"{c + ' ' + JOINT_NAMES[Q_COLUMNS.index(c)]:18s} {v['before']:10.3f} {v['after']:8.3f}")
+        row = f"{c + ' ' + JOINT_NAMES[Q_COLUMNS.index(c)]:18s} {v['before']:10.3f} {v['after']:8.3f}"
+        if c in verdict:
+            row += (f" {result['noise_floor_per_joint_deg'][c]:11.3f} {verdict[c]['tolerance_deg']:9.3f}"
+                    f"{'' if verdict[c]['consistent'] else '  structure left'}")
+        out.append(row)
+    out.append("")
+    out.extend(verdict_lines(result))
+    return out
+
+
+def verdict_lines(result) -> list[str]:
+    """The measured verdict and the residual's signature in plain sentences."""
+    noise = result["noise"]
+    model = " + ".join(result["selected"]) or "the analytic model"
+    out = [f"noise floor estimated from the data (neighbouring samples, sample spacing "
+           f"{noise['sample_spacing_deg']:.2f} deg of servo angle): {result['noise_floor_deg']:.3f} deg MAE"]
+    if result["explained"]:
+        out.append(f"explained: yes - the residual of {model} ({result['mae_deg_after']:.3f} deg MAE) is consistent "
+                   f"with that noise overall and on every joint")
+    else:
+        left = result["left"]
+        worst = sorted(left, key=lambda c: -left[c]["structured_rms_deg"])
+        joints = ", ".join(f"{c} {left[c]['structured_rms_deg']:.2f}" for c in worst)
+        overall = result["verdict"]["overall"]
+        out.append(f"explained: no - {model} leaves structure beyond the noise "
+                   f"(overall {overall['mae_deg']:.3f} deg MAE, consistent up to {overall['tolerance_deg']:.3f}); "
+                   f"RMS beyond the noise, deg: {joints or 'none per joint'}")
+    for when, key in (("the analytic model's residual", "before"), ("what is left", "after")):
+        sentences = result["signature"][key]["sentences"]
+        if sentences and (key == "before" or (result["selected"] and not result["explained"])):
+            out.append(f"signature of {when}: " + "; ".join(sentences))
     return out
 
 
