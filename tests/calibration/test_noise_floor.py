@@ -92,14 +92,7 @@ def test_nothing_hidden_floor_and_explained_in_19_of_20_seeds(hand):
 
 def test_servo_eccentricity_is_not_explained(hand):
     """q error = 1.5 deg sin(2 pi u / 40 deg) on every joint of the index and ring chains."""
-    u, sweep, cj = sweeps(hand, points=45)
-    q_true = analytic(hand, u)
-    for chain in hand.params.chains:
-        if chain.spec.digit in ("index", "ring"):
-            s = chain.spec.servo
-            for j in chain.spec.q_index:
-                q_true[:, j] += np.radians(1.5 * np.sin(2 * np.pi * np.degrees(u[:, s]) / 40.0))
-    m = measure(hand, u, sweep, cj, q_true, seed=3)
+    m = eccentric_data(hand)
     d = diagnose(hand, m)
     out = d.to_json()
     expected = NOISE_DEG * math.sqrt(2 / math.pi)
@@ -114,3 +107,61 @@ def test_servo_eccentricity_is_not_explained(hand):
 
     text = "\n".join(diagnosis_text(d, out))
     assert "explained: no" in text and "down to their noise" not in text
+
+
+def eccentric_data(hand, seed=3):
+    u, sweep, cj = sweeps(hand, points=45)
+    q_true = analytic(hand, u)
+    for chain in hand.params.chains:
+        if chain.spec.digit in ("index", "ring"):
+            s = chain.spec.servo
+            for j in chain.spec.q_index:
+                q_true[:, j] += np.radians(1.5 * np.sin(2 * np.pi * np.degrees(u[:, s]) / 40.0))
+    return measure(hand, u, sweep, cj, q_true, seed=seed)
+
+
+def test_signature_names_the_eccentricity_period(hand):
+    out = diagnose(hand, eccentric_data(hand)).to_json()
+    for key in ("before", "after"):
+        sig = out["signature"][key]
+        assert abs(sig["periodic"]["period_deg"] - 40.0) <= 4.0
+        assert sig["periodic"]["joints"] == ["q3", "q4", "q5", "q9", "q10", "q11"]
+        assert any("period 40 deg" in s and "eccentricity" in s for s in sig["sentences"])
+    # per joint: the sinusoid carries nearly all of the (detrended) residual; no direction dependence
+    q4 = out["left"]["q4"]["signature"]
+    assert q4["period"]["clear"] and q4["period"]["share"] > 0.9
+    assert q4["direction_flipping_rms_deg"] < 0.2 * q4["direction_independent_rms_deg"]
+    # unaffected joints show no clear period
+    assert not out["signature"]["before"]["per_joint"]["q7"]["period"]["clear"]
+
+
+def test_signature_of_a_direction_flipping_band_and_of_one_direction_data(hand):
+    """Hidden: the distal joints of the middle finger sit 0.8 deg low while flexing and 0.8 deg high
+    while extending (a friction band, written out here)."""
+    u, sweep, cj = sweeps(hand)
+    q_true = analytic(hand, u)
+    s = 2                                    # the middle finger's servo u3
+    rows = np.flatnonzero(sweep == s)
+    flexing = np.zeros(len(u), dtype=bool)
+    flexing[rows[:POINTS]] = True
+    chain = next(c for c in hand.params.chains if c.spec.servo == s)
+    for j in chain.spec.q_index[1:]:         # PIP, DIP
+        q_true[rows, j] += np.radians(np.where(flexing[rows], -0.8, 0.8))
+    m = measure(hand, u, sweep, cj, q_true, seed=5)
+    out = diagnose(hand, m, candidates=["joint_offset"]).to_json()
+    sig = out["signature"]["before"]
+    q7 = sig["per_joint"]["q7"]
+    assert q7["direction_flipping_rms_deg"] == pytest.approx(0.8, abs=0.08)
+    assert q7["direction_independent_rms_deg"] < 0.1
+    assert any("flips with the direction of motion" in t for t in sig["sentences"])
+    assert out["explained"] is False and set(out["left"]) == {"q6", "q7"}
+    # the same hand recorded flexing only (the paper's protocol): the report says what cannot be seen
+    keep = np.ones(len(u), dtype=bool)
+    for k in range(6):
+        keep[np.flatnonzero(sweep == k)[POINTS:]] = False
+    one = Measurements(u[keep], m.q[keep], m.measured, sweep[keep], m.sweep_ids, None,
+                       m.lines[keep], "<test>", True)
+    sig1 = diagnose(hand, one, candidates=["joint_offset"]).to_json()["signature"]["before"]
+    assert sig1["direction"] == "one direction only"
+    assert any("direction-dependent physics" in t and "cannot be seen" in t for t in sig1["sentences"])
+    assert "direction_flipping_rms_deg" not in sig1["per_joint"]["q7"]
