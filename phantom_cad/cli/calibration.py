@@ -14,6 +14,22 @@ import typer
 ParamsOpt = typer.Option(None, "--params", "-p", help="Parameter file (default: params/phantom.toml).",
                          dir_okay=False)
 DegreesOpt = typer.Option(False, "--degrees", help="Angles in the CSV are degrees.")
+PluginOpt = typer.Option(None, "--plugin", help="Python file that registers effects (@register_effect), "
+                         "repeatable; see docs/effects.md.", dir_okay=False)
+
+
+def _load_plugins(plugins: Optional[List[Path]]) -> list[str]:
+    """Load every --plugin file (PluginError, exit 2, naming the file and line, on failure); return
+    their absolute paths."""
+    import os
+
+    from ..calibration.effects import load_plugin
+
+    out = []
+    for p in plugins or []:
+        load_plugin(p, "--plugin")
+        out.append(os.path.abspath(p))
+    return out
 
 
 def _user_error(msg: str):
@@ -71,6 +87,7 @@ def simulate(
     measure: str = typer.Option("chain", "--measure", help="chain: record the swept servo's joints only; all: every joint."),
     joints: Optional[str] = typer.Option(None, "--joints", help="q columns to record, e.g. q3,q4,q5 (default all)."),
     degrees: bool = typer.Option(False, "--degrees", help="Write degrees instead of radians."),
+    plugin: Optional[List[Path]] = PluginOpt,
 ):
     """Sweep every servo (flex, then extend, others at 0) and write what a hand with hidden effects would measure."""
     from .. import load_hand
@@ -79,6 +96,7 @@ def simulate(
     from ..calibration.simulate import SimulationError, parse_effect_params, simulate as run
 
     check_output(out, CSV_MARKER, "a CSV written by phantom-cad")
+    plugin_files = _load_plugins(plugin)
     hand = load_hand(params)
     names = _effect_names(effects)
     cols = None if joints is None else [c.strip() for c in joints.split(",") if c.strip()]
@@ -112,6 +130,7 @@ def compare(
     report: Optional[Path] = typer.Option(None, "--report", help="Folder for report.md, metrics.json and PNGs (a new "
                                           "folder, or an earlier report, which is replaced)."),
     degrees: bool = DegreesOpt,
+    plugin: Optional[List[Path]] = PluginOpt,
 ):
     """Residual = measured - model per joint: MAE / RMS / max before (analytic) and after (with the effects)."""
     from .. import load_hand
@@ -120,6 +139,7 @@ def compare(
     from ..calibration.fitting import fit_effects
     from ..calibration.report import metrics
 
+    plugin_files = _load_plugins(plugin)
     hand = load_hand(params)
     m = read_measurements(data, degrees=degrees).require_joints()
     q_before = run_pipeline(hand, [], m.u, None, 0.0)
@@ -206,6 +226,7 @@ def diagnose(
     json_out: Optional[Path] = typer.Option(None, "--json", help="Write the result as JSON.", dir_okay=False),
     candidates: Optional[str] = typer.Option(None, "--candidates", help="Restrict the candidate effects (comma separated)."),
     degrees: bool = DegreesOpt,
+    plugin: Optional[List[Path]] = PluginOpt,
 ):
     """Which effect is missing? Score every effect of the library, add the ones the held-out data confirm."""
     from .. import load_hand
@@ -213,6 +234,7 @@ def diagnose(
     from ..calibration.diagnose import diagnose as run
 
     check_output(json_out, JSON_MARKER, "a JSON written by phantom-cad diagnose")
+    plugin_files = _load_plugins(plugin)
     hand = load_hand(params)
     m = read_measurements(data, degrees=degrees).require_joints()
     names = _effect_names(candidates, "--candidates") if candidates else None
@@ -320,25 +342,41 @@ def fit(
     out: Path = typer.Option(..., "--out", help="Parameter file to write (e.g. params/calibrated.toml).", dir_okay=False),
     params: Optional[Path] = ParamsOpt,
     degrees: bool = DegreesOpt,
+    plugin: Optional[List[Path]] = PluginOpt,
 ):
     """Fit effect parameters and write a parameter file whose model (forward / inverse) uses them.
 
     The fit starts from the analytic model; the written file is the input file with its [effects]
-    replaced by the fitted ones (tendon_elasticity always written, 0 when not fitted)."""
+    replaced by the fitted ones (tendon_elasticity written as 0 when not fitted: it replaces the
+    [mechanics] k_s/EA of the compensated model and nothing else) and its ``plugins`` extended by
+    the --plugin files (relative to the written file). Refused: an effect the control law cannot
+    invert. The written file is loaded back and must reproduce the fit's prediction."""
+    import os
+
+    import numpy as np
+
     from .. import load_hand
     from ..params import dump_params
+    from ..params.schema import plugin_paths
     from ..canon import plain
     from ..calibration.data import read_measurements
     from ..calibration.diagnose import mae
-    from ..calibration.effects import validate_effects
+    from ..calibration.effects import get_effect, has_invert, validate_effects
     from ..errors import one_line
     from ..calibration.fitting import Model, Problem, fit as run_fit
 
+    check_output(out, FIT_MARKER, "a parameter file written by phantom-cad fit")
+    plugin_files = _load_plugins(plugin)
+    hand = load_hand(params)
     names = _effect_names(effects)
     if not names:
         raise _user_error("--effects: name at least one effect to fit")
-    check_output(out, FIT_MARKER, "a parameter file written by phantom-cad fit")
-    hand = load_hand(params)
+    for n in names:
+        eff = get_effect(n)
+        if not has_invert(eff):
+            raise _user_error(f"--effects {effects}: effect '{n}' ({eff.stage} stage) has no invert(), so the control "
+                              f"law (Hand.inverse) could not use the calibrated file; add invert(self, hand, value, x) "
+                              f"to it (docs/effects.md), or use it with compare/diagnose only")
     m = read_measurements(data, degrees=degrees).require_joints()
     problem = Problem(hand, m)
     before = run_fit(Model(hand, [], problem), problem)
@@ -346,11 +384,18 @@ def fit(
     vals, errs = res.values(), res.uncertainties()
     table = {n: {k: round(v, 9) for k, v in vals[n].items()} for n in names}
     if "tendon_elasticity" not in table:
-        # the fit starts from the analytic model: a zero compliance keeps compensated=True consistent with it
+        # the fit starts from the analytic model: a zero compliance keeps compensated=True consistent
+        # with it (it replaces the base k_s/EA only; other tension-stage effects keep what they add)
         table["tendon_elasticity"] = {"compliance_per_m": 0.0}
     validate_effects(table, str(out))
     doc = plain(hand.params.document)
     doc["effects"] = table
+    here = os.path.dirname(os.path.abspath(out))
+    files = list(dict.fromkeys([*plugin_paths(hand.params.plugins, hand.params.source), *plugin_files]))
+    if files:
+        doc["plugins"] = [os.path.relpath(f, here) for f in files]
+    else:
+        doc.pop("plugins", None)
     header = [f"{FIT_MARKER} {one_line(data)} --effects {','.join(names)}`",
               f"# from {one_line(hand.params.source)} (digest {hand.params.digest[:12]}), {len(m)} rows.",
               f"# MAE {mae(before):.4f} deg (analytic) -> {mae(res):.4f} deg (with the effects).",
@@ -360,6 +405,15 @@ def fit(
         for k, v in vals[n].items():
             header.append(f"#   {n}.{k} = {v:.6g} +- {errs[n][k]:.2g}")
     dump_params(doc, out, header="\n".join(header) + "\n\n")
-    load_hand(out)  # the written file must load, effects included
+    # the written file must load and reproduce the fit: no written effect may override another
+    written = load_hand(out)
+    q_fit = res.model.predict(res.theta, m.u, m.direction)
+    q_file = written.effects.forward(written, m.u, True, m.direction)
+    gap = float(np.nanmax(np.abs(q_file - q_fit)[np.isfinite(m.q)]))
+    if gap > 1e-6:
+        os.replace(out, str(out) + ".rejected")
+        raise _user_error(f"{out}: the written effects ({', '.join(written.effects.names)}) do not reproduce the fit "
+                          f"(up to {np.degrees(gap):.4f} deg apart): one of them overrides another; the file was "
+                          f"moved to {out}.rejected")
     typer.echo("\n".join(h[2:] for h in header))
     typer.echo(f"wrote {out}")
