@@ -147,9 +147,12 @@ def _cells(fr):
     return p.rows[p.r_idx], p.j_idx, fr.residual
 
 
-def verdict(fr, noise: NoiseFloor) -> dict:
-    """``explained`` and, per joint, MAE / RMS / tolerance and the structured part beyond the noise."""
+def verdict(fr, noise: NoiseFloor, keep: np.ndarray | None = None) -> dict:
+    """``explained`` and, per joint, MAE / RMS / tolerance and the structured part beyond the noise;
+    ``keep``: the cells to judge (default all)."""
     rows, jj, r = _cells(fr)
+    if keep is not None:
+        rows, jj, r = rows[keep], jj[keep], r[keep]
     per = {}
     ok_all = True
     for j, c in enumerate(Q_COLUMNS):

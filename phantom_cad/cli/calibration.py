@@ -14,6 +14,8 @@ import typer
 ParamsOpt = typer.Option(None, "--params", "-p", help="Parameter file (default: params/phantom.toml).",
                          dir_okay=False)
 DegreesOpt = typer.Option(False, "--degrees", help="Angles in the CSV are degrees.")
+RobustOpt = typer.Option(False, "--robust", help="Robust fits (soft_l1 loss, scale 3 noise sd from the data); "
+                         "cells beyond 5 noise sd are listed as outliers.")
 PluginOpt = typer.Option(None, "--plugin", help="Python file that registers effects (@register_effect), "
                          "repeatable; see docs/effects.md.", dir_okay=False)
 
@@ -225,6 +227,7 @@ def diagnose(
                                           "earlier report, which is replaced)."),
     json_out: Optional[Path] = typer.Option(None, "--json", help="Write the result as JSON.", dir_okay=False),
     candidates: Optional[str] = typer.Option(None, "--candidates", help="Restrict the candidate effects (comma separated)."),
+    robust: bool = RobustOpt,
     degrees: bool = DegreesOpt,
     plugin: Optional[List[Path]] = PluginOpt,
 ):
@@ -238,7 +241,7 @@ def diagnose(
     hand = load_hand(params)
     m = read_measurements(data, degrees=degrees).require_joints()
     names = _effect_names(candidates, "--candidates") if candidates else None
-    d = run(hand, m, names)
+    d = run(hand, m, names, robust=robust)
     result = d.to_json()
     text = diagnosis_text(d, result)
     typer.echo("\n".join(text))
@@ -307,6 +310,13 @@ def diagnosis_text(d, result) -> list[str]:
         out.append(row)
     out.append("")
     out.extend(verdict_lines(result))
+    if result["outliers_count"]:
+        shown = ", ".join(f"{o['sweep']} line {o['line']} {o['joint']} {o['residual_deg']:+.2f}"
+                          for o in result["outliers"][:10])
+        more = f" and {result['outliers_count'] - 10} more" if result["outliers_count"] > 10 else ""
+        out.append(f"outliers ({result['outliers_count']} cells beyond 5 noise sd"
+                   f"{', left out of the verdict' if result['robust'] else '; --robust keeps them from bending the fit'}): "
+                   f"{shown}{more}")
     return out
 
 
@@ -317,7 +327,8 @@ def verdict_lines(result) -> list[str]:
     out = [f"noise floor estimated from the data (neighbouring samples, sample spacing "
            f"{noise['sample_spacing_deg']:.2f} deg of servo angle): {result['noise_floor_deg']:.3f} deg MAE"]
     if result["explained"]:
-        out.append(f"explained: yes - the residual of {model} ({result['mae_deg_after']:.3f} deg MAE) is consistent "
+        out.append(f"explained: yes - the residual of {model} ({result['verdict']['overall']['mae_deg']:.3f} deg MAE"
+                   f"{' without the outliers' if result['robust'] else ''}) is consistent "
                    f"with that noise overall and on every joint")
     else:
         left = result["left"]
@@ -343,6 +354,7 @@ def fit(
     params: Optional[Path] = ParamsOpt,
     degrees: bool = DegreesOpt,
     plugin: Optional[List[Path]] = PluginOpt,
+    robust: bool = RobustOpt,
 ):
     """Fit effect parameters and write a parameter file whose model (forward / inverse) uses them.
 
@@ -380,7 +392,15 @@ def fit(
     m = read_measurements(data, degrees=degrees).require_joints()
     problem = Problem(hand, m)
     before = run_fit(Model(hand, [], problem), problem)
-    res = run_fit(Model(hand, names, problem), problem)
+    if robust:
+        from ..calibration.diagnose import ROBUST_SCALE
+        from ..calibration.fitting import robust_loss
+        from ..calibration.residual import MAE_PER_SIGMA, noise_floor
+
+        with robust_loss(ROBUST_SCALE * noise_floor(m).overall_deg / MAE_PER_SIGMA):
+            res = run_fit(Model(hand, names, problem), problem)
+    else:
+        res = run_fit(Model(hand, names, problem), problem)
     vals, errs = res.values(), res.uncertainties()
     table = {n: {k: round(v, 9) for k, v in vals[n].items()} for n in names}
     if "tendon_elasticity" not in table:

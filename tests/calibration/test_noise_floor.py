@@ -165,3 +165,42 @@ def test_signature_of_a_direction_flipping_band_and_of_one_direction_data(hand):
     assert sig1["direction"] == "one direction only"
     assert any("direction-dependent physics" in t and "cannot be seen" in t for t in sig1["sentences"])
     assert "direction_flipping_rms_deg" not in sig1["per_joint"]["q7"]
+
+
+# -- robust fits ---------------------------------------------------------------------------------
+
+OFFSETS = {3: 1.0, 8: -0.8, 12: 0.6}           # hidden joint offsets (q4, q9, q13), deg
+GLITCHES = [(65, 3, 8.0), (100, 3, -8.0), (70, 2, 6.0), (200, 8, 9.0), (230, 10, -7.0), (320, 14, 8.0)]
+
+
+def glitched_data(hand):
+    """Hidden: joint offsets written out here, plus six vision glitches of 6-9 deg on chosen cells."""
+    u, sweep, cj = sweeps(hand)
+    q_true = analytic(hand, u)
+    for j, o in OFFSETS.items():
+        q_true[:, j] += np.radians(o)
+    m = measure(hand, u, sweep, cj, q_true, seed=21)
+    for row, j, g in GLITCHES:
+        assert np.isfinite(m.q[row, j])
+        m.q[row, j] += np.radians(g)
+    return m
+
+
+def test_robust_fit_lists_the_glitches_and_is_not_bent_by_them(hand):
+    m = glitched_data(hand)
+    robust = diagnose(hand, m, candidates=["joint_offset"], robust=True)
+    out = robust.to_json()
+    assert out["robust"] is True and out["selected"] == ["joint_offset"]
+    assert {(o["row"], o["joint"]) for o in out["outliers"]} == {(r, f"q{j + 1}") for r, j, _ in GLITCHES}
+    assert all(o["sweep"] == m.sweep_ids[m.sweep[o["row"]]] and o["line"] == o["row"] + 2 for o in out["outliers"])
+    fitted = out["effects"]["joint_offset"]["parameters"]
+    for j, o in OFFSETS.items():
+        assert fitted[f"q{j + 1}_deg"]["value"] == pytest.approx(o, abs=0.05)
+    assert out["explained"] is True                  # judged without the listed outliers
+    # least squares: the glitches pull the offsets of their joints by about glitch / samples
+    plain = diagnose(hand, m, candidates=["joint_offset"]).to_json()
+    ls = plain["effects"]["joint_offset"]["parameters"]
+    err_ls = max(abs(ls[f"q{j + 1}_deg"]["value"] - OFFSETS.get(j, 0.0)) for _, j, _ in GLITCHES)
+    err_rb = max(abs(fitted[f"q{j + 1}_deg"]["value"] - OFFSETS.get(j, 0.0)) for _, j, _ in GLITCHES)
+    assert err_rb < 0.5 * err_ls
+    assert plain["outliers_count"] == 6 and plain["explained"] is False
