@@ -207,3 +207,28 @@ def test_a_broken_plugin_is_one_error_line(files, command, body, message, tmp_pa
     assert r.returncode == 2, r.stderr
     assert r.stderr.startswith(f"error: --plugin: plugin {path}: {message}")
     assert r.stderr.count("\n") == 1 and "Traceback" not in r.stderr
+
+
+def test_hand_inverse_refuses_an_effect_it_cannot_invert(files, tmp_path):
+    """A hand-written file with a joint-stage effect without invert(): forward uses it, the control
+    law raises (it used to drop the effect silently)."""
+    from phantom_cad import load_hand
+    from phantom_cad.calibration.effects import unload_plugin
+    from phantom_cad.params import ParamError, load_document
+    from phantom_cad.params.io import DEFAULT_PARAMS, dumps
+
+    doc = load_document(DEFAULT_PARAMS)
+    doc["plugins"] = [str(files / "plugins" / "cmc_gain.py")]
+    doc["effects"] = {"cmc_gain": {"relative": 0.05}}
+    path = tmp_path / "hand.toml"
+    path.write_text(dumps(doc))
+    try:
+        hand = load_hand(path)
+        u0 = np.array([0.3, 0.8, 0.5, 0.9, 0.7, 0.6])
+        q = hand.forward(u0, compensated=True)
+        assert q[14] == pytest.approx(1.05 * 0.6, abs=1e-12)       # q15 = (1 + 0.05) u6
+        with pytest.raises(ParamError, match=r"effects.cmc_gain = \{'relative': 0.05\}: the joint-stage effect "
+                                             r"'cmc_gain' has no invert\(\)"):
+            hand.inverse(q, compensated=True)
+    finally:
+        unload_plugin(files / "plugins" / "cmc_gain.py")
