@@ -63,7 +63,27 @@ def test_dump_refuses_invalid_and_writes_nothing(tmp_path, document):
 def test_unknown_top_level_key(document):
     document["colour"] = 1
     refuse(document, "colour = 1: unknown key 'colour' (allowed: schema_version, hand, fingers, "
-                     "thumb, mechanics, palm, servo, hardware, print, cad, effects)")
+                     "thumb, mechanics, palm, servo, hardware, print, cad, plugins, effects)")
+
+
+def test_plugins_must_be_a_list_of_paths(document):
+    document["plugins"] = "my_effect.py"
+    refuse(document, "plugins = 'my_effect.py': must be a list of file paths (Python files that register "
+                     "effects, relative to this parameter file)")
+    document["plugins"] = ["ok.py", 3]
+    refuse(document, "plugins = ['ok.py', 3]: must be a list of file paths (Python files that register "
+                     "effects, relative to this parameter file)")
+
+
+def test_a_missing_plugin_is_named(document, tmp_path):
+    import phantom_cad  # noqa: F401  (installs the effect library's plugin loader)
+
+    document["plugins"] = ["nowhere/my_effect.py"]
+    source = str(tmp_path / "hand.toml")
+    with pytest.raises(ParamError) as info:
+        parse(document, source)
+    assert str(info.value) == (f"{source}: plugins[0]: plugin {tmp_path / 'nowhere' / 'my_effect.py'}: "
+                               "no such file")
 
 
 def test_finger_name_typo(document):

@@ -26,7 +26,9 @@ import numpy as np
 from ..kinematics.topology import Q_COLUMNS
 from .data import Measurements
 from .effects import REGISTRY, get_effect
-from .fitting import FitResult, Model, Problem, fit, fit_streamed, folds, heldout_sse, single_threaded_blas
+from .residual import MAE_PER_SIGMA, NoiseFloor, noise_floor, signature, verdict
+from .fitting import (FitResult, Model, Problem, fit, fit_streamed, folds, heldout_sse, robust_loss,
+                      single_threaded_blas)
 
 #: a candidate must bring the held-out sum of squares below this fraction of the model's without it
 HELDOUT_RATIO = 0.99
@@ -36,6 +38,12 @@ MAX_ROUNDS = 8
 #: the selection (fits of every candidate, held-out checks, pruning) runs on at most this many rows,
 #: every k-th row of the file; the selected effects are then refitted on every row
 SELECTION_ROWS = 20_000
+#: robust fits: soft_l1 scale, in noise standard deviations (residuals beyond it weigh about linearly)
+ROBUST_SCALE = 3.0
+#: a measured cell whose final residual is beyond this many of its joint's noise sd is an outlier
+OUTLIER_SIGMAS = 5.0
+#: outliers listed at most (the count is always given)
+MAX_OUTLIERS = 100
 
 #: the measurement that separates two effects that explain a residual equally well
 SEPARATING_EXPERIMENTS = {
@@ -91,6 +99,34 @@ class Diagnosis:
     rounds: list[list[Candidate]]
     ambiguities: list[dict]
     notes: list[str]
+    noise: NoiseFloor = None
+    hand: object = field(repr=False, default=None)
+    robust: bool = False
+
+    def outlier_cells(self) -> np.ndarray:
+        """Boolean over the final fit's cells: |residual| > OUTLIER_SIGMAS x the joint's noise sd."""
+        p, r = self.after.problem, self.after.residual
+        sig = np.array([self.noise.sigma_deg.get(c, np.nan) for c in Q_COLUMNS])[p.j_idx]
+        return np.abs(r) > OUTLIER_SIGMAS * np.nan_to_num(sig, nan=np.inf)
+
+    def outliers(self) -> list[dict]:
+        p, r = self.after.problem, self.after.residual
+        m = self.measurements
+        out = []
+        for k in np.flatnonzero(self.outlier_cells()):
+            row = int(p.rows[p.r_idx[k]])
+            out.append({"sweep": m.sweep_ids[int(m.sweep[row])], "row": row, "line": int(m.lines[row]),
+                        "joint": Q_COLUMNS[int(p.j_idx[k])], "residual_deg": round(float(r[k]), 4)})
+        return out
+
+    def verdict(self) -> dict:
+        """The verdict; with robust fits, over the cells that are not outliers."""
+        return verdict(self.after, self.noise, ~self.outlier_cells() if self.robust else None)
+
+    def signatures(self) -> dict:
+        """Signature of the analytic model's residual (before) and of what is left (after)."""
+        return {"before": signature(self.before, self.measurements, self.hand),
+                "after": signature(self.after, self.measurements, self.hand)}
 
     @property
     def ranking(self) -> list[Candidate]:
@@ -111,6 +147,16 @@ class Diagnosis:
                 "parameters": {k: {"value": round(v, 6), "std": round(errs[name][k], 6)}
                                for k, v in vals[name].items()},
             }
+        v = self.verdict()
+        sig = self.signatures()
+        left = {}
+        if not v["explained"]:
+            for c, pj in v["per_joint"].items():
+                if not pj["consistent"]:
+                    left[c] = {"mae_deg": pj["mae_deg"], "tolerance_deg": pj["tolerance_deg"],
+                               "structured_rms_deg": pj["structured_rms_deg"],
+                               "structured_mae_deg": pj["structured_mae_deg"],
+                               "signature": sig["after"]["per_joint"].get(c)}
         return {
             "generator": "phantom-cad diagnose",
             "source": self.measurements.source,
@@ -118,6 +164,16 @@ class Diagnosis:
             "measured_cells": int(self.before.m),
             "mae_deg_before": round(mae(self.before), 5),
             "mae_deg_after": round(mae(self.after), 5),
+            "noise_floor_deg": round(self.noise.overall_deg, 5),
+            "noise_floor_per_joint_deg": {c: round(x, 5) for c, x in self.noise.floor_deg.items()},
+            "noise": self.noise.to_json(),
+            "explained": v["explained"],
+            "verdict": v,
+            "left": left,
+            "signature": sig,
+            "robust": self.robust,
+            "outliers_count": len(outl := self.outliers()),
+            "outliers": outl[:MAX_OUTLIERS],
             "selected": list(self.selected),
             "effects": effects,
             "ranking": [c.to_json() for c in self.ranking],
@@ -148,10 +204,20 @@ def delta_ic(base: FitResult, cand: FitResult, n_eff: float) -> float:
     return float(n_eff * np.log(max(ratio, 1e-300)) + (cand.model.p - base.model.p) * np.log(n_eff))
 
 
-def diagnose(hand, m: Measurements, candidates=None, start=()) -> Diagnosis:
-    """Forward selection of effects (module docstring). ``candidates`` default: the whole library."""
+def diagnose(hand, m: Measurements, candidates=None, start=(), robust: bool = False) -> Diagnosis:
+    """Forward selection of effects (module docstring). ``candidates`` default: the whole library.
+    ``robust``: every fit uses the soft_l1 loss with scale ROBUST_SCALE x the data's noise sd, and
+    the scores use the same robust cost (so a few glitches neither bend a fit nor pass a candidate)."""
     with single_threaded_blas():
-        return _diagnose(hand, m, candidates, start)
+        if not robust:
+            return _diagnose(hand, m, candidates, start)
+        sigma = noise_floor(m).overall_deg / MAE_PER_SIGMA
+        with robust_loss(ROBUST_SCALE * sigma):
+            d = _diagnose(hand, m, candidates, start)
+        d.robust = True
+        d.notes.append(f"robust fits: soft_l1 loss with scale {ROBUST_SCALE * sigma:.3f} deg ({ROBUST_SCALE:g} x the "
+                       f"noise sd); outliers (beyond {OUTLIER_SIGMAS:g} noise sd) are left out of the verdict")
+        return d
 
 
 def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
@@ -229,7 +295,8 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
         notes.append(f"the effects were selected on every {step}th row ({problem.rows.size:,} of {len(m):,} rows; "
                      f"the ranking above is theirs); the selected effects were then fitted on all rows, and the "
                      f"MAE and parameters below are of that fit")
-    return Diagnosis(m, before, base, current[len(start):], rounds, ambiguities, [n for n in notes if n])
+    return Diagnosis(m, before, base, current[len(start):], rounds, ambiguities, [n for n in notes if n],
+                     noise_floor(m), hand)
 
 
 def _prune(hand, problem, current: list[str], base: FitResult, keep: int):

@@ -29,7 +29,7 @@ import numpy as np
 from ..kinematics.topology import (CHAINS, DISTAL_JOINTS, JOINTS, N_JOINTS, N_SERVOS, SERVOS, TENDON_SERVOS,
                                    servo_joints)
 from ..params.errors import ParamError
-from ..params.schema import register_effect_check
+from ..params.schema import register_effect_check, register_plugin_loader
 from ..units import DEG
 
 STAGES = ("servo", "reference", "tension", "joint")
@@ -77,6 +77,8 @@ class Context:
         self.s: np.ndarray | None = None            # reference angles (N, 6), after the reference stage
         #: k_s / EA (1/m) felt by each chain's elastic segments (N, chains); 0 = analytic model
         self.compliance = np.full((n, len(CHAINS)), float(compliance))
+        #: the base k_s / EA the pipeline started from (tendon_elasticity replaces it, and only it)
+        self.compliance_base = float(compliance)
         #: the tendon's compliance k_s / EA (1/m) that converts a tension change into a deviation
         mech = hand.params.mechanics
         self.compliance_ref = mech.spring_k / mech.tendon_EA
@@ -93,8 +95,9 @@ class Effect:
     ``stage`` is one of ``STAGES``; ``order`` sorts effects within a stage. ``explanation`` is the
     one-line physical reading of the residual the effect explains (printed in reports).
     For the control law (``Hand.inverse``), servo- and joint-stage effects implement
-    :meth:`invert` (reference- and tension-stage effects are inverted by the pipeline itself);
-    an effect without it is ignored by the inverse (documented limitation).
+    :meth:`invert` (reference- and tension-stage effects are inverted by the pipeline itself,
+    tension-stage ones as a compliance per chain that does not depend on the pose); ``fit``
+    refuses an effect without it and ``Hand.inverse`` raises on one (ParamError).
     """
 
     name: str = ""
@@ -220,7 +223,10 @@ class TendonElasticity(Effect):
                       "k_s / EA: spring rate over tendon axial stiffness, 1/m (only the ratio is identifiable)")]
 
     def apply(self, ctx, x):
-        ctx.compliance[:] = x[0]
+        # replaces the base k_s / EA and only it: what other tension-stage effects added (before
+        # or after this one) stays
+        ctx.compliance += x[0] - ctx.compliance_base
+        ctx.compliance_base = float(x[0])
         # `fit` writes compliance 0 when the data showed no elasticity: the base compensation is
         # then off, but the tendon's stiffness that friction stretches stays the [mechanics] one,
         # as it was when friction was fitted without this effect
@@ -405,8 +411,14 @@ class EffectStack:
         shape = q.shape
         q = q.reshape(-1, N_JOINTS)
         items = self._items(compensated)
+        for eff, _ in items:
+            if not has_invert(eff):
+                raise ParamError(f"effects.{eff.name}", dict(self.params.effects.get(eff.name, {})),
+                                 f"the {eff.stage}-stage effect '{eff.name}' has no invert(): the control law "
+                                 "(Hand.inverse) cannot use it (docs/effects.md, 'The control law with effects')",
+                                 self.params.source)
         for eff, x in reversed(items):
-            if eff.stage == "joint" and eff.invertible:
+            if eff.stage == "joint":
                 q = eff.invert(hand, q, x)
         # reference stage (effective radius), then the tension stage with unknown direction:
         # a constant compliance per chain, so each digit's reachable set is a line q = c s
@@ -429,7 +441,7 @@ class EffectStack:
         u = hand.control_law(q, hand.coupling_matrix(ctx.compliance[0]),
                              (s_ends.min(axis=0), s_ends.max(axis=0)), radius)
         for eff, x in reversed(items):
-            if eff.stage == "servo" and eff.invertible:
+            if eff.stage == "servo":
                 u = eff.invert(hand, u, x)
         u = np.clip(u, hand.u_min, hand.u_max)
         return u.reshape(shape[:-1] + (N_SERVOS,))
@@ -441,3 +453,98 @@ def build_effect_stack(params) -> EffectStack:
 
 
 register_effect_check(validate_effects)
+
+
+# ---------------------------------------------------------------------------
+# a user's effects in a plugin file (--plugin FILE.py, or `plugins = [...]` in a parameter file)
+# ---------------------------------------------------------------------------
+
+#: resolved plugin path -> the effect names it registered (a file is executed once per process)
+PLUGINS: dict[str, tuple[str, ...]] = {}
+
+
+class PluginError(ParamError):
+    """A plugin file that cannot be loaded: names the file, the line and the rule."""
+
+    def __init__(self, path: str, rule: str, where: str | None = None):
+        self.field, self.value, self.rule, self.source = where or "--plugin", path, rule, None
+        ValueError.__init__(self, f"{where + ': ' if where else ''}plugin {path}: {rule}")
+
+
+def load_plugin(path, where: str | None = None) -> tuple[str, ...]:
+    """Execute the Python file ``path`` once; return the names of the effects it registered.
+
+    Refused (PluginError, naming the file and the line): a missing file, a syntax error, an
+    exception while it runs (an import error included), no effect registered, or an effect whose
+    name is already taken by the library or another plugin."""
+    import hashlib
+    import importlib.util
+    import os
+    import sys
+    import traceback
+
+    path = os.path.abspath(os.fspath(path))
+    if path in PLUGINS:
+        return PLUGINS[path]
+
+    def fail(rule: str):
+        return PluginError(path, rule, where)
+
+    if not os.path.isfile(path):
+        raise fail("no such file" if not os.path.exists(path) else "is not a file")
+    if not path.endswith(".py"):
+        raise fail("a plugin must be a Python file (.py)")
+    module_name = "phantom_cad_plugin_" + hashlib.sha256(path.encode()).hexdigest()[:12]
+    spec = importlib.util.spec_from_file_location(module_name, path)
+    module = importlib.util.module_from_spec(spec)
+    before = dict(REGISTRY)
+    try:
+        spec.loader.exec_module(module)
+    except SyntaxError as exc:
+        _restore(before)
+        raise fail(f"line {exc.lineno}: syntax error: {exc.msg}") from None
+    except Exception as exc:
+        _restore(before)
+        frames = [f for f in traceback.extract_tb(exc.__traceback__) if os.path.abspath(f.filename) == path]
+        line = f"line {frames[-1].lineno}: " if frames else ""
+        raise fail(f"{line}{type(exc).__name__}: {exc}") from None
+    new = tuple(n for n, e in REGISTRY.items() if before.get(n) is not e)
+    taken = [n for n in new if n in before]
+    if taken:
+        _restore(before)
+        raise fail(f"effect '{taken[0]}' is already defined (by the library or another plugin); give yours "
+                   "another name")
+    if not new:
+        raise fail("registers no effect (decorate an Effect subclass with @register_effect)")
+    sys.modules[module_name] = module
+    PLUGINS[path] = new
+    return new
+
+
+def _restore(before: dict) -> None:
+    REGISTRY.clear()
+    REGISTRY.update(before)
+
+
+def unload_plugin(path) -> None:
+    """Forget a plugin and unregister its effects (tests)."""
+    import os
+
+    for name in PLUGINS.pop(os.path.abspath(os.fspath(path)), ()):
+        unregister_effect(name)
+
+
+def has_invert(eff: Effect) -> bool:
+    """Whether the control law can undo the effect: servo- and joint-stage effects must override
+    :meth:`Effect.invert` (or declare ``invertible``); reference and tension stages are inverted by
+    the pipeline itself."""
+    if eff.stage in ("reference", "tension"):
+        return True
+    return bool(eff.invertible) or type(eff).invert is not Effect.invert
+
+
+def _load_listed_plugin(path: str, field_name: str, source: str | None) -> None:
+    load_plugin(path, f"{source}: {field_name}" if source else field_name)
+
+
+register_plugin_loader(_load_listed_plugin)

@@ -24,6 +24,32 @@ from .effects import JOINT_SERVO, Effect, Param, get_effect, run_pipeline
 
 
 
+#: the loss of every fit: "linear" (least squares) unless inside robust_loss()
+_LOSS = {"loss": "linear", "f_scale": 1.0}
+
+
+@contextlib.contextmanager
+def robust_loss(f_scale_deg: float):
+    """Context: fits use scipy's soft_l1 loss with scale ``f_scale_deg`` (residuals well beyond it
+    count about linearly, not squared), and the sums of squares that score models (RSS, held-out)
+    are the same robust cost, f^2 sum 2 (sqrt(1 + (r/f)^2) - 1) (= r^2 for small r)."""
+    old = dict(_LOSS)
+    _LOSS.update(loss="soft_l1", f_scale=float(f_scale_deg))
+    try:
+        yield
+    finally:
+        _LOSS.clear()
+        _LOSS.update(old)
+
+
+def cost(r: np.ndarray) -> float:
+    """Sum of squares, or the robust cost inside robust_loss()."""
+    if _LOSS["loss"] == "linear":
+        return float(r @ r)
+    f = _LOSS["f_scale"]
+    return float(f * f * np.sum(2.0 * (np.sqrt(1.0 + (r / f) ** 2) - 1.0)))
+
+
 def single_threaded_blas():
     """Context: BLAS on one thread. The fits multiply small matrices thousands of times; a
     multithreaded BLAS spends more in waking and (on a loaded 2-core machine) fighting for cores
@@ -130,7 +156,7 @@ class FitResult:
     n_eff: float = field(init=False)
 
     def __post_init__(self):
-        self.rss = float(self.residual @ self.residual)
+        self.rss = cost(self.residual)
         self.n_eff = effective_size(self.problem, self.residual)
 
     @property
@@ -217,6 +243,8 @@ def fit(model: Model, problem: Problem, x0=None, uncertainty: bool = True) -> Fi
     dense = S.nnz > 0.5 * S.shape[0] * S.shape[1] or model.p <= 2
     kw = dict(jac="2-point", bounds=(model.lower, model.upper), method="trf", x_scale="jac",
               xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200)
+    if _LOSS["loss"] != "linear":
+        kw.update(loss=_LOSS["loss"], f_scale=_LOSS["f_scale"])
     if not dense:
         kw["jac_sparsity"] = S
         kw["tr_solver"] = "lsmr"
@@ -351,5 +379,5 @@ def heldout_sse(model: Model, problem: Problem, parts, previous=None) -> float:
         fr = fit(model, train, model.start(previous), uncertainty=False)
         fun = _residual_fn(model, test)
         r = fun(fr.theta)
-        sse += float(r @ r)
+        sse += cost(r)
     return sse

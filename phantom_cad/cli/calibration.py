@@ -14,6 +14,24 @@ import typer
 ParamsOpt = typer.Option(None, "--params", "-p", help="Parameter file (default: params/phantom.toml).",
                          dir_okay=False)
 DegreesOpt = typer.Option(False, "--degrees", help="Angles in the CSV are degrees.")
+RobustOpt = typer.Option(False, "--robust", help="Robust fits (soft_l1 loss, scale 3 noise sd from the data); "
+                         "cells beyond 5 noise sd are listed as outliers.")
+PluginOpt = typer.Option(None, "--plugin", help="Python file that registers effects (@register_effect), "
+                         "repeatable; see docs/effects.md.", dir_okay=False)
+
+
+def _load_plugins(plugins: Optional[List[Path]]) -> list[str]:
+    """Load every --plugin file (PluginError, exit 2, naming the file and line, on failure); return
+    their absolute paths."""
+    import os
+
+    from ..calibration.effects import load_plugin
+
+    out = []
+    for p in plugins or []:
+        load_plugin(p, "--plugin")
+        out.append(os.path.abspath(p))
+    return out
 
 
 def _user_error(msg: str):
@@ -71,6 +89,7 @@ def simulate(
     measure: str = typer.Option("chain", "--measure", help="chain: record the swept servo's joints only; all: every joint."),
     joints: Optional[str] = typer.Option(None, "--joints", help="q columns to record, e.g. q3,q4,q5 (default all)."),
     degrees: bool = typer.Option(False, "--degrees", help="Write degrees instead of radians."),
+    plugin: Optional[List[Path]] = PluginOpt,
 ):
     """Sweep every servo (flex, then extend, others at 0) and write what a hand with hidden effects would measure."""
     from .. import load_hand
@@ -79,6 +98,7 @@ def simulate(
     from ..calibration.simulate import SimulationError, parse_effect_params, simulate as run
 
     check_output(out, CSV_MARKER, "a CSV written by phantom-cad")
+    plugin_files = _load_plugins(plugin)
     hand = load_hand(params)
     names = _effect_names(effects)
     cols = None if joints is None else [c.strip() for c in joints.split(",") if c.strip()]
@@ -112,6 +132,7 @@ def compare(
     report: Optional[Path] = typer.Option(None, "--report", help="Folder for report.md, metrics.json and PNGs (a new "
                                           "folder, or an earlier report, which is replaced)."),
     degrees: bool = DegreesOpt,
+    plugin: Optional[List[Path]] = PluginOpt,
 ):
     """Residual = measured - model per joint: MAE / RMS / max before (analytic) and after (with the effects)."""
     from .. import load_hand
@@ -120,6 +141,7 @@ def compare(
     from ..calibration.fitting import fit_effects
     from ..calibration.report import metrics
 
+    plugin_files = _load_plugins(plugin)
     hand = load_hand(params)
     m = read_measurements(data, degrees=degrees).require_joints()
     q_before = run_pipeline(hand, [], m.u, None, 0.0)
@@ -205,7 +227,9 @@ def diagnose(
                                           "earlier report, which is replaced)."),
     json_out: Optional[Path] = typer.Option(None, "--json", help="Write the result as JSON.", dir_okay=False),
     candidates: Optional[str] = typer.Option(None, "--candidates", help="Restrict the candidate effects (comma separated)."),
+    robust: bool = RobustOpt,
     degrees: bool = DegreesOpt,
+    plugin: Optional[List[Path]] = PluginOpt,
 ):
     """Which effect is missing? Score every effect of the library, add the ones the held-out data confirm."""
     from .. import load_hand
@@ -213,10 +237,11 @@ def diagnose(
     from ..calibration.diagnose import diagnose as run
 
     check_output(json_out, JSON_MARKER, "a JSON written by phantom-cad diagnose")
+    plugin_files = _load_plugins(plugin)
     hand = load_hand(params)
     m = read_measurements(data, degrees=degrees).require_joints()
     names = _effect_names(candidates, "--candidates") if candidates else None
-    d = run(hand, m, names)
+    d = run(hand, m, names, robust=robust)
     result = d.to_json()
     text = diagnosis_text(d, result)
     typer.echo("\n".join(text))
@@ -261,7 +286,7 @@ def diagnosis_text(d, result) -> list[str]:
                    f"{c.n_eff:8.0f} {'yes' if c.passes else 'no':>5s}")
     out.append("")
     if not d.selected:
-        out.append("selected: nothing - the analytic model explains these data down to their noise")
+        out.append("selected: nothing (no library effect passes)")
     for name in d.selected:
         eff = get_effect(name)
         out.append(f"selected: {name}")
@@ -275,9 +300,48 @@ def diagnosis_text(d, result) -> list[str]:
     for n in d.notes:
         out.append(f"note: {n}")
     out.append("")
-    out.append(f"{'joint':18s} {'MAE before':>10s} {'after':>8s}  (deg)")
+    out.append(f"{'joint':18s} {'MAE before':>10s} {'after':>8s} {'noise floor':>11s} {'tolerance':>9s}  (deg)")
+    verdict = result["verdict"]["per_joint"]
     for c, v in result["per_joint"].items():
-        out.append(f"{c + ' ' + JOINT_NAMES[Q_COLUMNS.index(c)]:18s} {v['before']:10.3f} {v['after']:8.3f}")
+        row = f"{c + ' ' + JOINT_NAMES[Q_COLUMNS.index(c)]:18s} {v['before']:10.3f} {v['after']:8.3f}"
+        if c in verdict:
+            row += (f" {result['noise_floor_per_joint_deg'][c]:11.3f} {verdict[c]['tolerance_deg']:9.3f}"
+                    f"{'' if verdict[c]['consistent'] else '  structure left'}")
+        out.append(row)
+    out.append("")
+    out.extend(verdict_lines(result))
+    if result["outliers_count"]:
+        shown = ", ".join(f"{o['sweep']} line {o['line']} {o['joint']} {o['residual_deg']:+.2f}"
+                          for o in result["outliers"][:10])
+        more = f" and {result['outliers_count'] - 10} more" if result["outliers_count"] > 10 else ""
+        out.append(f"outliers ({result['outliers_count']} cells beyond 5 noise sd"
+                   f"{', left out of the verdict' if result['robust'] else '; --robust keeps them from bending the fit'}): "
+                   f"{shown}{more}")
+    return out
+
+
+def verdict_lines(result) -> list[str]:
+    """The measured verdict and the residual's signature in plain sentences."""
+    noise = result["noise"]
+    model = " + ".join(result["selected"]) or "the analytic model"
+    out = [f"noise floor estimated from the data (neighbouring samples, sample spacing "
+           f"{noise['sample_spacing_deg']:.2f} deg of servo angle): {result['noise_floor_deg']:.3f} deg MAE"]
+    if result["explained"]:
+        out.append(f"explained: yes - the residual of {model} ({result['verdict']['overall']['mae_deg']:.3f} deg MAE"
+                   f"{' without the outliers' if result['robust'] else ''}) is consistent "
+                   f"with that noise overall and on every joint")
+    else:
+        left = result["left"]
+        worst = sorted(left, key=lambda c: -left[c]["structured_rms_deg"])
+        joints = ", ".join(f"{c} {left[c]['structured_rms_deg']:.2f}" for c in worst)
+        overall = result["verdict"]["overall"]
+        out.append(f"explained: no - {model} leaves structure beyond the noise "
+                   f"(overall {overall['mae_deg']:.3f} deg MAE, consistent up to {overall['tolerance_deg']:.3f}); "
+                   f"RMS beyond the noise, deg: {joints or 'none per joint'}")
+    for when, key in (("the analytic model's residual", "before"), ("what is left", "after")):
+        sentences = result["signature"][key]["sentences"]
+        if sentences and (key == "before" or (result["selected"] and not result["explained"])):
+            out.append(f"signature of {when}: " + "; ".join(sentences))
     return out
 
 
@@ -289,37 +353,69 @@ def fit(
     out: Path = typer.Option(..., "--out", help="Parameter file to write (e.g. params/calibrated.toml).", dir_okay=False),
     params: Optional[Path] = ParamsOpt,
     degrees: bool = DegreesOpt,
+    plugin: Optional[List[Path]] = PluginOpt,
+    robust: bool = RobustOpt,
 ):
     """Fit effect parameters and write a parameter file whose model (forward / inverse) uses them.
 
     The fit starts from the analytic model; the written file is the input file with its [effects]
-    replaced by the fitted ones (tendon_elasticity always written, 0 when not fitted)."""
+    replaced by the fitted ones (tendon_elasticity written as 0 when not fitted: it replaces the
+    [mechanics] k_s/EA of the compensated model and nothing else) and its ``plugins`` extended by
+    the --plugin files (relative to the written file). Refused: an effect the control law cannot
+    invert. The written file is loaded back and must reproduce the fit's prediction."""
+    import os
+
+    import numpy as np
+
     from .. import load_hand
     from ..params import dump_params
+    from ..params.schema import plugin_paths
     from ..canon import plain
     from ..calibration.data import read_measurements
     from ..calibration.diagnose import mae
-    from ..calibration.effects import validate_effects
+    from ..calibration.effects import get_effect, has_invert, validate_effects
     from ..errors import one_line
     from ..calibration.fitting import Model, Problem, fit as run_fit
 
+    check_output(out, FIT_MARKER, "a parameter file written by phantom-cad fit")
+    plugin_files = _load_plugins(plugin)
+    hand = load_hand(params)
     names = _effect_names(effects)
     if not names:
         raise _user_error("--effects: name at least one effect to fit")
-    check_output(out, FIT_MARKER, "a parameter file written by phantom-cad fit")
-    hand = load_hand(params)
+    for n in names:
+        eff = get_effect(n)
+        if not has_invert(eff):
+            raise _user_error(f"--effects {effects}: effect '{n}' ({eff.stage} stage) has no invert(), so the control "
+                              f"law (Hand.inverse) could not use the calibrated file; add invert(self, hand, value, x) "
+                              f"to it (docs/effects.md), or use it with compare/diagnose only")
     m = read_measurements(data, degrees=degrees).require_joints()
     problem = Problem(hand, m)
     before = run_fit(Model(hand, [], problem), problem)
-    res = run_fit(Model(hand, names, problem), problem)
+    if robust:
+        from ..calibration.diagnose import ROBUST_SCALE
+        from ..calibration.fitting import robust_loss
+        from ..calibration.residual import MAE_PER_SIGMA, noise_floor
+
+        with robust_loss(ROBUST_SCALE * noise_floor(m).overall_deg / MAE_PER_SIGMA):
+            res = run_fit(Model(hand, names, problem), problem)
+    else:
+        res = run_fit(Model(hand, names, problem), problem)
     vals, errs = res.values(), res.uncertainties()
     table = {n: {k: round(v, 9) for k, v in vals[n].items()} for n in names}
     if "tendon_elasticity" not in table:
-        # the fit starts from the analytic model: a zero compliance keeps compensated=True consistent with it
+        # the fit starts from the analytic model: a zero compliance keeps compensated=True consistent
+        # with it (it replaces the base k_s/EA only; other tension-stage effects keep what they add)
         table["tendon_elasticity"] = {"compliance_per_m": 0.0}
     validate_effects(table, str(out))
     doc = plain(hand.params.document)
     doc["effects"] = table
+    here = os.path.dirname(os.path.abspath(out))
+    files = list(dict.fromkeys([*plugin_paths(hand.params.plugins, hand.params.source), *plugin_files]))
+    if files:
+        doc["plugins"] = [os.path.relpath(f, here) for f in files]
+    else:
+        doc.pop("plugins", None)
     header = [f"{FIT_MARKER} {one_line(data)} --effects {','.join(names)}`",
               f"# from {one_line(hand.params.source)} (digest {hand.params.digest[:12]}), {len(m)} rows.",
               f"# MAE {mae(before):.4f} deg (analytic) -> {mae(res):.4f} deg (with the effects).",
@@ -329,6 +425,15 @@ def fit(
         for k, v in vals[n].items():
             header.append(f"#   {n}.{k} = {v:.6g} +- {errs[n][k]:.2g}")
     dump_params(doc, out, header="\n".join(header) + "\n\n")
-    load_hand(out)  # the written file must load, effects included
+    # the written file must load and reproduce the fit: no written effect may override another
+    written = load_hand(out)
+    q_fit = res.model.predict(res.theta, m.u, m.direction)
+    q_file = written.effects.forward(written, m.u, True, m.direction)
+    gap = float(np.nanmax(np.abs(q_file - q_fit)[np.isfinite(m.q)]))
+    if gap > 1e-6:
+        os.replace(out, str(out) + ".rejected")
+        raise _user_error(f"{out}: the written effects ({', '.join(written.effects.names)}) do not reproduce the fit "
+                          f"(up to {np.degrees(gap):.4f} deg apart): one of them overrides another; the file was "
+                          f"moved to {out}.rejected")
     typer.echo("\n".join(h[2:] for h in header))
     typer.echo(f"wrote {out}")

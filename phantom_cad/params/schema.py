@@ -37,6 +37,25 @@ def register_effect_check(check: Callable[[Mapping[str, Any], str | None], None]
         EFFECT_CHECKS.append(check)
 
 
+#: loaders of the effect plugins a parameter file names (``plugins = ["my_effect.py"]``, paths
+#: relative to the file), ``load(path, field, source)`` raising ParamError; installed, like the
+#: effect checks, by the effect library (the params layer never imports calibration)
+PLUGIN_LOADERS: list[Callable[[str, str, str | None], None]] = []
+
+
+def register_plugin_loader(load: Callable[[str, str, str | None], None]) -> None:
+    if load not in PLUGIN_LOADERS:
+        PLUGIN_LOADERS.append(load)
+
+
+def plugin_paths(plugins: tuple[str, ...], source: str | None) -> tuple[str, ...]:
+    """The plugin files of a parameter file, resolved against the file's folder."""
+    import os
+
+    base = os.path.dirname(os.path.abspath(source)) if source else os.getcwd()
+    return tuple(os.path.normpath(os.path.join(base, p)) for p in plugins)
+
+
 @dataclass(frozen=True)
 class Guide:
     """MCP (or thumb MP) tendon guides: distances d1 (metacarpal side), d2 (phalanx side)
@@ -206,6 +225,8 @@ class HandParams:
     #: the validated document, as parsed (units as in the file); dump() writes it back
     document: Mapping[str, Any] = field(repr=False)
     source: str | None = None
+    #: effect plugin files as written (relative to the file's folder); see plugin_paths()
+    plugins: tuple[str, ...] = ()
 
     @property
     def chains(self) -> tuple[ChainParams, ...]:
@@ -512,6 +533,17 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
 
     cad = _cad(root.table("cad"), hand_length, fingers, thumb, palm, servo, hardware, printing)
 
+    plugins = root._get("plugins", [])
+    if not isinstance(plugins, list) or not all(isinstance(v, str) and v.strip() for v in plugins):
+        raise root.error("plugins", plugins, "must be a list of file paths (Python files that register effects, "
+                         "relative to this parameter file)")
+    plugins = tuple(plugins)
+    if plugins:
+        if not PLUGIN_LOADERS:
+            raise ParamError("plugins", ", ".join(plugins), "no effect library is loaded to load them", source)
+        for i, path in enumerate(plugin_paths(plugins, source)):
+            for load in PLUGIN_LOADERS:
+                load(path, f"plugins[{i}]", source)
     effects = root.table("effects", default={})
     effect_params = {}
     for key in effects.keys():
@@ -532,4 +564,5 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
         fingers=MappingProxyType(fingers), thumb=thumb, mechanics=mechanics, palm=palm,
         servo=servo, hardware=hardware, print=printing, cad=cad,
         effects=canon.freeze(effect_params), document=canon.freeze(dict(document)), source=source,
+        plugins=plugins,
     )

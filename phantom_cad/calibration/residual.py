@@ -1,0 +1,324 @@
+"""What the data say about themselves: the noise floor, the verdict, the residual's signature.
+
+Noise floor (from the data, not from a model)
+    Within each sweep, for each joint, every three consecutive measured samples x0, x1, x2 at
+    servo angles t0, t1, t2 (the joint's own servo) give the combination
+        e = (t2 - t1) x0 - (t2 - t0) x1 + (t1 - t0) x2,
+    which is zero for any straight line x(t) and, for white noise of standard deviation sigma,
+    has standard deviation sigma * sqrt((t2-t1)^2 + (t2-t0)^2 + (t1-t0)^2). Divided by that, every
+    e is a unit-scaled noise sample (equal steps: the second difference / sqrt(6); a reversal onto
+    the same angle: the difference of two repeated samples / sqrt(2); a servo at rest: the plain
+    second difference / sqrt(6)). Per joint, a first scale is 1.4826 * MAD of these; the samples
+    farther than TRIM of those scales from the median (the few triples at a kink: a reversal, a
+    dead band, a jump, an outlier) are set aside and sigma is the RMS of the others (divided by
+    0.9969, the RMS of a normal variable cut at 3.5 sd), which is robust like the MAD and about
+    2.7 times as efficient. The noise MAE (the floor) is
+    sigma * sqrt(2 / pi). Structure that changes on the scale of the sample spacing (a period of a
+    few samples) cannot be told from noise this way; the spacing is reported.
+
+Verdict
+    A joint is consistent with noise when its residual MAE <= FLOOR_FACTOR * its floor * (1 +
+    SMALL_SAMPLE / sqrt(n)), n its number of measured cells; overall likewise with every cell.
+    ``explained`` is true only when every joint and the whole are consistent.
+
+Signature (per joint, of a residual)
+    the part that flips with the direction of motion and the part that does not (bins of the
+    servo angle, the mean when flexing and when extending: half their difference / half their
+    sum); the value at rest; the linear trend against the servo angle; a least-squares
+    periodogram against the servo angle (periods PERIODS_DEG); MCP (and thumb MP, CMC) vs the
+    distal joints.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..kinematics.topology import DISTAL_JOINTS, JOINT_SERVO, Q_COLUMNS
+from ..units import DEG_PER_RAD
+
+#: residual MAE up to this multiple of the noise floor is "consistent with noise" ...
+FLOOR_FACTOR = 1.2
+#: ... times (1 + SMALL_SAMPLE / sqrt(n)): the spread of an n-cell MAE and of the floor's own estimate
+SMALL_SAMPLE = 3.0
+MAD_SCALE = 1.4826
+#: noise samples beyond TRIM MAD-scales are set aside; TRIM_RMS: the RMS of a unit normal cut at TRIM
+TRIM = 3.5
+TRIM_RMS = 0.99694
+MAE_PER_SIGMA = math.sqrt(2.0 / math.pi)
+#: candidate periods of the periodogram, degrees of servo angle
+PERIODS_DEG = tuple(float(p) for p in range(10, 121, 2))
+#: a period is reported when its sinusoid removes at least this share of the detrended variance ...
+PERIOD_SHARE = 0.5
+#: ... and at least this many times the median share over the candidate periods
+PERIOD_CONTRAST = 3.0
+#: servo angles within this fraction of the travel from its start count as "at rest"
+REST_FRACTION = 0.05
+#: number of servo-angle bins for the direction split
+DIRECTION_BINS = 12
+
+
+@dataclass
+class NoiseFloor:
+    sigma_deg: dict[str, float]          # per joint (q column)
+    floor_deg: dict[str, float]          # noise MAE per joint
+    triples: dict[str, int]              # number of triples per joint
+    cells: dict[str, int]                # measured cells per joint
+    overall_deg: float                   # noise MAE over every measured cell
+    spacing_deg: float                   # median |step| of the joint's servo between neighbours
+
+    def to_json(self) -> dict:
+        return {"overall": round(self.overall_deg, 5),
+                "per_joint": {c: round(v, 5) for c, v in self.floor_deg.items()},
+                "sigma_per_joint": {c: round(v, 5) for c, v in self.sigma_deg.items()},
+                "sample_spacing_deg": round(self.spacing_deg, 4)}
+
+
+def unit_noise_samples(t: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Unit-scaled noise samples of consecutive triples (module docstring); t, x: one run of samples."""
+    if x.size < 3:
+        return np.zeros(0)
+    t0, t1, t2 = t[:-2], t[1:-1], t[2:]
+    w0, w1, w2 = t2 - t1, -(t2 - t0), t1 - t0
+    scale = np.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+    flat = scale <= 1e-12 * max(1.0, float(np.max(np.abs(t))))
+    w0, w1, w2 = np.where(flat, 1.0, w0), np.where(flat, -2.0, w1), np.where(flat, 1.0, w2)
+    scale = np.where(flat, math.sqrt(6.0), scale)
+    return (w0 * x[:-2] + w1 * x[1:-1] + w2 * x[2:]) / scale
+
+
+def robust_sigma(e: np.ndarray) -> float:
+    """Scale of unit noise samples: the RMS of those within TRIM MAD-scales of the median."""
+    med = float(np.median(e))
+    s0 = MAD_SCALE * float(np.median(np.abs(e - med)))
+    if s0 <= 0:
+        return float(np.sqrt(np.mean(np.square(e - med))))
+    kept = e[np.abs(e - med) <= TRIM * s0]
+    return float(np.sqrt(np.mean(np.square(kept - med)))) / TRIM_RMS
+
+
+def noise_floor(m) -> NoiseFloor:
+    """Noise of every measured joint from the measurements alone (module docstring)."""
+    sigma, floor, triples, cells = {}, {}, {}, {}
+    steps = []
+    weighted = 0.0
+    total = 0
+    for j, c in enumerate(Q_COLUMNS):
+        col = m.q[:, j]
+        ok = np.isfinite(col)
+        if not ok.any():
+            continue
+        s = JOINT_SERVO[j]
+        parts = []
+        for k in np.unique(m.sweep[ok]):
+            rows = np.flatnonzero(ok & (m.sweep == k))
+            t = m.u[rows, s] * DEG_PER_RAD
+            parts.append(unit_noise_samples(t, col[rows] * DEG_PER_RAD))
+            d = np.abs(np.diff(t))
+            steps.append(d[d > 0])
+        e = np.concatenate(parts) if parts else np.zeros(0)
+        n = int(ok.sum())
+        cells[c] = n
+        triples[c] = int(e.size)
+        if e.size:
+            sig = robust_sigma(e)
+        else:
+            sig = float("nan")
+        sigma[c] = sig
+        floor[c] = sig * MAE_PER_SIGMA
+        if np.isfinite(sig):
+            weighted += floor[c] * n
+            total += n
+    allsteps = np.concatenate(steps) if steps else np.zeros(0)
+    return NoiseFloor(sigma, floor, triples, cells, weighted / total if total else float("nan"),
+                      float(np.median(allsteps)) if allsteps.size else float("nan"))
+
+
+def tolerance(floor: float, n: int) -> float:
+    """The largest residual MAE consistent with noise of MAE ``floor`` over ``n`` cells."""
+    return FLOOR_FACTOR * floor * (1.0 + SMALL_SAMPLE / math.sqrt(max(n, 1)))
+
+
+def _cells(fr):
+    """(rows into the measurements, joint index, residual deg) of a fit's measured cells."""
+    p = fr.problem
+    return p.rows[p.r_idx], p.j_idx, fr.residual
+
+
+def verdict(fr, noise: NoiseFloor, keep: np.ndarray | None = None) -> dict:
+    """``explained`` and, per joint, MAE / RMS / tolerance and the structured part beyond the noise;
+    ``keep``: the cells to judge (default all)."""
+    rows, jj, r = _cells(fr)
+    if keep is not None:
+        rows, jj, r = rows[keep], jj[keep], r[keep]
+    per = {}
+    ok_all = True
+    for j, c in enumerate(Q_COLUMNS):
+        sel = jj == j
+        if not sel.any() or c not in noise.floor_deg or not np.isfinite(noise.floor_deg[c]):
+            continue
+        x = r[sel]
+        mae_j = float(np.mean(np.abs(x)))
+        rms_j = float(np.sqrt(np.mean(x * x)))
+        tol = tolerance(noise.floor_deg[c], x.size)
+        structured_rms = math.sqrt(max(0.0, rms_j ** 2 - noise.sigma_deg[c] ** 2))
+        consistent = mae_j <= tol
+        ok_all &= consistent
+        per[c] = {"mae_deg": round(mae_j, 5), "rms_deg": round(rms_j, 5), "tolerance_deg": round(tol, 5),
+                  "consistent": bool(consistent), "structured_rms_deg": round(structured_rms, 5),
+                  "structured_mae_deg": round(structured_rms * MAE_PER_SIGMA, 5)}
+    mae_all = float(np.mean(np.abs(r))) if r.size else float("nan")
+    tol_all = tolerance(noise.overall_deg, r.size)
+    overall_ok = bool(mae_all <= tol_all)
+    return {"explained": bool(ok_all and overall_ok), "overall": {"mae_deg": round(mae_all, 5),
+            "tolerance_deg": round(tol_all, 5), "consistent": overall_ok}, "per_joint": per}
+
+
+# ---------------------------------------------------------------------------
+# signature
+# ---------------------------------------------------------------------------
+
+def _periodogram(t: np.ndarray, x: np.ndarray):
+    """(best period, its share of the detrended variance, median share) or None."""
+    if x.size < 12 or np.ptp(t) <= 0:
+        return None
+    base = np.column_stack([np.ones_like(t), t])
+    coef, *_ = np.linalg.lstsq(base, x, rcond=None)
+    e = x - base @ coef
+    var = float(e @ e)
+    if var <= 0:
+        return None
+    shares = []
+    periods = [p for p in PERIODS_DEG if p <= np.ptp(t)]
+    if len(periods) < 3:
+        return None
+    for p in periods:
+        w = 2 * math.pi * t / p
+        A = np.column_stack([np.ones_like(t), t, np.cos(w), np.sin(w)])
+        c, *_ = np.linalg.lstsq(A, x, rcond=None)
+        res = x - A @ c
+        shares.append(1.0 - float(res @ res) / var)
+    shares = np.array(shares)
+    k = int(np.argmax(shares))
+    # refine the peak on a 0.25 deg grid around the best candidate
+    best_p, best_s = periods[k], shares[k]
+    for p in np.arange(max(periods[0], best_p - 2.0), best_p + 2.0 + 1e-9, 0.25):
+        w = 2 * math.pi * t / p
+        A = np.column_stack([np.ones_like(t), t, np.cos(w), np.sin(w)])
+        c, *_ = np.linalg.lstsq(A, x, rcond=None)
+        res = x - A @ c
+        s = 1.0 - float(res @ res) / var
+        if s > best_s:
+            best_p, best_s = float(p), s
+    return float(best_p), float(best_s), float(np.median(shares))
+
+
+def joint_signature(u_deg: np.ndarray, d: np.ndarray, x: np.ndarray, travel_deg: tuple[float, float]) -> dict:
+    """Signature of one joint's residual x (deg) against its servo angle u (deg), direction d."""
+    out: dict = {"rms_deg": round(float(np.sqrt(np.mean(x * x))), 5)}
+    lo, hi = travel_deg
+    rest = u_deg <= lo + REST_FRACTION * (hi - lo)
+    out["at_rest_deg"] = round(float(np.mean(x[rest])), 5) if rest.any() else None
+    if np.ptp(u_deg) > 0 and x.size >= 3:
+        slope, icpt = np.polyfit(u_deg, x, 1)
+        fit = slope * u_deg + icpt
+        ss = float(np.sum((x - x.mean()) ** 2))
+        out["trend_deg_per_10deg"] = round(float(slope) * 10.0, 5)
+        out["trend_share"] = round(1.0 - float(np.sum((x - fit) ** 2)) / ss, 4) if ss > 0 else 0.0
+    both = (d > 0).any() and (d < 0).any()
+    if both:
+        edges = np.linspace(u_deg.min(), u_deg.max() + 1e-9, DIRECTION_BINS + 1)
+        b = np.clip(np.digitize(u_deg, edges) - 1, 0, DIRECTION_BINS - 1)
+        odd, even = [], []
+        for k in range(DIRECTION_BINS):
+            f, e = x[(b == k) & (d > 0)], x[(b == k) & (d < 0)]
+            if f.size and e.size:
+                odd.append((f.mean() - e.mean()) / 2)
+                even.append((f.mean() + e.mean()) / 2)
+        if odd:
+            out["direction_flipping_rms_deg"] = round(float(np.sqrt(np.mean(np.square(odd)))), 5)
+            out["direction_independent_rms_deg"] = round(float(np.sqrt(np.mean(np.square(even)))), 5)
+    out["both_directions"] = bool(both)
+    per = _periodogram(u_deg, x)
+    if per is not None:
+        p, share, med = per
+        clear = share >= PERIOD_SHARE and share >= PERIOD_CONTRAST * max(med, 1e-12)
+        out["period"] = {"best_deg": round(p, 2), "share": round(share, 4), "median_share": round(med, 4),
+                         "clear": bool(clear)}
+    return out
+
+
+def signature(fr, m, hand, joints=None) -> dict:
+    """Per-joint signature of a fit's residual and a plain summary (module docstring).
+    ``joints``: q columns to describe (default: every measured one)."""
+    rows, jj, r = _cells(fr)
+    d_all = m.direction
+    per = {}
+    for j, c in enumerate(Q_COLUMNS):
+        if joints is not None and c not in joints:
+            continue
+        sel = jj == j
+        if not sel.any():
+            continue
+        s = JOINT_SERVO[j]
+        # the rows where the joint's own servo moves (other sweeps hold it still)
+        rr = rows[sel]
+        moving = d_all[rr, s] != 0
+        if moving.sum() < 3:
+            continue
+        u = m.u[rr, s][moving] * DEG_PER_RAD
+        per[c] = joint_signature(u, d_all[rr, s][moving], r[sel][moving],
+                                 (float(hand.u_min[s] * DEG_PER_RAD), float(hand.u_max[s] * DEG_PER_RAD)))
+    summary = _summary(per)
+    return {"per_joint": per, **summary}
+
+
+def _group_rms(per: dict, distal: bool) -> float | None:
+    vals = [v["rms_deg"] for c, v in per.items() if (Q_COLUMNS.index(c) in DISTAL_JOINTS) == distal]
+    return round(float(np.sqrt(np.mean(np.square(vals)))), 5) if vals else None
+
+
+def _summary(per: dict) -> dict:
+    """Whole-residual features and one or two plain sentences."""
+    out: dict = {"mcp_rms_deg": _group_rms(per, False), "distal_rms_deg": _group_rms(per, True)}
+    sentences = []
+    if per and not any(v["both_directions"] for v in per.values()):
+        out["direction"] = "one direction only"
+        sentences.append("the data move in one direction only: direction-dependent physics (friction, backlash) "
+                         "cannot be seen; record the return sweep too")
+    periodic = {c: v["period"]["best_deg"] for c, v in per.items() if v.get("period", {}).get("clear")}
+    if periodic:
+        ps = np.array(list(periodic.values()))
+        out["periodic"] = {"period_deg": round(float(np.median(ps)), 2), "joints": sorted(periodic, key=Q_COLUMNS.index)}
+        sentences.append(f"the residual is periodic in u with period {np.median(ps):.0f} deg on "
+                         f"{', '.join(out['periodic']['joints'])}: no library effect predicts that; look at the "
+                         "servo horn / pulley eccentricity")
+    flip = {c: v for c, v in per.items() if "direction_flipping_rms_deg" in v}
+    if flip:
+        odd = float(np.sqrt(np.mean([v["direction_flipping_rms_deg"] ** 2 for v in flip.values()])))
+        even = float(np.sqrt(np.mean([v["direction_independent_rms_deg"] ** 2 for v in flip.values()])))
+        out["direction_flipping_rms_deg"], out["direction_independent_rms_deg"] = round(odd, 5), round(even, 5)
+        if odd > even:
+            sentences.append(f"the residual flips with the direction of motion (RMS {odd:.2f} deg flipping vs "
+                             f"{even:.2f} deg not): hysteresis, friction or backlash")
+    mcp, dist = out["mcp_rms_deg"], out["distal_rms_deg"]
+    if mcp is not None and dist is not None and not periodic:
+        if dist > 2 * mcp:
+            sentences.append(f"it sits on the distal joints (RMS {dist:.2f} deg) more than on the MCP/MP/CMC "
+                             f"({mcp:.2f} deg): the coupling (tendon stretch) rather than the drive")
+        elif mcp > 2 * dist:
+            sentences.append(f"it sits on the MCP/MP/CMC (RMS {mcp:.2f} deg) more than on the distal joints "
+                             f"({dist:.2f} deg): the drive (servo, pulley, guide) rather than the coupling")
+    rests = [abs(v["at_rest_deg"]) for v in per.values() if v.get("at_rest_deg") is not None]
+    trends = [v.get("trend_share", 0.0) for v in per.values()]
+    if not periodic and trends and np.median(trends) > 0.5:
+        sentences.append("it grows in proportion to the servo angle (a gain or radius error, or a stretch)")
+    elif not periodic and rests and np.median(rests) > 0.5 * np.median([v["rms_deg"] for v in per.values()]):
+        sentences.append("it is present at rest (an offset)")
+    out["sentences"] = sentences
+    return out
+
+
+__all__ = ["NoiseFloor", "noise_floor", "verdict", "signature", "tolerance", "FLOOR_FACTOR", "SMALL_SAMPLE"]
