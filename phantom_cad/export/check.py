@@ -45,7 +45,7 @@ TOL_Q = 1e-6
 TOL_EQUILIBRIUM = math.radians(0.1)
 #: near-rigid: every tendon strand but the return cord this many times stiffer (and damped), the
 #: simulation step shortened to stay stable, the settling time
-NEAR_RIGID, NEAR_RIGID_STEP, SETTLE_S = 300.0, 3e-5, 1.2
+NEAR_RIGID, NEAR_RIGID_STEP, SETTLE_S = 200.0, 2e-5, 1.0
 #: inertials: relative, of the mass and of the largest tensor entry; the STEP round trip and the
 #: 6-7 significant digits the files keep
 TOL_MASS, TOL_TENSOR = 1e-4, 1e-3

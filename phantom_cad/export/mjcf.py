@@ -12,7 +12,7 @@ names, inertials and meshes as the URDF). What MuJoCo adds (docs/descriptions.md
   (the return cord, whose tension is then k_s sum R_i q_i, eq. 11), damping stiffness x
   :data:`~phantom_cad.export.robot.STRAND_TAU`.
 * **Servos**: each tendon servo's pulley turns on a hinge (named after the servo,
-  ``index_flexion``, ...) with the servo's reflected inertia as armature, driven by a position
+  ``index_flexion``, ...; armature kv^2 / (4 kp): the position loop critically damped), driven by a position
   actuator ``servo<n>`` (control = u in radians); the drive tendon is clamped on the pulley and
   wound by it. ``servo6`` turns the CMC directly (q = cmc_gain u).
 * kp = stall torque / stall error (``servo.stall_error_deg``), kv = stall torque / no-load speed.

@@ -100,7 +100,8 @@ class ServoDrive:
     torque: float                # stall torque, N m
     stiffness: float             # position gain, N m / rad of servo angle
     damping: float               # N m s / rad: stall torque / no-load speed (the motor's line)
-    armature: float              # reflected rotor inertia, kg m^2
+    armature: float              # inertia on the hinge, kg m^2: kv^2 / (4 kp), the position loop
+                                 # critically damped (a hobby servo does not ring after a step)
 
     @property
     def joint(self) -> str:
@@ -188,9 +189,6 @@ def _drives(params) -> dict[str, tuple[float, float, Mimic | None]]:
     return out
 
 
-#: reflected rotor inertia of a micro servo's motor through its gearbox (about 5e-9 kg m^2 times a
-#: ratio of about 300, squared): what the servo's hinge carries in a simulation
-SERVO_ARMATURE = 4e-4
 #: a strand's damping is its stiffness times this time constant (s): a few simulation steps
 STRAND_TAU = 0.002
 
@@ -210,7 +208,7 @@ def transmissions(params) -> tuple[tuple[ServoDrive | JointDrive, ...], tuple[St
         ch = params.digit(servo.digit).chain
         drives.append(ServoDrive(servo.actuator, servo.name, servo.link,
                                  tuple(float(v) for v in routing.servo_axis(params)), ch.travel, tau, kp, kv,
-                                 SERVO_ARMATURE))
+                                 kv * kv / (4.0 * kp)))
     rest = routing.lengths(params)
     strands = []
     for r in routing.routes(params):
