@@ -19,15 +19,12 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from phantom_cad.kinematics import routing  # noqa: E402
+from phantom_cad.kinematics.frames import segment_length  # noqa: E402
 from phantom_cad.kinematics.model import Hand  # noqa: E402
 from phantom_cad.kinematics.topology import SERVOS, chain, digit_links, joint  # noqa: E402
 from phantom_cad.params.io import DEFAULT_PARAMS, load_params  # noqa: E402
 
 COLOURS = {"drive": "#d62728", "a": "#ff7f0e", "b": "#2ca02c", "return": "#1f77b4"}
-
-
-def _segment(p, ln) -> float:
-    return 0.0 if ln.length_key is None else getattr(p.digit(ln.digit), ln.length_key)
 
 
 def draw(ax, p, digit: str, frac: float, title: str) -> None:
@@ -45,7 +42,7 @@ def draw(ax, p, digit: str, frac: float, title: str) -> None:
     for ln in digit_links(digit):
         if ln.segment == "servo_pulley":
             continue
-        L = _segment(p, ln)
+        L = segment_length(p, ln)
         y0 = -p.cad.finger_base_length if ln.segment == "base" else -T / 2
         y1 = L + T / 2 if L > 0 else 0.0
         box = np.array([[0, y0, -T / 2], [0, y1, -T / 2], [0, y1, T / 2], [0, y0, T / 2], [0, y0, -T / 2]])

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import contextlib
 import io
-import json
 import sys
 import threading
 from pathlib import Path
@@ -55,27 +54,17 @@ CAMERA_SHIFT = 0.12
 
 # -- the export ------------------------------------------------------------------
 
-def local_urdf(export: Path, manifest: Optional[dict] = None) -> Path:
-    """The robot description's URDF with relative mesh paths (meshes in metres) of ``export``."""
-    if manifest is None:
-        manifest = json.loads((export / "manifest.json").read_text(encoding="utf-8"))
-    rel = (manifest.get("description") or {}).get("local_urdf")
-    if rel:
-        return export / rel
-    name = (manifest.get("hand") or {}).get("name", "")
-    return export / "description" / "urdf" / f"{name}.local.urdf"
-
-
 def ensure_export(params_path, out, log: Callable[[str], None]):
     """(params, export folder, local URDF) of the hand in ``params_path`` (default
     params/phantom.toml); builds the export into ``out`` (default the build's default,
     exports/<hand>) first when it is missing or was built from other parameters
     (export.pipeline.ensure_export, not sliced: the viewer needs no print estimates)."""
     from ..export import pipeline
+    from ..export.check import Export
 
     path = Path(params_path) if params_path is not None else DEFAULT_PARAMS
     export, params = pipeline.ensure_export(path, out, None, lambda msg: log(f"view: {msg}"), slice=False)
-    return params, export, local_urdf(export)
+    return params, export, Export.open(export).local_urdf
 
 
 def load_urdf(path: Path):

@@ -36,6 +36,7 @@ from .. import units
 from ..errors import UserError
 from ..kinematics.model import Hand
 from ..kinematics.topology import CMC_Q, CMC_SERVO, JOINTS, LINK_NAMES, SERVOS, joint
+from .pipeline import export_problem
 
 #: poses: position (mm) and rotation (deg) tolerances of the issue
 TOL_MM, TOL_DEG = 0.01, 0.01
@@ -431,11 +432,9 @@ def check_export(export_dir: Path, params, samples: int = 8, settle: int = 3, se
                  log=lambda msg: None) -> list[Row]:
     """Every row of the check of the export in ``export_dir`` built from ``params``."""
     export = Export.open(Path(export_dir))
-    recorded = export.manifest.get("params", {}).get("digest")
-    if recorded != params.digest or export.manifest.get("hand", {}).get("side") != params.side:
-        raise UserError(f"{export.folder}: built from other parameters (digest {str(recorded)[:12]}, side "
-                        f"{export.manifest.get('hand', {}).get('side')}) than {params.source} (digest "
-                        f"{params.digest[:12]}, side {params.side}); build it again")
+    problem = export_problem(export.folder, params.digest, params.side)
+    if problem is not None:
+        raise UserError(f"{problem} ({params.source}); build it again")
     hand = Hand(params)
     U = commands(hand, samples, seed)
     rows = []

@@ -125,8 +125,9 @@ def mjcf_spec(model: RobotModel, meshdir: str = "../meshes"):
     # per link: the strands' sites (name, pos) and pulley cylinders (name, centre, axis, radius, width)
     sites: dict[str, list] = {}
     cylinders: dict[str, dict] = {}
+    strand_names = {st.name: _strand_names(st) for st in model.strands}
     for st in model.strands:
-        names, geoms = _strand_names(st)
+        names, geoms = strand_names[st.name]
         for k, e in enumerate(st.elements):
             if names[k] is not None:
                 sites.setdefault(e.link, []).append((names[k], e.pos))
@@ -180,7 +181,7 @@ def mjcf_spec(model: RobotModel, meshdir: str = "../meshes"):
     for a, b in model.adjacent:
         spec.add_exclude(bodyname1=a, bodyname2=b)
     for st in model.strands:
-        names, geoms = _strand_names(st)
+        names, geoms = strand_names[st.name]
         t = spec.add_tendon(name=st.name, stiffness=st.stiffness, damping=st.damping,
                             springlength=[0.0, st.rest_length], width=0.0003,
                             rgba=list(RETURN_RGBA if st.kind == "return" else TENDON_RGBA))

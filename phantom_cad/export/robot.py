@@ -210,13 +210,14 @@ def transmissions(params) -> tuple[tuple[ServoDrive | JointDrive, ...], tuple[St
                                  tuple(float(v) for v in routing.servo_axis(params)), ch.travel, tau, kp, kv,
                                  kv * kv / (4.0 * kp)))
     rest = routing.lengths(params)
+    mid = routing.mid_travel_pose(params)
     strands = []
     for r in routing.routes(params):
         for st in r.strands:
             L = rest[st.name]
             k = params.mechanics.spring_k if r.stiffness == "k_s" else params.mechanics.tendon_EA / L
             strands.append(Strand(st.name, r.name, r.tendon.kind, st.elements,
-                                  tuple(routing.side_sites(params, st)), L, k, k * STRAND_TAU))
+                                  tuple(routing.side_sites(params, st, mid)), L, k, k * STRAND_TAU))
     return tuple(drives), tuple(strands)
 
 

@@ -229,7 +229,7 @@ def guide_sites(params, digit: str) -> tuple[tuple[str, np.ndarray], tuple[str, 
     ch = chain(digit)
     ref = joint(ch.joint_names[0])
     G1, G2 = guide_offsets(params.digit(digit).chain.guide)
-    L = _segment_length(params, link(ref.parent))
+    L = segment_length(params, link(ref.parent))
     p1 = np.array([0.0, L + G1[0], G1[1]])
     p2 = np.array([0.0, G2[0], G2[1]])
     if params.side == "left":
@@ -242,7 +242,7 @@ def rest_transforms(params) -> dict[str, np.ndarray]:
     return joint_transforms(params, np.zeros(N_JOINTS))
 
 
-def _segment_length(params, ln) -> float:
+def segment_length(params, ln) -> float:
     """Length (m) of link ``ln`` from its proximal joint to its distal one (0 for a finger base,
     whose origin is its distal joint)."""
     key = ln.length_key
@@ -264,7 +264,7 @@ def _joint_transform(params, ln, q) -> np.ndarray:
     j = joint(ln.parent_joint)
     if j.index == CMC_Q:
         return T_palm_thumb_cmc_base(params, float(q[j.index]))
-    L = _segment_length(params, link(ln.parent))
+    L = segment_length(params, link(ln.parent))
     return flex(float(q[j.index])) if L == 0.0 else trans(0, L, 0) @ flex(float(q[j.index]))
 
 

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import frames as F
-from .topology import CHAINS, SERVOS, TENDONS, Tendon, chain, digit_links, joint, link
+from .topology import CHAINS, JOINTS, N_JOINTS, SERVOS, TENDONS, Tendon, chain, digit_links, joint, link
 
 #: two perimeters of a 0.4 mm nozzle: the thinnest flank beside a groove (m)
 FLANK = 0.8e-3
@@ -130,13 +130,8 @@ def layout(params, digit: str) -> Layout:
 # plane geometry
 # ---------------------------------------------------------------------------
 
-def _polar(p) -> float:
-    """Polar angle of (y, z) measured from +y toward +z."""
-    return math.atan2(p[1], p[0])
-
-
-def _yz(angle: float, r: float, centre=(0.0, 0.0)) -> np.ndarray:
-    return np.array([centre[0] + r * math.cos(angle), centre[1] + r * math.sin(angle)])
+def _yz(angle: float, r: float) -> np.ndarray:
+    return np.array([r * math.cos(angle), r * math.sin(angle)])
 
 
 def _clamp_angle(lo: float, hi: float, what: str) -> float:
@@ -151,20 +146,14 @@ def _joint_travel(params, jname: str) -> float:
     return lim[1] + TRAVEL_MARGIN + (params.cad.module_stop_margin if link(j.parent).segment == "base" else 0.0)
 
 
-def _rest(params) -> dict[str, np.ndarray]:
-    return F.rest_transforms(params)
-
-
-def _child_origin(params, jname: str) -> np.ndarray:
-    """The joint's axis point (its child's origin) in its parent's frame, at rest."""
+def _child_origin(rest: dict[str, np.ndarray], jname: str) -> np.ndarray:
+    """The joint's axis point (its child's origin) in its parent's frame, from the rest transforms."""
     j = joint(jname)
-    return _rest(params)[f"T_{j.parent}_{j.child}"][:3, 3].copy()
+    return rest[f"T_{j.parent}_{j.child}"][:3, 3].copy()
 
 
 def _segment(params, link_name: str) -> float:
-    """Distance (m) from a link's proximal joint to its distal one."""
-    ln = link(link_name)
-    return 0.0 if ln.length_key is None else float(getattr(params.digit(ln.digit), ln.length_key))
+    return float(F.segment_length(params, link(link_name)))
 
 
 # ---------------------------------------------------------------------------
@@ -178,7 +167,7 @@ def _p(x: float, yz) -> tuple[float, float, float]:
     return (float(x), float(yz[0]), float(yz[1]))
 
 
-def _loop(params, digit: str, k: int, lay: Layout) -> tuple[Strand, Strand]:
+def _loop(params, digit: str, k: int, lay: Layout, rest) -> tuple[Strand, Strand]:
     """The figure-eight loop between chain joints k and k+1 (see the module doc)."""
     ch = params.digit(digit).chain
     spec = chain(digit)
@@ -198,7 +187,7 @@ def _loop(params, digit: str, k: int, lay: Layout) -> tuple[Strand, Strand]:
     # strand a wraps psi - pi - gamma - q_b, strand b 2 pi - 2 gamma minus that
     wa = _clamp_angle(math.pi - 2 * gamma + qb + m, math.pi - m, f"{digit} loop {ja}-{jb} groove")
     psi = wa + math.pi + gamma
-    hub_c = _child_origin(params, ja)                 # joint a's axis in A's frame
+    hub_c = _child_origin(rest, ja)                   # joint a's axis in A's frame
     cA = hub_c + np.array([x, 0.0, 0.0])
     clamp_A = cA + np.array([0.0, *_yz(phi, Ra + CLAMP_OFFSET)])   # A's frame = C's frame at rest
     clamp_B = np.array([x, *_yz(psi, Rb + CLAMP_OFFSET)])
@@ -215,7 +204,7 @@ def _loop(params, digit: str, k: int, lay: Layout) -> tuple[Strand, Strand]:
     return a, b
 
 
-def _return(params, digit: str, lay: Layout) -> Strand:
+def _return(params, digit: str, lay: Layout, rest) -> Strand:
     """The dorsal cable-spring: tangent to every joint's groove at its radius, on both sides."""
     spec = chain(digit)
     ch = params.digit(digit).chain
@@ -224,14 +213,14 @@ def _return(params, digit: str, lay: Layout) -> Strand:
     x = lay.return_x
     first = links[0]
     # anchored on the first link, half way between its start and the first joint
-    ja0 = _child_origin(params, spec.joint_names[0])
+    ja0 = _child_origin(rest, spec.joint_names[0])
     y0 = ja0[1] - (_segment(params, first) / 2.0 if _segment(params, first) > 0 else params.cad.finger_base_length / 2.0)
     els: list = [Point("anchor", first, (float(x), float(y0), float(ch.radii[0])), "knot")]
     e = lay.return_groove      # the cord leaves / reaches each groove tangentially over this run
     for k, jn in enumerate(spec.joint_names):
         j = joint(jn)
         R = ch.radii[k]
-        c = _child_origin(params, jn)
+        c = _child_origin(rest, jn)
         # tangent on the parent's side, then the groove on the child (the cord slides on it)
         els.append(Point("via", j.parent, (float(x), float(c[1] - e), float(R)), "channel"))
         els.append(Pulley(j.child, (float(x), 0.0, 0.0), tuple(-X), R, lay.return_groove, "return", jn))
@@ -335,6 +324,7 @@ def routes(params) -> tuple[Route, ...]:
 def _routes(params) -> tuple[Route, ...]:
     out = []
     lays = {ch.digit: layout(params, ch.digit) for ch in CHAINS}
+    rest = F.rest_transforms(params)
     for t in TENDONS:
         lay = lays[t.digit]
         if t.kind == "drive":
@@ -342,9 +332,9 @@ def _routes(params) -> tuple[Route, ...]:
         elif t.kind == "coupling":
             keys = chain(t.digit).keys
             k0 = keys.index(t.joints[0].split("_", 1)[1])
-            strands, d, k = _loop(params, t.digit, k0, lay), params.hardware.tendon_diameter, "EA"
+            strands, d, k = _loop(params, t.digit, k0, lay, rest), params.hardware.tendon_diameter, "EA"
         else:
-            strands, d, k = (_return(params, t.digit, lay),), params.cad.spring_diameter, "k_s"
+            strands, d, k = (_return(params, t.digit, lay, rest),), params.cad.spring_diameter, "k_s"
         if params.side == "left":
             strands = tuple(Strand(s.name, tuple(_mirror_element(e) for e in s.elements)) for s in strands)
         out.append(Route(t, strands, d, k))
@@ -404,8 +394,7 @@ def _wrap(P, N, centre, axis, rho):
     arc = (t_out - t_in) % (2.0 * math.pi)
     if arc > math.pi:
         return float(np.linalg.norm(N - P)), [P, N]
-    s1 = math.hypot(dp, 0.0) ** 2 - rho * rho
-    l1 = math.sqrt(max(0.0, s1))
+    l1 = math.sqrt(max(0.0, dp * dp - rho * rho))
     l3 = math.sqrt(max(0.0, dn * dn - rho * rho))
     planar = l1 + rho * arc + l3
     dz = n[2] - p[2]
@@ -488,18 +477,23 @@ def document(params) -> dict:
             "tendons": tendons}
 
 
-def side_sites(params, strand: Strand) -> list[tuple[str, tuple[float, float, float]] | None]:
-    """For each element of ``strand``: None for a point; for a pulley, a point on the side its
-    strand wraps (MuJoCo's ``sidesite``), fixed to the link that carries the strand's straight
-    runs beside it, half a radius outside the arc's middle at the middle of every travel."""
-    from .topology import JOINTS, N_JOINTS
-
+def mid_travel_pose(params) -> dict[str, np.ndarray]:
+    """T_palm_link with every flexion joint at half its travel (as the clamps are placed) and every
+    tendon servo at the middle of its travel: where :func:`side_sites` places the side sites."""
     q = np.zeros(N_JOINTS)
     for j in JOINTS:
         if j.key != "cmc":
             q[j.index] = _joint_travel(params, j.name) / 2.0
     u = np.array([sum(params.digit(s.digit).chain.travel) / 2.0 if s.drive == "tendon" else 0.0 for s in SERVOS])
-    Ts = pose(params, q, u)
+    return pose(params, q, u)
+
+
+def side_sites(params, strand: Strand, Ts=None) -> list[tuple[str, tuple[float, float, float]] | None]:
+    """For each element of ``strand``: None for a point; for a pulley, a point on the side its
+    strand wraps (MuJoCo's ``sidesite``), fixed to the link that carries the strand's straight
+    runs beside it, half a radius outside the arc's middle at the middle of every travel
+    (``Ts``: :func:`mid_travel_pose`, computed when not given)."""
+    Ts = mid_travel_pose(params) if Ts is None else Ts
     els = strand.elements
     out: list = []
     for i, e in enumerate(els):

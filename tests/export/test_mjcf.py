@@ -61,10 +61,14 @@ def _qadr(m, joint):
     return m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, joint)]
 
 
-def _set_q(m, d, q: dict):
+def _set_q(m, d, q: dict, u: dict | None = None):
+    """Joint angles ``q`` by name and tendon servo angles ``u`` by digit (the rest 0), then the
+    kinematics and tendon lengths."""
     d.qpos[:] = 0.0
     for name, v in q.items():
         d.qpos[_qadr(m, name)] = v
+    for digit, v in (u or {}).items():
+        d.qpos[_qadr(m, f"{digit}_flexion")] = v
     mujoco.mj_kinematics(m, d)
     mujoco.mj_comPos(m, d)
     mujoco.mj_tendon(m, d)
@@ -158,15 +162,6 @@ def _radii(doc, digit):
 CHAIN_KEYS = {"thumb": ("mp", "ip"), **{f: ("mcp", "pip", "dip") for f in FINGERS}}
 
 
-def _set_qu(m, d, q: dict, u: dict):
-    _set_q(m, d, q)
-    for digit, v in u.items():
-        d.qpos[_qadr(m, f"{digit}_flexion")] = v
-    mujoco.mj_kinematics(m, d)
-    mujoco.mj_comPos(m, d)
-    mujoco.mj_tendon(m, d)
-
-
 def _length(m, d, name):
     return d.ten_length[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_TENDON, name)]
 
@@ -178,13 +173,13 @@ def test_tendon_lengths_are_the_mechanism(model, doc):
     exactly when eq. (2) holds), the drive by chord(q_ref) - chord(0) + r u (eq. 4-5: winding
     r u onto the servo takes up the chord's shortening), the return cord by sum R_i q_i (eq. 11)."""
     m, d = model, mujoco.MjData(model)
-    _set_qu(m, d, {}, {})
+    _set_q(m, d, {}, {})
     rest = {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_TENDON, t): d.ten_length[t] for t in range(m.ntendon)}
     rng = np.random.default_rng(7)
     for _ in range(6):
         q = {j: rng.uniform(0.0, 1.2) for j in JOINT_NAMES}
         u = {digit: rng.uniform(0.0, 1.4) for digit in SERVO_DIGIT.values()}
-        _set_qu(m, d, q, u)
+        _set_q(m, d, q, u)
         for digit, keys in CHAIN_KEYS.items():
             R = _radii(doc, digit)
             for a, b in zip(keys, keys[1:]):
@@ -204,17 +199,17 @@ def test_loops_hold_the_coupling_and_only_it(model, doc):
     """Along the coupled motion (eq. 2 by hand) every loop strand keeps its length within 0.02 mm
     over the whole travel; one joint leaving the coupling by 1 degree changes it by >= 0.05 mm."""
     m, d = model, mujoco.MjData(model)
-    _set_qu(m, d, {}, {})
+    _set_q(m, d, {}, {})
     rest = {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_TENDON, t): d.ten_length[t] for t in range(m.ntendon)}
     loops = [n for n in rest if n.endswith(("_a", "_b"))]
     assert len(loops) == 2 * (1 + 2 * len(FINGERS))
     for ref in np.linspace(0.0, 1.2, 13):
         q = {j: ref for j in SERVO_JOINT.values() if j != "thumb_cmc"}
         q.update({f: k * q[r] for f, (r, k) in MIMIC.items()})
-        _set_qu(m, d, q, {})
+        _set_q(m, d, q, {})
         assert max(abs(_length(m, d, n) - rest[n]) for n in loops) < 2e-5
         for j in MIMIC:
-            _set_qu(m, d, {**q, j: q[j] + math.radians(1.0)}, {})
+            _set_q(m, d, {**q, j: q[j] + math.radians(1.0)}, {})
             moved = [n for n in loops if abs(_length(m, d, n) - rest[n]) >= 5e-5]
             digit = j.split("_")[0]
             assert moved and all(n.startswith(digit) for n in moved), j

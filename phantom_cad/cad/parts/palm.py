@@ -26,6 +26,7 @@ import numpy as np
 
 from ... import canon, units
 from ...kinematics import frames as F
+from ...kinematics import routing
 from ...kinematics.topology import FINGERS, LINKS, SERVOS, THUMB_CHAIN, chain
 from ..measure import circular_pockets
 from .base import Part
@@ -204,23 +205,8 @@ class Palm(Part):
 
     def cmc_arch(self) -> dict:
         """Dimensions (CMC frame, mm) of the post and arch that carry the thumb tendon onto the
-        CMC axis above the CMC base, so that turning the CMC does not change its length. The
-        post stands on the end wall of servo 6's housing, on the side the thumb never sweeps
-        (q15 turns the thumb from +y toward -x), the arch clears the CMC base by one clearance."""
-        t = self.tol
-        T = mm(self.params.thumb.thickness)
-        r_hub = mm(self.params.thumb.cmc_horn_radius)
-        r_post = t.wall
-        # on the end wall of servo 6's housing, clear of the pocket, its ear slots and the hub
-        y_post = -max(self.shaft_offset + self.flange_span / 2.0 + 2.0 * t.clearance + r_post,
-                      r_hub + t.clearance + r_post)
-        z_floor = -(T / 2.0 + 2.0 * t.clearance + self.pulley_width)   # servo 6 housing top
-        z_lo = T / 2.0 + t.clearance                                     # arch underside
-        z_hi = z_lo + 2.0 * t.wall
-        z_mid = (z_lo + z_hi) / 2.0
-        z_entry = z_floor + t.tendon_relief + t.wall
-        return {"r_post": r_post, "y_post": y_post, "z_floor": z_floor, "z_lo": z_lo, "z_hi": z_hi,
-                "z_mid": z_mid, "z_entry": z_entry}
+        CMC axis (``kinematics.routing.thumb_arch``: the routing model places them)."""
+        return {k: mm(v) for k, v in routing.thumb_arch(self.params).items()}
 
     def thumb_tendon_path(self) -> list[np.ndarray]:
         """Palm-frame points (mm) of the thumb tendon: its servo's tangent point, the palm exit,
