@@ -82,13 +82,6 @@ class RobotJoint:
 
 
 @dataclass(frozen=True)
-class Site:
-    name: str
-    link: str
-    pos: tuple[float, float, float]        # m, link frame
-
-
-@dataclass(frozen=True)
 class ServoDrive:
     """A tendon servo: its pulley (link ``link``) turns on a hinge ``joint`` about ``axis`` (its own
     frame); the angle u winds the digit's drive tendon (``kinematics.routing``) onto it."""
