@@ -325,8 +325,8 @@ def _field(document, path, value):
     ("thumb.guide.d1_mm", 43.2, "thumb.guide.d1_mm", "27.768 mm below the joint axis"),
     ("thumb.guide.d1_mm", 13.3, "thumb.guide.d1_mm", "(<= 8.500 mm"),        # 13.3 cos 50 = 8.549
     # a 0.11 x 189 = 20.79 mm metacarpal leaves 10.79 mm of arm in front of the 10 mm hub; the eyelet
-    # reaches 11 sin 50 + 2 / 2 + (sqrt 3 + 2) 0.5 = 8.4265 + 1 + 1.8660 = 11.2925 mm behind the MP axis
-    ("thumb.length_fraction.metacarpal", 0.11, "thumb.guide.d1_mm", "11.293 mm behind the MP axis"),
+    # reaches 11 sin 50 + 1.2 / 2 + (sqrt 3 + 2) 0.5 = 8.4265 + 0.6 + 1.8660 = 10.8925 mm behind the MP axis
+    ("thumb.length_fraction.metacarpal", 0.11, "thumb.guide.d1_mm", "10.893 mm behind the MP axis"),
 ])
 def test_rules_the_build_relies_on(document, path, value, field, words):
     _field(document, path, value)

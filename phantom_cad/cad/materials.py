@@ -14,42 +14,59 @@ from ..kinematics.topology import (CMC_Q, CMC_SERVO, DIGITS, FINGER_CHAINS, FING
                                    THUMB_CHAIN)
 
 
-def _tendon_lengths(params) -> dict[str, float]:
-    """Cut length (mm) of each tendon: servo pulley tangent -> palm -> finger base -> guides ->
-    along the phalanges to the distal anchor, plus the length wound on the servo pulley over
-    its full travel."""
-    out = {}
-    for spec in FINGER_CHAINS:
-        f = spec.digit
-        fp = params.fingers[f]
-        chain = fp.chain
-        exit_ = F.socket_tendon_point(params, f)
-        Ts = F.T_palm_servo(params, spec.servo)
-        tangent = (Ts @ np.array([-chain.servo_radius, 0, 0, 1.0]))[:3]
-        palm = np.linalg.norm(exit_ - tangent)
-        base = params.cad.finger_base_length
-        run = palm + base + chain.guide.L0 + fp.proximal + fp.middle + fp.distal / 2.0
-        wrap = chain.servo_radius * chain.travel[1]
-        out[f] = units.mm(run + wrap)
-    th = params.thumb
-    from .parts.palm import Palm   # numpy only until build()
-    palm = Palm(params)
-    path = palm.thumb_tendon_path()             # mm: servo -> palm exit -> post -> arch -> CMC axis
-    run = units.m(sum(float(np.linalg.norm(b - a)) for a, b in zip(path, path[1:])))
-    run += units.m(palm.cmc_arch()["z_lo"])     # down the CMC axis to the CMC base's mid-plane
-    run += th.metacarpal + th.chain.guide.L0 + th.proximal + th.distal / 2.0
-    out[THUMB_CHAIN.digit] = units.mm(run + th.chain.servo_radius * th.chain.travel[1])
-    return out
+#: cord added to a cut length for each knot or clamp it ends in (mm): enough to tie and trim
+KNOT_ALLOWANCE_MM = 20.0
 
 
-def _spring_lengths(params) -> dict[str, float]:
-    """Free length (mm) of each dorsal cable spring, anchor to anchor at full extension."""
+def _cords(params) -> list[dict]:
+    """One row per routed tendon (``kinematics.routing``): its cut length, from the routing model's
+    rest length of its strands (plus, for a drive, what its servo winds over the travel) and a
+    knot allowance per end, and how it is anchored and tensioned."""
+    from ..kinematics import routing
+    rest = routing.lengths(params)
+    hw = params.hardware
+    g = lambda v: f"{units.mm(v):g}"  # noqa: E731
+    rows = []
+    for r in routing.routes(params):
+        t = r.tendon
+        run = sum(rest[st.name] for st in r.strands)
+        if t.kind == "drive":
+            ch = params.digit(t.digit).chain
+            cut = units.mm(run + ch.servo_radius * ch.travel[1]) + 2 * KNOT_ALLOWANCE_MM
+            how = ("knotted in the servo pulley's anchor hole, wound on it, through the palm and across the "
+                   "magnet face to G1 and G2, knotted behind G2; tensioned by setting the servo horn's zero")
+            spec = f"{g(hw.tendon_diameter)} mm braided UHMWPE, {cut:.0f} mm"
+        elif t.kind == "coupling":
+            cut = units.mm(run) + 2 * KNOT_ALLOWANCE_MM
+            a, b = t.joints
+            how = (f"figure eight: knotted at its middle in the {b.split('_', 1)[1].upper()} groove's knot pocket, "
+                   f"both ends crossed over the carrier and pinched under the M2 set screw in the "
+                   f"{a.split('_', 1)[1].upper()} hub; pulled taut at rest, then the screw tightened")
+            spec = f"{g(hw.tendon_diameter)} mm braided UHMWPE, {cut:.0f} mm"
+        else:
+            cut = units.mm(run) + 2 * KNOT_ALLOWANCE_MM
+            how = "knotted on the dorsal face at both knot wells, at its free length with the digit extended"
+            spec = f"{g(params.cad.spring_diameter)} mm elastic cord, {units.mm(run):.0f} mm free length ({cut:.0f} mm cut)"
+        rows.append({"item": "tendon" if t.kind != "return" else "cable spring", "spec": spec, "quantity": 1,
+                     "used_in": f"{t.name} ({t.kind}): {how}"})
+    return rows
+
+
+def _bearings(params) -> dict[str, int]:
+    """Bearings per digit: one per joint whose tongue has a face where the seat fits beside the
+    grooves (``phalanx.tongue_bearing_face``); the others turn on the axle in their bore."""
+    from .parts.common import DigitSection
+    from .parts.phalanx import tongue_bearing_face
+    from .parts.tendons import LinkTendons
     out = {}
-    for f in FINGERS:
-        fp = params.fingers[f]
-        out[f] = units.mm(params.cad.finger_base_length + fp.proximal + fp.middle + fp.distal / 2.0)
-    th = params.thumb
-    out[THUMB_CHAIN.digit] = units.mm(th.metacarpal + th.proximal + th.distal / 2.0)
+    for spec in FINGER_CHAINS + (THUMB_CHAIN,):
+        sec = DigitSection(params, spec.digit)
+        n = 0
+        for jn in spec.joint_names:
+            j = [x for x in JOINTS if x.name == jn][0]
+            if tongue_bearing_face(sec, jn, LinkTendons(params, j.child)) is not None:
+                n += 1
+        out[spec.digit] = n
     return out
 
 
@@ -57,12 +74,13 @@ def bill_of_materials(params) -> list[dict]:
     hw = params.hardware
     g = lambda v: f"{units.mm(v):g}"  # noqa: E731
     n_joints = {c.digit: len(c.keys) for c in FINGER_CHAINS + (THUMB_CHAIN,)}
+    n_bearings = _bearings(params)
     bom = [{
         "item": "bearing",
         "spec": f"{g(hw.bearing_bore)} x {g(hw.bearing_outer)} x {g(hw.bearing_width)} mm (683ZZ class)",
-        "quantity": 2 * sum(n_joints.values()),
-        "used_in": "two per joint, in the child link's tongue: " + ", ".join(
-            f"{d} x{n}" for d, n in n_joints.items()),
+        "quantity": sum(n_bearings.values()),
+        "used_in": "one per joint where it fits beside the tendon grooves, in the child link's tongue: " + ", ".join(
+            f"{d} x{n} of {n_joints[d]}" for d, n in n_bearings.items()),
     }]
     for d in DIGITS:
         width = units.mm(params.digit(d).width)
@@ -81,13 +99,14 @@ def bill_of_materials(params) -> list[dict]:
     cmc = params.thumb.thickness + params.print.hole_clearance + engage
     bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} x {units.mm(cmc):.0f} self-tapping",
                 "quantity": 2, "used_in": f"{JOINTS[CMC_Q].child} through its hub into {SERVOS[CMC_SERVO].link}"})
-    for d, L in _tendon_lengths(params).items():
-        bom.append({"item": "tendon", "spec": f"{g(hw.tendon_diameter)} mm braided UHMWPE, {L:.0f} mm",
-                    "quantity": 1, "used_in": f"{d}: servo pulley to distal anchor"})
-    for d, L in _spring_lengths(params).items():
-        bom.append({"item": "cable spring",
-                    "spec": f"{g(params.cad.spring_diameter)} mm elastic cord, {L:.0f} mm free length",
-                    "quantity": 2, "used_in": f"{d}: dorsal return path, base anchor to distal anchor"})
+    n_loops = sum(n - 1 for n in n_joints.values())
+    from ..kinematics import routing
+    # the hub clamp's pilot: from the cheek's outer face across the loop's groove (parts.tendons)
+    pilot = min(params.digit(d).width / 2.0 - abs(routing.layout(params, d).loop_x[0]) + routing.layout(params, d).groove / 2.0
+                for d in n_joints)
+    bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} x {int(units.mm(pilot))} set screw (grub screw)",
+                "quantity": n_loops, "used_in": "one per coupling loop: clamps and tensions it in its hub"})
+    bom += _cords(params)
     sv = params.servo
     bom.append({"item": "servo",
                 "spec": "micro servo, body " + " x ".join(g(v) for v in sv.body) + " mm (SCS0009 class)",

@@ -317,13 +317,15 @@ def _solids(export: Export) -> tuple[dict[str, object], dict[str, dict]]:
 def axis_rows(robot, params, solids: dict) -> list[Row]:
     """Each joint's axis (URDF, at rest) on the bores measured in the solids, each solid placed
     where the CAD assembly puts it at rest: the parent's axle press bore and the child's bearing
-    seats; for the CMC the servo hub's round."""
+    seat and axle bore (a tongue without a bearing turns on the axle in its bore); for the CMC the
+    servo hub's round."""
     from ..cad.assembly import pose_transforms
     from ..cad.measure import cylinders
 
     hw, pr = params.hardware, params.print
     press = (hw.axle_diameter - pr.press_fit_interference) / 2 / units.MM
     seat = (hw.bearing_outer - pr.press_fit_interference) / 2 / units.MM
+    clear = (hw.axle_diameter + 2.0 * pr.hole_clearance) / 2 / units.MM   # the tongue's axle bore
     hub = params.thumb.cmc_horn_radius / units.MM
     robot.update_cfg(np.zeros(len(robot.actuated_joint_names)))
     names = {j.name: j for j in robot.robot.joints}
@@ -338,15 +340,15 @@ def axis_rows(robot, params, solids: dict) -> list[Row]:
         T = robot.get_transform(j.child, robot.base_link)
         a = T[:3, :3] @ (np.asarray(uj.axis, float) / np.linalg.norm(uj.axis))
         p = T[:3, 3] / units.MM
-        seats = ([(SERVOS[CMC_SERVO].link, hub, "horn hub")] if j.index == CMC_Q
-                 else [(j.parent, press, "axle press bore"), (j.child, seat, "bearing seat")])
-        for part, radius, what in seats:
+        seats = ([(SERVOS[CMC_SERVO].link, (hub,), "horn hub")] if j.index == CMC_Q
+                 else [(j.parent, (press,), "axle press bore"), (j.child, (seat, clear), "bearing seat and axle bore")])
+        for part, radii, what in seats:
             if part not in cyl:
                 cyl[part] = cylinders(solids[part])
             Tp = rest[part]
             found = [(np.linalg.norm(np.cross(Tp[:3, :3] @ c["point"] + Tp[:3, 3] - p, a)),
                       math.degrees(math.acos(min(1.0, abs(float((Tp[:3, :3] @ c["direction"]) @ a))))))
-                     for c in cyl[part] if abs(c["radius"] - radius) < 1e-6]
+                     for c in cyl[part] if any(abs(c["radius"] - r) < 1e-6 for r in radii)]
             key = f"{j.name} / {part} {what}"
             if not found:
                 dist[key] = ang[key] = math.inf

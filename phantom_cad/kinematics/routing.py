@@ -41,11 +41,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..params.rules import FLANK
 from . import frames as F
 from .topology import CHAINS, JOINTS, N_JOINTS, SERVOS, TENDONS, Tendon, chain, digit_links, joint, link
 
-#: two perimeters of a 0.4 mm nozzle: the thinnest flank beside a groove (m)
-FLANK = 0.8e-3
 #: every wrap stays this far inside (0, 180 deg) over the joint's whole travel (rad)
 WRAP_MARGIN = math.radians(8.0)
 #: a clamp sits this far outside its pulley's centreline circle (m): a simulator's wrapping needs the
@@ -310,18 +309,21 @@ def _mirror_element(e):
 _ROUTES: dict = {}
 
 
-def routes(params) -> tuple[Route, ...]:
+def routes(params, right_handed: bool = False) -> tuple[Route, ...]:
     """Every tendon of the topology (``TENDONS`` order), routed for this hand (memoised by the
-    parameters' digest and side: the routes are pure functions of them)."""
-    key = (params.digest, params.side)
+    parameters' digest and side: the routes are pure functions of them). ``right_handed``: the
+    routes before a left hand's mirroring, in the frames the parts are built in (the CAD layer
+    cuts right-handed parts and mirrors them on export)."""
+    mirror = params.side == "left" and not right_handed
+    key = (params.digest, mirror)
     if key not in _ROUTES:
         if len(_ROUTES) > 16:
             _ROUTES.clear()
-        _ROUTES[key] = _routes(params)
+        _ROUTES[key] = _routes(params, mirror)
     return _ROUTES[key]
 
 
-def _routes(params) -> tuple[Route, ...]:
+def _routes(params, mirror: bool) -> tuple[Route, ...]:
     out = []
     lays = {ch.digit: layout(params, ch.digit) for ch in CHAINS}
     rest = F.rest_transforms(params)
@@ -335,7 +337,7 @@ def _routes(params) -> tuple[Route, ...]:
             strands, d, k = _loop(params, t.digit, k0, lay, rest), params.hardware.tendon_diameter, "EA"
         else:
             strands, d, k = (_return(params, t.digit, lay, rest),), params.cad.spring_diameter, "k_s"
-        if params.side == "left":
+        if mirror:
             strands = tuple(Strand(s.name, tuple(_mirror_element(e) for e in s.elements)) for s in strands)
         out.append(Route(t, strands, d, k))
     return tuple(out)
@@ -392,6 +394,8 @@ def _wrap(P, N, centre, axis, rho):
     t_in = math.atan2(p[1], p[0]) + math.acos(min(1.0, rho / dp))
     t_out = math.atan2(n[1], n[0]) - math.acos(min(1.0, rho / dn))
     arc = (t_out - t_in) % (2.0 * math.pi)
+    if arc > 2.0 * math.pi - 1e-9:      # a tangent run (no wrap) that rounding put a turn away
+        arc = 0.0
     if arc > math.pi:
         return float(np.linalg.norm(N - P)), [P, N]
     l1 = math.sqrt(max(0.0, dp * dp - rho * rho))
@@ -434,6 +438,133 @@ def strand_path(params, strand: Strand, Ts) -> tuple[float, np.ndarray]:
         cur = N
         i += 2
     return total, np.array(pts)
+
+
+def _nodes(strand: Strand, Ts) -> list[tuple[np.ndarray | None, np.ndarray | None]]:
+    """(arrival, departure) point of every element, palm frame: a point's own position; a pulley's
+    two tangent points (None where the strand lifts off it)."""
+    els = strand.elements
+    out: list = [None] * len(els)
+    for i, e in enumerate(els):
+        if isinstance(e, Point):
+            p = _world(Ts, e.link, e.pos)
+            out[i] = (p, p)
+    for i, e in enumerate(els):
+        if isinstance(e, Pulley):
+            _, pts = _wrap(out[i - 1][1], out[i + 1][0], _world(Ts, e.link, e.centre),
+                           _world(Ts, e.link, e.axis, 0.0), e.radius)
+            out[i] = (pts[1], pts[-2]) if len(pts) > 2 else (None, None)
+    return out
+
+
+@dataclass(frozen=True)
+class Run:
+    """A straight stretch of a strand between two consecutive elements (a point, or where it leaves
+    or reaches a pulley), at rest, in the frame of every link it is fixed to (``links``): the
+    channel a part must leave open for it. ``links`` is empty for a free run (a chord across a
+    joint, which moves relative to every link)."""
+    tendon: str
+    strand: str
+    index: int                   # between elements index and index + 1 of the strand
+    links: tuple[str, ...]
+    ends: dict                   # link -> (p0, p1) in that link's frame (m)
+    diameter: float              # of the cord (m)
+
+
+_RUNS: dict = {}
+
+
+def runs(params, right_handed: bool = False) -> tuple[Run, ...]:
+    """Every straight run of every strand, with the links it is fixed to. A run is fixed to a link
+    when both its ends stay put in that link's frame at rest, at mid travel and at full travel
+    (found by evaluating them there, not by case analysis: a tangent point is fixed to the link
+    that holds both the pulley's axis and the point it comes from). ``right_handed`` as for
+    :func:`routes`."""
+    key = (params.digest, params.side, right_handed)
+    if key in _RUNS:
+        return _RUNS[key]
+    q_full = np.zeros(N_JOINTS)
+    for j in JOINTS:
+        if j.key != "cmc":
+            q_full[j.index] = _joint_travel(params, j.name)
+    u_full = np.array([params.digit(s.digit).chain.travel[1] if s.drive == "tendon" else 0.0 for s in SERVOS])
+    poses = [pose(params, None, np.zeros(len(SERVOS))), mid_travel_pose(params), pose(params, q_full, u_full)]
+    unmirror = F.MIRROR[:3, :3] if (right_handed and params.side == "left") else np.eye(3)
+    out = []
+    for r in routes(params):
+        for st in r.strands:
+            nodes = [_nodes(st, Ts) for Ts in poses]
+            els = st.elements
+            for i in range(len(els) - 1):
+                ends = [(n[i][1], n[i + 1][0]) for n in nodes]
+                if any(a is None or b is None for a, b in ends):
+                    continue
+                if any(isinstance(e, Point) and e.role == "clamp" for e in (els[i], els[i + 1])):
+                    continue                  # a clamp sits on its pulley's circle: no straight run
+                cands = dict.fromkeys(e.link for e in (els[i], els[i + 1]))
+                fixed = {}
+                for ln in cands:
+                    loc = [tuple((np.linalg.inv(Ts[ln]) @ np.array([*p, 1.0]))[:3] for p in pair)
+                           for Ts, pair in zip(poses, ends)]
+                    if all(np.linalg.norm(a - b) < 1e-9 for pr in loc[1:] for a, b in zip(pr, loc[0])):
+                        fixed[ln] = tuple(tuple(float(v) for v in unmirror @ p) for p in loc[0])
+                out.append(Run(r.name, st.name, i, tuple(fixed), fixed, r.diameter))
+    _RUNS[key] = tuple(out)
+    return _RUNS[key]
+
+
+def travel_poses(params, fractions) -> list[dict[str, np.ndarray]]:
+    """T_palm_link with every flexion joint and tendon servo at each fraction of its travel (the
+    joints to the clamps' design travel, :func:`_joint_travel`; the CMC at rest)."""
+    out = []
+    for f in fractions:
+        q = np.zeros(N_JOINTS)
+        for j in JOINTS:
+            if j.key != "cmc":
+                q[j.index] = f * _joint_travel(params, j.name)
+        u = np.array([f * params.digit(s.digit).chain.travel[1] if s.drive == "tendon" else 0.0 for s in SERVOS])
+        out.append(pose(params, q, u))
+    return out
+
+
+def arc_range(params, strand: Strand, index: int, fractions=tuple(np.linspace(0.0, 1.0, 11))) -> tuple[float, float]:
+    """The polar angles (rad, about the pulley's centre in its link's (y, z) plane, from +y toward
+    +z) between which strand element ``index`` (a pulley) is ever in contact over the travel: the
+    sector its groove must span. Mirror-invariant (a left hand mirrors x only)."""
+    e = strand.elements[index]
+    angles = []
+    for Ts in travel_poses(params, fractions):
+        tin, tout = _nodes(strand, Ts)[index]
+        if tin is None:
+            continue
+        inv = np.linalg.inv(Ts[e.link])
+        for p in (tin, tout):
+            v = (inv @ np.array([*p, 1.0]))[:3] - np.asarray(e.centre)
+            angles.append(math.atan2(v[2], v[1]))
+        # the arc between them, on the side the strand turns
+        a0, a1 = angles[-2], angles[-1]
+        turn = (a1 - a0) % (2 * math.pi) if e.axis[0] > 0 else -((a0 - a1) % (2 * math.pi))
+        angles.append(a0 + turn / 2.0)
+    ref = angles[0]
+    rel = [((a - ref + math.pi) % (2 * math.pi)) - math.pi for a in angles]
+    return ref + min(rel), ref + max(rel)
+
+
+def run_sweep(params, run: Run, link_name: str, fractions=tuple(np.linspace(0.0, 1.0, 21)),
+              right_handed: bool = False) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The ends of a run (m) in ``link_name``'s frame at each fraction of the travel
+    (:func:`travel_poses`): the region a free run (a chord across a joint) sweeps through a part."""
+    st = next(s for r in routes(params) for s in r.strands if s.name == run.strand)
+    S = F.MIRROR[:3, :3] if (right_handed and params.side == "left") else np.eye(3)
+    out = []
+    for Ts in travel_poses(params, fractions):
+        n = _nodes(st, Ts)
+        inv = np.linalg.inv(Ts[link_name])
+        a, b = n[run.index][1], n[run.index + 1][0]
+        if a is None or b is None:
+            continue
+        out.append(tuple(S @ (inv @ np.array([*p, 1.0]))[:3] for p in (a, b)))
+    return out
 
 
 def lengths(params, q=None, u=None, which=None) -> dict[str, float]:

@@ -41,17 +41,27 @@ def check_parts(c, hand_length, fingers, thumb, palm, servo, hardware, printing,
     _servos(c, fingers, thumb, servo, hardware, printing, cad)
 
 
+#: two perimeters of a 0.4 mm nozzle: the thinnest flank beside a tendon groove (m); the routing
+#: model (``kinematics.routing.layout``) spaces the grooves by it
+FLANK = 0.8e-3
+
+
 def _joints(c, fingers, thumb, hardware, printing, cad) -> None:
     groove = hardware.tendon_diameter + 2.0 * printing.hole_clearance
+    ret = cad.spring_diameter + 2.0 * printing.hole_clearance
+    cl = printing.hole_clearance
     for name, d in _digits(fingers, thumb):
         width, thick = d.width, d.thickness
-        # the joint tongue between the two cheeks carries two bearings and the tendon groove
-        tongue = width - 2.0 * cad.cheek - 2.0 * printing.hole_clearance
-        need = 2.0 * hardware.bearing_width + groove + 2.0 * printing.hole_clearance
-        if tongue < need - 1e-12:
+        # the clevis slot holds a coupling loop's hub beside one cheek (a groove between two
+        # flanks, one clearance) and the tongue beside it, which carries the return cord's groove
+        # a flank inside each of its faces on both sides of the middle (kinematics.routing.layout)
+        slot = width - 2.0 * cad.cheek
+        hub = cl + 2.0 * FLANK + groove
+        need = 2.0 * (hub + cl + FLANK) + ret
+        if slot < need - 1e-12:
             raise c.error("cheek_mm", cad.cheek / MM,
-                          f"leaves a {tongue / MM:.3f} mm joint tongue in {name}.width_mm = {width / MM:g}; "
-                          f"two bearings and the tendon groove need {need / MM:.3f} mm")
+                          f"leaves a {slot / MM:.3f} mm clevis slot in {name}.width_mm = {width / MM:g}; "
+                          f"a loop hub, the tongue and its return groove need {need / MM:.3f} mm")
         # each joint's tendon groove of radius R lies in the tongue's boss (radius thickness / 2)
         # and outside the axle's clearance bore
         axle = hardware.axle_diameter / 2.0 + printing.hole_clearance

@@ -126,18 +126,36 @@ def test_bill_of_materials(params):
     for row in bom:
         assert isinstance(row["quantity"], int) and row["quantity"] > 0
         qty[row["item"]] = qty.get(row["item"], 0) + row["quantity"]
-    # 14 tendon-driven joints (4 x 3 + thumb 2), two bearings and one axle each
-    assert qty["bearing"] == 28
+    # 14 tendon-driven joints (4 x 3 + thumb 2), one axle each; one bearing where its seat (radius
+    # (7 - 0.05) / 2 = 3.475 mm, 3 mm wide from a tongue face) stays 0.8 mm from every groove: at a
+    # finger PIP both tongue faces carry a groove (the loop's at the ulnar face, floor 4 - 0.3 =
+    # 3.7 mm; the return cord's next to the hub, floor 4 - 0.75 = 3.25 mm), so 2 per finger + 2
+    assert qty["bearing"] == 4 * 2 + 2
     assert qty["axle"] == 14
     # two magnets per finger base and two per palm socket
     assert qty["magnet"] == 16
     assert qty["servo"] == 6
-    assert qty["tendon"] == 5
-    assert qty["cable spring"] == 10
-    # the index tendon is at least as long as the finger from its base to the middle of the distal
-    tendon = next(r for r in bom if r["item"] == "tendon" and r["used_in"].startswith("index"))
+    # a drive per tendon servo (5), a coupling loop per pair of adjacent joints (4 x 2 + 1), a
+    # return cord per digit (5)
+    assert qty["tendon"] == 5 + 9
+    assert qty["cable spring"] == 5
+    # every tendon's cut length is its routed length (routing.lengths) plus what its ends need
+    from phantom_cad.kinematics import routing
+    rest = routing.lengths(params)
+    for row in bom:
+        if row["item"] in ("tendon", "cable spring"):
+            name = row["used_in"].split(" ", 1)[0]
+            run = sum(v for k, v in rest.items() if k == name or k.startswith(name + "_")) * 1e3
+            if row["item"] == "cable spring":
+                free = float(re.search(r"(\d+) mm free length", row["spec"]).group(1))
+                assert free == pytest.approx(run, abs=0.5)
+            else:
+                cut = float(re.search(r"(\d+) mm$", row["spec"]).group(1))
+                assert run + 40 - 0.5 <= cut
+    # the index drive reaches from its servo pulley past the MCP
+    tendon = next(r for r in bom if r["item"] == "tendon" and r["used_in"].startswith("index_drive"))
     length = float(re.search(r"(\d+) mm$", tendon["spec"]).group(1))
-    assert length > 189.0 * (0.245 + 0.143 + 0.097 / 2)
+    assert length > 189.0 * 0.245 / 2
 
 
 def test_built_parts_carry_their_placement(built, params):

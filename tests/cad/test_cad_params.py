@@ -25,7 +25,7 @@ def test_default_cad_values_in_si(params):
     cad = params.cad
     assert cad.finger_base_length == pytest.approx(0.013)
     assert cad.cheek == pytest.approx(0.0024)
-    assert cad.eyelet_length == pytest.approx(0.002)
+    assert cad.eyelet_length == pytest.approx(0.0012)
     assert cad.horn_hole_radius == pytest.approx(0.004)
 
 
@@ -40,12 +40,13 @@ def test_unknown_cad_key(document):
 
 
 def test_cheek_too_thick_for_the_pinky_tongue(document):
-    # pinky: 15 - 2*4 - 2*0.2 = 6.6 mm tongue; 2 bearings 3 mm + groove (0.6 + 0.4) + 0.4 = 7.4 mm
+    # ring (the first too narrow): 17 - 2*4 = 9 mm slot; hub 0.2 + 2*0.8 + (0.6 + 0.4) = 2.8 mm,
+    # twice (hub + 0.2 + 0.8) = 7.6 mm, and the return groove 1.5 + 0.4 = 1.9 mm: 9.5 mm
     e = _fails(document, lambda d: d["cad"].__setitem__("cheek_mm", 4.0))
     assert e.field == "cad.cheek_mm"
     assert e.value == pytest.approx(4.0)
-    assert e.rule == ("leaves a 6.600 mm joint tongue in fingers.pinky.width_mm = 15; "
-                      "two bearings and the tendon groove need 7.400 mm")
+    assert e.rule == ("leaves a 9.000 mm clevis slot in fingers.ring.width_mm = 17; "
+                      "a loop hub, the tongue and its return groove need 9.500 mm")
 
 
 def test_finger_base_too_short_for_the_magnets(document):
@@ -67,9 +68,12 @@ def test_finger_bases_too_long_collide(document):
 
 
 def test_guide_eyelet_inside_the_boss(document):
-    # index 17.8 mm thick: 8.9 + 0.2 + 1 = 10.1 mm > d2 = 10 (its 18.33 mm distal still takes
-    # two 17.8 + 2 * 0.2 mm joint bosses)
-    e = _fails(document, lambda d: d["fingers"]["index"].__setitem__("thickness_mm", 17.8))
+    # a 2 mm eyelet and index 17.8 mm thick: 8.9 + 0.2 + 1 = 10.1 mm > d2 = 10 (its 18.33 mm distal
+    # still takes two 17.8 + 2 * 0.2 mm joint bosses)
+    def edit(d):
+        d["cad"]["eyelet_length_mm"] = 2.0
+        d["fingers"]["index"]["thickness_mm"] = 17.8
+    e = _fails(document, edit)
     assert (e.field, e.value) == ("fingers.index.guide.d2_mm", 10.0)
     assert e.rule == ("must be >= 10.100 mm (half the thickness + hole_clearance + half cad.eyelet_length): "
                       "the phalanx guide eyelet must clear the joint boss")
@@ -108,13 +112,13 @@ def test_nonpositive_cad_value(document):
 
 
 def test_base_guide_behind_the_magnet_face(document):
-    # 14 sin(50 deg) + 2/2 + (sqrt(3) + 2) * (0.6/2 + 0.2) = 13.591 mm > 13 mm
-    reach = 14 * math.sin(math.radians(50)) + 1.0 + (math.sqrt(3) + 2) * 0.5
+    # 14 sin(50 deg) + 1.2/2 + (sqrt(3) + 2) * (0.6/2 + 0.2) = 13.191 mm > 13 mm
+    reach = 14 * math.sin(math.radians(50)) + 0.6 + (math.sqrt(3) + 2) * 0.5
     e = _fails(document, lambda d: d["fingers"]["middle"]["guide"].__setitem__("d1_mm", 14.0))
     assert (e.field, e.value) == ("fingers.middle.guide.d1_mm", 14.0)
     assert e.rule == (f"puts the guide eyelet {reach:.3f} mm behind the MCP axis, beyond the finger base's "
                       "magnet face (cad.finger_base_length_mm = 13)")
-    assert f"{reach:.3f}" == "13.591"
+    assert f"{reach:.3f}" == "13.191"
 
 
 def test_module_stop_margin_range(document):

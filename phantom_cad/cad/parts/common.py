@@ -123,6 +123,48 @@ class DigitSection:
         self.guide = chain.guide
 
     @property
+    def layout(self):
+        """The routing model's planes of this digit's loops and return cord (``routing.layout``), mm."""
+        from types import SimpleNamespace
+
+        from ...kinematics import routing
+        lay = routing.layout(self.params, self.digit)
+        return SimpleNamespace(slot_half=mm(lay.slot_half), groove=mm(lay.groove), return_groove=mm(lay.return_groove),
+                               loop_x=tuple(mm(x) for x in lay.loop_x), return_x=mm(lay.return_x),
+                               hub_width=mm(lay.hub_width))
+
+    def tongue_span(self, hub_x: float | None) -> tuple[float, float]:
+        """x extent (lo, hi) of a joint's tongue: one clearance inside the slot, and one clearance
+        off the parent's hub on the side that has one (``hub_x``: its groove plane)."""
+        s, c = self.slot_width / 2.0, self.tol.clearance
+        lo, hi = -(s - c), s - c
+        if hub_x is not None:
+            if hub_x > 0:
+                hi = s - self.layout.hub_width - c
+            else:
+                lo = -(s - self.layout.hub_width - c)
+        return lo, hi
+
+    def bearing_face(self, lo: float, hi: float, obstacles) -> float | None:
+        """The tongue face (x) a bearing seat opens on, or None when none fits: the seat (bearing
+        width deep, the seat's radius) must stay a flank (``routing.FLANK``) from every groove,
+        pocket and relief of the tongue (``obstacles``: (x0, x1, floor radius)); of two faces that
+        fit, the one with more material between."""
+        from ...kinematics import routing
+        t = self.tol
+        r_seat = t.bearing_seat / 2.0
+        best, face = -1.0, None
+        for f, x0, x1 in ((lo, lo, lo + t.bearing_width), (hi, hi - t.bearing_width, hi)):
+            gap = math.inf
+            for a, b, floor in obstacles:
+                dx = max(0.0, a - x1, x0 - b)
+                dr = floor - r_seat
+                gap = min(gap, math.hypot(dx, max(0.0, dr)) if (dx > 0 or dr > 0) else -1.0)
+            if gap >= mm(routing.FLANK) and gap > best:
+                best, face = gap, f
+        return face
+
+    @property
     def boss_radius(self) -> float:
         """Radius of a joint's tongue boss and of the rounded clevis ends."""
         return self.thickness / 2.0
@@ -310,12 +352,16 @@ def as_solid(shape):
     return b.Solid(s.wrapped) if not isinstance(s, b.Solid) else s
 
 
-def build(body_parts, tools):
-    """Fuse the body parts and cut every tool in one boolean; the result should be one valid
-    solid (checked once per part by ``phantom_cad.cad.verify``)."""
+def build(body_parts, tools, *later):
+    """Fuse the body parts and cut every tool in one boolean, then each group of ``later`` tools
+    in one boolean of its own (OpenCascade's multi-tool cut can leave material where several
+    tools overlap one another at tangent or coincident faces: a guide eyelet's relief sphere
+    inside a clevis slot, measured by ``cad.clearance``); the result should be one valid solid
+    (checked once per part by ``phantom_cad.cad.verify``)."""
     body = body_parts[0]
     if len(body_parts) > 1:
         body = body.fuse(*body_parts[1:])
-    if tools:
-        body = body.cut(*tools)
+    for group in (tools, *later):
+        if group:
+            body = as_solid(body.cut(*group))
     return as_solid(body)

@@ -18,7 +18,8 @@ from ...kinematics.topology import FINGERS, digit_links
 from ..measure import circular_pockets, eyelet_centres, point_line_distance
 from .base import Part, child_joint, digit_table
 from .common import DigitSection, box, build, cylinder, mm
-from .phalanx import channel, clevis, eyelet, spring_anchor, spring_channel
+from .phalanx import channel, clevis, eyelet, hub_grooves
+from .tendons import LinkTendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry, verify_grooves
 
 
 class FingerBase(Part):
@@ -53,6 +54,7 @@ class FingerBase(Part):
         """The metacarpal-side guide eyelet at d1 from the MCP axis; two magnet pockets."""
         out: list[str] = []
         tol = self.sec.tol
+        verify_grooves(self, shape, LinkTendons(self.params, self.link.name), out)
         eyes = eyelet_centres(shape, tol.tendon_hole / 2.0, tol.eyelet_length)
         d = point_line_distance(eyes[0]["centre"], (0, 0, 0), (1, 0, 0)) if len(eyes) == 1 else None
         self.expect(out, "guide d1", d, mm(self.sec.guide.d1), 0.02)
@@ -79,23 +81,24 @@ class FingerBase(Part):
         sec, t = self.sec, self.sec.tol
         W, T, Lb = sec.width, sec.thickness, self.length
         body = [box(-W / 2.0, W / 2.0, -Lb, 0.0, -T / 2.0, T / 2.0)]
-        b, tools = clevis(sec, self.joint, 0.0)
+        lt = LinkTendons(self.params, self.link.name)
+        b, tools = clevis(sec, self.joint, 0.0, lt.hubs().get(child_joint(self.link).name))
         body += b
+        tools += hub_grooves(sec, lt)
         # metacarpal-side MCP guide at d1, and the tendon path from the magnet face to it
         G1, G2 = sec.guide_points()
-        b3, t3, u, (s_near, s_far) = eyelet(sec, G1, G2, clip_y=-Lb)
+        b3, guide, u, (s_near, s_far) = eyelet(sec, G1, lt.eyelet_toward(G1), clip_y=-Lb)
         body += b3
-        tools += t3
-        chord = float(np.linalg.norm(G1 - G2))
-        tools.append(channel(s_near, s_near + u * chord / 2.0, t.tendon_relief))
-        u_in = (s_far - self.tendon_entry) / np.linalg.norm(s_far - self.tendon_entry)
-        tools.append(cylinder(self.tendon_entry - u_in, s_far, t.tendon_relief / 2.0))   # ends in the relief sphere
+        # the drive's run from the magnet face toward G1 (routing), a clearance hole that ends inside
+        # the far relief sphere (a wider one would bite the eyelet)
+        g1 = np.array([0.0, *G1])
+        end = guide_entry(self.tendon_entry, g1, s_far)
+        u_in = (end - self.tendon_entry) / np.linalg.norm(end - self.tendon_entry)
+        guide.append(cylinder(self.tendon_entry - u_in, end, t.tendon_hole / 2.0))
+        guide += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - np.array([0.0, *G1]))))
         # magnet pockets, opening on the magnet face
         for c in self.magnet_centres():
             tools.append(cylinder(c - np.array([0.0, 1.0, 0.0]),
                                   c + np.array([0.0, t.magnet_pocket_depth, 0.0]), t.magnet_pocket_d / 2.0))
-        # cable springs: anchored behind the magnets, running out through the clevis
-        y_anchor = -Lb + t.magnet_pocket_depth + t.wall + t.spring_hole
-        tools.extend(spring_channel(sec, y_anchor, sec.boss_radius + 1.0))
-        tools.extend(spring_anchor(sec, y_anchor))
-        return build(body, tools)
+        # the loop's hub clamp, the return cord's channel and knot well (routing model)
+        return build(body, tools, guide, channel_tools(lt) + anchor_tools(lt, sec))

@@ -209,21 +209,17 @@ class Palm(Part):
         return {k: mm(v) for k, v in routing.thumb_arch(self.params).items()}
 
     def thumb_tendon_path(self) -> list[np.ndarray]:
-        """Palm-frame points (mm) of the thumb tendon: its servo's tangent point, the palm exit,
-        the post entry, the post top, the point above the CMC axis, the CMC axis at the arch's
-        underside."""
-        a = self.cmc_arch()
-        x0 = self.extents()[0]
-        Ts = self.T_servo(THUMB_CHAIN.servo)
-        tangent = (Ts @ np.array([-self.pulley_radius(THUMB_CHAIN.servo), 0.0, 0.0, 1.0]))[:3]
-        exit_ = np.array([x0 - 1.0, tangent[1], tangent[2]])
-        Tc = self.T_cmc()
-        P = lambda *v: (Tc @ np.array([*v, 1.0]))[:3]  # noqa: E731
-        entry = P(0.0, a["y_post"], a["z_entry"])
-        top = P(0.0, a["y_post"], a["z_mid"])
-        over = P(0.0, 0.0, a["z_mid"])
-        axis = P(0.0, 0.0, a["z_lo"])
-        return [tangent, exit_, entry, top, over, axis]
+        """Palm-frame points (mm) of the thumb drive where the routing model runs it on the palm:
+        where it leaves servo 1's pulley (tangent), the turn just outside the pulley's cavity, the
+        post entry, the post top, the point above the CMC axis, the CMC axis at the arch's
+        underside (``kinematics.routing``, right hand)."""
+        st = next(s for r in routing.routes(self.params, right_handed=True)
+                  if r.tendon.kind == "drive" and r.tendon.digit == THUMB_CHAIN.digit for s in r.strands)
+        run = next(r for r in routing.runs(self.params, right_handed=True) if r.strand == st.name and "palm" in r.links)
+        tangent = np.asarray(units.mm(np.array(run.ends["palm"][0])), float)
+        pts = [np.asarray(units.mm(np.array(e.pos)), float) for e in st.elements
+               if isinstance(e, routing.Point) and e.link == "palm"]
+        return [tangent] + pts
 
     def cmc_arch_body(self):
         a = self.cmc_arch()
@@ -240,12 +236,8 @@ class Palm(Part):
         e = np.array([0.0, a["y_post"], a["z_entry"]])
         top = np.array([0.0, a["y_post"], a["z_mid"]])
         over = np.array([0.0, 0.0, a["z_mid"]])
-        # the entry hole faces the palm exit (the tendon arrives through the air)
-        Tc_inv = np.linalg.inv(self.T_cmc())
-        exit_local = (Tc_inv @ np.append(self.thumb_tendon_path()[1], 1.0))[:3]
-        u = exit_local - e
-        u /= np.linalg.norm(u)
-        return [cylinder(e, e + u * (a["r_post"] + 2.0 * t.wall), r), sphere(e, rr), cylinder(e, top, r), sphere(top, rr),
+        # the entry hole is the channel from the turn (``build``: one cylinder along that line)
+        return [sphere(e, rr), cylinder(e, top, r), sphere(top, rr),
                 cylinder(top, over, r), sphere(over, rr),
                 cylinder(over, (0.0, 0.0, a["z_lo"] - 1.0), r)]
 
@@ -303,11 +295,13 @@ class Palm(Part):
         for f in FINGERS:
             for rail in self.limiter_rails(f):
                 body.append(transform(rail, _mm(F.T_palm_finger_base(self.params, f))))
-        # thumb tendon: servo 1's tangent point out through the radial side, then (in the air)
+        # thumb tendon: from servo 1's pulley along its plane to the turn, then (in the air)
         # to the CMC post, up the post, along the arch and down the CMC axis into the thumb
         pts = self.thumb_tendon_path()
-        tools.append(cylinder(pts[0], pts[1], t.tendon_hole / 2.0))
-        tools.append(cylinder(pts[1], pts[2], t.tendon_hole / 2.0))   # where it grazes the housing
+        u = (pts[1] - pts[0]) / np.linalg.norm(pts[1] - pts[0])
+        tools.append(cylinder(pts[0] - u, pts[1], t.tendon_hole / 2.0))
+        tools.append(sphere(pts[1], t.tendon_relief / 2.0))            # the turn
+        tools.append(cylinder(pts[1], pts[2], t.tendon_hole / 2.0))   # through the post's entry
         Tc = self.T_cmc()
         for tool in self.cmc_arch_tools():
             tools.append(transform(tool, Tc))

@@ -19,41 +19,85 @@ import numpy as np
 
 from ... import canon
 from ...kinematics.topology import CMC_Q, LINKS, digit_links, joint
-from ..measure import eyelet_centres, measure_groove_radius, point_line_distance
+from ..measure import eyelet_centres, point_line_distance
 from .base import Part, child_joint, digit_table, parent_joint
-from .common import (DigitSection, box, build, cyl_x, cylinder, internal_tangents, mm, prism_x,
-                     ring_x, sphere)
+from .common import DigitSection, box, build, cyl_x, cylinder, mm, prism_x, sphere
+from .tendons import (LinkTendons, anchor_tools, channel_tools, drive_fan_tools, groove_tool, knot_pocket_depth,
+                      parent_hub_x, verify_grooves)
 
 # ---------------------------------------------------------------------------
 # shared joint features: each returns (body_parts, cutting_tools), link frame, mm
 # ---------------------------------------------------------------------------
 
 
-def tongue(sec: DigitSection, joint: str):
-    """Child side of a joint whose axis is the link's x axis."""
+def tongue(sec: DigitSection, joint_name: str, lt: LinkTendons):
+    """Child side of a joint whose axis is the link's x axis: cut back off the parent's hub, the
+    routing model's grooves (loop groove, return cord) in it, the axle's clearance bore, and one
+    bearing seat on the face that leaves a flank to every groove (none where no face does: the
+    tongue then turns on the axle in its bore)."""
     t = sec.tol
-    rb, tw, T = sec.boss_radius, sec.tongue_width, sec.thickness
+    rb, T = sec.boss_radius, sec.thickness
+    lo, hi = sec.tongue_span(parent_hub_x(sec.params, joint_name))
     body = [
-        cyl_x(rb, -tw / 2.0, tw / 2.0, 0.0, 0.0),
-        box(-tw / 2.0, tw / 2.0, 0.0, sec.slot_back, -T / 2.0, T / 2.0),
-        box(-tw / 2.0, tw / 2.0, -sec.slot_back, 0.0, sec.heel_z, T / 2.0),   # extension-stop heel
+        cyl_x(rb, lo, hi, 0.0, 0.0),
+        box(lo, hi, 0.0, sec.slot_back, -T / 2.0, T / 2.0),
+        box(lo, hi, -sec.slot_back, 0.0, sec.heel_z, T / 2.0),                 # extension-stop heel
     ]
-    tools = [
-        ring_x(sec.R[joint], sec.groove_outer, sec.groove_width),              # tendon groove, radius R
-        cyl_x(t.axle_clear / 2.0, -tw / 2.0 - 1.0, tw / 2.0 + 1.0, 0.0, 0.0),  # axle clearance bore
-    ]
-    for sgn in (1.0, -1.0):                                                    # two bearing seats
-        x_in, x_out = sgn * (tw / 2.0 - t.bearing_width), sgn * (tw / 2.0 + 1.0)
+    # out past the tongue's corners: the strands beyond the arc belong to the parent, and sweep
+    # through the tongue's plane as the joint turns
+    outer = math.hypot(sec.slot_back, T / 2.0) + 1.0
+    tools = [groove_tool(g, outer) for g in lt.tongue_grooves(joint_name)]
+    tools += [cyl_x(t.axle_clear / 2.0, lo - 1.0, hi + 1.0, 0.0, 0.0)]           # axle clearance bore
+    face = tongue_bearing_face(sec, joint_name, lt)
+    if face is not None:
+        x_in = face + (t.bearing_width if face == lo else -t.bearing_width)
+        x_out = face + (-1.0 if face == lo else 1.0)
         tools.append(cyl_x(t.bearing_seat / 2.0, min(x_in, x_out), max(x_in, x_out), 0.0, 0.0))
     return body, tools
 
 
-def clevis(sec: DigitSection, joint: str, y: float):
-    """Parent side of a joint whose axis is parallel to x through (y, 0)."""
+def tongue_obstacles(sec: DigitSection, joint_name: str, lt: LinkTendons):
+    """(x0, x1, floor radius) of what the tongue at ``joint_name`` has cut into it about its axis:
+    grooves, the knot pockets below them, the drive chord's fan (its closest approach)."""
+    out = []
+    for g in lt.tongue_grooves(joint_name):
+        depth = max((knot_pocket_depth(sec, g.floor, a.cord) for a in lt.anchors if a.role == "groove clamp"
+                     and abs(a.pos[0] - g.x) < 1e-6), default=0.0)
+        out.append((g.x - g.width / 2.0, g.x + g.width / 2.0, g.floor - depth))
+    for fixed, moving in lt.drive_sweeps:
+        r = min(_segment_axis_distance(fixed, m) for m in moving)
+        w = sec.tol.tendon_hole
+        out.append((fixed[0] - w / 2.0, fixed[0] + w / 2.0, r - w / 2.0))
+    return out
+
+
+def tongue_bearing_face(sec: DigitSection, joint_name: str, lt: LinkTendons) -> float | None:
+    """The tongue face (x, mm) whose bearing seat fits beside the tongue's grooves, or None."""
+    lo, hi = sec.tongue_span(parent_hub_x(sec.params, joint_name))
+    return sec.bearing_face(lo, hi, tongue_obstacles(sec, joint_name, lt))
+
+
+def _segment_axis_distance(a, b) -> float:
+    """Distance in the (y, z) plane from the x axis to the segment a-b."""
+    a, b = np.asarray(a, float)[1:], np.asarray(b, float)[1:]
+    d = b - a
+    t = 0.0 if d @ d == 0 else min(1.0, max(0.0, -(a @ d) / (d @ d)))
+    return float(np.linalg.norm(a + t * d))
+
+
+def clevis(sec: DigitSection, joint: str, y: float, hub_x: float | None = None):
+    """Parent side of a joint whose axis is parallel to x through (y, 0); a loop's hub (groove
+    plane ``hub_x``) is the material the slot leaves beside that side's cheek."""
     t = sec.tol
     rb, W, T, sw = sec.boss_radius, sec.width, sec.thickness, sec.slot_width
     body = [cyl_x(rb, -W / 2.0, W / 2.0, y, 0.0)]
-    slot = box(-sw / 2.0, sw / 2.0, y - sec.slot_back, y + rb + 1.0, -T / 2.0 - 1.0, T / 2.0 + 1.0)
+    lo, hi = -sw / 2.0, sw / 2.0
+    if hub_x is not None:
+        if hub_x > 0:
+            hi -= sec.layout.hub_width
+        else:
+            lo += sec.layout.hub_width
+    slot = box(lo, hi, y - sec.slot_back, y + rb + 1.0, -T / 2.0 - 1.0, T / 2.0 + 1.0)
     recess = sec.recess(sec.q_stop[joint])
     half = sw / 2.0
     if recess > 0.0:       # across the full width: the child's full-width body swings in here
@@ -100,32 +144,6 @@ def channel(p0, p1, d: float, extend: float = 0.0):
     p1 = np.asarray(p1, float)
     u = (p1 - p0) / np.linalg.norm(p1 - p0)
     return cylinder(p0 - extend * u, p1 + extend * u, d / 2.0)
-
-
-def spring_channel(sec: DigitSection, y0: float, y1: float):
-    """The two dorsal cable-spring channels (one in each cheek line)."""
-    return [cylinder((sx, y0, sec.spring_z), (sx, y1, sec.spring_z), sec.tol.spring_hole / 2.0)
-            for sx in (sec.spring_x, -sec.spring_x)]
-
-
-def spring_anchor(sec: DigitSection, y: float):
-    """Anchor wells of the cable springs: from the dorsal face down through the spring channels
-    (cord + one clearance, narrower than the channel so the two bores never share a radius);
-    the cord is knotted on the dorsal face."""
-    t = sec.tol
-    r = (t.spring + t.clearance) / 2.0
-    return [cylinder((sx, y, sec.spring_z - t.spring_hole / 2.0), (sx, y, sec.thickness / 2.0 + 1.0), r)
-            for sx in (sec.spring_x, -sec.spring_x)]
-
-
-def figure_eight(sec: DigitSection, j_prox: str, j_dist: str, length: float):
-    """The two crossing tendon channels between the pulley grooves of this link's proximal
-    joint (at y = 0) and distal joint (at y = length)."""
-    out = []
-    half = sec.tol.tendon / 2.0   # the tendon's centreline wraps at R + d/2
-    for pa, pb in internal_tangents(sec.R[j_prox] + half, length, sec.R[j_dist] + half):
-        out.append(channel((0.0, *pa), (0.0, *pb), sec.tol.tendon_hole, extend=1.0))
-    return out
 
 
 # ---------------------------------------------------------------------------
@@ -202,15 +220,11 @@ class Phalanx(Part):
         return T
 
     def verify(self, shape) -> list[str]:
-        """The proximal joint's groove radius R; on the guide link, the eyelet at d2."""
+        """The routing model's grooves on this link (floor R - cord / 2); on the guide link, the
+        eyelet at d2."""
         out: list[str] = []
         tol = self.sec.tol
-        j = self.proximal_joint
-        try:
-            r = measure_groove_radius(shape, (0, 0, 0), (1, 0, 0), tol.tendon_hole)
-        except ValueError:
-            r = None
-        self.expect(out, f"{j} groove radius", r, self.sec.R[j])
+        verify_grooves(self, shape, LinkTendons(self.params, self.link.name), out)
         if self.has_guide:
             eyes = eyelet_centres(shape, tol.tendon_hole / 2.0, tol.eyelet_length)
             d = point_line_distance(eyes[0]["centre"], (0, 0, 0), (1, 0, 0)) if len(eyes) == 1 else None
@@ -220,7 +234,8 @@ class Phalanx(Part):
     def build(self):
         sec, t = self.sec, self.sec.tol
         W, T, L = sec.width, sec.thickness, self.length
-        body, tools = tongue(sec, self.proximal_joint)
+        lt = LinkTendons(self.params, self.link.name)
+        body, tools = tongue(sec, parent_joint(self.link).name, lt)
         if self.distal_joint is None:       # fingertip: a half-cylinder of radius T/2 (or less)
             r_tip = self.tip_radius
             y_c = L - r_tip
@@ -230,29 +245,23 @@ class Phalanx(Part):
             body.append(tip)
         else:
             body.append(box(-W / 2.0, W / 2.0, sec.slot_back, L, -T / 2.0, T / 2.0))
-            b2, t2 = clevis(sec, self.distal_joint, L)
+            b2, t2 = clevis(sec, self.distal_joint, L, lt.hubs().get(child_joint(self.link).name))
             body += b2
             tools += t2
-            tools += figure_eight(sec, self.proximal_joint, self.distal_joint, L)
+        tools += hub_grooves(sec, lt)
         if self.has_guide:
             G1, G2 = sec.guide_points()
-            b3, t3, u, (s_near, s_far) = eyelet(sec, G2, G1, clip_palmar=True)
+            b3, t3, u, (s_near, s_far) = eyelet(sec, G2, lt.eyelet_toward(G2), clip_palmar=True)
             body += b3
             tools += t3
-            chord = float(np.linalg.norm(G1 - G2))
-            tools.append(channel(s_near, s_near + u * chord / 2.0, t.tendon_relief))
-            # on to the distal joint's pulley, palmar side
-            tools.append(channel(s_far, (0.0, L, -sec.R[self.distal_joint]), t.tendon_hole))
-        # dorsal cable spring: through the whole link; anchored in the distal phalanx
-        if self.distal_joint is None:
-            y_anchor = max(sec.slot_back + t.spring_hole + t.wall, L - T / 2.0 - t.spring_hole)
-            tools.extend(spring_channel(sec, -sec.slot_back - 1.0, y_anchor))
-            tools.extend(spring_anchor(sec, y_anchor))
-            # tendon anchor: from the groove's palmar side into a knot well
-            zt = -(sec.R[self.proximal_joint] + t.tendon / 2.0)   # the tendon centreline leaves the groove
-            y_knot = sec.slot_back + t.wall + t.tendon_relief / 2.0
-            tools.append(channel((0.0, 0.0, zt), (0.0, y_knot, zt), t.tendon_hole))
-            tools.append(channel((0.0, y_knot, zt), (0.0, y_knot, -T / 2.0 - 1.0), t.tendon_relief))
-        else:
-            tools.extend(spring_channel(sec, -sec.slot_back - 1.0, L + sec.boss_radius + 1.0))
+                    # the drive ends here: knotted behind G2, in a well from the far relief to the palmar face
+            tools.append(cylinder(s_far, (0.0, s_far[1], -T / 2.0 - 1.0), t.tendon_relief / 2.0))
+            tools += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - np.array([0.0, *G2]))))
+        tools += channel_tools(lt)
+        tools += anchor_tools(lt, sec)
         return build(body, tools)
+
+
+def hub_grooves(sec: DigitSection, lt: LinkTendons) -> list:
+    """The grooves of the loop hubs a link carries, cut out through the hub's rim."""
+    return [groove_tool(g, sec.boss_radius + 1.0) for g in lt.grooves if g.role == "hub"]

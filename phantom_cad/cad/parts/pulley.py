@@ -18,6 +18,8 @@ import math
 
 import numpy as np
 
+from ... import canon
+
 from ...kinematics import frames
 from ...kinematics.topology import N_SERVOS, SERVOS, link
 from ..measure import coaxial, cylinders, measure_groove_radius
@@ -27,7 +29,6 @@ from .common import Tolerances, build, cylinder, mm
 #: angular positions (rad) of the holes on the horn circle
 HORN_ANGLES = (math.pi / 4.0, 5.0 * math.pi / 4.0)        # horn screws (through the pulley into the horn)
 BASE_ANGLES = (3.0 * math.pi / 4.0, 7.0 * math.pi / 4.0)  # CMC base screws (into the servo-6 hub)
-ANCHOR_ANGLE = math.pi / 2.0                              # tendon anchor
 
 
 class ServoPulley(Part):
@@ -64,7 +65,9 @@ class ServoPulley(Part):
         if self.is_hub:
             src = {"cmc_horn_radius_mm": doc["thumb"]["cmc_horn_radius_mm"]}
         else:
-            src = {"servo_pulley_radius_mm": digit_table(doc, self.servo.digit)["servo_pulley_radius_mm"]}
+            # the radius, and the travel that places the drive's clamp (routing.servo_clamp_wrap)
+            table = digit_table(doc, self.servo.digit)
+            src = {k: canon.plain(table[k]) for k in ("servo_pulley_radius_mm", "servo_travel_deg")}
         return {**self.common_inputs(), "servo": self.servo.label, **src}
 
     def verify(self, shape) -> list[str]:
@@ -78,8 +81,23 @@ class ServoPulley(Part):
                 r = measure_groove_radius(shape, (0, 0, 0), (0, 0, 1), self.tol.tendon_hole)
             except ValueError:
                 r = None
-            self.expect(out, "groove radius", r, self.radius)
+            self.expect(out, "groove radius", r, self.groove_floor)
         return out
+
+    @property
+    def groove_floor(self) -> float:
+        """Radius of the groove's floor: half a tendon inside r_j, so the tendon's centreline runs
+        at r_j (the moment arm of eq. 5)."""
+        return self.radius - self.tol.tendon / 2.0
+
+    @property
+    def anchor_angle(self) -> float:
+        """Polar angle (rad, pulley frame at u = 0, right hand) of the drive's clamp: where the
+        routing model anchors it (``routing.servo_clamp_wrap``: every wrap inside the travel)."""
+        from ...kinematics import routing
+        clamp = next(st.elements[0] for r in routing.routes(self.params, right_handed=True)
+                     if r.tendon.kind == "drive" and r.tendon.servo == self.servo.index for st in r.strands)
+        return math.atan2(clamp.pos[1], clamp.pos[0])
 
     @property
     def lip(self) -> float:
@@ -107,9 +125,9 @@ class ServoPulley(Part):
         else:
             groove_w = t.tendon_hole
             outer = cylinder((0, 0, -groove_w / 2.0), (0, 0, groove_w / 2.0), self.outer_radius + 1.0)
-            inner = cylinder((0, 0, -groove_w / 2.0 - 1.0), (0, 0, groove_w / 2.0 + 1.0), self.radius)
+            inner = cylinder((0, 0, -groove_w / 2.0 - 1.0), (0, 0, groove_w / 2.0 + 1.0), self.groove_floor)
             tools.append(outer.cut(inner))
-            a = ANCHOR_ANGLE
+            a = self.anchor_angle
             d = np.array([math.cos(a), math.sin(a), 0.0])
             tools.append(cylinder(d * self.horn_radius, d * (self.radius + 0.5), t.tendon_hole / 2.0))
             tools += [cylinder(d * self.horn_radius - np.array([0, 0, w / 2.0 + 1.0]),

@@ -21,7 +21,8 @@ from ...kinematics.topology import CMC_Q, JOINTS, link
 from ..measure import eyelet_centres, point_line_distance
 from .base import Part, child_joint, digit_table
 from .common import DigitSection, box, build, cylinder, mm, sphere
-from .phalanx import channel, clevis, eyelet, spring_anchor, spring_channel
+from .phalanx import channel, clevis, eyelet, hub_grooves
+from .tendons import LinkTendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry, verify_grooves
 from .pulley import BASE_ANGLES, HORN_ANGLES
 
 
@@ -55,6 +56,7 @@ class ThumbCMCBase(Part):
         """The metacarpal-side guide eyelet at d1 from the MP axis (at y = metacarpal)."""
         out: list[str] = []
         tol = self.sec.tol
+        verify_grooves(self, shape, LinkTendons(self.params, self.link.name), out)
         eyes = eyelet_centres(shape, tol.tendon_hole / 2.0, tol.eyelet_length)
         d = (point_line_distance(eyes[0]["centre"], (0, self.length, 0), (1, 0, 0)) if len(eyes) == 1
              else None)
@@ -71,27 +73,24 @@ class ThumbCMCBase(Part):
         W, T, L = sec.width, sec.thickness, self.length
         body = [cylinder((0, 0, -T / 2.0), (0, 0, T / 2.0), self.hub_radius),
                 box(-W / 2.0, W / 2.0, 0.0, L, -T / 2.0, T / 2.0)]
-        b, tools = clevis(sec, self.joint, L)
+        lt = LinkTendons(self.params, self.link.name)
+        b, tools = clevis(sec, self.joint, L, lt.hubs().get(child_joint(self.link).name))
         body += b
+        tools += hub_grooves(sec, lt)
         G1, G2 = sec.guide_points()
         shift = np.array([L, 0.0])
-        b3, t3, u, (s_near, s_far) = eyelet(sec, G1 + shift, G2 + shift)
+        b3, guide, u, (s_near, s_far) = eyelet(sec, G1 + shift, lt.eyelet_toward(G1 + shift))
         body += b3
-        tools += t3
-        chord = float(np.linalg.norm(G1 - G2))
-        tools.append(channel(s_near, s_near + u * chord / 2.0, t.tendon_relief))
+        guide += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - np.array([0.0, *(G1 + shift)]))))
         # the tendon comes down the CMC axis (through the hub's central bore, from the palm's
         # arch above) and turns along the arm to the eyelet: CMC rotation leaves its length alone
         turn = np.array([0.0, 0.0, s_far[2]])
-        tools.append(sphere(turn, t.tendon_relief / 2.0 + t.clearance))
-        tools.append(cylinder(turn, s_far, t.tendon_relief / 2.0))
+        guide.append(sphere(turn, t.tendon_relief / 2.0 + t.clearance))
+        guide.append(cylinder(turn, guide_entry(turn, np.array([0.0, *(G1 + shift)]), s_far), t.tendon_hole / 2.0))
         # hub: spline-screw bore and the four holes on the horn circle
         h = T / 2.0 + 1.0
         tools.append(cylinder((0, 0, -h), (0, 0, h), t.screw_clear / 2.0))
         for a in HORN_ANGLES + BASE_ANGLES:
             c = self.horn_radius * np.array([math.cos(a), math.sin(a), 0.0])
             tools.append(cylinder(c - (0, 0, h), c + (0, 0, h), t.screw_clear / 2.0))
-        y_anchor = self.hub_radius + t.wall + t.spring_hole
-        tools.extend(spring_channel(sec, y_anchor, L + sec.boss_radius + 1.0))
-        tools.extend(spring_anchor(sec, y_anchor))
-        return build(body, tools)
+        return build(body, tools, guide, channel_tools(lt) + anchor_tools(lt, sec))

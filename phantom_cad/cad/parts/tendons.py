@@ -1,0 +1,308 @@
+"""The tendon features of a digit link's part, cut from the routing model (``kinematics.routing``).
+
+Nothing here retypes a tendon's path: every groove, channel, clamp and knot well is read from the
+right-handed routes (``routing.routes(params, right_handed=True)``) and their straight runs
+(``routing.runs``), in the link's frame, in mm. docs/transmission.md describes the mechanism and
+docs/parts.md the features:
+
+* a **pulley** element on this link is a groove whose floor lies half a cord inside the pulley's
+  centreline radius (the moment arm R): a full ring for a loop's hub and groove (their strands
+  touch nearly all the way round over the travel), a sector for the return cord (the arc it ever
+  touches, ``routing.arc_range``, plus ``SECTOR_MARGIN``);
+* a **hub** (a loop's pulley on the link before its first joint) is material the clevis slot
+  leaves standing beside that side's cheek (``routing.Layout.hub_width``); the child's tongue is
+  cut back there;
+* a **run** fixed to this link is a channel of the cord's clearance diameter along it;
+* an **anchor**: a loop's clamp on its hub is an M2 set-screw pilot along the axis from the
+  cheek's outer face across the groove (the screw pinches both cord ends against the inner flank:
+  the loop is tensioned there); a loop's clamp on its groove is a knot pocket in the groove floor
+  (the cord's middle, knotted); the return cord's knots are wells up to the dorsal face.
+
+numpy only; the solids are made by ``common``'s helpers (build123d imported lazily).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ... import units
+from ...kinematics import routing
+from ...kinematics.topology import TENDONS, joint
+
+#: a return groove's sector reaches this far beyond the arc its cord ever touches (rad)
+SECTOR_MARGIN = math.radians(15.0)
+#: a drive chord's fan reaches this far (rad) beyond the extreme chords it holds
+FAN_PAD = math.radians(4.0)
+#: the loop and return tendons: the ones whose features this module cuts (the drive's eyelets and
+#: channels are the guide features of the parts themselves)
+KINDS = ("coupling", "return")
+_KIND = {t.name: t.kind for t in TENDONS}
+
+
+def _mm(v) -> np.ndarray:
+    return np.asarray(units.mm(np.asarray(v, float)), float)
+
+
+@dataclass(frozen=True)
+class Groove:
+    """A groove about an axis parallel to x through (y, z): floor radius, width, plane x, and the
+    sector of polar angles it spans (None: all round). mm, rad."""
+    role: str
+    joint: str
+    y: float
+    z: float
+    x: float
+    floor: float
+    width: float
+    sector: tuple[float, float] | None
+    radius: float                # the cord's centreline radius (the moment arm)
+
+
+@dataclass(frozen=True)
+class Anchor:
+    role: str                    # "hub clamp", "groove clamp", "knot"
+    pos: np.ndarray              # mm, link frame
+    centre: np.ndarray | None    # the pulley's centre (mm) for a clamp
+    radius: float | None         # the pulley's centreline radius (mm) for a clamp
+    cord: float                  # mm
+
+
+class LinkTendons:
+    """What the routing model asks of one link's part (right hand, mm)."""
+
+    def __init__(self, params, link_name: str):
+        self.params, self.link = params, link_name
+        cl = units.mm(params.print.hole_clearance)
+        self.grooves: list[Groove] = []
+        self.anchors: list[Anchor] = []
+        seen = set()
+        for r in routing.routes(params, right_handed=True):
+            if _KIND[r.name] not in KINDS:
+                continue
+            cord = float(units.mm(r.diameter))
+            for st in r.strands:
+                els = st.elements
+                for i, e in enumerate(els):
+                    if e.link != link_name:
+                        continue
+                    if isinstance(e, routing.Pulley):
+                        c, R = _mm(e.centre), float(units.mm(e.radius))
+                        key = (e.role, e.joint, round(c[0], 6))
+                        sector = None
+                        if e.role == "return":
+                            # the arc it touches, and behind it the parent's run, which turns into
+                            # this link's frame as the joint flexes (up to a quarter turn beyond)
+                            a0, a1 = routing.arc_range(params, st, i)
+                            sector = (a0 - SECTOR_MARGIN, a1 + math.pi / 2.0)
+                        if key in seen:
+                            continue
+                        seen.add(key)
+                        self.grooves.append(Groove(e.role, e.joint, float(c[1]), float(c[2]), float(c[0]),
+                                                   R - cord / 2.0, float(units.mm(e.width)), sector, R))
+                    elif e.kind == "anchor":
+                        key = ("anchor", tuple(np.round(_mm(e.pos), 6)))
+                        if key in seen:
+                            continue
+                        seen.add(key)
+                        nb = els[i + 1] if i == 0 else els[i - 1]
+                        if isinstance(nb, routing.Pulley) and e.role == "clamp":
+                            role = "hub clamp" if nb.role == "hub" else "groove clamp"
+                            self.anchors.append(Anchor(role, _mm(e.pos), _mm(nb.centre),
+                                                       float(units.mm(nb.radius)), cord))
+                        else:
+                            self.anchors.append(Anchor("knot", _mm(e.pos), None, None, cord))
+        #: (p0, p1, channel diameter) of every loop and return run fixed to this link, mm
+        self.channels = []
+        for run in routing.runs(params, right_handed=True):
+            if _KIND[run.tendon] in KINDS and link_name in run.links:
+                p0, p1 = run.ends[link_name]
+                self.channels.append((_mm(p0), _mm(p1), float(units.mm(run.diameter)) + 2.0 * cl))
+
+        #: drive chords (free runs across the reference joint) with an end on this link: (the end
+        #: fixed here, the other end's positions over the travel), mm
+        self.drive_sweeps = []
+        strands = {st.name: st for r in routing.routes(params, right_handed=True) for st in r.strands}
+        for run in routing.runs(params, right_handed=True):
+            if _KIND[run.tendon] != "drive" or run.links:
+                continue
+            els = strands[run.strand].elements
+            ends = (els[run.index].link, els[run.index + 1].link)
+            if link_name not in ends:
+                continue
+            sweep = routing.run_sweep(params, run, link_name, right_handed=True)
+            k = ends.index(link_name)
+            self.drive_sweeps.append((_mm(sweep[0][k]), [_mm(pr[1 - k]) for pr in sweep]))
+
+    def eyelet_toward(self, centre_yz) -> np.ndarray:
+        """A point (y, z) the drive's guide eyelet at ``centre_yz`` points toward: along the
+        bisector of the directions its chord takes over the travel, so the chord swings least
+        off the eyelet's axis (at G2 it turns through about 60 deg)."""
+        c = np.asarray(centre_yz, float)
+        for fixed, moving in self.drive_sweeps:
+            if np.linalg.norm(fixed[1:] - c) < 1e-6:
+                dirs = [(m - fixed)[1:] / np.linalg.norm((m - fixed)[1:]) for m in moving]
+                ang = [math.atan2(d[1], d[0]) for d in dirs]
+                rel = [((a - ang[0] + math.pi) % (2 * math.pi)) - math.pi for a in ang]
+                mid = ang[0] + (min(rel) + max(rel)) / 2.0
+                return c + np.array([math.cos(mid), math.sin(mid)])
+        raise ValueError(f"{self.link}: no drive chord ends at {tuple(c)}")
+
+    def hubs(self) -> dict[str, float]:
+        """{joint name: x of the hub's groove plane} of the hubs this link carries."""
+        return {g.joint: g.x for g in self.grooves if g.role == "hub"}
+
+    def tongue_grooves(self, joint_name: str) -> list[Groove]:
+        """The grooves on this link's tongue at its proximal joint (loop grooves, return)."""
+        return [g for g in self.grooves if g.joint == joint_name and g.role in ("groove", "return")]
+
+
+def verify_grooves(part, shape, lt: LinkTendons, out: list[str]) -> None:
+    """Every groove the routing model puts on this link (hub, loop groove, return groove), measured
+    on the solid: its floor, half a cord inside the pulley radius, about the pulley's axis."""
+    from ..measure import measure_groove_radius
+    for g in lt.grooves:
+        try:
+            r = measure_groove_radius(shape, (g.x, g.y, g.z), (1, 0, 0), g.width)
+        except ValueError:
+            r = None
+        label = {"hub": "loop hub", "groove": "loop groove", "return": "return groove"}[g.role]
+        part.expect(out, f"{g.joint.split('_', 1)[1]} {label} floor", r, g.floor)
+
+
+def parent_hub_x(params, joint_name: str) -> float | None:
+    """x of the hub on a joint's parent link (the loop plane that joint's tongue must leave free),
+    or None."""
+    j = joint(joint_name)
+    return LinkTendons(params, j.parent).hubs().get(joint_name)
+
+
+# ---------------------------------------------------------------------------
+# geometry (build123d through common's helpers)
+# ---------------------------------------------------------------------------
+
+def groove_tool(g: Groove, outer: float):
+    """The cutter of a groove: from its floor out to ``outer`` (mm), over its sector."""
+    from .common import prism_x, ring_x
+    ring = ring_x(g.floor, outer, g.width, g.y, g.z).moved(_loc_x(g.x))
+    if g.sector is None:
+        return ring
+    a0, a1 = g.sector
+    n = max(2, int(math.ceil((a1 - a0) / math.radians(10.0))))
+    big = outer / math.cos(math.pi / (2 * n)) + 1.0     # the polygon's chords stay outside the ring
+    poly = [(g.y, g.z)] + [(g.y + big * math.cos(a), g.z + big * math.sin(a)) for a in np.linspace(a0, a1, n + 1)]
+    sector = ring.intersect(prism_x(poly, g.x - g.width, g.x + g.width))
+    solids = sector.solids() if hasattr(sector, "solids") else [s for c in sector for s in c.solids()]
+    if len(solids) == 1:
+        return solids[0]
+    from .common import bd
+    return bd().Compound(list(solids))
+
+
+def _loc_x(x: float):
+    from .common import bd
+    b = bd()
+    return b.Location((float(x), 0.0, 0.0))
+
+
+def channel_tools(lt: LinkTendons, extend: float | None = None):
+    """A channel along every loop and return run fixed to the link, a clearance diameter wide,
+    reaching half a diameter past each end (into the groove or well it meets)."""
+    from .common import cylinder
+    out = []
+    for p0, p1, d in lt.channels:
+        u = (p1 - p0) / np.linalg.norm(p1 - p0)
+        e = d / 2.0 if extend is None else extend
+        out.append(cylinder(p0 - e * u, p1 + e * u, d / 2.0))
+    return out
+
+
+def anchor_tools(lt: LinkTendons, sec) -> list:
+    """Clamps and knot wells (see the module doc)."""
+    from .common import cylinder
+    t = sec.tol
+    out = []
+    for a in lt.anchors:
+        p = a.pos
+        if a.role == "hub clamp":            # set-screw pilot from the cheek's outer face across the groove
+            side = math.copysign(1.0, p[0])
+            on_circle = a.centre + (p - a.centre) * (a.radius / np.linalg.norm((p - a.centre)[1:]))
+            on_circle[0] = p[0]
+            x_in = p[0] - side * (sec.layout.groove / 2.0)
+            out.append(cylinder((x_in, *on_circle[1:]), (side * (sec.width / 2.0 + 1.0), *on_circle[1:]),
+                                t.screw_pilot / 2.0))
+        elif a.role == "groove clamp":       # knot pocket in the groove floor
+            v = (p - a.centre)[1:]
+            v = v / np.linalg.norm(v)
+            floor = a.radius - a.cord / 2.0
+            depth = knot_pocket_depth(sec, floor, a.cord)
+            c0 = np.array([p[0], *(a.centre[1:] + (floor - depth) * v)])
+            c1 = np.array([p[0], *(a.centre[1:] + a.radius * v)])
+            out.append(cylinder(c0, c1, sec.layout.groove / 2.0))
+        else:                                # a knot well up to the dorsal face, one clearance wider
+            d = a.cord + 4.0 * t.clearance   # than the channel it meets (equal bores meet degenerately)
+            out.append(cylinder(p, (p[0], p[1], sec.thickness / 2.0 + 1.0), d / 2.0))
+    return out
+
+
+def knot_pocket_depth(sec, floor: float, cord: float) -> float:
+    """Depth (mm) of a loop's knot pocket below its groove floor: two cord diameters, less where
+    the axle's clearance bore would come within a flank."""
+    return max(0.0, min(2.0 * cord, floor - sec.tol.axle_clear / 2.0 - units.mm(routing.FLANK)))
+
+
+def drive_fan_tools(lt: LinkTendons, sec, start: float) -> list:
+    """The slot a drive chord sweeps through this link over the travel: a fan from the end fixed
+    here (from ``start`` mm along the chord, past the eyelet) to the other end's positions, a
+    clearance diameter wide about the chord's plane."""
+    from .common import prism_x
+    out = []
+    w = sec.tol.tendon_hole
+    for fixed, moving in lt.drive_sweeps:
+        rays = {}
+        for m in moving:
+            v = (m - fixed)[1:]
+            L = float(np.linalg.norm(v))
+            if L <= start:
+                continue
+            u = v / L
+            a = round(math.atan2(u[1], u[0]), 9)
+            rays[a] = max(rays.get(a, 0.0), L + 1.0)
+        if len(rays) < 2:
+            continue
+        # star-shaped about the fixed end: the rays in angular order (unwrapped about the first)
+        a0 = next(iter(rays))
+        order = sorted(rays, key=lambda a: ((a - a0 + math.pi) % (2 * math.pi)))
+        # a clearance's worth of angle beyond the two extreme chords, which would lie on its edges
+        first, last = order[0], order[-1]
+        pad = FAN_PAD
+        rays[first - pad], rays[last + pad] = rays[first], rays[last]
+        order = [first - pad] + order + [last + pad]
+        c = fixed[1:]
+        near = [c + start * np.array([math.cos(a), math.sin(a)]) for a in order]
+        far = [c + rays[a] * np.array([math.cos(a), math.sin(a)]) for a in order]
+        poly = [tuple(p) for p in near] + [tuple(p) for p in reversed(far)]
+        out.append(prism_x(_simple(poly), fixed[0] - w / 2.0, fixed[0] + w / 2.0))
+    return out
+
+
+def guide_entry(start, guide, relief_centre) -> np.ndarray:
+    """Where a channel along the line from ``start`` through a guide point should end: the point of
+    that line nearest the eyelet's far relief sphere's centre (inside the sphere, so the channel's
+    rim never reaches the eyelet's hole)."""
+    a, g, c = (np.asarray(v, float) for v in (start, guide, relief_centre))
+    u = (g - a) / np.linalg.norm(g - a)
+    return a + float((c - a) @ u) * u
+
+
+def _simple(poly):
+    """Drop consecutive duplicates (a fan whose near edge has not moved)."""
+    out = []
+    for p in poly:
+        if not out or math.hypot(p[0] - out[-1][0], p[1] - out[-1][1]) > 1e-6:
+            out.append(p)
+    if math.hypot(out[0][0] - out[-1][0], out[0][1] - out[-1][1]) < 1e-6:
+        out.pop()
+    return out
