@@ -57,14 +57,14 @@ def _bearings(params) -> dict[str, int]:
     grooves (``phalanx.tongue_bearing_face``); the others turn on the axle in their bore."""
     from .parts.common import DigitSection
     from .parts.phalanx import tongue_bearing_face
-    from .parts.tendons import LinkTendons
+    from .parts.tendons import link_tendons
     out = {}
     for spec in FINGER_CHAINS + (THUMB_CHAIN,):
         sec = DigitSection(params, spec.digit)
         n = 0
         for jn in spec.joint_names:
             j = [x for x in JOINTS if x.name == jn][0]
-            if tongue_bearing_face(sec, jn, LinkTendons(params, j.child)) is not None:
+            if tongue_bearing_face(sec, jn, link_tendons(params, j.child)) is not None:
                 n += 1
         out[spec.digit] = n
     return out

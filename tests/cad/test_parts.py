@@ -177,6 +177,30 @@ def test_servo_pulley_groove_radius_is_r(built, document, k):
     assert r == pytest.approx(src["servo_pulley_radius_mm"] - document["hardware"]["tendon_diameter_mm"] / 2, abs=1e-6)
 
 
+@pytest.mark.parametrize("k", [1, 2, 3, 4, 5])
+def test_servo_pulley_anchor_at_the_clamp_and_clear_of_the_horn_screws(built, document, k):
+    """The knot well (an axial hole of twice the tendon hole's diameter) sits at the polar angle
+    where the drive is clamped: the wrap at u = 0 is the middle of (8 deg, 172 deg - travel), so the
+    clamp is at 180 deg + (180 deg - travel) / 2 = 270 deg - travel / 2; every horn-screw hole
+    stands a print wall away from it."""
+    src = document["thumb"] if k == 1 else document["fingers"][FINGERS[k - 2]]
+    travel = src["servo_travel_deg"][1]
+    pr, hw = document["print"], document["hardware"]
+    well_r = tendon_hole(document)
+    screw_r = hw["screw_diameter_mm"] / 2 + pr["hole_clearance_mm"]
+    axial = [c for c in check.cylinders(built[f"servo_pulley_{k}"].shape)
+             if abs(abs(c["direction"][2]) - 1.0) < 1e-9 and np.hypot(*c["point"][:2]) > 1.0]
+    wells = [c for c in axial if abs(c["radius"] - well_r) < 1e-6]
+    screws = [c for c in axial if abs(c["radius"] - screw_r) < 1e-6]
+    assert len(wells) == 1 and len(screws) == 2
+    w = wells[0]["point"][:2]
+    angle = math.degrees(math.atan2(w[1], w[0])) % 360.0
+    assert angle == pytest.approx(270.0 - travel / 2.0, abs=1e-6)
+    for sc in screws:
+        wall = np.linalg.norm(sc["point"][:2] - w) - well_r - screw_r
+        assert wall >= document["palm"]["wall_mm"]
+
+
 def test_cmc_hub_radius_is_the_horn_radius(built, document):
     cs = [c for c in check.cylinders(built["servo_pulley_6"].shape)
           if check.coaxial(c, (0, 0, 0), (0, 0, 1))]

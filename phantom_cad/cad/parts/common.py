@@ -13,6 +13,7 @@ carries its print tolerance from ``params.print`` (docs/parts.md lists which):
 from __future__ import annotations
 
 import math
+from functools import cached_property
 
 import numpy as np
 
@@ -122,7 +123,7 @@ class DigitSection:
             self.q_stop[ref.key] = self.q_max[ref.key] + params.cad.module_stop_margin
         self.guide = chain.guide
 
-    @property
+    @cached_property
     def layout(self):
         """The routing model's planes of this digit's loops and return cord (``routing.layout``), mm."""
         from types import SimpleNamespace

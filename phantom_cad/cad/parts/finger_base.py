@@ -19,7 +19,7 @@ from ..measure import circular_pockets, eyelet_centres, point_line_distance
 from .base import Part, child_joint, digit_table
 from .common import DigitSection, box, build, cylinder, mm
 from .phalanx import channel, clevis, eyelet, hub_grooves
-from .tendons import LinkTendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry, verify_grooves
+from .tendons import link_tendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry, verify_grooves
 
 
 class FingerBase(Part):
@@ -54,7 +54,7 @@ class FingerBase(Part):
         """The metacarpal-side guide eyelet at d1 from the MCP axis; two magnet pockets."""
         out: list[str] = []
         tol = self.sec.tol
-        verify_grooves(self, shape, LinkTendons(self.params, self.link.name), out)
+        verify_grooves(self, shape, link_tendons(self.params, self.link.name), out)
         eyes = eyelet_centres(shape, tol.tendon_hole / 2.0, tol.eyelet_length)
         d = point_line_distance(eyes[0]["centre"], (0, 0, 0), (1, 0, 0)) if len(eyes) == 1 else None
         self.expect(out, "guide d1", d, mm(self.sec.guide.d1), 0.02)
@@ -81,7 +81,7 @@ class FingerBase(Part):
         sec, t = self.sec, self.sec.tol
         W, T, Lb = sec.width, sec.thickness, self.length
         body = [box(-W / 2.0, W / 2.0, -Lb, 0.0, -T / 2.0, T / 2.0)]
-        lt = LinkTendons(self.params, self.link.name)
+        lt = link_tendons(self.params, self.link.name)
         b, tools = clevis(sec, self.joint, 0.0, lt.hubs().get(child_joint(self.link).name))
         body += b
         tools += hub_grooves(sec, lt)

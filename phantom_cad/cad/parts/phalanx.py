@@ -22,7 +22,7 @@ from ...kinematics.topology import CMC_Q, LINKS, digit_links, joint
 from ..measure import eyelet_centres, point_line_distance
 from .base import Part, child_joint, digit_table, parent_joint
 from .common import DigitSection, box, build, cyl_x, cylinder, mm, prism_x, sphere
-from .tendons import (LinkTendons, anchor_tools, channel_tools, drive_fan_tools, groove_tool, knot_pocket_depth,
+from .tendons import (LinkTendons, link_tendons, anchor_tools, channel_tools, drive_fan_tools, groove_tool, knot_pocket_depth,
                       parent_hub_x, verify_grooves)
 
 # ---------------------------------------------------------------------------
@@ -224,7 +224,7 @@ class Phalanx(Part):
         eyelet at d2."""
         out: list[str] = []
         tol = self.sec.tol
-        verify_grooves(self, shape, LinkTendons(self.params, self.link.name), out)
+        verify_grooves(self, shape, link_tendons(self.params, self.link.name), out)
         if self.has_guide:
             eyes = eyelet_centres(shape, tol.tendon_hole / 2.0, tol.eyelet_length)
             d = point_line_distance(eyes[0]["centre"], (0, 0, 0), (1, 0, 0)) if len(eyes) == 1 else None
@@ -234,7 +234,7 @@ class Phalanx(Part):
     def build(self):
         sec, t = self.sec, self.sec.tol
         W, T, L = sec.width, sec.thickness, self.length
-        lt = LinkTendons(self.params, self.link.name)
+        lt = link_tendons(self.params, self.link.name)
         body, tools = tongue(sec, parent_joint(self.link).name, lt)
         if self.distal_joint is None:       # fingertip: a half-cylinder of radius T/2 (or less)
             r_tip = self.tip_radius

@@ -100,6 +100,17 @@ class ServoPulley(Part):
         return math.atan2(clamp.pos[1], clamp.pos[0])
 
     @property
+    def horn_angles(self) -> tuple[float, float]:
+        """Polar angles (rad) of the two horn-screw holes. The CMC hub: ``HORN_ANGLES``. A drive
+        pulley: square to its anchor (the anchor sits where the routing model's clamp is, at
+        270 deg - travel / 2, which is on ``HORN_ANGLES`` for a 90 deg travel; the horn goes on
+        the spline at the tooth nearest this orientation, docs/assembly.md)."""
+        if self.is_hub:
+            return HORN_ANGLES
+        a = self.anchor_angle
+        return tuple(math.remainder(a + s * math.pi / 2.0, 2.0 * math.pi) for s in (1.0, -1.0))
+
+    @property
     def lip(self) -> float:
         """Groove depth: the flanges stand two tendon diameters above the groove bottom."""
         return mm(frames.servo_pulley_lip(self.params))
@@ -119,7 +130,7 @@ class ServoPulley(Part):
         w = self.width
         body = [cylinder((0, 0, -w / 2.0), (0, 0, w / 2.0), self.outer_radius)]
         tools = [cylinder((0, 0, -w / 2.0 - 1.0), (0, 0, w / 2.0 + 1.0), t.screw_clear / 2.0)]
-        tools += self._holes(HORN_ANGLES, t.screw_clear)
+        tools += self._holes(self.horn_angles, t.screw_clear)
         if self.is_hub:
             tools += self._holes(BASE_ANGLES, t.screw_pilot)
         else:

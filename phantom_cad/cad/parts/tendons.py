@@ -172,11 +172,26 @@ def verify_grooves(part, shape, lt: LinkTendons, out: list[str]) -> None:
         part.expect(out, f"{g.joint.split('_', 1)[1]} {label} floor", r, g.floor)
 
 
+_LINK_TENDONS: dict = {}
+
+
+def link_tendons(params, link_name: str) -> LinkTendons:
+    """The :class:`LinkTendons` of one link, made once per hand (memoised by the parameters'
+    digest: the routes are pure functions of them; a part's build, its verification, its
+    child's tongue and the bill of materials all read the same one)."""
+    key = (params.digest, link_name)
+    if key not in _LINK_TENDONS:
+        if len(_LINK_TENDONS) > 64:
+            _LINK_TENDONS.clear()
+        _LINK_TENDONS[key] = LinkTendons(params, link_name)
+    return _LINK_TENDONS[key]
+
+
 def parent_hub_x(params, joint_name: str) -> float | None:
     """x of the hub on a joint's parent link (the loop plane that joint's tongue must leave free),
     or None."""
     j = joint(joint_name)
-    return LinkTendons(params, j.parent).hubs().get(joint_name)
+    return link_tendons(params, j.parent).hubs().get(joint_name)
 
 
 # ---------------------------------------------------------------------------

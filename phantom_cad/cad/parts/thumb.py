@@ -22,7 +22,7 @@ from ..measure import eyelet_centres, point_line_distance
 from .base import Part, child_joint, digit_table
 from .common import DigitSection, box, build, cylinder, mm, sphere
 from .phalanx import channel, clevis, eyelet, hub_grooves
-from .tendons import LinkTendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry, verify_grooves
+from .tendons import link_tendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry, verify_grooves
 from .pulley import BASE_ANGLES, HORN_ANGLES
 
 
@@ -56,7 +56,7 @@ class ThumbCMCBase(Part):
         """The metacarpal-side guide eyelet at d1 from the MP axis (at y = metacarpal)."""
         out: list[str] = []
         tol = self.sec.tol
-        verify_grooves(self, shape, LinkTendons(self.params, self.link.name), out)
+        verify_grooves(self, shape, link_tendons(self.params, self.link.name), out)
         eyes = eyelet_centres(shape, tol.tendon_hole / 2.0, tol.eyelet_length)
         d = (point_line_distance(eyes[0]["centre"], (0, self.length, 0), (1, 0, 0)) if len(eyes) == 1
              else None)
@@ -73,7 +73,7 @@ class ThumbCMCBase(Part):
         W, T, L = sec.width, sec.thickness, self.length
         body = [cylinder((0, 0, -T / 2.0), (0, 0, T / 2.0), self.hub_radius),
                 box(-W / 2.0, W / 2.0, 0.0, L, -T / 2.0, T / 2.0)]
-        lt = LinkTendons(self.params, self.link.name)
+        lt = link_tendons(self.params, self.link.name)
         b, tools = clevis(sec, self.joint, L, lt.hubs().get(child_joint(self.link).name))
         body += b
         tools += hub_grooves(sec, lt)
@@ -83,9 +83,13 @@ class ThumbCMCBase(Part):
         body += b3
         guide += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - np.array([0.0, *(G1 + shift)]))))
         # the tendon comes down the CMC axis (through the hub's central bore, from the palm's
-        # arch above) and turns along the arm to the eyelet: CMC rotation leaves its length alone
+        # arch above) and turns along the arm to the eyelet: CMC rotation leaves its length alone.
+        # The turn is rounded by a sphere one tendon radius wider than the bore (a sphere as wide
+        # as the bore would touch it along a circle, and the arm channel through that circle
+        # leaves edges 1e-5 mm long that tessellate with holes)
         turn = np.array([0.0, 0.0, s_far[2]])
-        guide.append(sphere(turn, t.tendon_relief / 2.0 + t.clearance))
+        guide.append(sphere(turn, max(t.tendon_relief / 2.0 + t.clearance,
+                                      t.screw_clear / 2.0 + t.tendon_hole / 2.0)))
         guide.append(cylinder(turn, guide_entry(turn, np.array([0.0, *(G1 + shift)]), s_far), t.tendon_hole / 2.0))
         # hub: spline-screw bore and the four holes on the horn circle
         h = T / 2.0 + 1.0
