@@ -41,7 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..params.rules import FLANK
+from ..params.rules import FLANK, slot_back
 from . import frames as F
 from .topology import CHAINS, JOINTS, N_JOINTS, SERVOS, TENDONS, Tendon, chain, digit_links, joint, link
 
@@ -211,9 +211,11 @@ def _return(params, digit: str, lay: Layout, rest) -> Strand:
     links = [ln.name for ln in digit_links(digit) if ln.segment != "servo_pulley"]
     x = lay.return_x
     first = links[0]
-    # anchored on the first link, half way between its start and the first joint
+    # anchored on the first link, half way between its start and the first joint's clevis slot
+    # (the slot's back wall, rules.slot_back: the knot's well must be cut in material)
     ja0 = _child_origin(rest, spec.joint_names[0])
-    y0 = ja0[1] - (_segment(params, first) / 2.0 if _segment(params, first) > 0 else params.cad.finger_base_length / 2.0)
+    start = _segment(params, first) if _segment(params, first) > 0 else params.cad.finger_base_length
+    y0 = ja0[1] - (start + slot_back(d.thickness, params.print.hole_clearance)) / 2.0
     els: list = [Point("anchor", first, (float(x), float(y0), float(ch.radii[0])), "knot")]
     e = lay.return_groove      # the cord leaves / reaches each groove tangentially over this run
     for k, jn in enumerate(spec.joint_names):

@@ -77,17 +77,23 @@ def _joints(c, fingers, thumb, hardware, printing, cad) -> None:
                       f"clearance) must fit inside a clevis cheek (cheek_mm = {cad.cheek / MM:g})")
 
 
+def slot_back(thickness: float, hole_clearance: float) -> float:
+    """Distance from a joint's axis back to its clevis slot's back wall (the extension stop): the
+    tongue's boss (half the digit's thickness) and a clearance. SI units."""
+    return thickness / 2.0 + hole_clearance
+
+
 def _segments(c, fingers, thumb, printing, hand_length) -> None:
     """A phalanx reaches past the clevis slots of its two joints; the thumb metacarpal carries the
     CMC hub and the MP clevis."""
     for name, d in _digits(fingers, thumb):
-        slot_back = d.thickness / 2.0 + printing.hole_clearance
+        back = slot_back(d.thickness, printing.hole_clearance)
         # the phalanges follow the metacarpal; the k-th starts at joint k and ends at joint k + 1
         segments = d.chain.spec.segments[1:]
         far_limits = dict(zip(segments, [*d.chain.limits[1:], None]))
         for seg in segments:
             length = getattr(d, seg)
-            need = 2.0 * slot_back
+            need = 2.0 * back
             far = far_limits[seg]
             if far is not None and far[1] > math.pi / 2.0:
                 need += d.thickness / 2.0     # beyond 90 degrees the far clevis is recessed by T/2
@@ -96,14 +102,14 @@ def _segments(c, fingers, thumb, printing, hand_length) -> None:
                                  f"the {seg} phalanx ({length / MM:.2f} mm at hand_length_mm = {hand_length / MM:g}) "
                                  f"must be longer than its two joint bosses and their clearances "
                                  f"({need / MM:.2f} mm: {name}.thickness_mm + 2 hole_clearance"
-                                 f"{', + half the thickness for a far joint flexing past 90 degrees' if need > 2.0 * slot_back else ''})",
+                                 f"{', + half the thickness for a far joint flexing past 90 degrees' if need > 2.0 * back else ''})",
                                  c.source)
-    slot_back = thumb.thickness / 2.0 + printing.hole_clearance
-    if thumb.metacarpal <= thumb.cmc_horn_radius + slot_back + 1e-12:
+    back = slot_back(thumb.thickness, printing.hole_clearance)
+    if thumb.metacarpal <= thumb.cmc_horn_radius + back + 1e-12:
         raise ParamError("thumb.length_fraction.metacarpal", round(thumb.metacarpal / hand_length, 6),
                          f"the thumb metacarpal ({thumb.metacarpal / MM:.2f} mm) must be longer than the CMC hub "
                          f"(thumb.cmc_horn_radius_mm = {thumb.cmc_horn_radius / MM:g}) and the MP clevis "
-                         f"({slot_back / MM:.2f} mm)", c.source)
+                         f"({back / MM:.2f} mm)", c.source)
 
 
 def _magnets(c, fingers, palm, hardware, printing, cad) -> None:

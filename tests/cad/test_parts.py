@@ -606,3 +606,34 @@ def test_palm_has_two_flange_screw_pilots_per_servo(built, document):
     assert pairs == 6
     # each hole is 3 screw diameters deep below the ear slot (plus one clearance)
     assert all(c["length"] >= 3 * hw["screw_diameter_mm"] for c in holes)
+
+
+# ---------------------------------------------------------------------------
+# every knot of the routing model sits in a well cut in material
+# ---------------------------------------------------------------------------
+
+def test_every_knot_well_is_cut_in_material(built, params):
+    """A knot (the return cord's two ends, the drive's end behind G2) pulls on the part around
+    its well: at the knot, 1 mm beyond the well's wall (the well is the tendon hole plus a
+    clearance wide, about 1.4 mm), the part has material on both sides across the digit and behind it (away from its cord).
+    (The routing model once put the finger bases' return knot in the open MCP clevis slot.)"""
+    from phantom_cad.kinematics import routing
+
+    r = (params.hardware.tendon_diameter * 1e3 + 4 * params.print.hole_clearance * 1e3) / 2 + 1.0
+    knots = []     # (link, knot, the point its cord leaves toward), mm, link frame
+    for rt in routing.routes(params, right_handed=True):
+        for st in rt.strands:
+            for e, nb in ((st.elements[0], st.elements[1]), (st.elements[-1], st.elements[-2])):
+                if getattr(e, "kind", None) == "anchor" and e.role == "knot":
+                    assert nb.link == e.link
+                    knots.append((e.link, np.asarray(e.pos) * 1e3, np.asarray(nb.pos) * 1e3))
+    assert len(knots) == 10        # 5 return cords x 2 ends
+    missing = []
+    for link_name, p, toward in knots:
+        shape = built[link_name].shape
+        back = (p - toward) / np.linalg.norm(p - toward)     # behind the knot, away from its cord
+        for d in ((r, 0, 0), (-r, 0, 0), r * back):
+            q = p + np.asarray(d)
+            if not shape.is_inside(tuple(q)):
+                missing.append((link_name, tuple(np.round(q, 2))))
+    assert not missing, missing

@@ -20,6 +20,7 @@ import numpy as np
 from ... import units
 from ...kinematics import frames as F
 from ...kinematics import topology
+from ...params.rules import slot_back
 
 
 def mm(x: float) -> float:
@@ -181,7 +182,7 @@ class DigitSection:
     @property
     def slot_back(self) -> float:
         """Distance from a joint axis back to its clevis slot's back wall (extension stop face)."""
-        return self.boss_radius + self.tol.clearance
+        return mm(slot_back(self.params.digit(self.digit).thickness, self.params.print.hole_clearance))
 
     @property
     def groove_width(self) -> float:

@@ -100,17 +100,6 @@ class ServoPulley(Part):
         return math.atan2(clamp.pos[1], clamp.pos[0])
 
     @property
-    def horn_angles(self) -> tuple[float, float]:
-        """Polar angles (rad) of the two horn-screw holes. The CMC hub: ``HORN_ANGLES``. A drive
-        pulley: square to its anchor (the anchor sits where the routing model's clamp is, at
-        270 deg - travel / 2, which is on ``HORN_ANGLES`` for a 90 deg travel; the horn goes on
-        the spline at the tooth nearest this orientation, docs/assembly.md)."""
-        if self.is_hub:
-            return HORN_ANGLES
-        a = self.anchor_angle
-        return tuple(math.remainder(a + s * math.pi / 2.0, 2.0 * math.pi) for s in (1.0, -1.0))
-
-    @property
     def lip(self) -> float:
         """Groove depth: the flanges stand two tendon diameters above the groove bottom."""
         return mm(frames.servo_pulley_lip(self.params))
@@ -130,17 +119,22 @@ class ServoPulley(Part):
         w = self.width
         body = [cylinder((0, 0, -w / 2.0), (0, 0, w / 2.0), self.outer_radius)]
         tools = [cylinder((0, 0, -w / 2.0 - 1.0), (0, 0, w / 2.0 + 1.0), t.screw_clear / 2.0)]
-        tools += self._holes(self.horn_angles, t.screw_clear)
         if self.is_hub:
+            tools += self._holes(HORN_ANGLES, t.screw_clear)
             tools += self._holes(BASE_ANGLES, t.screw_pilot)
-        else:
-            groove_w = t.tendon_hole
-            outer = cylinder((0, 0, -groove_w / 2.0), (0, 0, groove_w / 2.0), self.outer_radius + 1.0)
-            inner = cylinder((0, 0, -groove_w / 2.0 - 1.0), (0, 0, groove_w / 2.0 + 1.0), self.groove_floor)
-            tools.append(outer.cut(inner))
-            a = self.anchor_angle
-            d = np.array([math.cos(a), math.sin(a), 0.0])
-            tools.append(cylinder(d * self.horn_radius, d * (self.radius + 0.5), t.tendon_hole / 2.0))
-            tools += [cylinder(d * self.horn_radius - np.array([0, 0, w / 2.0 + 1.0]),
-                               d * self.horn_radius + np.array([0, 0, w / 2.0 + 1.0]), t.tendon_relief / 2.0)]
-        return build(body, tools)
+            return build(body, tools)
+        # a drive pulley is cut with its anchor on +y and then turned to the clamp angle: cut in
+        # place, the groove floor's face (its seam on +x, the anchor hole at -135 deg) came out of
+        # a mirror for the left hand unorientable (BRepCheck), so the part was invalid
+        # the horn screws square to the anchor (on it, as at 45/225 deg, they cut the knot well)
+        tools += self._holes((0.0, math.pi), t.screw_clear)
+        groove_w = t.tendon_hole
+        outer = cylinder((0, 0, -groove_w / 2.0), (0, 0, groove_w / 2.0), self.outer_radius + 1.0)
+        inner = cylinder((0, 0, -groove_w / 2.0 - 1.0), (0, 0, groove_w / 2.0 + 1.0), self.groove_floor)
+        tools.append(outer.cut(inner))
+        d = np.array([0.0, 1.0, 0.0])
+        tools.append(cylinder(d * self.horn_radius, d * (self.radius + 0.5), t.tendon_hole / 2.0))
+        tools += [cylinder(d * self.horn_radius - np.array([0, 0, w / 2.0 + 1.0]),
+                           d * self.horn_radius + np.array([0, 0, w / 2.0 + 1.0]), t.tendon_relief / 2.0)]
+        from build123d import Axis
+        return build(body, tools).rotate(Axis.Z, math.degrees(self.anchor_angle) - 90.0)
