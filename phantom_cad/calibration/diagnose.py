@@ -26,7 +26,7 @@ import numpy as np
 from ..kinematics.topology import Q_COLUMNS
 from .data import Measurements
 from .effects import REGISTRY, get_effect
-from .residual import MAE_PER_SIGMA, NoiseFloor, noise_floor, signature, verdict
+from .residual import MAE_PER_SIGMA, NoiseFloor, made_worse, noise_floor, signature, verdict
 from .fitting import (FitResult, Model, Problem, fit, fit_streamed, folds, heldout_sse, robust_loss,
                       single_threaded_blas)
 
@@ -137,6 +137,11 @@ class Diagnosis:
         a = mae_per_joint(self.after)
         return {c: {"before": round(b[c], 5), "after": round(a[c], 5)} for c in b}
 
+    def made_worse(self) -> list[str]:
+        """Joints whose MAE the selected effects raised beyond noise (residual.made_worse)."""
+        b, a = mae_per_joint(self.before), mae_per_joint(self.after)
+        return made_worse(b, a, self.noise.floor_deg, self.noise.cells)
+
     def to_json(self) -> dict:
         vals, errs = self.after.values(), self.after.uncertainties()
         effects = {}
@@ -180,6 +185,7 @@ class Diagnosis:
             "rounds": [[c.to_json() for c in r] for r in self.rounds],
             "ambiguities": self.ambiguities,
             "per_joint": self.per_joint(),
+            "made_worse": self.made_worse(),
             "notes": self.notes,
         }
 

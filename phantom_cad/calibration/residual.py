@@ -176,6 +176,21 @@ def verdict(fr, noise: NoiseFloor, keep: np.ndarray | None = None) -> dict:
             "tolerance_deg": round(tol_all, 5), "consistent": overall_ok}, "per_joint": per}
 
 
+def made_worse(before: dict, after: dict, floor: dict | None, cells: dict | None) -> list[str]:
+    """Joints whose MAE rose beyond what noise explains: after - before > SMALL_SAMPLE x the joint's
+    noise floor / sqrt(n) (the spread of an n-cell MAE, as in the verdict), n its measured cells."""
+    out = []
+    for c in before:
+        if c not in after:
+            continue
+        f = (floor or {}).get(c)
+        n = (cells or {}).get(c, 1)
+        margin = SMALL_SAMPLE * f / np.sqrt(max(n, 1)) if f is not None and np.isfinite(f) else 0.0
+        if after[c] - before[c] > margin:
+            out.append(c)
+    return out
+
+
 # ---------------------------------------------------------------------------
 # signature
 # ---------------------------------------------------------------------------
@@ -321,4 +336,4 @@ def _summary(per: dict) -> dict:
     return out
 
 
-__all__ = ["NoiseFloor", "noise_floor", "verdict", "signature", "tolerance", "FLOOR_FACTOR", "SMALL_SAMPLE"]
+__all__ = ["NoiseFloor", "noise_floor", "verdict", "made_worse", "signature", "tolerance", "FLOOR_FACTOR", "SMALL_SAMPLE"]

@@ -166,12 +166,16 @@ def compare(
     typer.echo("\n".join(lines))
     if report:
         from ..calibration.report import ReportDir, mae_table, plot_hysteresis, plot_mae, plot_residuals
+        from ..calibration.residual import made_worse, noise_floor
 
         with ReportDir(report) as tmp:
             plot_residuals(tmp / "residual_before.png", m, q_before, "residual of the analytic model")
             bm = {c: v["mae"] for c, v in mb["per_joint"].items()}
             am = {c: v["mae"] for c, v in ma["per_joint"].items()} if ma else None
-            plot_mae(tmp / "mae.png", bm, am, ("analytic", label or ""), "MAE per joint")
+            noise = noise_floor(m)
+            worse = made_worse(bm, am, noise.floor_deg, noise.cells) if am else []
+            plot_mae(tmp / "mae.png", bm, am, ("analytic", label or ""), "MAE per joint", noise.floor_deg,
+                     noise.overall_deg, worse)
             if q_after is not None:
                 plot_residuals(tmp / "residual_after.png", m, q_after, f"residual, {label}")
                 plot_hysteresis(tmp / "hysteresis.png", m, q_after, q_before, f"deviation from the analytic model: measured, {label}")
@@ -259,7 +263,8 @@ def diagnose(
         with ReportDir(report) as tmp:
             plot_residuals(tmp / "residual_before.png", m, q_before, "residual of the analytic model")
             plot_residuals(tmp / "residual_after.png", m, q_after, f"residual with {label}")
-            plot_mae(tmp / "mae.png", before, after, ("analytic", f"with {label}"), "MAE per joint")
+            plot_mae(tmp / "mae.png", before, after, ("analytic", f"with {label}"), "MAE per joint",
+                     result["noise_floor_per_joint_deg"], result["noise_floor_deg"], result["made_worse"])
             plot_hysteresis(tmp / "hysteresis.png", m, q_after, q_before,
                             f"deviation from the analytic model: measured, and modelled with {label}")
             _write_json(tmp / "diagnosis.json", result)
@@ -307,6 +312,8 @@ def diagnosis_text(d, result) -> list[str]:
         if c in verdict:
             row += (f" {result['noise_floor_per_joint_deg'][c]:11.3f} {verdict[c]['tolerance_deg']:9.3f}"
                     f"{'' if verdict[c]['consistent'] else '  structure left'}")
+        if c in result["made_worse"]:
+            row += "  made worse"
         out.append(row)
     out.append("")
     out.extend(verdict_lines(result))
