@@ -26,7 +26,8 @@ import numpy as np
 from ..kinematics.topology import Q_COLUMNS
 from .data import Measurements
 from .effects import REGISTRY, get_effect
-from .residual import MAE_PER_SIGMA, NoiseFloor, made_worse, noise_floor, signature, verdict
+from .residual import (MAE_PER_SIGMA, NoiseFloor, made_worse, measured_features, noise_floor, signature,
+                       signature_report, verdict)
 from .fitting import (FitResult, Model, Problem, fit, fit_streamed, folds, heldout_sse, robust_loss,
                       single_threaded_blas)
 
@@ -128,6 +129,25 @@ class Diagnosis:
         return {"before": signature(self.before, self.measurements, self.hand),
                 "after": signature(self.after, self.measurements, self.hand)}
 
+    def signature_match(self, sig: dict | None = None, v: dict | None = None) -> dict:
+        """The measured signature's features (over the joints with structure beyond the noise)
+        against the declared signature (Effect.leaves) of the best candidate: of the first round
+        for the analytic model's residual (``before``), of the last round, which nothing passed,
+        for what is left (``after``, only when not explained)."""
+        sig = sig or self.signatures()
+        v = v or self.verdict()
+        out = {}
+        vb = verdict(self.before, self.noise)
+        left_before = [c for c, pj in vb["per_joint"].items() if not pj["consistent"]]
+        best = self.ranking[0].effect if self.ranking else None
+        out["before"] = signature_report(measured_features(sig["before"], left_before, self.noise), best, REGISTRY)
+        if not v["explained"]:
+            left = [c for c, pj in v["per_joint"].items() if not pj["consistent"]]
+            last = self.rounds[-1] if self.rounds and self.rounds[-1] else None
+            best_after = last[0].effect if last and not last[0].passes else None
+            out["after"] = signature_report(measured_features(sig["after"], left, self.noise), best_after, REGISTRY)
+        return out
+
     @property
     def ranking(self) -> list[Candidate]:
         return self.rounds[0] if self.rounds else []
@@ -176,6 +196,7 @@ class Diagnosis:
             "verdict": v,
             "left": left,
             "signature": sig,
+            "signature_match": self.signature_match(sig, v),
             "robust": self.robust,
             "outliers_count": len(outl := self.outliers()),
             "outliers": outl[:MAX_OUTLIERS],

@@ -62,6 +62,52 @@ class Param:
     doc: str = ""
 
 
+#: the values of each feature of a :class:`Signature` ("any": the effect does not fix it)
+SIGNATURE_FEATURES = {
+    "direction": ("flips", "same", "any"),
+    "at_rest": ("zero", "nonzero", "any"),
+    "trend": ("grows", "flat", "any"),
+    "joints": ("all", "distal", "mcp", "any"),
+    "periodic": (True, False),
+    "reversal": ("jump", "none", "any"),
+}
+
+
+@dataclass(frozen=True)
+class Signature:
+    """The residual an effect leaves when the model lacks it, feature by feature, in the words of
+    the measured signature (calibration/residual.py, :func:`~.residual.measured_features`):
+
+    ``direction``  "flips": the residual changes sign with the direction of motion (a band between
+                   the flexing and the extending branch); "same": no direction dependence.
+    ``at_rest``    "zero": the residual vanishes at the start of the travel; "nonzero": it is there.
+    ``trend``      of the residual's main part (the band's width for a flipping effect, else the
+                   residual itself) along the servo angle: "grows" (with servo angle and spring
+                   tension: the upper half of the travel carries more than twice the lower half's)
+                   or "flat".
+    ``joints``     "all": MCP (thumb MP, CMC) and distal joints alike; "distal": PIP, DIP, thumb
+                   IP and not the MCP; "mcp": the MCP alone.
+    ``periodic``   a periodic pattern in the servo angle.
+    ``reversal``   "jump": the residual steps within a few samples after each reversal of the
+                   servo; "none": it passes through reversals continuously.
+    Any feature may be "any" (the effect does not fix it)."""
+
+    direction: str = "any"
+    at_rest: str = "any"
+    trend: str = "any"
+    joints: str = "any"
+    periodic: bool = False
+    reversal: str = "any"
+
+    def __post_init__(self):
+        for key, allowed in SIGNATURE_FEATURES.items():
+            if getattr(self, key) not in allowed:
+                raise ValueError(f"Signature.{key} = {getattr(self, key)!r}: must be one of {allowed}")
+
+    def to_json(self) -> dict:
+        return {k: getattr(self, k) for k in SIGNATURE_FEATURES}
+
+
 class Context:
     """What the pipeline carries from stage to stage (all arrays batch-first)."""
 
@@ -107,6 +153,8 @@ class Effect:
     formula: str = ""
     signature: str = ""
     reference: str = ""
+    #: the residual the effect leaves, feature by feature (:class:`Signature`); None: not declared
+    leaves: Signature | None = None
     #: depends on the direction of motion (needs a sweep to be identified)
     directional: bool = False
 
@@ -166,6 +214,7 @@ class TendonSlack(Effect):
     signature = ("zero in a band at the start of travel, then a lag of about delta_j * dq/du on every joint "
                  "of the chain (MCP included); independent of the direction")
     reference = "dead-zone / backlash models of cable drives, e.g. Kaneko et al., IEEE T-RA 7(3), 1991"
+    leaves = Signature(direction="same", at_rest="zero", trend="flat", joints="all", reversal="none")
 
     def parameters(self, hand):
         return [Param(f"{sv.label}_deg", 0.0, 15.0, (1.0, 4.0), False, servo_joints(sv.index), True,
@@ -196,6 +245,7 @@ class PulleyRadiusError(Effect):
     signature = ("grows with u (about e_j * u * dq/du), on the MCP as much as on PIP/DIP; zero at rest; "
                  "independent of the direction")
     reference = "eq. (5)-(6) of the paper; effective radius = pulley radius + half the tendon diameter"
+    leaves = Signature(direction="same", at_rest="zero", trend="grows", joints="all", reversal="none")
 
     def parameters(self, hand):
         return [Param(f"{sv.label}_relative", -0.2, 0.2, (0.015, 0.04), True, servo_joints(sv.index), True,
@@ -217,6 +267,7 @@ class TendonElasticity(Effect):
                "fitted: the compliance ratio c = k_s / EA (1/m), one for the whole hand")
     signature = "negative on PIP/DIP/IP, growing with flexion, zero on MCP/MP/CMC; no direction dependence"
     reference = "the paper's mechanics-based compensation, eq. (11)-(14)"
+    leaves = Signature(direction="same", at_rest="zero", trend="grows", joints="distal", reversal="none")
 
     def parameters(self, hand):
         return [Param("compliance_per_m", 0.0, 5.0, (0.07, 0.27), False, DISTAL_JOINTS, True,
@@ -248,6 +299,7 @@ class FrictionHysteresis(Effect):
     signature = ("PIP/DIP/IP lag when flexing and lead when extending (a hysteresis loop), the gap grows with "
                  "flexion; MCP untouched; zero when the direction is unknown")
     reference = "capstan equation T2 = T1 exp(mu theta) (Euler-Eytelwein); Kaneko et al., IEEE T-RA 7(3), 1991"
+    leaves = Signature(direction="flips", at_rest="zero", trend="grows", joints="distal", reversal="jump")
 
     def parameters(self, hand):
         return [Param("mu", 0.0, 1.0, (0.08, 0.25), False, DISTAL_JOINTS, True,
@@ -274,6 +326,7 @@ class JointOffset(Effect):
     formula = "q_i = q_model,i + o_i"
     signature = "constant per joint over the whole sweep, nonzero at rest, independent of direction and servo"
     reference = "standard zero-offset calibration of joint encoders (e.g. Hollerbach & Wampler 1996)"
+    leaves = Signature(direction="same", at_rest="nonzero", trend="flat", joints="any", reversal="none")
 
     def parameters(self, hand):
         return [Param(f"{j.label}_deg", -10.0, 10.0, (0.5, 2.0), True, (j.index,), False,

@@ -349,6 +349,12 @@ def verdict_lines(result) -> list[str]:
         sentences = result["signature"][key]["sentences"]
         if sentences and (key == "before" or (result["selected"] and not result["explained"])):
             out.append(f"signature of {when}: " + "; ".join(sentences))
+        match = result["signature_match"].get(key)
+        if match and (key == "before" or not result["explained"]):
+            best = match.get("best_candidate")
+            out.append(f"{when} against the signatures the effects declare"
+                       f"{f' (best candidate: {best})' if best else ''}:")
+            out.extend(f"  {t}" for t in match["sentences"])
     return out
 
 
