@@ -137,7 +137,7 @@ def compare(
     """Residual = measured - model per joint: MAE / RMS / max before (analytic) and after (with the effects)."""
     from .. import load_hand
     from ..calibration.data import read_measurements
-    from ..calibration.effects import run_pipeline
+    from ..calibration.effects import History, run_pipeline
     from ..calibration.fitting import fit_effects
     from ..calibration.report import metrics
 
@@ -150,12 +150,12 @@ def compare(
         names = _effect_names(effects)
         if names:
             fitted = fit_effects(hand, m, names)
-            q_after = fitted.model.predict(fitted.theta, m.u, m.direction)
+            q_after = fitted.model.predict_measurements(fitted.theta, m)
             label = "fitted " + " + ".join(names)
         else:
             q_after, label = None, None
     elif hand.effects:
-        q_after = hand.effects.forward(hand, m.u, True, m.direction)
+        q_after = hand.effects.forward(hand, m.u, True, m.direction, History.of(m))
         label = "calibrated (" + " + ".join(hand.effects.names) + ")"
     else:
         q_after = hand.forward(m.u, compensated=True)
@@ -257,8 +257,8 @@ def diagnose(
 
         before = {c: v["before"] for c, v in result["per_joint"].items()}
         after = {c: v["after"] for c, v in result["per_joint"].items()}
-        q_before = d.before.model.predict(d.before.theta, m.u, m.direction)
-        q_after = d.after.model.predict(d.after.theta, m.u, m.direction)
+        q_before = d.before.model.predict_measurements(d.before.theta, m)
+        q_after = d.after.model.predict_measurements(d.after.theta, m)
         label = " + ".join(d.selected) or "analytic"
         with ReportDir(report) as tmp:
             plot_residuals(tmp / "residual_before.png", m, q_before, "residual of the analytic model")
@@ -386,7 +386,7 @@ def fit(
     from ..canon import plain
     from ..calibration.data import read_measurements
     from ..calibration.diagnose import mae
-    from ..calibration.effects import get_effect, has_invert, validate_effects
+    from ..calibration.effects import History, get_effect, has_invert, validate_effects
     from ..errors import one_line
     from ..calibration.fitting import Model, Problem, fit as run_fit
 
@@ -440,8 +440,8 @@ def fit(
     dump_params(doc, out, header="\n".join(header) + "\n\n")
     # the written file must load and reproduce the fit: no written effect may override another
     written = load_hand(out)
-    q_fit = res.model.predict(res.theta, m.u, m.direction)
-    q_file = written.effects.forward(written, m.u, True, m.direction)
+    q_fit = res.model.predict_measurements(res.theta, m)
+    q_file = written.effects.forward(written, m.u, True, m.direction, History.of(m))
     gap = float(np.nanmax(np.abs(q_file - q_fit)[np.isfinite(m.q)]))
     if gap > 1e-6:
         os.replace(out, str(out) + ".rejected")
