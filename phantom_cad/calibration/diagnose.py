@@ -106,19 +106,10 @@ class Diagnosis:
 
     def outlier_cells(self) -> np.ndarray:
         """Boolean over the final fit's cells: |residual| > OUTLIER_SIGMAS x the joint's noise sd."""
-        p, r = self.after.problem, self.after.residual
-        sig = np.array([self.noise.sigma_deg.get(c, np.nan) for c in Q_COLUMNS])[p.j_idx]
-        return np.abs(r) > OUTLIER_SIGMAS * np.nan_to_num(sig, nan=np.inf)
+        return outlier_cells(self.after, self.noise)
 
     def outliers(self) -> list[dict]:
-        p, r = self.after.problem, self.after.residual
-        m = self.measurements
-        out = []
-        for k in np.flatnonzero(self.outlier_cells()):
-            row = int(p.rows[p.r_idx[k]])
-            out.append({"sweep": m.sweep_ids[int(m.sweep[row])], "row": row, "line": int(m.lines[row]),
-                        "joint": Q_COLUMNS[int(p.j_idx[k])], "residual_deg": round(float(r[k]), 4)})
-        return out
+        return outliers(self.after, self.measurements, self.noise)
 
     def verdict(self) -> dict:
         """The verdict; with robust fits, over the cells that are not outliers."""
@@ -209,6 +200,37 @@ class Diagnosis:
             "made_worse": self.made_worse(),
             "notes": self.notes,
         }
+
+
+def outlier_cells(fr: FitResult, noise: NoiseFloor) -> np.ndarray:
+    """Boolean over a fit's cells: |residual| > OUTLIER_SIGMAS x the joint's noise sd."""
+    p, r = fr.problem, fr.residual
+    sig = np.array([noise.sigma_deg.get(c, np.nan) for c in Q_COLUMNS])[p.j_idx]
+    return np.abs(r) > OUTLIER_SIGMAS * np.nan_to_num(sig, nan=np.inf)
+
+
+def outliers(fr: FitResult, m: Measurements, noise: NoiseFloor) -> list[dict]:
+    """The outlier cells of a fit: sweep, row (0-based), file line, joint, residual (deg)."""
+    p, r = fr.problem, fr.residual
+    out = []
+    for k in np.flatnonzero(outlier_cells(fr, noise)):
+        row = int(p.rows[p.r_idx[k]])
+        out.append({"sweep": m.sweep_ids[int(m.sweep[row])], "row": row, "line": int(m.lines[row]),
+                    "joint": Q_COLUMNS[int(p.j_idx[k])], "residual_deg": round(float(r[k]), 4)})
+    return out
+
+
+def outlier_text(found: list[dict], robust: bool, count: int | None = None, shown: int = 10,
+                 robust_note: str = "left out of the verdict") -> str:
+    """One line naming the outliers (sweep, row, file line, joint, residual); ``count``: how many
+    there are when ``found`` lists only the first ones; ``robust_note``: what a robust fit did with them."""
+    count = len(found) if count is None else count
+    items = ", ".join(f"sweep {o['sweep']} row {o['row']} (line {o['line']}) {o['joint']} {o['residual_deg']:+.2f}"
+                      for o in found[:shown])
+    more = f" and {count - min(shown, len(found))} more" if count > min(shown, len(found)) else ""
+    return (f"outliers ({count} cells beyond {OUTLIER_SIGMAS:g} noise sd"
+            f"{', ' + robust_note if robust else '; --robust keeps them from bending the fit'}): "
+            f"{items}{more}")
 
 
 def mae(fr: FitResult) -> float:

@@ -318,12 +318,9 @@ def diagnosis_text(d, result) -> list[str]:
     out.append("")
     out.extend(verdict_lines(result))
     if result["outliers_count"]:
-        shown = ", ".join(f"{o['sweep']} line {o['line']} {o['joint']} {o['residual_deg']:+.2f}"
-                          for o in result["outliers"][:10])
-        more = f" and {result['outliers_count'] - 10} more" if result["outliers_count"] > 10 else ""
-        out.append(f"outliers ({result['outliers_count']} cells beyond 5 noise sd"
-                   f"{', left out of the verdict' if result['robust'] else '; --robust keeps them from bending the fit'}): "
-                   f"{shown}{more}")
+        from ..calibration.diagnose import outlier_text
+
+        out.append(outlier_text(result["outliers"], result["robust"], result["outliers_count"]))
     return out
 
 
@@ -405,15 +402,18 @@ def fit(
     m = read_measurements(data, degrees=degrees).require_joints()
     problem = Problem(hand, m)
     before = run_fit(Model(hand, [], problem), problem)
-    if robust:
-        from ..calibration.diagnose import ROBUST_SCALE
-        from ..calibration.fitting import robust_loss
-        from ..calibration.residual import MAE_PER_SIGMA, noise_floor
+    from ..calibration.diagnose import OUTLIER_SIGMAS, ROBUST_SCALE, outlier_text, outliers
+    from ..calibration.residual import MAE_PER_SIGMA, noise_floor
 
-        with robust_loss(ROBUST_SCALE * noise_floor(m).overall_deg / MAE_PER_SIGMA):
+    noise = noise_floor(m)
+    if robust:
+        from ..calibration.fitting import robust_loss
+
+        with robust_loss(ROBUST_SCALE * noise.overall_deg / MAE_PER_SIGMA):
             res = run_fit(Model(hand, names, problem), problem)
     else:
         res = run_fit(Model(hand, names, problem), problem)
+    found = outliers(res, m, noise)
     vals, errs = res.values(), res.uncertainties()
     table = {n: {k: round(v, 9) for k, v in vals[n].items()} for n in names}
     if "tendon_elasticity" not in table:
@@ -429,7 +429,7 @@ def fit(
         doc["plugins"] = [os.path.relpath(f, here) for f in files]
     else:
         doc.pop("plugins", None)
-    header = [f"{FIT_MARKER} {one_line(data)} --effects {','.join(names)}`",
+    header = [f"{FIT_MARKER} {one_line(data)} --effects {','.join(names)}{' --robust' if robust else ''}`",
               f"# from {one_line(hand.params.source)} (digest {hand.params.digest[:12]}), {len(m)} rows.",
               f"# MAE {mae(before):.4f} deg (analytic) -> {mae(res):.4f} deg (with the effects).",
               "# Fitted on the analytic model; [effects.tendon_elasticity] compliance_per_m replaces k_s/EA",
@@ -437,6 +437,9 @@ def fit(
     for n in names:
         for k, v in vals[n].items():
             header.append(f"#   {n}.{k} = {v:.6g} +- {errs[n][k]:.2g}")
+    if robust or found:
+        header.append(f"# {'Robust fit (soft_l1, scale ' + format(ROBUST_SCALE, 'g') + ' noise sd); ' if robust else ''}"
+                      f"{len(found)} cells beyond the outlier limit ({OUTLIER_SIGMAS:g} noise sd).")
     dump_params(doc, out, header="\n".join(header) + "\n\n")
     # the written file must load and reproduce the fit: no written effect may override another
     written = load_hand(out)
@@ -449,4 +452,6 @@ def fit(
                           f"(up to {np.degrees(gap):.4f} deg apart): one of them overrides another; the file was "
                           f"moved to {out}.rejected")
     typer.echo("\n".join(h[2:] for h in header))
+    if found:
+        typer.echo(outlier_text(found, robust, robust_note="weighed about linearly"))
     typer.echo(f"wrote {out}")
