@@ -542,7 +542,7 @@ def signature_report(measured: dict | None, best: str | None, registry: dict) ->
             if cmp["unknown"]:
                 sentences.append("cannot be seen in these data: " + ", ".join(cmp["unknown"]))
     if not fits:
-        sentences.append("no library effect leaves this signature")
+        sentences.append("no single library effect leaves this signature (two effects at once, or one outside the library)")
     elif best is not None and best not in fits:
         sentences.append(f"the library effects whose declared signature matches: {', '.join(fits)}")
     out["sentences"] = sentences
