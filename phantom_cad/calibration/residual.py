@@ -203,38 +203,45 @@ def made_worse(before: dict, after: dict, floor: dict | None, cells: dict | None
 # signature
 # ---------------------------------------------------------------------------
 
+def _sinusoid_shares(t: np.ndarray, e: np.ndarray, var: float, Q: np.ndarray, periods) -> np.ndarray:
+    """For each period p: the share of the detrended variance ``var`` that a line plus one
+    sinusoid of period p removes beyond the line, i.e. 1 - RSS([1, t, cos, sin]) / var, for all
+    periods at once: cos and sin with the line projected out (``Q``, an orthonormal basis of
+    [1, t]), then the 2 x 2 normal equations of each period."""
+    w = 2 * math.pi * t[:, None] / np.asarray(periods, dtype=float)[None, :]
+    C, S = np.cos(w), np.sin(w)
+    C -= Q @ (Q.T @ C)
+    S -= Q @ (Q.T @ S)
+    cc, ss, cs = np.einsum("ij,ij->j", C, C), np.einsum("ij,ij->j", S, S), np.einsum("ij,ij->j", C, S)
+    ce, se = e @ C, e @ S
+    det = cc * ss - cs * cs
+    ok = det > 1e-12 * np.maximum(cc * ss, 1e-300)
+    a = np.where(ok, (ss * ce - cs * se) / np.where(ok, det, 1.0), 0.0)
+    b = np.where(ok, (cc * se - cs * ce) / np.where(ok, det, 1.0), 0.0)
+    return (a * ce + b * se) / var
+
+
 def _periodogram(t: np.ndarray, x: np.ndarray):
     """(best period, its share of the detrended variance, median share) or None."""
     if x.size < 12 or np.ptp(t) <= 0:
         return None
-    base = np.column_stack([np.ones_like(t), t])
-    coef, *_ = np.linalg.lstsq(base, x, rcond=None)
-    e = x - base @ coef
+    Q, _ = np.linalg.qr(np.column_stack([np.ones_like(t), t]))
+    e = x - Q @ (Q.T @ x)
     var = float(e @ e)
     if var <= 0:
         return None
-    shares = []
     periods = [p for p in PERIODS_DEG if p <= np.ptp(t)]
     if len(periods) < 3:
         return None
-    for p in periods:
-        w = 2 * math.pi * t / p
-        A = np.column_stack([np.ones_like(t), t, np.cos(w), np.sin(w)])
-        c, *_ = np.linalg.lstsq(A, x, rcond=None)
-        res = x - A @ c
-        shares.append(1.0 - float(res @ res) / var)
-    shares = np.array(shares)
+    shares = _sinusoid_shares(t, e, var, Q, periods)
     k = int(np.argmax(shares))
     # refine the peak on a 0.25 deg grid around the best candidate
-    best_p, best_s = periods[k], shares[k]
-    for p in np.arange(max(periods[0], best_p - 2.0), best_p + 2.0 + 1e-9, 0.25):
-        w = 2 * math.pi * t / p
-        A = np.column_stack([np.ones_like(t), t, np.cos(w), np.sin(w)])
-        c, *_ = np.linalg.lstsq(A, x, rcond=None)
-        res = x - A @ c
-        s = 1.0 - float(res @ res) / var
-        if s > best_s:
-            best_p, best_s = float(p), s
+    best_p, best_s = periods[k], float(shares[k])
+    fine = np.arange(max(periods[0], best_p - 2.0), best_p + 2.0 + 1e-9, 0.25)
+    fine_shares = _sinusoid_shares(t, e, var, Q, fine)
+    j = int(np.argmax(fine_shares))
+    if fine_shares[j] > best_s:
+        best_p, best_s = float(fine[j]), float(fine_shares[j])
     return float(best_p), float(best_s), float(np.median(shares))
 
 
