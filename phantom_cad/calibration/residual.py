@@ -26,7 +26,18 @@ Signature (per joint, of a residual)
     servo angle, the mean when flexing and when extending: half their difference / half their
     sum); the value at rest; the linear trend against the servo angle; a least-squares
     periodogram against the servo angle (periods PERIODS_DEG); MCP (and thumb MP, CMC) vs the
-    distal joints.
+    distal joints; the mean at the very start of the travel; how much the upper half of the
+    travel carries over the lower half (of the residual, and of the flipping band); the jump of
+    the residual across each reversal.
+
+Features and the library's declarations
+    :func:`measured_features` reads those numbers, over the joints with structure beyond the
+    noise, as the features an effect declares (effects.Signature: direction, at_rest, trend,
+    joints, periodic, reversal); :func:`signature_report` compares them with the best
+    candidate's declaration and with every registered effect's, in sentences.
+
+Made worse
+    :func:`made_worse`: joints whose MAE rose by more than SMALL_SAMPLE x floor / sqrt(n).
 """
 
 from __future__ import annotations
