@@ -11,7 +11,8 @@ lag-1 autocorrelation of the residuals of the round's best-fitting candidate, on
 so that candidates are compared on one scale), and must also lower the *held-out* error:
 the sweeps are cut into contiguous blocks assigned alternately to two folds, the model is fitted
 on one fold and evaluated on the other, both ways; the candidate passes only if the held-out sum
-of squares falls below HELDOUT_RATIO times the model's without it. The best passing candidate
+of squares falls below HELDOUT_RATIO times the model's without it (checked only for candidates
+with dIC < 0: the others fail already; their held-out ratio is None). The best passing candidate
 (lowest dIC) is added; the loop stops when none passes. Candidates whose dIC is within
 AMBIGUITY_IC of the winner's are reported as indistinguishable on these data, with the experiment
 that separates them.
@@ -87,7 +88,8 @@ class Candidate:
 
     def to_json(self):
         return {"effect": self.effect, "delta_ic": round(self.delta_ic, 3), "rss_ratio": round(self.rss_ratio, 6),
-                "heldout_ratio": round(self.heldout_ratio, 6), "passes": self.passes,
+                "heldout_ratio": round(self.heldout_ratio, 6) if np.isfinite(self.heldout_ratio) else None,
+                "passes": self.passes,
                 "n_eff": round(self.n_eff, 1), "n_params": self.n_params, "mae_deg": round(self.mae_deg, 5)}
 
 
@@ -297,7 +299,6 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
     for _ in range(MAX_ROUNDS):
         pool = [n for n in names if n not in current]
         scored: list[Candidate] = []
-        base_held = held(base.model, base) if pool else 0.0
         fits = []
         for n in pool:
             model = Model(hand, current + [n], problem)
@@ -311,10 +312,15 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
             break
         # one effective sample size for the whole round: that of the best-fitting candidate's residuals
         n_eff = max(min(fits, key=lambda f: f[2].rss)[2].n_eff, 2.0)
+        base_held = None
         for n, model, res in fits:
             dic = delta_ic(base, res, n_eff)
-            h = held(model, base)
-            ratio_h = h / base_held if base_held > 0 else 1.0
+            if dic < 0:
+                if base_held is None:
+                    base_held = held(base.model, base)
+                ratio_h = held(model, base) / base_held if base_held > 0 else 1.0
+            else:
+                ratio_h = float("nan")      # not run: a candidate with dIC >= 0 fails already
             passes = bool(dic < 0 and ratio_h < HELDOUT_RATIO)
             scored.append(Candidate(n, float(dic), res.rss / base.rss if base.rss > 0 else 1.0, float(ratio_h),
                                     passes, float(n_eff), model.p - base.model.p, mae(res), res))

@@ -287,7 +287,8 @@ def diagnosis_text(d, result) -> list[str]:
     out.append("candidates, first round (dIC < 0 and held-out ratio < 0.99 pass):")
     out.append(f"  {'effect':22s} {'dIC':>10s} {'RSS ratio':>10s} {'held-out':>9s} {'n_eff':>8s} {'pass':>5s}")
     for c in d.ranking:
-        out.append(f"  {c.effect:22s} {c.delta_ic:10.1f} {c.rss_ratio:10.4f} {c.heldout_ratio:9.4f} "
+        held = f"{c.heldout_ratio:9.4f}" if c.heldout_ratio == c.heldout_ratio else f"{'-':>9s}"
+        out.append(f"  {c.effect:22s} {c.delta_ic:10.1f} {c.rss_ratio:10.4f} {held} "
                    f"{c.n_eff:8.0f} {'yes' if c.passes else 'no':>5s}")
     out.append("")
     if not d.selected:
