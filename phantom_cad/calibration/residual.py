@@ -77,6 +77,8 @@ REVERSAL_SAMPLES = 3
 GROWTH = 2.0
 #: a feature is read only when it stands this many noise standard errors above the noise
 FEATURE_SIGMAS = 4.0
+#: the signature of a joint is computed on at most about this many of its samples (every k-th)
+SIGNATURE_SAMPLES = 5_000
 
 
 @dataclass
@@ -348,13 +350,19 @@ def signature(fr, m, hand, joints=None) -> dict:
         s = JOINT_SERVO[j]
         # the rows where the joint's own servo moves (other sweeps hold it still)
         rr = rows[sel]
-        moving = d_all[rr, s] != 0
-        if moving.sum() < 3:
+        moving = np.flatnonzero(d_all[rr, s] != 0)
+        if moving.size < 3:
             continue
+        # a long recording: every k-th sample in row order (the features are averages over the
+        # travel; a million samples add nothing but time)
+        every = -(-moving.size // SIGNATURE_SAMPLES)
+        moving = moving[::every]
         u = m.u[rr, s][moving] * DEG_PER_RAD
         per[c] = joint_signature(u, d_all[rr, s][moving], r[sel][moving],
                                  (float(hand.u_min[s] * DEG_PER_RAD), float(hand.u_max[s] * DEG_PER_RAD)),
                                  m.sweep[rr][moving])
+        if every > 1:
+            per[c]["every_kth_sample"] = int(every)
     summary = _summary(per)
     return {"per_joint": per, **summary}
 
