@@ -1,4 +1,4 @@
-"""Benchmark: `diagnose` on a full bidirectional sweep of all six servos (about 2,000 samples) with the five library effects as candidates.
+"""Benchmark: `diagnose` on a full bidirectional sweep of all six servos (about 2,000 samples) with every library effect as a candidate (six since issue 11 added backlash), the verdict and the signature report included (`to_json`).
 
 Data sets: nothing hidden (one round, every candidate scored and rejected), one effect hidden,
 all five hidden (six rounds, the worst case), recording the swept finger's joints (simulate's
@@ -33,6 +33,7 @@ def main() -> None:
         for _ in range(3):
             t0 = time.perf_counter()
             d = diagnose(hand, sim.measurements)
+            d.to_json()                      # the verdict, the signatures and their match: part of every report
             best = min(best, time.perf_counter() - t0)
         print(f"diagnose, {len(sim.measurements)} samples ({d.before.m} measured angles), {label}: "
               f"{best:.2f} s; selected {d.selected or 'nothing'}; MAE {mae(d.before):.3f} -> {mae(d.after):.3f} deg "

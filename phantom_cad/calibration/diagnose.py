@@ -11,7 +11,8 @@ lag-1 autocorrelation of the residuals of the round's best-fitting candidate, on
 so that candidates are compared on one scale), and must also lower the *held-out* error:
 the sweeps are cut into contiguous blocks assigned alternately to two folds, the model is fitted
 on one fold and evaluated on the other, both ways; the candidate passes only if the held-out sum
-of squares falls below HELDOUT_RATIO times the model's without it. The best passing candidate
+of squares falls below HELDOUT_RATIO times the model's without it (checked only for candidates
+with dIC < 0: the others fail already; their held-out ratio is None). The best passing candidate
 (lowest dIC) is added; the loop stops when none passes. Candidates whose dIC is within
 AMBIGUITY_IC of the winner's are reported as indistinguishable on these data, with the experiment
 that separates them.
@@ -26,7 +27,8 @@ import numpy as np
 from ..kinematics.topology import Q_COLUMNS
 from .data import Measurements
 from .effects import REGISTRY, get_effect
-from .residual import MAE_PER_SIGMA, NoiseFloor, noise_floor, signature, verdict
+from .residual import (MAE_PER_SIGMA, NoiseFloor, made_worse, measured_features, noise_floor, signature,
+                       signature_report, verdict)
 from .fitting import (FitResult, Model, Problem, fit, fit_streamed, folds, heldout_sse, robust_loss,
                       single_threaded_blas)
 
@@ -86,7 +88,8 @@ class Candidate:
 
     def to_json(self):
         return {"effect": self.effect, "delta_ic": round(self.delta_ic, 3), "rss_ratio": round(self.rss_ratio, 6),
-                "heldout_ratio": round(self.heldout_ratio, 6), "passes": self.passes,
+                "heldout_ratio": round(self.heldout_ratio, 6) if np.isfinite(self.heldout_ratio) else None,
+                "passes": self.passes,
                 "n_eff": round(self.n_eff, 1), "n_params": self.n_params, "mae_deg": round(self.mae_deg, 5)}
 
 
@@ -105,19 +108,10 @@ class Diagnosis:
 
     def outlier_cells(self) -> np.ndarray:
         """Boolean over the final fit's cells: |residual| > OUTLIER_SIGMAS x the joint's noise sd."""
-        p, r = self.after.problem, self.after.residual
-        sig = np.array([self.noise.sigma_deg.get(c, np.nan) for c in Q_COLUMNS])[p.j_idx]
-        return np.abs(r) > OUTLIER_SIGMAS * np.nan_to_num(sig, nan=np.inf)
+        return outlier_cells(self.after, self.noise)
 
     def outliers(self) -> list[dict]:
-        p, r = self.after.problem, self.after.residual
-        m = self.measurements
-        out = []
-        for k in np.flatnonzero(self.outlier_cells()):
-            row = int(p.rows[p.r_idx[k]])
-            out.append({"sweep": m.sweep_ids[int(m.sweep[row])], "row": row, "line": int(m.lines[row]),
-                        "joint": Q_COLUMNS[int(p.j_idx[k])], "residual_deg": round(float(r[k]), 4)})
-        return out
+        return outliers(self.after, self.measurements, self.noise)
 
     def verdict(self) -> dict:
         """The verdict; with robust fits, over the cells that are not outliers."""
@@ -128,6 +122,25 @@ class Diagnosis:
         return {"before": signature(self.before, self.measurements, self.hand),
                 "after": signature(self.after, self.measurements, self.hand)}
 
+    def signature_match(self, sig: dict | None = None, v: dict | None = None) -> dict:
+        """The measured signature's features (over the joints with structure beyond the noise)
+        against the declared signature (Effect.leaves) of the best candidate: of the first round
+        for the analytic model's residual (``before``), of the last round, which nothing passed,
+        for what is left (``after``, only when not explained)."""
+        sig = sig or self.signatures()
+        v = v or self.verdict()
+        out = {}
+        vb = verdict(self.before, self.noise)
+        left_before = [c for c, pj in vb["per_joint"].items() if not pj["consistent"]]
+        best = self.ranking[0].effect if self.ranking else None
+        out["before"] = signature_report(measured_features(sig["before"], left_before, self.noise), best, REGISTRY)
+        if not v["explained"]:
+            left = [c for c, pj in v["per_joint"].items() if not pj["consistent"]]
+            last = self.rounds[-1] if self.rounds and self.rounds[-1] else None
+            best_after = last[0].effect if last and not last[0].passes else None
+            out["after"] = signature_report(measured_features(sig["after"], left, self.noise), best_after, REGISTRY)
+        return out
+
     @property
     def ranking(self) -> list[Candidate]:
         return self.rounds[0] if self.rounds else []
@@ -136,6 +149,11 @@ class Diagnosis:
         b = mae_per_joint(self.before)
         a = mae_per_joint(self.after)
         return {c: {"before": round(b[c], 5), "after": round(a[c], 5)} for c in b}
+
+    def made_worse(self) -> list[str]:
+        """Joints whose MAE the selected effects raised beyond noise (residual.made_worse)."""
+        b, a = mae_per_joint(self.before), mae_per_joint(self.after)
+        return made_worse(b, a, self.noise.floor_deg, self.noise.cells)
 
     def to_json(self) -> dict:
         vals, errs = self.after.values(), self.after.uncertainties()
@@ -171,6 +189,7 @@ class Diagnosis:
             "verdict": v,
             "left": left,
             "signature": sig,
+            "signature_match": self.signature_match(sig, v),
             "robust": self.robust,
             "outliers_count": len(outl := self.outliers()),
             "outliers": outl[:MAX_OUTLIERS],
@@ -180,8 +199,40 @@ class Diagnosis:
             "rounds": [[c.to_json() for c in r] for r in self.rounds],
             "ambiguities": self.ambiguities,
             "per_joint": self.per_joint(),
+            "made_worse": self.made_worse(),
             "notes": self.notes,
         }
+
+
+def outlier_cells(fr: FitResult, noise: NoiseFloor) -> np.ndarray:
+    """Boolean over a fit's cells: |residual| > OUTLIER_SIGMAS x the joint's noise sd."""
+    p, r = fr.problem, fr.residual
+    sig = np.array([noise.sigma_deg.get(c, np.nan) for c in Q_COLUMNS])[p.j_idx]
+    return np.abs(r) > OUTLIER_SIGMAS * np.nan_to_num(sig, nan=np.inf)
+
+
+def outliers(fr: FitResult, m: Measurements, noise: NoiseFloor) -> list[dict]:
+    """The outlier cells of a fit: sweep, row (0-based), file line, joint, residual (deg)."""
+    p, r = fr.problem, fr.residual
+    out = []
+    for k in np.flatnonzero(outlier_cells(fr, noise)):
+        row = int(p.rows[p.r_idx[k]])
+        out.append({"sweep": m.sweep_ids[int(m.sweep[row])], "row": row, "line": int(m.lines[row]),
+                    "joint": Q_COLUMNS[int(p.j_idx[k])], "residual_deg": round(float(r[k]), 4)})
+    return out
+
+
+def outlier_text(found: list[dict], robust: bool, count: int | None = None, shown: int = 10,
+                 robust_note: str = "left out of the verdict") -> str:
+    """One line naming the outliers (sweep, row, file line, joint, residual); ``count``: how many
+    there are when ``found`` lists only the first ones; ``robust_note``: what a robust fit did with them."""
+    count = len(found) if count is None else count
+    items = ", ".join(f"sweep {o['sweep']} row {o['row']} (line {o['line']}) {o['joint']} {o['residual_deg']:+.2f}"
+                      for o in found[:shown])
+    more = f" and {count - min(shown, len(found))} more" if count > min(shown, len(found)) else ""
+    return (f"outliers ({count} cells beyond {OUTLIER_SIGMAS:g} noise sd"
+            f"{', ' + robust_note if robust else '; --robust keeps them from bending the fit'}): "
+            f"{items}{more}")
 
 
 def mae(fr: FitResult) -> float:
@@ -248,7 +299,6 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
     for _ in range(MAX_ROUNDS):
         pool = [n for n in names if n not in current]
         scored: list[Candidate] = []
-        base_held = held(base.model, base) if pool else 0.0
         fits = []
         for n in pool:
             model = Model(hand, current + [n], problem)
@@ -262,10 +312,15 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
             break
         # one effective sample size for the whole round: that of the best-fitting candidate's residuals
         n_eff = max(min(fits, key=lambda f: f[2].rss)[2].n_eff, 2.0)
+        base_held = None
         for n, model, res in fits:
             dic = delta_ic(base, res, n_eff)
-            h = held(model, base)
-            ratio_h = h / base_held if base_held > 0 else 1.0
+            if dic < 0:
+                if base_held is None:
+                    base_held = held(base.model, base)
+                ratio_h = held(model, base) / base_held if base_held > 0 else 1.0
+            else:
+                ratio_h = float("nan")      # not run: a candidate with dIC >= 0 fails already
             passes = bool(dic < 0 and ratio_h < HELDOUT_RATIO)
             scored.append(Candidate(n, float(dic), res.rss / base.rss if base.rss > 0 else 1.0, float(ratio_h),
                                     passes, float(n_eff), model.p - base.model.p, mae(res), res))

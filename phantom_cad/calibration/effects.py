@@ -62,16 +62,135 @@ class Param:
     doc: str = ""
 
 
+#: the values of each feature of a :class:`Signature` ("any": the effect does not fix it)
+SIGNATURE_FEATURES = {
+    "direction": ("flips", "same", "any"),
+    "at_rest": ("zero", "nonzero", "any"),
+    "trend": ("grows", "flat", "any"),
+    "joints": ("all", "distal", "mcp", "any"),
+    "periodic": (True, False),
+    "reversal": ("jump", "none", "any"),
+}
+
+
+@dataclass(frozen=True)
+class Signature:
+    """The residual an effect leaves when the model lacks it, feature by feature, in the words of
+    the measured signature (calibration/residual.py, :func:`~.residual.measured_features`):
+
+    ``direction``  "flips": the residual changes sign with the direction of motion (a band between
+                   the flexing and the extending branch); "same": no direction dependence.
+    ``at_rest``    "zero": the residual vanishes at the start of the travel; "nonzero": it is there.
+    ``trend``      of the residual's main part (the band's width for a flipping effect, else the
+                   residual itself) along the servo angle: "grows" (with servo angle and spring
+                   tension: the upper half of the travel carries more than twice the lower half's)
+                   or "flat".
+    ``joints``     "all": MCP (thumb MP, CMC) and distal joints alike; "distal": PIP, DIP, thumb
+                   IP and not the MCP; "mcp": the MCP alone.
+    ``periodic``   a periodic pattern in the servo angle.
+    ``reversal``   "jump": the residual steps within a few samples after each reversal of the
+                   servo; "none": it passes through reversals continuously.
+    Any feature may be "any" (the effect does not fix it)."""
+
+    direction: str = "any"
+    at_rest: str = "any"
+    trend: str = "any"
+    joints: str = "any"
+    periodic: bool = False
+    reversal: str = "any"
+
+    def __post_init__(self):
+        for key, allowed in SIGNATURE_FEATURES.items():
+            if getattr(self, key) not in allowed:
+                raise ValueError(f"Signature.{key} = {getattr(self, key)!r}: must be one of {allowed}")
+
+    def to_json(self) -> dict:
+        return {k: getattr(self, k) for k in SIGNATURE_FEATURES}
+
+
+@dataclass(frozen=True)
+class Runs:
+    """One servo's runs of rows with one direction of motion within one sweep (a new run at every
+    reversal and at every new sweep), over a :class:`History`: ``of_row`` (R,) the run of every
+    row; per run, in row order: ``direction`` (+1/-1/0), ``first`` (the sweep's first run),
+    ``u_start`` and ``u_end`` (the command at its first and last row). Within a run the command
+    is monotone (flat steps hold the direction)."""
+
+    of_row: np.ndarray
+    direction: np.ndarray
+    first: np.ndarray
+    u_start: np.ndarray
+    u_end: np.ndarray
+
+
+class History:
+    """The whole recording in row order, for effects whose output depends on what came before
+    (backlash after a reversal): the commanded servo angles ``u`` (R, 6) of every row of the file,
+    the sweep code of every row ``sweep`` (R,) (rows of one sweep are one continuous motion, in row
+    order; sweeps are independent) and the direction of motion ``direction`` (R, 6).
+
+    The pipeline may run on any subset of the rows (a fold, a block of rows, every k-th row):
+    ``Context.rows`` says which rows of the history the batch holds, so a history-dependent effect
+    takes its state from the whole history (:meth:`runs`, computed once) and evaluates the batch's
+    rows only. :meth:`cached` keeps a few small results per key."""
+
+    def __init__(self, u, sweep, direction):
+        self.u = np.asarray(u, dtype=float)
+        self.sweep = np.asarray(sweep)
+        self.direction = np.asarray(direction)
+        self._runs: dict[int, Runs] = {}
+        self._cache: dict = {}
+
+    @classmethod
+    def of(cls, m) -> "History":
+        """The history of a :class:`~.data.Measurements`."""
+        return cls(m.u, m.sweep, m.direction)
+
+    def __len__(self) -> int:
+        return len(self.u)
+
+    def runs(self, servo: int) -> Runs:
+        """The runs of one servo (0-based), computed once."""
+        if servo not in self._runs:
+            d = self.direction[:, servo]
+            n = len(d)
+            start = np.ones(n, dtype=bool)
+            if n > 1:
+                start[1:] = (d[1:] != d[:-1]) | (self.sweep[1:] != self.sweep[:-1])
+            new_sweep = np.ones(n, dtype=bool)
+            if n > 1:
+                new_sweep[1:] = self.sweep[1:] != self.sweep[:-1]
+            first_rows = np.flatnonzero(start)
+            last_rows = np.append(first_rows[1:] - 1, n - 1)
+            self._runs[servo] = Runs(np.cumsum(start) - 1, d[first_rows].astype(int), new_sweep[first_rows],
+                                     self.u[first_rows, servo], self.u[last_rows, servo])
+        return self._runs[servo]
+
+    def cached(self, key, compute):
+        if key not in self._cache:
+            if len(self._cache) >= 64:
+                self._cache.pop(next(iter(self._cache)))
+            self._cache[key] = compute()
+        return self._cache[key]
+
+
 class Context:
     """What the pipeline carries from stage to stage (all arrays batch-first)."""
 
-    def __init__(self, hand, u: np.ndarray, direction: np.ndarray | None, compliance: float):
+    def __init__(self, hand, u: np.ndarray, direction: np.ndarray | None, compliance: float,
+                 history: History | None = None, rows: np.ndarray | None = None):
         n = u.shape[0]
         self.hand = hand
         self.params = hand.params
         self.u = u                                  # commanded servo angles (N, 6), rad
         #: +1 flexing, -1 extending, 0 unknown, per row and servo (N, 6); None = unknown everywhere
         self.direction = direction
+        #: the whole recording (History) and which of its rows this batch holds (N,); None = unknown
+        #: (Hand.forward, the control law): history-dependent effects then do nothing
+        self.history = history
+        self.rows = None if history is None else (np.arange(n) if rows is None else np.asarray(rows))
+        #: the sweep code of every row of the batch (N,), or None
+        self.sweep = None if history is None else history.sweep[self.rows]
         self.u_eff = u.copy()                       # servo stage output
         self.radius_scale = np.ones(len(CHAINS))    # reference stage: r_eff = r * radius_scale
         self.s: np.ndarray | None = None            # reference angles (N, 6), after the reference stage
@@ -107,6 +226,8 @@ class Effect:
     formula: str = ""
     signature: str = ""
     reference: str = ""
+    #: the residual the effect leaves, feature by feature (:class:`Signature`); None: not declared
+    leaves: Signature | None = None
     #: depends on the direction of motion (needs a sweep to be identified)
     directional: bool = False
 
@@ -166,6 +287,7 @@ class TendonSlack(Effect):
     signature = ("zero in a band at the start of travel, then a lag of about delta_j * dq/du on every joint "
                  "of the chain (MCP included); independent of the direction")
     reference = "dead-zone / backlash models of cable drives, e.g. Kaneko et al., IEEE T-RA 7(3), 1991"
+    leaves = Signature(direction="same", at_rest="zero", trend="flat", joints="all", reversal="none")
 
     def parameters(self, hand):
         return [Param(f"{sv.label}_deg", 0.0, 15.0, (1.0, 4.0), False, servo_joints(sv.index), True,
@@ -196,6 +318,7 @@ class PulleyRadiusError(Effect):
     signature = ("grows with u (about e_j * u * dq/du), on the MCP as much as on PIP/DIP; zero at rest; "
                  "independent of the direction")
     reference = "eq. (5)-(6) of the paper; effective radius = pulley radius + half the tendon diameter"
+    leaves = Signature(direction="same", at_rest="zero", trend="grows", joints="all", reversal="none")
 
     def parameters(self, hand):
         return [Param(f"{sv.label}_relative", -0.2, 0.2, (0.015, 0.04), True, servo_joints(sv.index), True,
@@ -217,6 +340,7 @@ class TendonElasticity(Effect):
                "fitted: the compliance ratio c = k_s / EA (1/m), one for the whole hand")
     signature = "negative on PIP/DIP/IP, growing with flexion, zero on MCP/MP/CMC; no direction dependence"
     reference = "the paper's mechanics-based compensation, eq. (11)-(14)"
+    leaves = Signature(direction="same", at_rest="zero", trend="grows", joints="distal", reversal="none")
 
     def parameters(self, hand):
         return [Param("compliance_per_m", 0.0, 5.0, (0.07, 0.27), False, DISTAL_JOINTS, True,
@@ -248,6 +372,7 @@ class FrictionHysteresis(Effect):
     signature = ("PIP/DIP/IP lag when flexing and lead when extending (a hysteresis loop), the gap grows with "
                  "flexion; MCP untouched; zero when the direction is unknown")
     reference = "capstan equation T2 = T1 exp(mu theta) (Euler-Eytelwein); Kaneko et al., IEEE T-RA 7(3), 1991"
+    leaves = Signature(direction="flips", at_rest="zero", trend="grows", joints="distal", reversal="jump")
 
     def parameters(self, hand):
         return [Param("mu", 0.0, 1.0, (0.08, 0.25), False, DISTAL_JOINTS, True,
@@ -274,6 +399,7 @@ class JointOffset(Effect):
     formula = "q_i = q_model,i + o_i"
     signature = "constant per joint over the whole sweep, nonzero at rest, independent of direction and servo"
     reference = "standard zero-offset calibration of joint encoders (e.g. Hollerbach & Wampler 1996)"
+    leaves = Signature(direction="same", at_rest="nonzero", trend="flat", joints="any", reversal="none")
 
     def parameters(self, hand):
         return [Param(f"{j.label}_deg", -10.0, 10.0, (0.5, 2.0), True, (j.index,), False,
@@ -288,19 +414,86 @@ class JointOffset(Effect):
         return q - x * DEG
 
 
+def play_start(runs: Runs, half: float) -> np.ndarray:
+    """The output of the play (backlash) operator of half width ``half`` when each run starts: a
+    sweep starts with the output at the command; a run flexing ends at max(y0, u_end - half), one
+    extending at min(y0, u_end + half) (the command is monotone within a run)."""
+    y0 = np.empty(runs.direction.size)
+    y = 0.0
+    for i, (d, first, us, ue) in enumerate(zip(runs.direction, runs.first, runs.u_start, runs.u_end)):
+        y = us if first else y
+        y0[i] = y
+        if d > 0:
+            y = max(y, ue - half)
+        elif d < 0:
+            y = min(y, ue + half)
+    return y0
+
+
+def play(u: np.ndarray, rows: np.ndarray, runs: Runs, half: float, y0: np.ndarray) -> np.ndarray:
+    """The play operator's output at ``rows`` of the history (their commands ``u``): within a run
+    flexing max(y0, u - half), extending min(y0, u + half), at rest y0."""
+    r = runs.of_row[rows]
+    d, start = runs.direction[r], y0[r]
+    return np.where(d > 0, np.maximum(start, u - half),
+                    np.where(d < 0, np.minimum(start, u + half), np.clip(start, u - half, u + half)))
+
+
+@register_effect
+class Backlash(Effect):
+    name = "backlash"
+    stage = "servo"
+    order = 12
+    directional = True
+    explanation = ("after each reversal the joints stay still while the servo turns through a dead band, then "
+                   "follow it lagging by half the band, on every joint of the chain: backlash (play) in the drive")
+    formula = ("play operator per servo within each sweep, full width b_j: u_eff,k = min(max(u_eff,k-1, u_k - b/2), "
+               "u_k + b/2), u_eff = u at the start of a sweep")
+    signature = ("a band of about b_j * dq/du between the flexing and the extending branch, the same width over "
+                 "the travel, on every joint of the chain (MCP included); after each reversal the residual ramps "
+                 "across the band within b_j of servo travel; zero when the history is unknown")
+    reference = "play / backlash operator (Krasnosel'skii & Pokrovskii 1989; Tao & Kokotovic, Automatica 1993)"
+    leaves = Signature(direction="flips", at_rest="any", trend="flat", joints="all", reversal="jump")
+
+    def parameters(self, hand):
+        return [Param(f"{sv.label}_deg", 0.0, 10.0, (1.0, 3.5), False, servo_joints(sv.index), True,
+                      f"full width of the play of servo {sv.label}'s drive, degrees") for sv in SERVOS]
+
+    def apply(self, ctx, x):
+        if ctx.history is None or not np.any(x):
+            return
+        h = ctx.history
+        u_eff = ctx.u_eff.copy()
+        for j in np.flatnonzero(x > 0):
+            half = 0.5 * float(x[j]) * DEG
+            runs = h.runs(int(j))
+            y0 = h.cached(("backlash", int(j), half), lambda: play_start(runs, half))
+            # what the play takes off the command, added to what earlier servo-stage effects did
+            u_eff[:, j] += play(ctx.u[:, j], ctx.rows, runs, half, y0) - ctx.u[:, j]
+        ctx.u_eff = u_eff
+
+    #: the control law does not know the direction of the next move: it aims at the middle of the
+    #: play (u = u_eff), as it aims at the middle of the friction band
+    invertible = True
+
+
 # ---------------------------------------------------------------------------
 # the pipeline
 # ---------------------------------------------------------------------------
 
 def run_pipeline(hand, items: Sequence[tuple[Effect, np.ndarray]], u, direction=None,
-                 compliance: float = 0.0) -> np.ndarray:
+                 compliance: float = 0.0, history: History | None = None, rows=None) -> np.ndarray:
     """q (N, 15) for servo angles u (N, 6) with the effects ``items`` ((effect, x) pairs).
 
     ``compliance``: the base k_s / EA (0 = the analytic model); a ``tendon_elasticity`` item
     replaces it. ``direction`` (N, 6) of +1/-1/0, or None (unknown: friction is not applied).
+    ``history``: the whole recording (:class:`History`) and ``rows`` the rows of it that ``u``
+    holds (default: all, in order); None: unknown (backlash is not applied).
     """
     u = np.asarray(u, dtype=float)
-    ctx = Context(hand, u, direction, compliance)
+    if history is not None and rows is None and len(history) != u.shape[0]:
+        raise ValueError("run_pipeline: pass the rows of the history that u holds")
+    ctx = Context(hand, u, direction, compliance, history, rows)
     items = sorted(items, key=lambda it: (STAGES.index(it[0].stage), it[0].order))
     stage_of = [it[0].stage for it in items]
     for eff, x in items:
@@ -396,11 +589,13 @@ class EffectStack:
         m = hand.params.mechanics
         return m.spring_k / m.tendon_EA if compensated else 0.0
 
-    def forward(self, hand, u, compensated: bool, direction=None) -> np.ndarray:
+    def forward(self, hand, u, compensated: bool, direction=None, history: History | None = None) -> np.ndarray:
+        """``direction`` and ``history`` (the recording ``u`` comes from, its rows in order) as in
+        :func:`run_pipeline`; without them friction and backlash are left out."""
         u = np.asarray(u, dtype=float)
         flat = u.reshape(-1, N_SERVOS)
         d = None if direction is None else np.broadcast_to(direction, u.shape).reshape(-1, N_SERVOS)
-        q = run_pipeline(hand, self._items(compensated), flat, d, self._base(hand, compensated))
+        q = run_pipeline(hand, self._items(compensated), flat, d, self._base(hand, compensated), history)
         return q.reshape(u.shape[:-1] + (N_JOINTS,))
 
     def inverse(self, hand, q, compensated: bool) -> np.ndarray:

@@ -20,7 +20,7 @@ from scipy.optimize import least_squares
 
 from ..units import DEG_PER_RAD
 from .data import Measurements
-from .effects import JOINT_SERVO, Effect, Param, get_effect, run_pipeline
+from .effects import JOINT_SERVO, Effect, History, Param, get_effect, run_pipeline
 
 
 
@@ -64,11 +64,14 @@ def single_threaded_blas():
 class Problem:
     """Data prepared for fitting: rows, measured cells, directions."""
 
-    def __init__(self, hand, m: Measurements, rows: np.ndarray | None = None, all_directions=None):
+    def __init__(self, hand, m: Measurements, rows: np.ndarray | None = None, all_directions=None,
+                 history: History | None = None):
         self.hand = hand
         self.data = m
         # the direction of motion of every row of the file, computed once (subsets share it)
         self.all_directions = m.direction if all_directions is None else all_directions
+        #: the whole recording in row order (history-dependent effects), shared by subsets
+        self.history = History(m.u, m.sweep, self.all_directions) if history is None else history
         if rows is None:            # every row: views, no copies (a 1,000,000-row file is 200 MB)
             self.rows = np.arange(len(m))
             self.u, self.direction, self.q, self.sweep = m.u, self.all_directions, m.q, m.sweep
@@ -81,7 +84,7 @@ class Problem:
         self.meas = self.q[self.mask]
 
     def subset(self, rows) -> "Problem":
-        return Problem(self.hand, self.data, self.rows[np.asarray(rows)], self.all_directions)
+        return Problem(self.hand, self.data, self.rows[np.asarray(rows)], self.all_directions, self.history)
 
     @property
     def m(self) -> int:
@@ -112,8 +115,13 @@ class Model:
             xs[k][i] = v
         return list(zip(self.effects, xs))
 
-    def predict(self, theta, u, direction) -> np.ndarray:
-        return run_pipeline(self.hand, self.items(theta), u, direction, 0.0)
+    def predict(self, theta, u, direction, history: History | None = None, rows=None) -> np.ndarray:
+        """q for commands ``u`` (N, 6); ``history`` and ``rows`` as in run_pipeline."""
+        return run_pipeline(self.hand, self.items(theta), u, direction, 0.0, history, rows)
+
+    def predict_measurements(self, theta, m: Measurements) -> np.ndarray:
+        """q for every row of ``m``, with its directions and history."""
+        return self.predict(theta, m.u, m.direction, History.of(m))
 
     def values(self, theta) -> dict[str, dict[str, float]]:
         """{effect: {key: value}} of the free parameters (file units)."""
@@ -206,7 +214,7 @@ def _chunks(problem: Problem):
 
 
 def _chunk_residual(model: Model, problem: Problem, theta, a, b, ca, cb) -> np.ndarray:
-    q = model.predict(theta, problem.u[a:b], problem.direction[a:b])
+    q = model.predict(theta, problem.u[a:b], problem.direction[a:b], problem.history, problem.rows[a:b])
     return (problem.meas[ca:cb] - q[problem.mask[a:b]]) * DEG_PER_RAD
 
 
@@ -356,7 +364,7 @@ def predict(hand, m: Measurements, effects: dict | None = None) -> np.ndarray:
     from .effects import effect_values
 
     items = [(get_effect(n), effect_values(n, v, hand)) for n, v in (effects or {}).items()]
-    return run_pipeline(hand, items, m.u, m.direction, 0.0)
+    return run_pipeline(hand, items, m.u, m.direction, 0.0, History.of(m))
 
 
 def folds(problem: Problem, blocks: int = 6) -> list[np.ndarray]:

@@ -26,7 +26,18 @@ Signature (per joint, of a residual)
     servo angle, the mean when flexing and when extending: half their difference / half their
     sum); the value at rest; the linear trend against the servo angle; a least-squares
     periodogram against the servo angle (periods PERIODS_DEG); MCP (and thumb MP, CMC) vs the
-    distal joints.
+    distal joints; the mean at the very start of the travel; how much the upper half of the
+    travel carries over the lower half (of the residual, and of the flipping band); the jump of
+    the residual across each reversal.
+
+Features and the library's declarations
+    :func:`measured_features` reads those numbers, over the joints with structure beyond the
+    noise, as the features an effect declares (effects.Signature: direction, at_rest, trend,
+    joints, periodic, reversal); :func:`signature_report` compares them with the best
+    candidate's declaration and with every registered effect's, in sentences.
+
+Made worse
+    :func:`made_worse`: joints whose MAE rose by more than SMALL_SAMPLE x floor / sqrt(n).
 """
 
 from __future__ import annotations
@@ -58,6 +69,16 @@ PERIOD_CONTRAST = 3.0
 REST_FRACTION = 0.05
 #: number of servo-angle bins for the direction split
 DIRECTION_BINS = 12
+#: "at the start": the samples within this fraction of the swept range from its lowest servo angle
+START_FRACTION = 0.02
+#: samples on each side of a reversal whose means are compared (the reversal jump)
+REVERSAL_SAMPLES = 3
+#: a part "grows" when the upper half of the travel carries more than this multiple of the lower half's
+GROWTH = 2.0
+#: a feature is read only when it stands this many noise standard errors above the noise
+FEATURE_SIGMAS = 4.0
+#: the signature of a joint is computed on at most about this many of its samples (every k-th)
+SIGNATURE_SAMPLES = 5_000
 
 
 @dataclass
@@ -176,51 +197,112 @@ def verdict(fr, noise: NoiseFloor, keep: np.ndarray | None = None) -> dict:
             "tolerance_deg": round(tol_all, 5), "consistent": overall_ok}, "per_joint": per}
 
 
+def made_worse(before: dict, after: dict, floor: dict | None, cells: dict | None) -> list[str]:
+    """Joints whose MAE rose beyond what noise explains: after - before > SMALL_SAMPLE x the joint's
+    noise floor / sqrt(n) (the spread of an n-cell MAE, as in the verdict), n its measured cells."""
+    out = []
+    for c in before:
+        if c not in after:
+            continue
+        f = (floor or {}).get(c)
+        n = (cells or {}).get(c, 1)
+        margin = SMALL_SAMPLE * f / np.sqrt(max(n, 1)) if f is not None and np.isfinite(f) else 0.0
+        if after[c] - before[c] > margin:
+            out.append(c)
+    return out
+
+
 # ---------------------------------------------------------------------------
 # signature
 # ---------------------------------------------------------------------------
+
+def _sinusoid_shares(t: np.ndarray, e: np.ndarray, var: float, Q: np.ndarray, periods) -> np.ndarray:
+    """For each period p: the share of the detrended variance ``var`` that a line plus one
+    sinusoid of period p removes beyond the line, i.e. 1 - RSS([1, t, cos, sin]) / var, for all
+    periods at once: cos and sin with the line projected out (``Q``, an orthonormal basis of
+    [1, t]), then the 2 x 2 normal equations of each period."""
+    w = 2 * math.pi * t[:, None] / np.asarray(periods, dtype=float)[None, :]
+    C, S = np.cos(w), np.sin(w)
+    C -= Q @ (Q.T @ C)
+    S -= Q @ (Q.T @ S)
+    cc, ss, cs = np.einsum("ij,ij->j", C, C), np.einsum("ij,ij->j", S, S), np.einsum("ij,ij->j", C, S)
+    ce, se = e @ C, e @ S
+    det = cc * ss - cs * cs
+    ok = det > 1e-12 * np.maximum(cc * ss, 1e-300)
+    a = np.where(ok, (ss * ce - cs * se) / np.where(ok, det, 1.0), 0.0)
+    b = np.where(ok, (cc * se - cs * ce) / np.where(ok, det, 1.0), 0.0)
+    return (a * ce + b * se) / var
+
 
 def _periodogram(t: np.ndarray, x: np.ndarray):
     """(best period, its share of the detrended variance, median share) or None."""
     if x.size < 12 or np.ptp(t) <= 0:
         return None
-    base = np.column_stack([np.ones_like(t), t])
-    coef, *_ = np.linalg.lstsq(base, x, rcond=None)
-    e = x - base @ coef
+    Q, _ = np.linalg.qr(np.column_stack([np.ones_like(t), t]))
+    e = x - Q @ (Q.T @ x)
     var = float(e @ e)
     if var <= 0:
         return None
-    shares = []
     periods = [p for p in PERIODS_DEG if p <= np.ptp(t)]
     if len(periods) < 3:
         return None
-    for p in periods:
-        w = 2 * math.pi * t / p
-        A = np.column_stack([np.ones_like(t), t, np.cos(w), np.sin(w)])
-        c, *_ = np.linalg.lstsq(A, x, rcond=None)
-        res = x - A @ c
-        shares.append(1.0 - float(res @ res) / var)
-    shares = np.array(shares)
+    shares = _sinusoid_shares(t, e, var, Q, periods)
     k = int(np.argmax(shares))
     # refine the peak on a 0.25 deg grid around the best candidate
-    best_p, best_s = periods[k], shares[k]
-    for p in np.arange(max(periods[0], best_p - 2.0), best_p + 2.0 + 1e-9, 0.25):
-        w = 2 * math.pi * t / p
-        A = np.column_stack([np.ones_like(t), t, np.cos(w), np.sin(w)])
-        c, *_ = np.linalg.lstsq(A, x, rcond=None)
-        res = x - A @ c
-        s = 1.0 - float(res @ res) / var
-        if s > best_s:
-            best_p, best_s = float(p), s
+    best_p, best_s = periods[k], float(shares[k])
+    fine = np.arange(max(periods[0], best_p - 2.0), best_p + 2.0 + 1e-9, 0.25)
+    fine_shares = _sinusoid_shares(t, e, var, Q, fine)
+    j = int(np.argmax(fine_shares))
+    if fine_shares[j] > best_s:
+        best_p, best_s = float(fine[j]), float(fine_shares[j])
     return float(best_p), float(best_s), float(np.median(shares))
 
 
-def joint_signature(u_deg: np.ndarray, d: np.ndarray, x: np.ndarray, travel_deg: tuple[float, float]) -> dict:
-    """Signature of one joint's residual x (deg) against its servo angle u (deg), direction d."""
-    out: dict = {"rms_deg": round(float(np.sqrt(np.mean(x * x))), 5)}
+def _growth(u_deg: np.ndarray, x: np.ndarray) -> float | None:
+    """Mean |x| over the upper half of the swept range over that of the lower half."""
+    if x.size < 4 or np.ptp(u_deg) <= 0:
+        return None
+    mid = u_deg.min() + 0.5 * np.ptp(u_deg)
+    low, high = np.abs(x[u_deg < mid]), np.abs(x[u_deg >= mid])
+    if not low.size or not high.size:
+        return None
+    return float(high.mean() / max(low.mean(), 1e-12))
+
+
+def _reversal_jumps(u_deg: np.ndarray, d: np.ndarray, x: np.ndarray, sweep: np.ndarray | None) -> list[float]:
+    """At each reversal of the servo within a sweep: the mean residual of the REVERSAL_SAMPLES
+    samples after it minus that of the REVERSAL_SAMPLES before (nearly the same servo angles, so a
+    residual continuous in u gives about 0)."""
+    k = REVERSAL_SAMPLES
+    same = np.ones(x.size - 1, dtype=bool) if sweep is None else sweep[1:] == sweep[:-1]
+    turns = np.flatnonzero(same & (d[1:] * d[:-1] < 0)) + 1
+    out = []
+    for t in turns:
+        if t - k < 0 or t + k > x.size or (sweep is not None and
+                                           (sweep[t - k] != sweep[t] or sweep[t + k - 1] != sweep[t])):
+            continue
+        out.append(float(x[t:t + k].mean() - x[t - k:t].mean()))
+    return out
+
+
+def joint_signature(u_deg: np.ndarray, d: np.ndarray, x: np.ndarray, travel_deg: tuple[float, float],
+                    sweep: np.ndarray | None = None) -> dict:
+    """Signature of one joint's residual x (deg) against its servo angle u (deg), direction d,
+    samples in row order (``sweep``: their sweep codes, for the reversals)."""
+    out: dict = {"rms_deg": round(float(np.sqrt(np.mean(x * x))), 5), "n": int(x.size)}
     lo, hi = travel_deg
     rest = u_deg <= lo + REST_FRACTION * (hi - lo)
     out["at_rest_deg"] = round(float(np.mean(x[rest])), 5) if rest.any() else None
+    # the samples at the very start of the travel (within START_FRACTION of the swept range)
+    start = u_deg <= u_deg.min() + START_FRACTION * max(float(np.ptp(u_deg)), 1e-12)
+    out["at_start_deg"] = round(float(np.mean(x[start])), 5)
+    out["at_start_n"] = int(start.sum())
+    g = _growth(u_deg, x)
+    out["growth"] = round(g, 4) if g is not None else None
+    jumps = _reversal_jumps(u_deg, d, x, sweep)
+    if jumps:
+        out["reversal_jump_deg"] = round(float(np.sqrt(np.mean(np.square(jumps)))), 5)
+        out["reversals"] = len(jumps)
     if np.ptp(u_deg) > 0 and x.size >= 3:
         slope, icpt = np.polyfit(u_deg, x, 1)
         fit = slope * u_deg + icpt
@@ -231,15 +313,18 @@ def joint_signature(u_deg: np.ndarray, d: np.ndarray, x: np.ndarray, travel_deg:
     if both:
         edges = np.linspace(u_deg.min(), u_deg.max() + 1e-9, DIRECTION_BINS + 1)
         b = np.clip(np.digitize(u_deg, edges) - 1, 0, DIRECTION_BINS - 1)
-        odd, even = [], []
+        odd, even, centre = [], [], []
         for k in range(DIRECTION_BINS):
             f, e = x[(b == k) & (d > 0)], x[(b == k) & (d < 0)]
             if f.size and e.size:
                 odd.append((f.mean() - e.mean()) / 2)
                 even.append((f.mean() + e.mean()) / 2)
+                centre.append(0.5 * (edges[k] + edges[k + 1]))
         if odd:
             out["direction_flipping_rms_deg"] = round(float(np.sqrt(np.mean(np.square(odd)))), 5)
             out["direction_independent_rms_deg"] = round(float(np.sqrt(np.mean(np.square(even)))), 5)
+            fg = _growth(np.array(centre), np.array(odd))
+            out["flip_growth"] = round(fg, 4) if fg is not None else None
     out["both_directions"] = bool(both)
     per = _periodogram(u_deg, x)
     if per is not None:
@@ -265,12 +350,19 @@ def signature(fr, m, hand, joints=None) -> dict:
         s = JOINT_SERVO[j]
         # the rows where the joint's own servo moves (other sweeps hold it still)
         rr = rows[sel]
-        moving = d_all[rr, s] != 0
-        if moving.sum() < 3:
+        moving = np.flatnonzero(d_all[rr, s] != 0)
+        if moving.size < 3:
             continue
+        # a long recording: every k-th sample in row order (the features are averages over the
+        # travel; a million samples add nothing but time)
+        every = -(-moving.size // SIGNATURE_SAMPLES)
+        moving = moving[::every]
         u = m.u[rr, s][moving] * DEG_PER_RAD
         per[c] = joint_signature(u, d_all[rr, s][moving], r[sel][moving],
-                                 (float(hand.u_min[s] * DEG_PER_RAD), float(hand.u_max[s] * DEG_PER_RAD)))
+                                 (float(hand.u_min[s] * DEG_PER_RAD), float(hand.u_max[s] * DEG_PER_RAD)),
+                                 m.sweep[rr][moving])
+        if every > 1:
+            per[c]["every_kth_sample"] = int(every)
     summary = _summary(per)
     return {"per_joint": per, **summary}
 
@@ -321,4 +413,167 @@ def _summary(per: dict) -> dict:
     return out
 
 
-__all__ = ["NoiseFloor", "noise_floor", "verdict", "signature", "tolerance", "FLOOR_FACTOR", "SMALL_SAMPLE"]
+# ---------------------------------------------------------------------------
+# the measured signature against the one an effect declares (effects.Signature)
+# ---------------------------------------------------------------------------
+
+#: how each feature value reads in a sentence
+FEATURE_WORDS = {
+    ("direction", "flips"): "it flips with the direction of motion",
+    ("direction", "same"): "it is the same in both directions",
+    ("at_rest", "zero"): "it vanishes at rest (the start of the travel)",
+    ("at_rest", "nonzero"): "it is present at rest",
+    ("trend", "grows"): "it grows with the servo angle (tension)",
+    ("trend", "flat"): "it is flat over the travel",
+    ("joints", "all"): "it is on the MCP and the distal joints alike",
+    ("joints", "distal"): "it is on the distal joints (PIP, DIP, IP), not the MCP",
+    ("joints", "mcp"): "it is on the MCP/MP/CMC, not the distal joints",
+    ("periodic", False): "it is not periodic in u",
+    ("reversal", "jump"): "it jumps after each reversal",
+    ("reversal", "none"): "it passes through reversals without a jump",
+}
+#: what to look at when a measured feature is one no library effect declares
+FEATURE_HINTS = {
+    "periodic": "look at the servo horn / pulley eccentricity",
+    "joints": "a measurement-side error (camera scale or offset on those joints) or the guide geometry (d1, d2, alpha)",
+    "reversal": "history after a reversal: backlash / a dead band in the drive",
+    "direction": "friction or backlash (direction-dependent physics)",
+}
+
+
+def _word(key, value, measured: dict | None = None) -> str:
+    if key == "periodic" and value is True:
+        period = (measured or {}).get("period_deg")
+        return f"the residual is periodic in u with period {period:.0f} deg" if period else "the residual is periodic in u"
+    return FEATURE_WORDS.get((key, value), f"{key}: {value}")
+
+
+def measured_features(sig: dict, joints, noise: NoiseFloor) -> dict | None:
+    """The features of a residual's signature (``sig`` = :func:`signature`'s output) over the
+    structured ``joints`` (q columns beyond the noise), in the vocabulary of effects.Signature.
+    A feature the data cannot show is "unknown" (one-direction data: direction and reversal). None
+    when no joint has structure."""
+    per = sig["per_joint"]
+    J = [c for c in joints if c in per]
+    if not J:
+        return None
+    sd = {c: noise.sigma_deg.get(c, float("nan")) for c in per}
+    out: dict = {"joints_used": J}
+    # direction: the flipping part against the part that does not flip, pooled over J
+    both = [c for c in J if "direction_flipping_rms_deg" in per[c]]
+    if both:
+        odd = math.sqrt(np.mean([per[c]["direction_flipping_rms_deg"] ** 2 for c in both]))
+        even = math.sqrt(np.mean([per[c]["direction_independent_rms_deg"] ** 2 for c in both]))
+        # noise on a bin's half difference: sigma / sqrt(2 x samples per bin and direction)
+        floor = np.mean([sd[c] / math.sqrt(max(per[c]["n"] / (2 * DIRECTION_BINS), 1.0)) / math.sqrt(2) for c in both])
+        flips = odd > even and odd > FEATURE_SIGMAS * floor
+        out["direction"] = "flips" if flips else "same"
+    else:
+        out["direction"] = "unknown"
+    # at rest
+    votes = []
+    for c in J:
+        v = per[c]
+        thr = max(0.5 * v["rms_deg"], FEATURE_SIGMAS * sd[c] / math.sqrt(max(v["at_start_n"], 1)))
+        votes.append(abs(v["at_start_deg"]) > thr)
+    out["at_rest"] = "nonzero" if 2 * sum(votes) > len(votes) else "zero"
+    # trend of the main part: the band's width when it flips, else the residual itself
+    key = "flip_growth" if out["direction"] == "flips" else "growth"
+    g = [per[c][key] for c in J if per[c].get(key) is not None]
+    out["trend"] = ("grows" if float(np.median(g)) > GROWTH else "flat") if g else "unknown"
+    out["growth"] = round(float(np.median(g)), 3) if g else None
+    # MCP vs distal, over the chains with structure, less the noise
+    servos = {int(JOINT_SERVO[Q_COLUMNS.index(c)]) for c in J}
+    groups = {True: [], False: []}
+    for c, v in per.items():
+        j = Q_COLUMNS.index(c)
+        if int(JOINT_SERVO[j]) in servos:
+            groups[j in DISTAL_JOINTS].append(max(0.0, v["rms_deg"] ** 2 - sd[c] ** 2))
+    if groups[True] and groups[False]:
+        dist, mcp = math.sqrt(np.mean(groups[True])), math.sqrt(np.mean(groups[False]))
+        out["joints"] = "distal" if dist > 2 * mcp else "mcp" if mcp > 2 * dist else "all"
+        out["distal_structured_rms_deg"], out["mcp_structured_rms_deg"] = round(dist, 5), round(mcp, 5)
+    else:
+        out["joints"] = "unknown"
+    # periodic
+    periodic = [per[c]["period"]["best_deg"] for c in J if per[c].get("period", {}).get("clear")]
+    out["periodic"] = 2 * len(periodic) > len(J)
+    if out["periodic"]:
+        out["period_deg"] = round(float(np.median(periodic)), 2)
+    # a jump after the reversals
+    rev = [c for c in J if "reversal_jump_deg" in per[c]]
+    if rev:
+        jumps = [per[c]["reversal_jump_deg"] > FEATURE_SIGMAS * sd[c] * math.sqrt(2.0 / REVERSAL_SAMPLES) for c in rev]
+        out["reversal"] = "jump" if 2 * sum(jumps) > len(jumps) else "none"
+    else:
+        out["reversal"] = "unknown"
+    return out
+
+
+FEATURE_KEYS = ("direction", "at_rest", "trend", "joints", "periodic", "reversal")
+
+
+def compare_features(measured: dict, declared) -> dict:
+    """Which measured features the declared signature (effects.Signature, or None) matches."""
+    match, mismatch, unknown = [], [], []
+    if declared is None:
+        return {"declared": None, "matches": [], "mismatches": [], "unknown": list(FEATURE_KEYS)}
+    for k in FEATURE_KEYS:
+        mv, dv = measured[k], getattr(declared, k)
+        if mv == "unknown":
+            unknown.append(k)
+        elif dv == "any" or mv == dv:
+            match.append(k)
+        else:
+            mismatch.append(k)
+    return {"declared": declared.to_json(), "matches": match, "mismatches": mismatch, "unknown": unknown}
+
+
+def signature_report(measured: dict | None, best: str | None, registry: dict) -> dict | None:
+    """The measured features against the best candidate's declared signature and against the
+    whole library: which features match, which do not, which effects leave this signature, and the
+    sentences to print."""
+    if measured is None:
+        return None
+    out: dict = {"measured": {k: measured[k] for k in FEATURE_KEYS},
+                 "details": {k: v for k, v in measured.items() if k not in FEATURE_KEYS}}
+    fits = [n for n, e in registry.items()
+            if getattr(e, "leaves", None) is not None and not compare_features(measured, e.leaves)["mismatches"]]
+    out["effects_with_this_signature"] = fits
+    sentences = []
+    if best is not None:
+        cmp = compare_features(measured, getattr(registry.get(best), "leaves", None))
+        out["best_candidate"] = best
+        out.update(cmp)
+        if cmp["declared"] is None:
+            sentences.append(f"{best} declares no signature (Effect.leaves): its features cannot be compared")
+        else:
+            # the features no library effect predicts first: they say most about what is missing
+            def predicted(k):
+                return any(getattr(e, "leaves", None) is not None and getattr(e.leaves, k) == measured[k]
+                           for e in registry.values())
+            for k in sorted(cmp["mismatches"], key=predicted):
+                said = _word(k, measured[k], measured)
+                decl = _word(k, getattr(registry[best].leaves, k))
+                others = [n for n, e in registry.items()
+                          if getattr(e, "leaves", None) is not None and getattr(e.leaves, k) == measured[k]]
+                if others:
+                    sentences.append(f"does not match {best}, whose residual {decl[3:] if decl.startswith('it ') else decl}: "
+                                     f"{said}; {', '.join(others)} predict{'s' if len(others) == 1 else ''} that")
+                else:
+                    sentences.append(f"does not match {best}: {said}: no library effect predicts that; "
+                                     f"{FEATURE_HINTS.get(k, 'consider your own effect (docs/effects.md)')}")
+            if cmp["matches"]:
+                sentences.append(f"matches {best}: " + "; ".join(_word(k, measured[k], measured) for k in cmp["matches"]))
+            if cmp["unknown"]:
+                sentences.append("cannot be seen in these data: " + ", ".join(cmp["unknown"]))
+    if not fits:
+        sentences.append("no single library effect leaves this signature (two effects at once, or one outside the library)")
+    elif best is not None and best not in fits:
+        sentences.append(f"the library effects whose declared signature matches: {', '.join(fits)}")
+    out["sentences"] = sentences
+    return out
+
+
+__all__ = ["NoiseFloor", "noise_floor", "verdict", "made_worse", "measured_features", "compare_features",
+           "signature_report", "signature", "tolerance", "FLOOR_FACTOR", "SMALL_SAMPLE"]

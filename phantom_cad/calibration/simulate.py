@@ -18,7 +18,7 @@ import numpy as np
 from ..kinematics.topology import N_JOINTS, N_SERVOS, Q_COLUMNS, U_COLUMNS, servo_joints
 from ..units import DEG
 from .data import Measurements
-from .effects import REGISTRY, effect_values, get_effect, run_pipeline
+from .effects import REGISTRY, History, effect_values, get_effect, run_pipeline
 
 
 #: most samples per direction per servo: 12 x 100,000 rows of 21 columns is about 0.2 GB in memory
@@ -116,7 +116,7 @@ def simulate(hand, effects=(), *, noise_deg: float = 0.1, seed: int = 0, points:
     m0 = Measurements(u, np.zeros((len(u), N_JOINTS)), measured, sweep, ids, None,
                       np.arange(len(u)) + 2, "<simulate>", True)
     items = [(get_effect(n), effect_values(n, hidden[n], hand)) for n in REGISTRY if n in hidden]
-    clean = run_pipeline(hand, items, u, m0.direction, 0.0)
+    clean = run_pipeline(hand, items, u, m0.direction, 0.0, History.of(m0))
     mask = np.zeros(clean.shape, dtype=bool)
     mask[:, measured] = True
     if measure == "chain":

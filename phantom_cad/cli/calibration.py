@@ -137,7 +137,7 @@ def compare(
     """Residual = measured - model per joint: MAE / RMS / max before (analytic) and after (with the effects)."""
     from .. import load_hand
     from ..calibration.data import read_measurements
-    from ..calibration.effects import run_pipeline
+    from ..calibration.effects import History, run_pipeline
     from ..calibration.fitting import fit_effects
     from ..calibration.report import metrics
 
@@ -150,12 +150,12 @@ def compare(
         names = _effect_names(effects)
         if names:
             fitted = fit_effects(hand, m, names)
-            q_after = fitted.model.predict(fitted.theta, m.u, m.direction)
+            q_after = fitted.model.predict_measurements(fitted.theta, m)
             label = "fitted " + " + ".join(names)
         else:
             q_after, label = None, None
     elif hand.effects:
-        q_after = hand.effects.forward(hand, m.u, True, m.direction)
+        q_after = hand.effects.forward(hand, m.u, True, m.direction, History.of(m))
         label = "calibrated (" + " + ".join(hand.effects.names) + ")"
     else:
         q_after = hand.forward(m.u, compensated=True)
@@ -166,12 +166,16 @@ def compare(
     typer.echo("\n".join(lines))
     if report:
         from ..calibration.report import ReportDir, mae_table, plot_hysteresis, plot_mae, plot_residuals
+        from ..calibration.residual import made_worse, noise_floor
 
         with ReportDir(report) as tmp:
             plot_residuals(tmp / "residual_before.png", m, q_before, "residual of the analytic model")
             bm = {c: v["mae"] for c, v in mb["per_joint"].items()}
             am = {c: v["mae"] for c, v in ma["per_joint"].items()} if ma else None
-            plot_mae(tmp / "mae.png", bm, am, ("analytic", label or ""), "MAE per joint")
+            noise = noise_floor(m)
+            worse = made_worse(bm, am, noise.floor_deg, noise.cells) if am else []
+            plot_mae(tmp / "mae.png", bm, am, ("analytic", label or ""), "MAE per joint", noise.floor_deg,
+                     noise.overall_deg, worse)
             if q_after is not None:
                 plot_residuals(tmp / "residual_after.png", m, q_after, f"residual, {label}")
                 plot_hysteresis(tmp / "hysteresis.png", m, q_after, q_before, f"deviation from the analytic model: measured, {label}")
@@ -253,13 +257,14 @@ def diagnose(
 
         before = {c: v["before"] for c, v in result["per_joint"].items()}
         after = {c: v["after"] for c, v in result["per_joint"].items()}
-        q_before = d.before.model.predict(d.before.theta, m.u, m.direction)
-        q_after = d.after.model.predict(d.after.theta, m.u, m.direction)
+        q_before = d.before.model.predict_measurements(d.before.theta, m)
+        q_after = d.after.model.predict_measurements(d.after.theta, m)
         label = " + ".join(d.selected) or "analytic"
         with ReportDir(report) as tmp:
             plot_residuals(tmp / "residual_before.png", m, q_before, "residual of the analytic model")
             plot_residuals(tmp / "residual_after.png", m, q_after, f"residual with {label}")
-            plot_mae(tmp / "mae.png", before, after, ("analytic", f"with {label}"), "MAE per joint")
+            plot_mae(tmp / "mae.png", before, after, ("analytic", f"with {label}"), "MAE per joint",
+                     result["noise_floor_per_joint_deg"], result["noise_floor_deg"], result["made_worse"])
             plot_hysteresis(tmp / "hysteresis.png", m, q_after, q_before,
                             f"deviation from the analytic model: measured, and modelled with {label}")
             _write_json(tmp / "diagnosis.json", result)
@@ -282,7 +287,8 @@ def diagnosis_text(d, result) -> list[str]:
     out.append("candidates, first round (dIC < 0 and held-out ratio < 0.99 pass):")
     out.append(f"  {'effect':22s} {'dIC':>10s} {'RSS ratio':>10s} {'held-out':>9s} {'n_eff':>8s} {'pass':>5s}")
     for c in d.ranking:
-        out.append(f"  {c.effect:22s} {c.delta_ic:10.1f} {c.rss_ratio:10.4f} {c.heldout_ratio:9.4f} "
+        held = f"{c.heldout_ratio:9.4f}" if c.heldout_ratio == c.heldout_ratio else f"{'-':>9s}"
+        out.append(f"  {c.effect:22s} {c.delta_ic:10.1f} {c.rss_ratio:10.4f} {held} "
                    f"{c.n_eff:8.0f} {'yes' if c.passes else 'no':>5s}")
     out.append("")
     if not d.selected:
@@ -307,16 +313,15 @@ def diagnosis_text(d, result) -> list[str]:
         if c in verdict:
             row += (f" {result['noise_floor_per_joint_deg'][c]:11.3f} {verdict[c]['tolerance_deg']:9.3f}"
                     f"{'' if verdict[c]['consistent'] else '  structure left'}")
+        if c in result["made_worse"]:
+            row += "  made worse"
         out.append(row)
     out.append("")
     out.extend(verdict_lines(result))
     if result["outliers_count"]:
-        shown = ", ".join(f"{o['sweep']} line {o['line']} {o['joint']} {o['residual_deg']:+.2f}"
-                          for o in result["outliers"][:10])
-        more = f" and {result['outliers_count'] - 10} more" if result["outliers_count"] > 10 else ""
-        out.append(f"outliers ({result['outliers_count']} cells beyond 5 noise sd"
-                   f"{', left out of the verdict' if result['robust'] else '; --robust keeps them from bending the fit'}): "
-                   f"{shown}{more}")
+        from ..calibration.diagnose import outlier_text
+
+        out.append(outlier_text(result["outliers"], result["robust"], result["outliers_count"]))
     return out
 
 
@@ -342,6 +347,12 @@ def verdict_lines(result) -> list[str]:
         sentences = result["signature"][key]["sentences"]
         if sentences and (key == "before" or (result["selected"] and not result["explained"])):
             out.append(f"signature of {when}: " + "; ".join(sentences))
+        match = result["signature_match"].get(key)
+        if match and (key == "before" or not result["explained"]):
+            best = match.get("best_candidate")
+            out.append(f"{when} against the signatures the effects declare"
+                       f"{f' (best candidate: {best})' if best else ''}:")
+            out.extend(f"  {t}" for t in match["sentences"])
     return out
 
 
@@ -373,7 +384,7 @@ def fit(
     from ..canon import plain
     from ..calibration.data import read_measurements
     from ..calibration.diagnose import mae
-    from ..calibration.effects import get_effect, has_invert, validate_effects
+    from ..calibration.effects import History, get_effect, has_invert, validate_effects
     from ..errors import one_line
     from ..calibration.fitting import Model, Problem, fit as run_fit
 
@@ -392,15 +403,18 @@ def fit(
     m = read_measurements(data, degrees=degrees).require_joints()
     problem = Problem(hand, m)
     before = run_fit(Model(hand, [], problem), problem)
-    if robust:
-        from ..calibration.diagnose import ROBUST_SCALE
-        from ..calibration.fitting import robust_loss
-        from ..calibration.residual import MAE_PER_SIGMA, noise_floor
+    from ..calibration.diagnose import OUTLIER_SIGMAS, ROBUST_SCALE, outlier_text, outliers
+    from ..calibration.residual import MAE_PER_SIGMA, noise_floor
 
-        with robust_loss(ROBUST_SCALE * noise_floor(m).overall_deg / MAE_PER_SIGMA):
+    noise = noise_floor(m)
+    if robust:
+        from ..calibration.fitting import robust_loss
+
+        with robust_loss(ROBUST_SCALE * noise.overall_deg / MAE_PER_SIGMA):
             res = run_fit(Model(hand, names, problem), problem)
     else:
         res = run_fit(Model(hand, names, problem), problem)
+    found = outliers(res, m, noise)
     vals, errs = res.values(), res.uncertainties()
     table = {n: {k: round(v, 9) for k, v in vals[n].items()} for n in names}
     if "tendon_elasticity" not in table:
@@ -416,7 +430,7 @@ def fit(
         doc["plugins"] = [os.path.relpath(f, here) for f in files]
     else:
         doc.pop("plugins", None)
-    header = [f"{FIT_MARKER} {one_line(data)} --effects {','.join(names)}`",
+    header = [f"{FIT_MARKER} {one_line(data)} --effects {','.join(names)}{' --robust' if robust else ''}`",
               f"# from {one_line(hand.params.source)} (digest {hand.params.digest[:12]}), {len(m)} rows.",
               f"# MAE {mae(before):.4f} deg (analytic) -> {mae(res):.4f} deg (with the effects).",
               "# Fitted on the analytic model; [effects.tendon_elasticity] compliance_per_m replaces k_s/EA",
@@ -424,11 +438,14 @@ def fit(
     for n in names:
         for k, v in vals[n].items():
             header.append(f"#   {n}.{k} = {v:.6g} +- {errs[n][k]:.2g}")
+    if robust or found:
+        header.append(f"# {'Robust fit (soft_l1, scale ' + format(ROBUST_SCALE, 'g') + ' noise sd); ' if robust else ''}"
+                      f"{len(found)} cells beyond the outlier limit ({OUTLIER_SIGMAS:g} noise sd).")
     dump_params(doc, out, header="\n".join(header) + "\n\n")
     # the written file must load and reproduce the fit: no written effect may override another
     written = load_hand(out)
-    q_fit = res.model.predict(res.theta, m.u, m.direction)
-    q_file = written.effects.forward(written, m.u, True, m.direction)
+    q_fit = res.model.predict_measurements(res.theta, m)
+    q_file = written.effects.forward(written, m.u, True, m.direction, History.of(m))
     gap = float(np.nanmax(np.abs(q_file - q_fit)[np.isfinite(m.q)]))
     if gap > 1e-6:
         os.replace(out, str(out) + ".rejected")
@@ -436,4 +453,6 @@ def fit(
                           f"(up to {np.degrees(gap):.4f} deg apart): one of them overrides another; the file was "
                           f"moved to {out}.rejected")
     typer.echo("\n".join(h[2:] for h in header))
+    if found:
+        typer.echo(outlier_text(found, robust, robust_note="weighed about linearly"))
     typer.echo(f"wrote {out}")

@@ -52,6 +52,8 @@ def test_diagnose_json_and_report(workflow):
     for k in ("u1_deg", "u3_deg", "u4_deg", "u5_deg"):   # explicit u2 only: the others are 0
         assert abs(slack[k]["value"]) < 3 * slack[k]["std"] + 0.05
     assert "why: joints lag by a constant servo angle" in r.stdout
+    # every joint's MAE falls from well above the floor: none is flagged as made worse
+    assert out["made_worse"] == [] and "made worse" not in r.stdout
     for png in ("residual_before.png", "residual_after.png", "mae.png", "hysteresis.png"):
         assert (d / "rep" / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "![MAE](mae.png)" in (d / "rep" / "report.md").read_text()
@@ -110,7 +112,7 @@ def test_compare_prints_metrics(workflow):
     (["diagnose", "{dir}/missing.csv"], "error: {dir}/missing.csv: no such file"),
     (["simulate", "--effects", "gravity", "--out", "{dir}/x.csv"],
      "error: --effects gravity: unknown effect 'gravity' (known: tendon_slack, pulley_radius_error, "
-     "tendon_elasticity, friction_hysteresis, joint_offset, or none)"),
+     "tendon_elasticity, friction_hysteresis, joint_offset, backlash, or none)"),
     (["simulate", "--effects", "tendon_slack", "--effect-param", "friction_hysteresis.mu=0.1", "--out", "{dir}/x.csv"],
      "error: --effect-param friction_hysteresis.*: effect 'friction_hysteresis' is not in --effects"),
     (["simulate", "--effects", "friction_hysteresis", "--effect-param", "friction_hysteresis.mu=3", "--out",

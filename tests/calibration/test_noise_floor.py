@@ -86,7 +86,7 @@ def test_nothing_hidden_floor_and_explained_in_19_of_20_seeds(hand):
         assert out["noise_floor_deg"] == pytest.approx(d.noise.overall_deg, abs=1e-5)
         explained += out["explained"] is True
         if out["explained"]:
-            assert out["left"] == {}
+            assert out["left"] == {} and "after" not in out["signature_match"]
     assert explained >= 19
 
 
