@@ -255,7 +255,9 @@ def anchor_tools(lt: LinkTendons, sec) -> list:
             depth = knot_pocket_depth(sec, floor, a.cord)
             c0 = np.array([p[0], *(a.centre[1:] + (floor - depth) * v)])
             c1 = np.array([p[0], *(a.centre[1:] + a.radius * v)])
-            out.append(cylinder(c0, c1, sec.layout.groove / 2.0))
+            # a clearance narrower than the groove: a pocket as wide as the groove is tangent to
+            # both its walls, and a left hand's mirror of that face is unorientable (BRepCheck)
+            out.append(cylinder(c0, c1, (sec.layout.groove - t.clearance) / 2.0))
         else:                                # a knot well up to the dorsal face, one clearance wider
             d = a.cord + 4.0 * t.clearance   # than the channel it meets (equal bores meet degenerately)
             out.append(cylinder(p, (p[0], p[1], sec.thickness / 2.0 + 1.0), d / 2.0))
