@@ -11,7 +11,7 @@ import numpy as np
 from .. import units
 from ..kinematics import frames as F
 from ..kinematics.topology import (CMC_Q, CMC_SERVO, DIGITS, FINGER_CHAINS, FINGERS, JOINTS, N_SERVOS, SERVOS,
-                                   THUMB_CHAIN)
+                                   THUMB_CHAIN, joint)
 
 
 #: cord added to a cut length for each knot or clamp it ends in (mm): enough to tie and trim
@@ -63,7 +63,7 @@ def _bearings(params) -> dict[str, int]:
         sec = DigitSection(params, spec.digit)
         n = 0
         for jn in spec.joint_names:
-            j = [x for x in JOINTS if x.name == jn][0]
+            j = joint(jn)
             if tongue_bearing_face(sec, jn, link_tendons(params, j.child)) is not None:
                 n += 1
         out[spec.digit] = n
@@ -81,7 +81,7 @@ def bill_of_materials(params) -> list[dict]:
         "quantity": sum(n_bearings.values()),
         "used_in": "one per joint where it fits beside the tendon grooves, in the child link's tongue: " + ", ".join(
             f"{d} x{n} of {n_joints[d]}" for d, n in n_bearings.items()),
-    }]
+    }] if sum(n_bearings.values()) else []      # none fits: every joint turns on its axle
     for d in DIGITS:
         width = units.mm(params.digit(d).width)
         bom.append({"item": "axle", "spec": f"{g(hw.axle_diameter)} mm steel pin, {width:g} mm long",

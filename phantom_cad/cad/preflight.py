@@ -74,7 +74,12 @@ def magnet_pockets(palm: Palm, finger: str) -> list:
 def check(params) -> None:
     """Raise ParamError if the palm's servo pockets reach a finger socket's magnet pockets, if
     the thenar housing of the CMC servo does not join the palm, or if the CMC servo's hub (which
-    turns with the thumb) or the thumb tendon's post comes closer to the palm than a clearance."""
+    turns with the thumb) or the thumb tendon's post comes closer to the palm than a clearance; and
+    if the routing model finds no clamp position for a loop or a drive (``routing.routes`` raises
+    the ParamError: a joint's travel too large for its loop's pulleys and carrier)."""
+    from ..kinematics import routing
+
+    routing.routes(params)
     palm = Palm(params)
     src = params.source
     pockets = {f: magnet_pockets(palm, f) for f in FINGERS}

@@ -41,7 +41,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..params.rules import FLANK, slot_back
+from ..params import ParamError
+from ..params.rules import FLANK, digit_field, slot_back
 from . import frames as F
 from .topology import CHAINS, JOINTS, N_JOINTS, SERVOS, TENDONS, Tendon, chain, digit_links, joint, link
 
@@ -133,9 +134,14 @@ def _yz(angle: float, r: float) -> np.ndarray:
     return np.array([r * math.cos(angle), r * math.sin(angle)])
 
 
-def _clamp_angle(lo: float, hi: float, what: str) -> float:
+def _clamp_angle(lo: float, hi: float, what: str, params, field: str, value, why: str) -> float:
+    """The middle of [lo, hi]; a ParamError naming ``field`` (its ``value``) when it is empty: no
+    clamp keeps every wrap of ``what`` inside (WRAP_MARGIN, 180 deg - WRAP_MARGIN) over the travel
+    (``why``: what that asks of the parameters, in their words)."""
     if hi - lo < 0.0:
-        raise ValueError(f"{what}: no clamp position keeps every wrap inside (0, 180 deg) over the travel")
+        raise ParamError(field, value, f"no clamp position on the {what} keeps every wrap inside "
+                         f"({math.degrees(WRAP_MARGIN):g}, {180 - math.degrees(WRAP_MARGIN):g} deg) over the "
+                         f"travel: {why}", params.source)
     return (lo + hi) / 2.0
 
 
@@ -180,11 +186,27 @@ def _loop(params, digit: str, k: int, lay: Layout, rest) -> tuple[Strand, Strand
     # clamp on the hub (fixed to A), polar angle in C at rest phi: strand a wraps phi - gamma + q_a,
     # strand b 2 pi - gamma - phi - q_a; both inside (margin, pi - margin) over the travel
     qa, qb, m = _joint_travel(params, ja), _joint_travel(params, jb), WRAP_MARGIN
+    # both clamps exist while each joint's travel (limit + margins) stays under 2 gamma - 2 margin
+    def why(jn, q):
+        return (f"the {joint(jn).key.upper()} travel ({math.degrees(q):.2f} deg: the upper limit + {math.degrees(TRAVEL_MARGIN):g} deg"
+                f"{' + cad.module_stop_margin_deg' if link(joint(jn).parent).segment == 'base' else ''}) must stay "
+                f"under 2 acos((R_{joint(ja).key} + R_{joint(jb).key}) / L_{link(C).segment}) - "
+                f"{2 * math.degrees(m):g} deg = {math.degrees(2 * gamma - 2 * m):.2f} deg (L = {L * 1e3:.2f} mm, "
+                f"R = {Ra * 1e3:g} and {Rb * 1e3:g} mm: smaller pulley radii or a longer phalanx allow more)")
+
+    loop = f"{digit} {joint(ja).key.upper()}-{joint(jb).key.upper()}"
+
+    def limit(jn):
+        key = joint(jn).key
+        return (f"{digit_field(digit)}.limits_rad.{key}",
+                [round(v, 6) for v in dict(zip(ch.joints, ch.limits))[key]])
+
     phi = _clamp_angle(max(gamma + m, math.pi - gamma + m), min(math.pi + gamma - qa - m, 2 * math.pi - gamma - qa - m),
-                       f"{digit} loop {ja}-{jb} hub")
+                       f"{loop} loop's hub", params, *limit(ja), why(ja, qa))
     # clamp on the groove (fixed to B, centre at y = L of C), polar angle psi about B's centre:
     # strand a wraps psi - pi - gamma - q_b, strand b 2 pi - 2 gamma minus that
-    wa = _clamp_angle(math.pi - 2 * gamma + qb + m, math.pi - m, f"{digit} loop {ja}-{jb} groove")
+    wa = _clamp_angle(math.pi - 2 * gamma + qb + m, math.pi - m, f"{loop} loop's groove",
+                      params, *limit(jb), why(jb, qb))
     psi = wa + math.pi + gamma
     hub_c = _child_origin(rest, ja)                   # joint a's axis in A's frame
     cA = hub_c + np.array([x, 0.0, 0.0])
@@ -254,8 +276,12 @@ def thumb_arch(params) -> dict[str, float]:
 def servo_clamp_wrap(params, servo: int) -> float:
     """Wrap (rad) of a drive on its servo pulley at u = 0: the middle of what keeps the wrap inside
     (margin, 180 deg - margin) over the servo's travel."""
-    travel = params.digit(SERVOS[servo].digit).chain.travel[1]
-    return _clamp_angle(WRAP_MARGIN, math.pi - WRAP_MARGIN - travel, f"servo {servo + 1} pulley")
+    digit = SERVOS[servo].digit
+    lo, travel = params.digit(digit).chain.travel
+    m = math.degrees(WRAP_MARGIN)
+    return _clamp_angle(WRAP_MARGIN, math.pi - WRAP_MARGIN - travel, f"servo {servo + 1} pulley", params,
+                        f"{digit_field(digit)}.servo_travel_deg", [round(math.degrees(lo), 6), round(math.degrees(travel), 6)],
+                        f"the servo's travel must be at most {180 - 2 * m:g} deg (a wrap is modelled up to 180 deg)")
 
 
 def _drive(params, digit: str) -> Strand:

@@ -27,9 +27,14 @@ MAX_FLEXION = 120.0 * DEG
 MAX_FINGER_PITCH = 21.0 * MM
 
 
+def digit_field(digit: str) -> str:
+    """The parameter file's table of a digit: ``thumb`` or ``fingers.<name>``."""
+    return "thumb" if digit == "thumb" else f"fingers.{digit}"
+
+
 def _digits(fingers, thumb):
     """(field prefix, digit) of the four fingers and the thumb."""
-    return [(f"fingers.{n}", f) for n, f in fingers.items()] + [("thumb", thumb)]
+    return [(digit_field(n), f) for n, f in fingers.items()] + [(digit_field("thumb"), thumb)]
 
 
 def check_parts(c, hand_length, fingers, thumb, palm, servo, hardware, printing, cad) -> None:

@@ -513,9 +513,10 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
     hw.done()
     for n in FINGERS:
         f = fingers[n]
-        if 2 * hardware.bearing_width >= f.width:
+        if hardware.bearing_width >= f.width:
             raise ParamError("hardware.bearing.width_mm", bw / MM,
-                             f"two bearings per joint must fit in fingers.{n}.width_mm = {f.width / MM:g}", source)
+                             f"must be < fingers.{n}.width_mm = {f.width / MM:g} (a joint's bearing sits in its "
+                             f"tongue; the parts seat one where it fits beside the tendon grooves)", source)
         if hardware.bearing_outer >= f.thickness:
             raise ParamError("hardware.bearing.outer_mm", outer / MM,
                              f"must be < fingers.{n}.thickness_mm = {f.thickness / MM:g}", source)

@@ -172,3 +172,53 @@ def test_cmc_hub_or_post_into_the_palm(variant, x, what):
         preflight.check(p)
     assert exc.value.field == "palm.thumb_cmc_offset_mm" and what in exc.value.rule
     assert exc.value.value == [x, -45.0, -2.0]
+
+
+def test_a_loop_without_a_clamp_position_is_a_param_error(tmp_path, document):
+    """The index pulleys 1.5 times larger (MCP 7.5, PIP 6, DIP 7.5 mm) and the DIP flexing to
+    2.09 rad: the PIP-DIP loop's strands leave the middle phalanx's groove at
+    gamma = acos((R_PIP + R_DIP) / L_middle) from its axis, and a clamp on the DIP groove keeps both
+    wraps inside (8, 172 deg) only while the DIP travel (limit + 3 deg) stays under 2 gamma - 16 deg.
+    By hand: L_middle = 0.143 x 189 = 27.027 mm, gamma = acos(13.5 / 27.027) = 60.03 deg, so
+    104.07 deg < 119.75 + 3 deg. The file used to validate and the build to stop on a ValueError."""
+    import subprocess
+    import sys
+
+    import tomli_w
+
+    doc = copy.deepcopy(document)
+    f = doc["fingers"]["index"]
+    f["pulley_radius_mm"] = {k: 1.5 * v for k, v in f["pulley_radius_mm"].items()}
+    f["limits_rad"]["dip"] = [0.0, 2.09]
+    L = f["length_fraction"]["middle"] * doc["hand"]["hand_length_mm"]
+    gamma = math.degrees(math.acos((f["pulley_radius_mm"]["pip"] + f["pulley_radius_mm"]["dip"]) / L))
+    allowed = 2 * gamma - 16.0
+    assert math.degrees(2.09) + 3.0 > allowed
+    path = tmp_path / "big_pulleys.toml"
+    path.write_text(tomli_w.dumps(doc))
+    r = subprocess.run([sys.executable, "-m", "phantom_cad", "params", "validate", str(path)],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    line = r.stderr.strip()
+    assert "\n" not in line and str(path) in line         # one line naming the file
+    assert "fingers.index.limits_rad.dip = [0.0, 2.09]" in line
+    assert f"{allowed:.2f} deg" in line and "no clamp position" in line
+
+
+@pytest.mark.parametrize("width, ok", [(10.0, True), (18.0, False)])
+def test_bearing_width_rule(variant, width, ok):
+    """One bearing per joint, seated where it fits beside the tendon grooves: a 10 mm wide bearing
+    (twice it is wider than the 18 mm index, which the two-bearings rule refused) validates, and no
+    tongue of the default hand has room for it (a 10 mm seat leaves 8 mm of an 18 mm finger for
+    its clevis cheeks (2 x 2.4 mm), the loop hub and the grooves), so the BOM lists no bearing;
+    as wide as the finger is refused."""
+    from phantom_cad.cad import materials
+
+    edit = lambda d: d["hardware"]["bearing"].__setitem__("width_mm", width)  # noqa: E731
+    if not ok:
+        with pytest.raises(ParamError) as exc:
+            variant(edit)
+        assert exc.value.field == "hardware.bearing.width_mm" and "fingers.index.width_mm = 18" in exc.value.rule
+        return
+    rows = [r for r in materials.bill_of_materials(variant(edit)) if r["item"] == "bearing"]
+    assert rows == []
