@@ -44,6 +44,7 @@ import numpy as np
 from ..params import ParamError
 from ..params.rules import FLANK, digit_field, slot_back
 from . import frames as F
+from .memo import memoised
 from .topology import CHAINS, JOINTS, N_JOINTS, SERVOS, TENDONS, Tendon, chain, digit_links, joint, link
 
 #: every wrap stays this far inside (0, 180 deg) over the joint's whole travel (rad)
@@ -172,6 +173,26 @@ def _p(x: float, yz) -> tuple[float, float, float]:
     return (float(x), float(yz[0]), float(yz[1]))
 
 
+def _limit_field(params, digit: str, jname: str) -> tuple[str, list[float]]:
+    """The parameter field (and its value) a loop's clamp rule names: the joint's limits."""
+    ch = params.digit(digit).chain
+    key = joint(jname).key
+    return f"{digit_field(digit)}.limits_rad.{key}", [round(v, 6) for v in dict(zip(ch.joints, ch.limits))[key]]
+
+
+def _loop_travel_rule(ja: str, jb: str, carrier: str, jname: str, q: float, gamma: float, L: float,
+                      Ra: float, Rb: float) -> str:
+    """Why a loop's clamp cannot be placed: both clamps exist while each joint's travel (limit +
+    margins) stays under 2 gamma - 2 WRAP_MARGIN, gamma = acos((R_a + R_b) / L)."""
+    m = WRAP_MARGIN
+    stop = " + cad.module_stop_margin_deg" if link(joint(jname).parent).segment == "base" else ""
+    return (f"the {joint(jname).key.upper()} travel ({math.degrees(q):.2f} deg: the upper limit + "
+            f"{math.degrees(TRAVEL_MARGIN):g} deg{stop}) must stay under 2 acos((R_{joint(ja).key} + "
+            f"R_{joint(jb).key}) / L_{link(carrier).segment}) - {2 * math.degrees(m):g} deg = "
+            f"{math.degrees(2 * gamma - 2 * m):.2f} deg (L = {L * 1e3:.2f} mm, R = {Ra * 1e3:g} and "
+            f"{Rb * 1e3:g} mm: smaller pulley radii or a longer phalanx allow more)")
+
+
 def _loop(params, digit: str, k: int, lay: Layout, rest) -> tuple[Strand, Strand]:
     """The figure-eight loop between chain joints k and k+1 (see the module doc)."""
     ch = params.digit(digit).chain
@@ -186,27 +207,15 @@ def _loop(params, digit: str, k: int, lay: Layout, rest) -> tuple[Strand, Strand
     # clamp on the hub (fixed to A), polar angle in C at rest phi: strand a wraps phi - gamma + q_a,
     # strand b 2 pi - gamma - phi - q_a; both inside (margin, pi - margin) over the travel
     qa, qb, m = _joint_travel(params, ja), _joint_travel(params, jb), WRAP_MARGIN
-    # both clamps exist while each joint's travel (limit + margins) stays under 2 gamma - 2 margin
-    def why(jn, q):
-        return (f"the {joint(jn).key.upper()} travel ({math.degrees(q):.2f} deg: the upper limit + {math.degrees(TRAVEL_MARGIN):g} deg"
-                f"{' + cad.module_stop_margin_deg' if link(joint(jn).parent).segment == 'base' else ''}) must stay "
-                f"under 2 acos((R_{joint(ja).key} + R_{joint(jb).key}) / L_{link(C).segment}) - "
-                f"{2 * math.degrees(m):g} deg = {math.degrees(2 * gamma - 2 * m):.2f} deg (L = {L * 1e3:.2f} mm, "
-                f"R = {Ra * 1e3:g} and {Rb * 1e3:g} mm: smaller pulley radii or a longer phalanx allow more)")
-
     loop = f"{digit} {joint(ja).key.upper()}-{joint(jb).key.upper()}"
-
-    def limit(jn):
-        key = joint(jn).key
-        return (f"{digit_field(digit)}.limits_rad.{key}",
-                [round(v, 6) for v in dict(zip(ch.joints, ch.limits))[key]])
-
     phi = _clamp_angle(max(gamma + m, math.pi - gamma + m), min(math.pi + gamma - qa - m, 2 * math.pi - gamma - qa - m),
-                       f"{loop} loop's hub", params, *limit(ja), why(ja, qa))
+                       f"{loop} loop's hub", params, *_limit_field(params, digit, ja),
+                       _loop_travel_rule(ja, jb, C, ja, qa, gamma, L, Ra, Rb))
     # clamp on the groove (fixed to B, centre at y = L of C), polar angle psi about B's centre:
     # strand a wraps psi - pi - gamma - q_b, strand b 2 pi - 2 gamma minus that
     wa = _clamp_angle(math.pi - 2 * gamma + qb + m, math.pi - m, f"{loop} loop's groove",
-                      params, *limit(jb), why(jb, qb))
+                      params, *_limit_field(params, digit, jb),
+                      _loop_travel_rule(ja, jb, C, jb, qb, gamma, L, Ra, Rb))
     psi = wa + math.pi + gamma
     hub_c = _child_origin(rest, ja)                   # joint a's axis in A's frame
     cA = hub_c + np.array([x, 0.0, 0.0])
@@ -343,12 +352,7 @@ def routes(params, right_handed: bool = False) -> tuple[Route, ...]:
     routes before a left hand's mirroring, in the frames the parts are built in (the CAD layer
     cuts right-handed parts and mirrors them on export)."""
     mirror = params.side == "left" and not right_handed
-    key = (params.digest, mirror)
-    if key not in _ROUTES:
-        if len(_ROUTES) > 16:
-            _ROUTES.clear()
-        _ROUTES[key] = _routes(params, mirror)
-    return _ROUTES[key]
+    return memoised(_ROUTES, (params.digest, mirror), lambda: _routes(params, mirror), cap=16)
 
 
 def _routes(params, mirror: bool) -> tuple[Route, ...]:
@@ -508,9 +512,10 @@ def runs(params, right_handed: bool = False) -> tuple[Run, ...]:
     (found by evaluating them there, not by case analysis: a tangent point is fixed to the link
     that holds both the pulley's axis and the point it comes from). ``right_handed`` as for
     :func:`routes`."""
-    key = (params.digest, params.side, right_handed)
-    if key in _RUNS:
-        return _RUNS[key]
+    return memoised(_RUNS, (params.digest, right_handed), lambda: _runs(params, right_handed), cap=16)
+
+
+def _runs(params, right_handed: bool) -> tuple[Run, ...]:
     q_full = np.zeros(N_JOINTS)
     for j in JOINTS:
         if j.key != "cmc":
@@ -537,13 +542,29 @@ def runs(params, right_handed: bool = False) -> tuple[Run, ...]:
                     if all(np.linalg.norm(a - b) < 1e-9 for pr in loc[1:] for a, b in zip(pr, loc[0])):
                         fixed[ln] = tuple(tuple(float(v) for v in unmirror @ p) for p in loc[0])
                 out.append(Run(r.name, st.name, i, tuple(fixed), fixed, r.diameter))
-    _RUNS[key] = tuple(out)
-    return _RUNS[key]
+    return tuple(out)
 
 
-def travel_poses(params, fractions) -> list[dict[str, np.ndarray]]:
+_POSES: dict = {}
+_TRAVEL_NODES: dict = {}
+
+
+def travel_poses(params, fractions) -> tuple[dict[str, np.ndarray], ...]:
     """T_palm_link with every flexion joint and tendon servo at each fraction of its travel (the
-    joints to the clamps' design travel, :func:`_joint_travel`; the CMC at rest)."""
+    joints to the clamps' design travel, :func:`_joint_travel`; the CMC at rest). Memoised by
+    the parameters' digest and the fractions (read-only)."""
+    fr = tuple(float(f) for f in fractions)
+    return memoised(_POSES, (params.digest, fr), lambda: _travel_poses(params, fr), cap=16)
+
+
+def travel_nodes(params, strand: Strand, fractions) -> tuple[list, ...]:
+    """:func:`_nodes` of ``strand`` at each of :func:`travel_poses` (memoised, read-only)."""
+    fr = tuple(float(f) for f in fractions)
+    return memoised(_TRAVEL_NODES, (params.digest, strand, fr),
+                    lambda: tuple(_nodes(strand, Ts) for Ts in travel_poses(params, fr)), cap=512)
+
+
+def _travel_poses(params, fractions) -> tuple[dict[str, np.ndarray], ...]:
     out = []
     for f in fractions:
         q = np.zeros(N_JOINTS)
@@ -552,7 +573,7 @@ def travel_poses(params, fractions) -> list[dict[str, np.ndarray]]:
                 q[j.index] = f * _joint_travel(params, j.name)
         u = np.array([f * params.digit(s.digit).chain.travel[1] if s.drive == "tendon" else 0.0 for s in SERVOS])
         out.append(pose(params, q, u))
-    return out
+    return tuple(out)
 
 
 def arc_range(params, strand: Strand, index: int, fractions=tuple(np.linspace(0.0, 1.0, 11))) -> tuple[float, float]:
@@ -561,8 +582,8 @@ def arc_range(params, strand: Strand, index: int, fractions=tuple(np.linspace(0.
     sector its groove must span. Mirror-invariant (a left hand mirrors x only)."""
     e = strand.elements[index]
     angles = []
-    for Ts in travel_poses(params, fractions):
-        tin, tout = _nodes(strand, Ts)[index]
+    for Ts, nodes in zip(travel_poses(params, fractions), travel_nodes(params, strand, fractions)):
+        tin, tout = nodes[index]
         if tin is None:
             continue
         inv = np.linalg.inv(Ts[e.link])
@@ -585,8 +606,7 @@ def run_sweep(params, run: Run, link_name: str, fractions=tuple(np.linspace(0.0,
     st = next(s for r in routes(params) for s in r.strands if s.name == run.strand)
     S = F.MIRROR[:3, :3] if (right_handed and params.side == "left") else np.eye(3)
     out = []
-    for Ts in travel_poses(params, fractions):
-        n = _nodes(st, Ts)
+    for Ts, n in zip(travel_poses(params, fractions), travel_nodes(params, st, fractions)):
         inv = np.linalg.inv(Ts[link_name])
         a, b = n[run.index][1], n[run.index + 1][0]
         if a is None or b is None:

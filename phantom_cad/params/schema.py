@@ -8,6 +8,7 @@ must satisfy is checked in :func:`parse`, which either returns a complete
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -237,9 +238,10 @@ class HandParams:
         """The :class:`Thumb` or the :class:`Finger` named ``name``."""
         return self.thumb if name == "thumb" else self.fingers[name]
 
-    @property
+    @functools.cached_property
     def digest(self) -> str:
-        """SHA-256 of the canonical document: same parameters, same digest."""
+        """SHA-256 of the canonical document: same parameters, same digest (computed once: the
+        document is never changed after parsing)."""
         return canon.digest(self.document)
 
 

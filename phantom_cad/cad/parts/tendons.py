@@ -30,6 +30,7 @@ import numpy as np
 
 from ... import units
 from ...kinematics import routing
+from ...kinematics.memo import memoised
 from ...kinematics.topology import TENDONS, joint
 
 #: a return groove's sector reaches this far beyond the arc its cord ever touches (rad)
@@ -179,12 +180,7 @@ def link_tendons(params, link_name: str) -> LinkTendons:
     """The :class:`LinkTendons` of one link, made once per hand (memoised by the parameters'
     digest: the routes are pure functions of them; a part's build, its verification, its
     child's tongue and the bill of materials all read the same one)."""
-    key = (params.digest, link_name)
-    if key not in _LINK_TENDONS:
-        if len(_LINK_TENDONS) > 64:
-            _LINK_TENDONS.clear()
-        _LINK_TENDONS[key] = LinkTendons(params, link_name)
-    return _LINK_TENDONS[key]
+    return memoised(_LINK_TENDONS, (params.digest, link_name), lambda: LinkTendons(params, link_name))
 
 
 def parent_hub_x(params, joint_name: str) -> float | None:
