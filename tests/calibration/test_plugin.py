@@ -9,9 +9,6 @@ law of test_noise_floor), 0.1 deg noise."""
 import json
 import math
 import re
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,6 +16,7 @@ import pytest
 from phantom_cad.calibration.data import write_measurements
 from phantom_cad.calibration.labels import Labels
 
+from ._cli import run_cli as run
 from .test_noise_floor import NOISE_DEG, analytic, measure, sweeps
 
 PLUGIN = '''"""A user's effect: the tendon compliance differs per finger."""
@@ -82,16 +80,6 @@ def compliant(hand, u):
     return q
 
 
-ROOT = Path(__file__).resolve().parents[2]
-
-
-def run(*args):
-    """The command line of this source tree (not whichever copy the venv's script points at)."""
-    import os
-
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
-    return subprocess.run([sys.executable, "-c", "from phantom_cad.cli import main; main()", *map(str, args)],
-                          capture_output=True, text=True, cwd=ROOT, env=env)
 
 
 @pytest.fixture(scope="module")

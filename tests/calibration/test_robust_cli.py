@@ -3,11 +3,7 @@ joint offsets (both written out in test_noise_floor, never simulate); the fit li
 cells as outliers (sweep, row, file line, joint) and its offsets stay at the truth, where least
 squares is pulled off by the glitches."""
 
-import os
 import re
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
@@ -15,15 +11,9 @@ from phantom_cad.calibration.data import write_measurements
 from phantom_cad.calibration.labels import Labels
 from phantom_cad.params import load_document
 
+from ._cli import run_cli as run
 from .test_noise_floor import GLITCHES, OFFSETS, glitched_data
 
-ROOT = Path(__file__).resolve().parents[2]
-
-
-def run(*args):
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
-    return subprocess.run([sys.executable, "-c", "from phantom_cad.cli import main; main()", *map(str, args)],
-                          capture_output=True, text=True, cwd=ROOT, env=env)
 
 
 @pytest.fixture(scope="module")
