@@ -29,6 +29,9 @@ from .common import Tolerances, build, cylinder, mm
 #: angular positions (rad) of the holes on the horn circle
 HORN_ANGLES = (math.pi / 4.0, 5.0 * math.pi / 4.0)        # horn screws (through the pulley into the horn)
 BASE_ANGLES = (3.0 * math.pi / 4.0, 7.0 * math.pi / 4.0)  # CMC base screws (into the servo-6 hub)
+#: a drive pulley's horn screws, before the turn that puts its anchor (cut on +y) at the clamp:
+#: on x, square to the anchor (on it, as at 45/225 deg, they would cut the knot well)
+DRIVE_HORN_ANGLES = (0.0, math.pi)
 
 
 class ServoPulley(Part):
@@ -126,8 +129,7 @@ class ServoPulley(Part):
         # a drive pulley is cut with its anchor on +y and then turned to the clamp angle: cut in
         # place, the groove floor's face (its seam on +x, the anchor hole at -135 deg) came out of
         # a mirror for the left hand unorientable (BRepCheck), so the part was invalid
-        # the horn screws square to the anchor (on it, as at 45/225 deg, they cut the knot well)
-        tools += self._holes((0.0, math.pi), t.screw_clear)
+        tools += self._holes(DRIVE_HORN_ANGLES, t.screw_clear)
         groove_w = t.tendon_hole
         outer = cylinder((0, 0, -groove_w / 2.0), (0, 0, groove_w / 2.0), self.outer_radius + 1.0)
         inner = cylinder((0, 0, -groove_w / 2.0 - 1.0), (0, 0, groove_w / 2.0 + 1.0), self.groove_floor)
