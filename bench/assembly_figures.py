@@ -1,12 +1,14 @@
 """Pictures of the threading steps (docs/assembly.md), rendered from the model: the index finger
-of the default hand (right hand) at rest (u = 0, every joint 0), one figure per step (PIP-DIP
-loop, MCP-PIP loop, return cord, drive). Run from the repository's root:
+and the thumb of the default hand (right hand) at rest (u = 0, every joint 0), one figure per step
+(the finger's PIP-DIP loop, MCP-PIP loop, return cord and drive; the thumb's MP-IP loop, return
+cord and drive). Run from the repository's root:
 .venv/bin/python bench/assembly_figures.py [OUT_DIR]   (default docs/img)
 
 The parts are the real built solids (``cad.registry.part(params, name).build()``, right-handed,
 in their link frames, mm), tessellated (``export.step_stl.tessellate``) and placed with the
 routing model's rest transforms (``routing.pose``: T_palm_link, metres); everything is drawn in
-the index base link's frame (x ulnar, y along the finger, z dorsal; mm), in two views:
+the digit's first link's frame (the index base, the thumb's CMC base: x ulnar, y along the digit,
+z dorsal; mm), in two views:
 
 * side: seen from the ulnar side (+x), y to the right, z up;
 * top: seen from the dorsal side (+z), y to the right, x (ulnar) down.
@@ -16,9 +18,10 @@ culled); the tendons (``routing.routes`` / ``routing.strand_path``) are drawn on
 if the parts were glass: the step's tendon in colour, the others faint. The anchors are the
 routing model's strand ends, with their roles read from ``cad.parts.tendons.link_tendons`` (hub
 clamp: M2 set screw; groove clamp: knot pocket; knot: knot well); the drive's are its servo
-pulley clamp and its knot behind G2 (``routing`` Point anchors). For the drive the servo pulley
-(``servo_pulley_2``) is drawn too; the palm is not (its channel is the straight run from the
-pulley to the finger base's entry).
+pulley clamp and its knot behind G2 (``routing`` Point anchors). For the finger's drive the servo
+pulley (``servo_pulley_2``) is drawn too; the palm is not (its channel is the straight run from the
+pulley to the finger base's entry). The thumb's drive comes over the palm's arch and down the CMC
+axis into the CMC base; the panels show it from there (its palm path is in docs/transmission.md).
 """
 
 from __future__ import annotations
@@ -38,25 +41,28 @@ from phantom_cad.cad import registry  # noqa: E402
 from phantom_cad.cad.parts.tendons import link_tendons  # noqa: E402
 from phantom_cad.export.step_stl import tessellate  # noqa: E402
 from phantom_cad.kinematics import routing  # noqa: E402
-from phantom_cad.kinematics.topology import SERVOS, chain  # noqa: E402
+from phantom_cad.kinematics.topology import SERVOS, chain, digit_links  # noqa: E402
 from phantom_cad.params.io import DEFAULT_PARAMS, load_params  # noqa: E402
 
-DIGIT = "index"
-PARTS = ("index_base", "index_proximal", "index_middle", "index_distal")
-FRAME = "index_base"
 #: chord tolerance of the pictures' tessellation (mm)
 TESSELLATION_MM = 0.1
 
 COLOURS = {"drive": "#d62728", "a": "#ff7f0e", "b": "#2ca02c", "return": "#1f77b4"}
 STRAND_LABEL = {"drive": "drive", "a": "loop strand a", "b": "loop strand b", "return": "return cord"}
 
-#: (doc step, file, tendon, title)
-STEPS = (
-    (2, "assembly_pip_dip.png", f"{DIGIT}_pip_dip", "PIP-DIP loop"),
-    (3, "assembly_mcp_pip.png", f"{DIGIT}_mcp_pip", "MCP-PIP loop"),
-    (4, "assembly_return.png", f"{DIGIT}_return", "return cord"),
-    (5, "assembly_drive.png", f"{DIGIT}_drive", "drive"),
-)
+#: digit -> (what it is called, whether its servo pulley is drawn, ((doc step, file, tendon, title), ...));
+#: its parts are the digit's links (``topology.digit_links``), its frame the first of them
+DIGITS = {
+    "index": ("index finger", True, (
+        (2, "assembly_pip_dip.png", "index_pip_dip", "PIP-DIP loop"),
+        (3, "assembly_mcp_pip.png", "index_mcp_pip", "MCP-PIP loop"),
+        (4, "assembly_return.png", "index_return", "return cord"),
+        (5, "assembly_drive.png", "index_drive", "drive"))),
+    "thumb": ("thumb", False, (
+        (2, "assembly_thumb_mp_ip.png", "thumb_mp_ip", "MP-IP loop"),
+        (4, "assembly_thumb_return.png", "thumb_return", "return cord"),
+        (5, "assembly_thumb_drive.png", "thumb_drive", "drive"))),
+}
 
 #: what the maker does at an anchor, by its role (cad.parts.tendons.Anchor.role or the drive's)
 DOES = {
@@ -82,20 +88,20 @@ def _to_mm(T: np.ndarray) -> np.ndarray:
 
 
 class Scene:
-    """The parts' meshes and the tendons' paths at rest, in the index base's frame (mm)."""
+    """The parts' meshes and the tendons' paths at rest, in the digit's first link's frame (mm)."""
 
-    def __init__(self, p, parts):
-        self.p = p
+    def __init__(self, p, digit: str, parts):
+        self.p, self.digit, self.frame = p, digit, parts[0]
         u = np.zeros(len(SERVOS))
         self.Ts = routing.pose(p, None, u)
-        self.inv = np.linalg.inv(self.Ts[FRAME])
+        self.inv = np.linalg.inv(self.Ts[self.frame])
         self.meshes, self.T_mm = {}, {}
         for name in parts:
             v, f = tessellate(registry.part(p, name).build(), TESSELLATION_MM)   # link frame, mm
             T = _to_mm(self.inv @ self.Ts[name])                                  # base <- link, mm
             self.T_mm[name] = T
             self.meshes[name] = ((_h(v) @ T.T)[:, :3], f)
-        self.routes = [r for r in routing.routes(p) if r.tendon.digit == DIGIT]
+        self.routes = [r for r in routing.routes(p) if r.tendon.digit == digit]
         self.paths = {}
         for r in self.routes:
             for st in r.strands:
@@ -225,8 +231,9 @@ def marks(scene: Scene, tendon: str) -> list[tuple[np.ndarray, str | None, str]]
             elif isinstance(e, routing.Point) and e.role == "crossing":
                 out.append((P, f"{e.link}: the ends cross once\n(its two crossing channels)", "X"))
             elif isinstance(e, routing.Point) and e.role in ("interface", "guide G1"):
-                what = {"interface": "entry channel\n(from the palm channel)",
-                        "guide G1": "through G1"}[e.role]
+                entry = ("down the CMC axis\n(from the palm's arch)" if scene.digit == "thumb"
+                         else "entry channel\n(from the palm channel)")
+                what = {"interface": entry, "guide G1": "through G1"}[e.role]
                 out.append((P, f"{e.link}: {what}", "s"))
             elif isinstance(e, routing.Pulley) and e.role == "return":
                 out.append((P, f"{e.link}: over the {_joint(e)}\nreturn groove (dorsal)", "+"))
@@ -266,7 +273,7 @@ def draw_marks(ax, scene: Scene, view: str, tendon: str, labelled: bool) -> None
                         bbox=dict(boxstyle="round,pad=0.25", fc="white", ec="0.6", lw=0.5, alpha=0.92))
 
 
-def figure(scene: Scene, step: int, tendon: str, title: str, out: Path) -> None:
+def figure(scene: Scene, step: int, tendon: str, title: str, out: Path, what: str) -> None:
     r = next(r for r in scene.routes if r.name == tendon)
     allpts = np.concatenate([m[0] for m in scene.meshes.values()])
     lo, hi = allpts.min(axis=0), allpts.max(axis=0)
@@ -304,11 +311,12 @@ def figure(scene: Scene, step: int, tendon: str, title: str, out: Path) -> None:
             ax.set_ylabel("x ulnar (mm)", fontsize=8)
             ax.text(0.005, 0.97, "radial", transform=ax.transAxes, fontsize=8, va="top", color="0.2")
             ax.text(0.005, 0.03, "ulnar", transform=ax.transAxes, fontsize=8, va="bottom", color="0.2")
-        ax.set_xlabel(f"y along the finger, {FRAME} frame (mm)", fontsize=8)
+        ax.set_xlabel(f"y along the {'thumb' if scene.digit == 'thumb' else 'finger'}, {scene.frame} frame (mm)",
+                      fontsize=8)
         ax.set_aspect("equal")
         ax.tick_params(labelsize=7)
         ax.grid(lw=0.3, alpha=0.4)
-    fig.suptitle(f"Step {step}: {title} ({tendon}, {r.diameter * 1e3:.1f} mm cord), index finger at rest",
+    fig.suptitle(f"Step {step}: {title} ({tendon}, {r.diameter * 1e3:.1f} mm cord), {what} at rest",
                  fontsize=11)
     fig.get_layout_engine().set(h_pad=0.08, hspace=0.04)
     handles, labels = axes[0].get_legend_handles_labels()
@@ -330,14 +338,16 @@ def figure(scene: Scene, step: int, tendon: str, title: str, out: Path) -> None:
 def main(out: Path) -> None:
     p = load_params(DEFAULT_PARAMS)
     out.mkdir(parents=True, exist_ok=True)
-    pulley = SERVOS[chain(DIGIT).servo].link
-    scene = Scene(p, PARTS + (pulley,))
-    drive_meshes = scene.meshes
-    finger_meshes = {n: m for n, m in drive_meshes.items() if n != pulley}
-    for step, name, tendon, title in STEPS:
-        scene.meshes = drive_meshes if tendon.endswith("_drive") else finger_meshes
-        figure(scene, step, tendon, title, out / name)
-        print(out / name)
+    for digit, (what, with_pulley, steps) in DIGITS.items():
+        parts = tuple(ln.name for ln in digit_links(digit))
+        pulley = SERVOS[chain(digit).servo].link
+        scene = Scene(p, digit, parts + ((pulley,) if with_pulley else ()))
+        drive_meshes = scene.meshes
+        digit_meshes = {n: m for n, m in drive_meshes.items() if n != pulley}
+        for step, name, tendon, title in steps:
+            scene.meshes = drive_meshes if tendon.endswith("_drive") else digit_meshes
+            figure(scene, step, tendon, title, out / name, what)
+            print(out / name)
 
 
 if __name__ == "__main__":
