@@ -27,6 +27,7 @@ import numpy as np
 from ..kinematics.topology import Q_COLUMNS
 from .data import Measurements
 from .effects import REGISTRY, get_effect
+from .identify import combinations
 from .residual import (MAE_PER_SIGMA, NoiseFloor, made_worse, measured_features, noise_floor, signature,
                        signature_report, verdict)
 from .fitting import (FitResult, Model, Problem, fit, fit_streamed, folds, heldout_sse, robust_loss,
@@ -162,8 +163,7 @@ class Diagnosis:
             eff = get_effect(name)
             effects[name] = {
                 "explanation": eff.explanation,
-                "parameters": {k: {"value": round(v, 6), "std": round(errs[name][k], 6)}
-                               for k, v in vals[name].items()},
+                "parameters": {k: _value_json(v, errs[name][k]) for k, v in vals[name].items()},
             }
         v = self.verdict()
         sig = self.signatures()
@@ -198,10 +198,19 @@ class Diagnosis:
             "ranking": [c.to_json() for c in self.ranking],
             "rounds": [[c.to_json() for c in r] for r in self.rounds],
             "ambiguities": self.ambiguities,
+            "identifiability": [c.to_json() for c in combinations(self.after)],
             "per_joint": self.per_joint(),
             "made_worse": self.made_worse(),
             "notes": self.notes,
         }
+
+
+def _value_json(value: float, std: float) -> dict:
+    """A fitted parameter for JSON: its standard deviation, or null and ``identifiable: false`` when
+    it is part of a combination the data cannot separate (calibration/identify.py)."""
+    if np.isfinite(std):
+        return {"value": round(value, 6), "std": round(std, 6), "identifiable": True}
+    return {"value": round(value, 6), "std": None, "identifiable": False}
 
 
 def outlier_cells(fr: FitResult, noise: NoiseFloor) -> np.ndarray:

@@ -4,7 +4,8 @@ A :class:`Model` is the analytic model plus a list of effects; only the paramete
 can identify are free (a joint that was never measured, a servo that never moved: fixed at 0).
 Residuals are measured - model in degrees over every measured cell. Parameter uncertainties come
 from the Jacobian at the solution, cov = (J^T J)^-1 * RSS / (m - p), inflated by m / n_eff because
-the residuals within a sweep are correlated (see :func:`effective_size`).
+the residuals within a sweep are correlated (see :func:`effective_size`); a parameter in a
+combination the data cannot separate (:mod:`.identify`) has none (NaN: not identifiable).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from scipy.optimize import least_squares
 from ..units import DEG_PER_RAD
 from .data import Measurements
 from .effects import JOINT_SERVO, Effect, History, Param, get_effect, run_pipeline
+from .identify import not_identifiable
 
 
 
@@ -162,6 +164,8 @@ class FitResult:
     problem: Problem
     rss: float = field(init=False)
     n_eff: float = field(init=False)
+    #: J^T J at the solution (free parameters, degrees^2 per file unit^2), when computed
+    jtj: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self):
         self.rss = cost(self.residual)
@@ -269,10 +273,12 @@ def _result(model: Model, problem: Problem, theta, r, JTJ) -> FitResult:
     """The fit at ``theta`` with the uncertainties of the module docstring."""
     dof = max(r.size - model.p, 1)
     s2 = float(r @ r) / dof
-    out = FitResult(model, theta, np.full(model.p, np.nan), r, problem)
+    out = FitResult(model, theta, np.full(model.p, np.nan), r, problem, jtj=JTJ)
     inflate = r.size / max(out.n_eff, 1.0)
     cov = np.linalg.pinv(JTJ) * s2 * inflate
     out.std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    # a parameter in a combination the data cannot see has no finite uncertainty (calibration/identify.py)
+    out.std[not_identifiable(out)] = np.nan
     return out
 
 

@@ -218,7 +218,7 @@ def _compare_text(m, mb, ma, label, fitted) -> list[str]:
         vals, errs = fitted.values(), fitted.uncertainties()
         for n in vals:
             for k, v in vals[n].items():
-                out.append(f"  {n}.{k} = {v:.5g} +- {errs[n][k]:.2g}")
+                out.append(f"  {n}.{k} = {v:.5g} {plus_minus(errs[n][k])}")
     return out
 
 
@@ -277,6 +277,11 @@ def diagnose(
         typer.echo(f"report in {report}")
 
 
+def plus_minus(std: float) -> str:
+    """``+- 0.012``, or what a NaN standard deviation means (calibration/identify.py)."""
+    return f"+- {std:.2g}" if std == std else "(not identifiable alone: see the combination below)"
+
+
 def diagnosis_text(d, result) -> list[str]:
     from ..kinematics.topology import JOINT_NAMES, Q_COLUMNS
     from ..calibration.effects import get_effect
@@ -298,11 +303,14 @@ def diagnosis_text(d, result) -> list[str]:
         out.append(f"selected: {name}")
         out.append(f"  why: {eff.explanation}")
         for k, v in result["effects"][name]["parameters"].items():
-            out.append(f"  {name}.{k} = {v['value']:.5g} +- {v['std']:.2g}")
+            out.append(f"  {name}.{k} = {v['value']:.5g} " + (f"+- {v['std']:.2g}" if v["identifiable"]
+                                                             else "(not identifiable alone: see below)"))
     for a in d.ambiguities:
         out.append(f"ambiguous (round {a['round']}): {a['effects'][0]} and {a['effects'][1]} explain the residual "
                    f"equally well (dIC {a['delta_ic'][0]:.1f} vs {a['delta_ic'][1]:.1f}); kept {a['effects'][0]}. "
                    f"To separate them: {a['experiment']}")
+    for c in result["identifiability"]:
+        out.append(c["text"])
     for n in d.notes:
         out.append(f"note: {n}")
     out.append("")
@@ -437,7 +445,11 @@ def fit(
               "# in the compensated model (0 when not fitted). Uncertainties (1 sd):"]
     for n in names:
         for k, v in vals[n].items():
-            header.append(f"#   {n}.{k} = {v:.6g} +- {errs[n][k]:.2g}")
+            header.append(f"#   {n}.{k} = {v:.6g} {plus_minus(errs[n][k])}")
+    from ..calibration.identify import combinations
+
+    for c in combinations(res):
+        header.append(f"# {c.text()}")
     if robust or found:
         header.append(f"# {'Robust fit (soft_l1, scale ' + format(ROBUST_SCALE, 'g') + ' noise sd); ' if robust else ''}"
                       f"{len(found)} cells beyond the outlier limit ({OUTLIER_SIGMAS:g} noise sd).")
