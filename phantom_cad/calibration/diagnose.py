@@ -26,7 +26,7 @@ import numpy as np
 
 from ..kinematics.topology import Q_COLUMNS
 from .data import Measurements
-from .effects import REGISTRY, get_effect
+from .effects import MEASUREMENT, REGISTRY, get_effect
 from .identify import combinations
 from .residual import (MAE_PER_SIGMA, NoiseFloor, made_worse, measured_features, noise_floor, signature,
                        signature_report, verdict)
@@ -63,6 +63,12 @@ SEPARATING_EXPERIMENTS = {
         "error grows in proportion to u",
     frozenset({"joint_offset", "pulley_radius_error"}):
         "record the rest pose: an offset is there at u = 0, a radius error is not",
+    frozenset({"camera_scale", "tendon_elasticity"}):
+        "measure the other joints of the same chain: a scale error of one joint's measurement leaves the others "
+        "at the model, the tendon's elasticity bends every distal joint of the finger in the coupling's ratio",
+    frozenset({"camera_scale", "pulley_radius_error"}):
+        "measure the other joints of the same chain (the MCP above all): a scale error of one joint's "
+        "measurement leaves them at the model, a pulley radius error moves them all",
     frozenset({"friction_hysteresis", "tendon_slack"}):
         "reverse the direction in the middle of the travel: friction opens a loop at every reversal, slack "
         "only near the start",
@@ -163,6 +169,8 @@ class Diagnosis:
             eff = get_effect(name)
             effects[name] = {
                 "explanation": eff.explanation,
+                # the measurement's own error (never in the control law) or the hand's physics
+                "side": "measurement" if eff.stage == MEASUREMENT else "hand",
                 "parameters": {k: _value_json(v, errs[name][k]) for k, v in vals[name].items()},
             }
         v = self.verdict()
@@ -339,8 +347,17 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
         if not passing:
             break
         best = passing[0]
-        for other in passing[1:]:
-            if other.delta_ic - best.delta_ic < AMBIGUITY_IC:
+        # a measurement-side effect (a camera's scale) wins only by a clear margin over the hand's
+        # physics: on a tie the hand-side one is kept and the tie reported (with the recording
+        # that separates them), so a calibrated file does not drop a hand effect on a coin toss
+        if get_effect(best.effect).stage == MEASUREMENT:
+            hand_side = [c for c in passing if get_effect(c.effect).stage != MEASUREMENT]
+            if hand_side and hand_side[0].delta_ic - best.delta_ic < AMBIGUITY_IC:
+                best = hand_side[0]
+        for other in passing:
+            if other is best:
+                continue
+            if abs(other.delta_ic - best.delta_ic) < AMBIGUITY_IC:
                 ambiguities.append({
                     "round": len(rounds), "effects": [best.effect, other.effect],
                     "delta_ic": [round(best.delta_ic, 3), round(other.delta_ic, 3)],

@@ -32,7 +32,10 @@ from ..params.errors import ParamError
 from ..params.schema import register_effect_check, register_plugin_loader
 from ..units import DEG
 
-STAGES = ("servo", "reference", "tension", "joint")
+STAGES = ("servo", "reference", "tension", "joint", "measurement")
+#: the stage of effects that describe the measurement (a camera's scale), not the hand: fitted with
+#: the others, never applied by Hand.forward / Hand.inverse (the control law aims at true angles)
+MEASUREMENT = "measurement"
 
 #: servo of every joint (0-based), the CMC's is the direct-drive servo
 JOINT_SERVO = np.array([j.servo for j in JOINTS])
@@ -213,7 +216,9 @@ class Effect:
 
     ``stage`` is one of ``STAGES``; ``order`` sorts effects within a stage. ``explanation`` is the
     one-line physical reading of the residual the effect explains (printed in reports).
-    For the control law (``Hand.inverse``), servo- and joint-stage effects implement
+    A ``measurement``-stage effect describes the sensor, not the hand (a camera's scale error): it
+    is applied last, to what the measurement would read, and never by ``Hand.forward`` or the
+    control law. For the control law (``Hand.inverse``), servo- and joint-stage effects implement
     :meth:`invert` (reference- and tension-stage effects are inverted by the pipeline itself,
     tension-stage ones as a compliance per chain that does not depend on the pose); ``fit``
     refuses an effect without it and ``Hand.inverse`` raises on one (ParamError).
@@ -359,6 +364,30 @@ class TendonElasticity(Effect):
 
 
 @register_effect
+class TendonElasticityPerFinger(Effect):
+    name = "tendon_elasticity_per_finger"
+    stage = "tension"
+    order = 31
+    explanation = ("distal joints lag in proportion to flexion, the MCP does not, by a different amount on each "
+                   "finger: each tendon (or its return spring) has its own compliance (eq. 11-14 per finger)")
+    formula = "C_j = c_k l_j / R_j for chain k: the compliance ratio k_s / EA fitted per finger (5 values)"
+    signature = ("negative on PIP/DIP/IP, growing with flexion, zero on MCP/MP/CMC, its size different from "
+                 "finger to finger; no direction dependence")
+    reference = "the paper's mechanics-based compensation, eq. (11)-(14), one compliance per tendon"
+    leaves = Signature(direction="same", at_rest="zero", trend="grows", joints="distal", reversal="none")
+
+    def parameters(self, hand):
+        return [Param(f"{c.digit}_per_m", 0.0, 5.0, (0.07, 0.27), False, c.q_index[1:], True,
+                      f"k_s / EA of the {c.digit} tendon, 1/m") for c in CHAINS]
+
+    def apply(self, ctx, x):
+        # replaces the base k_s / EA (or tendon_elasticity's, which runs before) chain by chain
+        ctx.compliance += x - ctx.compliance_base
+        ctx.compliance_base = 0.0
+        ctx.compliance_ref = np.where(x > 0.0, x, ctx.compliance_ref)
+
+
+@register_effect
 class FrictionHysteresis(Effect):
     name = "friction_hysteresis"
     stage = "tension"
@@ -440,6 +469,27 @@ def play(u: np.ndarray, rows: np.ndarray, runs: Runs, half: float, y0: np.ndarra
 
 
 @register_effect
+class CameraScale(Effect):
+    name = "camera_scale"
+    stage = MEASUREMENT
+    order = 10
+    explanation = ("one joint's measured angle is a fixed multiple of the model's, in both directions and "
+                   "zero at rest: a scale error of the measurement (camera calibration, marker placement), "
+                   "not of the hand; never used by the control law")
+    formula = "q_measured,i = (1 + k_i) q_i"
+    signature = "proportional to the joint angle on one joint, zero at rest, independent of direction"
+    reference = "scale calibration of vision-based joint measurement (e.g. Hollerbach & Wampler 1996)"
+    leaves = Signature(direction="same", at_rest="zero", trend="grows", joints="any", reversal="none")
+
+    def parameters(self, hand):
+        return [Param(f"{j.label}_relative", -0.2, 0.2, (0.01, 0.04), True, (j.index,), True,
+                      f"scale error of the measurement of joint {j.label}, relative") for j in JOINTS]
+
+    def apply(self, ctx, x):
+        ctx.q *= 1.0 + x
+
+
+@register_effect
 class Backlash(Effect):
     name = "backlash"
     stage = "servo"
@@ -507,10 +557,11 @@ def run_pipeline(hand, items: Sequence[tuple[Effect, np.ndarray]], u, direction=
         if eff.stage == "tension":
             eff.apply(ctx, x)
     ctx.q = couple(hand, ctx.s, ctx.compliance)
-    if "joint" in stage_of:
-        for eff, x in items:
-            if eff.stage == "joint":
-                eff.apply(ctx, x)
+    for stage in ("joint", MEASUREMENT):
+        if stage in stage_of:
+            for eff, x in items:
+                if eff.stage == stage:
+                    eff.apply(ctx, x)
     return ctx.q
 
 
@@ -565,7 +616,9 @@ class EffectStack:
     ``compensated`` flag selects the spring/elasticity compensation, whose compliance is the fitted
     ``tendon_elasticity`` one when present (``fit`` always writes it, 0 when the data show none),
     else the [mechanics] k_s / EA. The direction of motion is unknown to ``Hand``: friction is left
-    out (the control law aims at the middle of the hysteresis band).
+    out (the control law aims at the middle of the hysteresis band). Measurement-stage effects (a
+    camera's scale) describe the data, not the hand: ``forward`` applies them only with
+    ``measured=True`` (to compare with measurements) and ``inverse`` never.
     """
 
     def __init__(self, params):
@@ -580,22 +633,23 @@ class EffectStack:
     def __bool__(self) -> bool:
         return bool(self.items)
 
-    def _items(self, compensated: bool):
-        if compensated:
-            return self.items
-        return [it for it in self.items if it[0].name != "tendon_elasticity"]
+    def _items(self, compensated: bool, measured: bool = False):
+        return [it for it in self.items if (compensated or it[0].name != "tendon_elasticity")
+                and (measured or it[0].stage != MEASUREMENT)]
 
     def _base(self, hand, compensated: bool) -> float:
         m = hand.params.mechanics
         return m.spring_k / m.tendon_EA if compensated else 0.0
 
-    def forward(self, hand, u, compensated: bool, direction=None, history: History | None = None) -> np.ndarray:
+    def forward(self, hand, u, compensated: bool, direction=None, history: History | None = None,
+                measured: bool = False) -> np.ndarray:
         """``direction`` and ``history`` (the recording ``u`` comes from, its rows in order) as in
-        :func:`run_pipeline`; without them friction and backlash are left out."""
+        :func:`run_pipeline`; without them friction and backlash are left out. ``measured``: what
+        the measurement reads (measurement-stage effects applied), not the hand's angles."""
         u = np.asarray(u, dtype=float)
         flat = u.reshape(-1, N_SERVOS)
         d = None if direction is None else np.broadcast_to(direction, u.shape).reshape(-1, N_SERVOS)
-        q = run_pipeline(hand, self._items(compensated), flat, d, self._base(hand, compensated), history)
+        q = run_pipeline(hand, self._items(compensated, measured), flat, d, self._base(hand, compensated), history)
         return q.reshape(u.shape[:-1] + (N_JOINTS,))
 
     def inverse(self, hand, q, compensated: bool) -> np.ndarray:
@@ -732,8 +786,8 @@ def unload_plugin(path) -> None:
 def has_invert(eff: Effect) -> bool:
     """Whether the control law can undo the effect: servo- and joint-stage effects must override
     :meth:`Effect.invert` (or declare ``invertible``); reference and tension stages are inverted by
-    the pipeline itself."""
-    if eff.stage in ("reference", "tension"):
+    the pipeline itself; a measurement-stage effect is never in the control law."""
+    if eff.stage in ("reference", "tension", MEASUREMENT):
         return True
     return bool(eff.invertible) or type(eff).invert is not Effect.invert
 

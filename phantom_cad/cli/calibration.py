@@ -155,7 +155,7 @@ def compare(
         else:
             q_after, label = None, None
     elif hand.effects:
-        q_after = hand.effects.forward(hand, m.u, True, m.direction, History.of(m))
+        q_after = hand.effects.forward(hand, m.u, True, m.direction, History.of(m), measured=True)
         label = "calibrated (" + " + ".join(hand.effects.names) + ")"
     else:
         q_after = hand.forward(m.u, compensated=True)
@@ -300,7 +300,9 @@ def diagnosis_text(d, result) -> list[str]:
         out.append("selected: nothing (no library effect passes)")
     for name in d.selected:
         eff = get_effect(name)
-        out.append(f"selected: {name}")
+        side = result["effects"][name]["side"]
+        out.append(f"selected: {name}" + (" (measurement side: an error of the data, not of the hand; the "
+                                          "control law never uses it)" if side == "measurement" else ""))
         out.append(f"  why: {eff.explanation}")
         for k, v in result["effects"][name]["parameters"].items():
             out.append(f"  {name}.{k} = {v['value']:.5g} " + (f"+- {v['std']:.2g}" if v["identifiable"]
@@ -446,8 +448,13 @@ def fit(
     for n in names:
         for k, v in vals[n].items():
             header.append(f"#   {n}.{k} = {v:.6g} {plus_minus(errs[n][k])}")
+    from ..calibration.effects import MEASUREMENT
     from ..calibration.identify import combinations
 
+    for n in names:
+        if get_effect(n).stage == MEASUREMENT:
+            header.append(f"# {n} describes the measurement, not the hand: Hand.forward and the control law "
+                          "never apply it (compare -p does).")
     for c in combinations(res):
         header.append(f"# {c.text()}")
     if robust or found:
@@ -457,7 +464,7 @@ def fit(
     # the written file must load and reproduce the fit: no written effect may override another
     written = load_hand(out)
     q_fit = res.model.predict_measurements(res.theta, m)
-    q_file = written.effects.forward(written, m.u, True, m.direction, History.of(m))
+    q_file = written.effects.forward(written, m.u, True, m.direction, History.of(m), measured=True)
     gap = float(np.nanmax(np.abs(q_file - q_fit)[np.isfinite(m.q)]))
     if gap > 1e-6:
         os.replace(out, str(out) + ".rejected")

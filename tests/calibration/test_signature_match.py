@@ -101,5 +101,9 @@ def test_per_finger_compliance_matches_tendon_elasticity(hand):
     sm = out["signature_match"]["before"]
     assert sm["measured"] == {"direction": "same", "at_rest": "zero", "trend": "grows", "joints": "distal",
                               "periodic": False, "reversal": "none"}
-    assert sm["effects_with_this_signature"] == ["tendon_elasticity"]
-    assert sm["best_candidate"] == "tendon_elasticity" and sm["mismatches"] == []
+    # the per-finger variant and a per-joint scale of the measurement leave the same features
+    assert sm["effects_with_this_signature"] == ["tendon_elasticity", "tendon_elasticity_per_finger",
+                                                 "camera_scale"]
+    # the per-finger compliance is the best candidate (5 parameters fit what 15 scales only approach)
+    assert sm["best_candidate"] == "tendon_elasticity_per_finger" and sm["mismatches"] == []
+    assert out["selected"] == ["tendon_elasticity_per_finger"] and out["explained"] is True
