@@ -114,11 +114,14 @@ class Diagnosis:
     robust: bool = False
 
     def outlier_cells(self) -> np.ndarray:
-        """Boolean over the final fit's cells: |residual| > OUTLIER_SIGMAS x the joint's noise sd."""
-        return outlier_cells(self.after, self.noise)
+        """Boolean over the final fit's cells: |residual| > OUTLIER_SIGMAS x the joint's noise sd
+        (computed once: the verdict and the outlier list both read it)."""
+        if getattr(self, "_outlier_cells", None) is None:
+            self._outlier_cells = outlier_cells(self.after, self.noise)
+        return self._outlier_cells
 
     def outliers(self) -> list[dict]:
-        return outliers(self.after, self.measurements, self.noise)
+        return outliers(self.after, self.measurements, self.noise, self.outlier_cells())
 
     def verdict(self) -> dict:
         """The verdict; with robust fits, over the cells that are not outliers."""
@@ -228,11 +231,12 @@ def outlier_cells(fr: FitResult, noise: NoiseFloor) -> np.ndarray:
     return np.abs(r) > OUTLIER_SIGMAS * np.nan_to_num(sig, nan=np.inf)
 
 
-def outliers(fr: FitResult, m: Measurements, noise: NoiseFloor) -> list[dict]:
-    """The outlier cells of a fit: sweep, row (0-based), file line, joint, residual (deg)."""
+def outliers(fr: FitResult, m: Measurements, noise: NoiseFloor, cells: np.ndarray | None = None) -> list[dict]:
+    """The outlier cells of a fit: sweep, row (0-based), file line, joint, residual (deg).
+    ``cells``: :func:`outlier_cells` when already computed."""
     p, r = fr.problem, fr.residual
     out = []
-    for k in np.flatnonzero(outlier_cells(fr, noise)):
+    for k in np.flatnonzero(outlier_cells(fr, noise) if cells is None else cells):
         row = int(p.rows[p.r_idx[k]])
         out.append({"sweep": m.sweep_ids[int(m.sweep[row])], "row": row, "line": int(m.lines[row]),
                     "joint": Q_COLUMNS[int(p.j_idx[k])], "residual_deg": round(float(r[k]), 4)})
