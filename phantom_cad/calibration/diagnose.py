@@ -13,7 +13,12 @@ the sweeps are cut into contiguous blocks assigned alternately to two folds, the
 on one fold and evaluated on the other, both ways; the candidate passes only if the held-out sum
 of squares falls below HELDOUT_RATIO times the model's without it (checked only for candidates
 with dIC < 0: the others fail already; their held-out ratio is None). The best passing candidate
-(lowest dIC) is added; the loop stops when none passes. Candidates whose dIC is within
+(lowest dIC) is added; the loop stops when none passes. The measurement's own errors
+(measurement-stage effects: ``camera_scale``) are a separate family, scored only when no effect of
+the hand passes any more, on what the hand's effects leave (then the backward step may drop hand
+effects they make redundant): a 15-parameter per-joint scale would otherwise absorb the hand's
+elasticity and radius errors, and the control law, which never applies it, would lose them.
+Candidates whose dIC is within
 AMBIGUITY_IC of the winner's are reported as indistinguishable on these data, with the experiment
 that separates them.
 """
@@ -317,8 +322,11 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
     if not ({1, -1} <= directions_seen):
         notes.append("the data move in one direction only: direction-dependent effects (friction) cannot be "
                      "told from direction-independent ones")
+    # the hand's physics first; the measurement's own errors (camera_scale) only on what it leaves
+    measurement = {n for n in names if get_effect(n).stage == MEASUREMENT}
+    family = "hand" if set(names) - measurement else "measurement"
     for _ in range(MAX_ROUNDS):
-        pool = [n for n in names if n not in current]
+        pool = [n for n in names if n not in current and (n in measurement) == (family == "measurement")]
         scored: list[Candidate] = []
         fits = []
         for n in pool:
@@ -329,6 +337,9 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
                 continue
             fits.append((n, model, fit(model, problem, model.start(base))))
         if not fits:
+            if family == "hand" and measurement:
+                family = "measurement"
+                continue
             rounds.append([])
             break
         # one effective sample size for the whole round: that of the best-fitting candidate's residuals
@@ -349,19 +360,13 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
         rounds.append(scored)
         passing = [c for c in scored if c.passes]
         if not passing:
+            if family == "hand" and measurement:
+                family = "measurement"
+                continue
             break
         best = passing[0]
-        # a measurement-side effect (a camera's scale) wins only by a clear margin over the hand's
-        # physics: on a tie the hand-side one is kept and the tie reported (with the recording
-        # that separates them), so a calibrated file does not drop a hand effect on a coin toss
-        if get_effect(best.effect).stage == MEASUREMENT:
-            hand_side = [c for c in passing if get_effect(c.effect).stage != MEASUREMENT]
-            if hand_side and hand_side[0].delta_ic - best.delta_ic < AMBIGUITY_IC:
-                best = hand_side[0]
-        for other in passing:
-            if other is best:
-                continue
-            if abs(other.delta_ic - best.delta_ic) < AMBIGUITY_IC:
+        for other in passing[1:]:
+            if other.delta_ic - best.delta_ic < AMBIGUITY_IC:
                 ambiguities.append({
                     "round": len(rounds), "effects": [best.effect, other.effect],
                     "delta_ic": [round(best.delta_ic, 3), round(other.delta_ic, 3)],
@@ -373,6 +378,10 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
         for name, dic in dropped:
             notes.append(f"{name} was dropped after {best.effect} was added: the model without it scores "
                          f"better (dIC {dic:+.1f}); what it explained is explained by the others")
+        base, simpler = _simplify(hand, problem, current, base, len(start))
+        for variant, parent, dic in simpler:
+            notes.append(f"{variant} was replaced by its simpler form {parent} after {best.effect} was added: "
+                         f"with the others in the model the extra parameters no longer pay (dIC {dic:+.1f})")
     before = fit(Model(hand, [], full), full)
     if problem is not full:
         model = Model(hand, current, full)
@@ -382,6 +391,26 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
                      f"MAE and parameters below are of that fit")
     return Diagnosis(m, before, base, current[len(start):], rounds, ambiguities, [n for n in notes if n],
                      noise_floor(m), hand)
+
+
+def _simplify(hand, problem, current: list[str], base: FitResult, keep: int):
+    """A selected variant (an effect with ``simpler``: the per-finger elasticity) is replaced by its
+    simpler form when that scores no worse with the model as it now is: a variant picked in an
+    early round may have been absorbing what an effect added later explains."""
+    done = []
+    for name in list(current[keep:]):
+        parent = getattr(get_effect(name), "simpler", None)
+        if not parent or parent in current:
+            continue
+        names = [parent if n == name else n for n in current]
+        model = Model(hand, names, problem)
+        res = fit(model, problem, model.start(base))
+        dic = delta_ic(base, res, max(base.n_eff, 2.0))      # IC(simpler) - IC(variant)
+        if dic <= 0:
+            current[current.index(name)] = parent
+            base = res
+            done.append((name, parent, float(dic)))
+    return base, done
 
 
 def _prune(hand, problem, current: list[str], base: FitResult, keep: int):

@@ -235,6 +235,9 @@ class Effect:
     leaves: Signature | None = None
     #: depends on the direction of motion (needs a sweep to be identified)
     directional: bool = False
+    #: the effect this one is a variant of (more parameters, same physics): diagnose prefers it
+    #: whenever the variant's extra parameters do not pay
+    simpler: str | None = None
 
     def parameters(self, hand) -> list[Param]:
         raise NotImplementedError
@@ -368,6 +371,7 @@ class TendonElasticityPerFinger(Effect):
     name = "tendon_elasticity_per_finger"
     stage = "tension"
     order = 31
+    simpler = "tendon_elasticity"
     explanation = ("distal joints lag in proportion to flexion, the MCP does not, by a different amount on each "
                    "finger: each tendon (or its return spring) has its own compliance (eq. 11-14 per finger)")
     formula = "C_j = c_k l_j / R_j for chain k: the compliance ratio k_s / EA fitted per finger (5 values)"

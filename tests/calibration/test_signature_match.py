@@ -16,7 +16,8 @@ from phantom_cad.cli.calibration import diagnosis_text
 from .test_noise_floor import OFFSETS, analytic, eccentric_data, measure, sweeps
 from .test_plugin import compliant
 
-LIBRARY = ("tendon_slack", "pulley_radius_error", "tendon_elasticity", "friction_hysteresis", "joint_offset")
+LIBRARY = ("tendon_slack", "pulley_radius_error", "tendon_elasticity", "tendon_elasticity_per_finger",
+           "friction_hysteresis", "joint_offset", "camera_scale", "backlash")
 PERIODIC = ("the residual is periodic in u with period 40 deg: no library effect predicts that; "
             "look at the servo horn / pulley eccentricity")
 
