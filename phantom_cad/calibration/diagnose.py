@@ -68,12 +68,6 @@ SEPARATING_EXPERIMENTS = {
         "error grows in proportion to u",
     frozenset({"joint_offset", "pulley_radius_error"}):
         "record the rest pose: an offset is there at u = 0, a radius error is not",
-    frozenset({"camera_scale", "tendon_elasticity"}):
-        "measure the other joints of the same chain: a scale error of one joint's measurement leaves the others "
-        "at the model, the tendon's elasticity bends every distal joint of the finger in the coupling's ratio",
-    frozenset({"camera_scale", "pulley_radius_error"}):
-        "measure the other joints of the same chain (the MCP above all): a scale error of one joint's "
-        "measurement leaves them at the model, a pulley radius error moves them all",
     frozenset({"friction_hysteresis", "tendon_slack"}):
         "reverse the direction in the middle of the travel: friction opens a loop at every reversal, slack "
         "only near the start",
