@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kinematics.topology import JOINTS, Q_COLUMNS, SERVOS
+from .data import motion_direction
 from .effects import JOINT_SERVO, History
 
 #: a combination is not identifiable when its scaled singular value is below 1 / KAPPA of the largest
@@ -150,8 +151,7 @@ def _experiment(fr, delta: np.ndarray, rms_data: float) -> dict | None:
                 u = np.zeros((ROWS, len(SERVOS)))
                 path = np.linspace(a * umax, b * umax, ROWS)
                 u[:, sv] = path if direction > 0 else path[::-1]
-                dirs = np.zeros_like(u)
-                dirs[:, sv] = direction
+                dirs = motion_direction(u)
                 hist = History(u, np.zeros(ROWS, dtype=int), dirs)
                 dq = (model.predict(hi_t, u, dirs, hist) - model.predict(lo_t, u, dirs, hist)) / step
                 dq = np.degrees(dq[:, cols])
