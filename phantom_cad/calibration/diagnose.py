@@ -35,7 +35,8 @@ from .effects import MEASUREMENT, REGISTRY, get_effect
 from .identify import combinations
 from .residual import (MAE_PER_SIGMA, NoiseFloor, made_worse, measured_features, noise_floor, signature,
                        signature_report, verdict)
-from .fitting import (FitResult, Model, Problem, fit, fit_streamed, folds, heldout_sse, robust_loss,
+from .parallel import FitPool
+from .fitting import (FitResult, Model, Problem, fit, fit_streamed, folds, robust_loss,
                       single_threaded_blas)
 
 #: a candidate must bring the held-out sum of squares below this fraction of the model's without it
@@ -275,23 +276,26 @@ def delta_ic(base: FitResult, cand: FitResult, n_eff: float) -> float:
     return float(n_eff * np.log(max(ratio, 1e-300)) + (cand.model.p - base.model.p) * np.log(n_eff))
 
 
-def diagnose(hand, m: Measurements, candidates=None, start=(), robust: bool = False) -> Diagnosis:
+def diagnose(hand, m: Measurements, candidates=None, start=(), robust: bool = False,
+             jobs: int | None = None) -> Diagnosis:
     """Forward selection of effects (module docstring). ``candidates`` default: the whole library.
+    ``jobs``: worker processes for the fits (default: the CPUs available; 1: all in this process;
+    the result is the same, calibration/parallel.py).
     ``robust``: every fit uses the soft_l1 loss with scale ROBUST_SCALE x the data's noise sd, and
     the scores use the same robust cost (so a few glitches neither bend a fit nor pass a candidate)."""
     with single_threaded_blas():
         if not robust:
-            return _diagnose(hand, m, candidates, start)
+            return _diagnose(hand, m, candidates, start, jobs)
         sigma = noise_floor(m).overall_deg / MAE_PER_SIGMA
         with robust_loss(ROBUST_SCALE * sigma):
-            d = _diagnose(hand, m, candidates, start)
+            d = _diagnose(hand, m, candidates, start, jobs)
         d.robust = True
         d.notes.append(f"robust fits: soft_l1 loss with scale {ROBUST_SCALE * sigma:.3f} deg ({ROBUST_SCALE:g} x the "
                        f"noise sd); outliers (beyond {OUTLIER_SIGMAS:g} noise sd) are left out of the verdict")
         return d
 
 
-def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
+def _diagnose(hand, m: Measurements, candidates, start, jobs: int | None) -> Diagnosis:
     names = list(REGISTRY) if candidates is None else list(candidates)
     for n in names:
         get_effect(n, "--effects")
@@ -299,16 +303,23 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
     step = -(-len(m) // SELECTION_ROWS)
     problem = full if step == 1 else full.subset(np.arange(0, len(m), step))
     parts = folds(problem)
+    with FitPool(hand, problem, parts, jobs) as pool:
+        return _select(hand, m, names, start, full, step, problem, pool)
+
+
+def _select(hand, m: Measurements, names, start, full: Problem, step: int, problem: Problem,
+            pool: FitPool) -> Diagnosis:
     notes: list[str] = []
     current = list(start)
     base = fit(Model(hand, current, problem), problem)
     heldout_cache: dict[tuple, float] = {}
 
-    def held(model: Model, previous):
-        key = model.names
-        if key not in heldout_cache:
-            heldout_cache[key] = heldout_sse(model, problem, parts, previous)
-        return heldout_cache[key]
+    def held(jobs: list[tuple[Model, FitResult]]) -> None:
+        """The held-out sums of squares of (model, the fit to start from), into heldout_cache."""
+        todo = {model.names: (model, model.start(start_from)) for model, start_from in jobs
+                if model.names not in heldout_cache}
+        for key, sse in zip(todo, pool.heldout(list(todo.values()))):
+            heldout_cache[key] = sse
 
     rounds: list[list[Candidate]] = []
     ambiguities: list[dict] = []
@@ -320,16 +331,18 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
     measurement = {n for n in names if get_effect(n).stage == MEASUREMENT}
     family = "hand" if set(names) - measurement else "measurement"
     for _ in range(MAX_ROUNDS):
-        pool = [n for n in names if n not in current and (n in measurement) == (family == "measurement")]
+        candidates = [n for n in names if n not in current and (n in measurement) == (family == "measurement")]
         scored: list[Candidate] = []
-        fits = []
-        for n in pool:
+        models = []
+        for n in candidates:
             model = Model(hand, current + [n], problem)
             if model.p == base.model.p:
                 if not rounds:
                     notes.append(f"{n}: no parameter is identifiable from these data (not scored)")
                 continue
-            fits.append((n, model, fit(model, problem, model.start(base))))
+            models.append((n, model))
+        results = pool.fits([(model, model.start(base)) for _, model in models])
+        fits = [(n, model, res) for (n, model), res in zip(models, results)]
         if not fits:
             if family == "hand" and measurement:
                 family = "measurement"
@@ -338,15 +351,18 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
             break
         # one effective sample size for the whole round: that of the best-fitting candidate's residuals
         n_eff = max(min(fits, key=lambda f: f[2].rss)[2].n_eff, 2.0)
-        base_held = None
-        for n, model, res in fits:
-            dic = delta_ic(base, res, n_eff)
+        dics = [delta_ic(base, res, n_eff) for _, _, res in fits]
+        # the held-out check only where it can decide: a candidate with dIC >= 0 fails already
+        # (each candidate starts from its own fit to all rows; the base from itself)
+        passing_ic = [(model, res) for (_, model, res), d in zip(fits, dics) if d < 0]
+        if passing_ic:
+            held([(base.model, base)] + passing_ic)
+        base_held = heldout_cache.get(base.model.names)
+        for (n, model, res), dic in zip(fits, dics):
             if dic < 0:
-                if base_held is None:
-                    base_held = held(base.model, base)
-                ratio_h = held(model, base) / base_held if base_held > 0 else 1.0
+                ratio_h = heldout_cache[model.names] / base_held if base_held > 0 else 1.0
             else:
-                ratio_h = float("nan")      # not run: a candidate with dIC >= 0 fails already
+                ratio_h = float("nan")      # not run
             passes = bool(dic < 0 and ratio_h < HELDOUT_RATIO)
             scored.append(Candidate(n, float(dic), res.rss / base.rss if base.rss > 0 else 1.0, float(ratio_h),
                                     passes, float(n_eff), model.p - base.model.p, mae(res), res))
@@ -368,11 +384,11 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
                 })
         current.append(best.effect)
         base = best.result
-        base, dropped = _prune(hand, problem, current, base, len(start))
+        base, dropped = _prune(hand, problem, current, base, len(start), pool)
         for name, dic in dropped:
             notes.append(f"{name} was dropped after {best.effect} was added: the model without it scores "
                          f"better (dIC {dic:+.1f}); what it explained is explained by the others")
-        base, simpler = _simplify(hand, problem, current, base, len(start))
+        base, simpler = _simplify(hand, problem, current, base, len(start), pool)
         for variant, parent, dic in simpler:
             notes.append(f"{variant} was replaced by its simpler form {parent} after {best.effect} was added: "
                          f"with the others in the model the extra parameters no longer pay (dIC {dic:+.1f})")
@@ -387,7 +403,7 @@ def _diagnose(hand, m: Measurements, candidates, start) -> Diagnosis:
                      noise_floor(m), hand)
 
 
-def _simplify(hand, problem, current: list[str], base: FitResult, keep: int):
+def _simplify(hand, problem, current: list[str], base: FitResult, keep: int, pool: FitPool):
     """A selected variant (an effect with ``simpler``: the per-finger elasticity) is replaced by its
     simpler form when that scores no worse with the model as it now is: a variant picked in an
     early round may have been absorbing what an effect added later explains."""
@@ -398,7 +414,7 @@ def _simplify(hand, problem, current: list[str], base: FitResult, keep: int):
             continue
         names = [parent if n == name else n for n in current]
         model = Model(hand, names, problem)
-        res = fit(model, problem, model.start(base))
+        res = pool.fit(model, model.start(base))
         dic = delta_ic(base, res, max(base.n_eff, 2.0))      # IC(simpler) - IC(variant)
         if dic <= 0:
             current[current.index(name)] = parent
@@ -407,16 +423,15 @@ def _simplify(hand, problem, current: list[str], base: FitResult, keep: int):
     return base, done
 
 
-def _prune(hand, problem, current: list[str], base: FitResult, keep: int):
+def _prune(hand, problem, current: list[str], base: FitResult, keep: int, pool: FitPool):
     """Backward step: drop a selected effect whose removal lowers the information criterion."""
     dropped = []
     while len(current) - keep > 1:
         trials = []
-        for name in current[keep:-1]:          # the effect just added stays
-            names = [n for n in current if n != name]
-            model = Model(hand, names, problem)
-            res = fit(model, problem, model.start(base))
-            n_eff = max(base.n_eff, 2.0)
+        removable = current[keep:-1]           # the effect just added stays
+        models = [Model(hand, [n for n in current if n != name], problem) for name in removable]
+        n_eff = max(base.n_eff, 2.0)
+        for name, res in zip(removable, pool.fits([(model, model.start(base)) for model in models])):
             dic = -delta_ic(res, base, n_eff)   # IC(without) - IC(with)
             trials.append((dic, name, res))
         dic, name, res = min(trials, key=lambda t: t[0])

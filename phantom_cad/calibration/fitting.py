@@ -16,7 +16,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from scipy import sparse
 from scipy.optimize import least_squares
 
 from ..units import DEG_PER_RAD
@@ -233,16 +232,63 @@ def _residual_fn(model: Model, problem: Problem):
     return fun
 
 
-def _sparsity(model: Model, problem: Problem):
-    cols = []
-    for _, _, p in model.free:
-        cols.append(np.isin(problem.j_idx, p.joints))
-    S = np.column_stack(cols) if cols else np.zeros((problem.m, 0), dtype=bool)
-    return sparse.csr_matrix(S.astype(np.int8))
+def _groups(model: Model) -> list[list[int]]:
+    """Free parameters in structurally orthogonal groups: no two in a group move a common joint,
+    so one forward difference gives every column of a group (Curtis-Powell-Reid)."""
+    groups: list[tuple[list[int], set[int]]] = []
+    for k, (_, _, par) in enumerate(model.free):
+        joints = set(par.joints)
+        for members, used in groups:
+            if not used & joints:
+                members.append(k)
+                used |= joints
+                break
+        else:
+            groups.append(([k], set(joints)))
+    return [members for members, _ in groups]
+
+
+def _forward_step(x, lo, hi) -> np.ndarray:
+    """scipy's "2-point" step: sqrt(eps) max(1, |x|) with the sign of x (+ at 0), turned back
+    where it would leave the bounds."""
+    h = np.sqrt(np.finfo(float).eps) * np.where(x >= 0, 1.0, -1.0) * np.maximum(1.0, np.abs(x))
+    return np.where((x + h > hi) | (x + h < lo), -h, h)
+
+
+def _grouped_jacobian(model: Model, problem: Problem, fun):
+    """(fun, jac) for least_squares: a dense forward-difference Jacobian, one evaluation per group
+    of :func:`_groups` (a dozen groups for forty parameters); the residual at x is the one
+    least_squares has just evaluated there, remembered, not computed again."""
+    groups = _groups(model)
+    cells = [np.isin(problem.j_idx, model.free[k][2].joints) for k in range(model.p)]
+    last: dict = {}
+
+    def f(x):
+        r = fun(x)
+        last["x"], last["r"] = x.copy(), r
+        return r
+
+    def jac(x):
+        r0 = last["r"] if "x" in last and np.array_equal(last["x"], x) else fun(x)
+        h = _forward_step(x, model.lower, model.upper)
+        J = np.zeros((problem.m, model.p))
+        for members in groups:
+            step = np.zeros(model.p)
+            step[members] = h[members]
+            diff = fun(x + step) - r0
+            for k in members:
+                J[cells[k], k] = diff[cells[k]] / h[k]
+        return J
+    return f, jac
 
 
 def fit(model: Model, problem: Problem, x0=None, uncertainty: bool = True) -> FitResult:
-    """Least-squares fit of the model's free parameters (trust region reflective, physical bounds)."""
+    """Least-squares fit of the model's free parameters (trust region reflective, physical bounds).
+
+    The Jacobian is scipy's forward difference taken for a group of parameters that share no
+    joint at a time (:func:`_grouped_jacobian`) and kept dense, so the trust-region steps are
+    exact (an SVD of the m x p Jacobian, p <= ~40). scipy's own sparse path (jac_sparsity, lsmr)
+    spent more in building sparse matrices than in the model (docs/performance.md)."""
     fun = _residual_fn(model, problem)
     if model.p == 0:
         r = fun(np.zeros(0))
@@ -251,21 +297,16 @@ def fit(model: Model, problem: Problem, x0=None, uncertainty: bool = True) -> Fi
     width = model.upper - model.lower
     eps = 1e-9 * width
     x0 = np.minimum(np.maximum(x0, model.lower + eps), model.upper - eps)
-    S = _sparsity(model, problem)
-    dense = S.nnz > 0.5 * S.shape[0] * S.shape[1] or model.p <= 2
-    kw = dict(jac="2-point", bounds=(model.lower, model.upper), method="trf", x_scale="jac",
+    f, jac = _grouped_jacobian(model, problem, fun)
+    kw = dict(jac=jac, bounds=(model.lower, model.upper), method="trf", x_scale="jac", tr_solver="exact",
               xtol=1e-10, ftol=1e-10, gtol=1e-10, max_nfev=200)
     if _LOSS["loss"] != "linear":
         kw.update(loss=_LOSS["loss"], f_scale=_LOSS["f_scale"])
-    if not dense:
-        kw["jac_sparsity"] = S
-        kw["tr_solver"] = "lsmr"
-    res = least_squares(fun, x0, **kw)
+    res = least_squares(f, x0, **kw)
     r = res.fun
     if uncertainty:
-        # J^T J through scipy.sparse (no BLAS call: multithreaded BLAS wake-up costs more than the product)
-        J = sparse.csr_matrix(res.jac)
-        return _result(model, problem, res.x, r, (J.T @ J).toarray())
+        J = np.asarray(res.jac)
+        return _result(model, problem, res.x, r, J.T @ J)
     return FitResult(model, res.x, np.full(model.p, np.nan), r, problem)
 
 
@@ -287,25 +328,15 @@ def fit_streamed(model: Model, problem: Problem, x0=None, max_iter: int = 50) ->
     the normal equations, J^T J and J^T r summed over blocks of PREDICT_ROWS rows, so that no
     m x p Jacobian is ever held (scipy's least_squares holds several: about 600 MB for 2.5 M cells).
 
-    The Jacobian is the same forward difference as ``least_squares(jac="2-point")`` (step
-    sqrt(eps) max(1, |x|), turned back at an upper bound), taken for groups of parameters whose
-    joints do not overlap at once. A step that leaves the bounds is clipped to them; the fit stops
+    The Jacobian is the forward difference of :func:`fit` (:func:`_forward_step`, one evaluation
+    per group of :func:`_groups`). A step that leaves the bounds is clipped to them; the fit stops
     when the linearized model promises a decrease of the sum of squares below 1e-10 of it."""
     if model.p == 0:
         return fit(model, problem, x0)
     lo, hi = model.lower, model.upper
     theta = model.start() if x0 is None else np.clip(x0, lo, hi)
     chunks = _chunks(problem)
-    groups: list[tuple[list[int], set[int]]] = []     # structurally orthogonal columns
-    for k, (_, _, par) in enumerate(model.free):
-        joints = set(par.joints)
-        for members, used in groups:
-            if not used & joints:
-                members.append(k)
-                used |= joints
-                break
-        else:
-            groups.append(([k], set(joints)))
+    groups = _groups(model)
     joint_of = [np.array(sorted(par.joints)) for _, _, par in model.free]
 
     def sse(x) -> float:
@@ -313,14 +344,13 @@ def fit_streamed(model: Model, problem: Problem, x0=None, max_iter: int = 50) ->
 
     def normal_equations(x):
         """J^T J, J^T r and r at x."""
-        h = np.sqrt(np.finfo(float).eps) * np.maximum(1.0, np.abs(x))
-        h = np.where(x + h > hi, -h, h)
+        h = _forward_step(x, lo, hi)
         JTJ, g, r = np.zeros((model.p, model.p)), np.zeros(model.p), np.empty(problem.m)
         for a, b, ca, cb in chunks:
             r0 = r[ca:cb] = _chunk_residual(model, problem, x, a, b, ca, cb)
             j = problem.j_idx[ca:cb]
             J = np.zeros((r0.size, model.p))
-            for members, _ in groups:
+            for members in groups:
                 step = np.zeros(model.p)
                 step[members] = h[members]
                 diff = _chunk_residual(model, problem, x + step, a, b, ca, cb) - r0
@@ -385,13 +415,14 @@ def folds(problem: Problem, blocks: int = 6) -> list[np.ndarray]:
     return [np.flatnonzero(fold == 0), np.flatnonzero(fold == 1)]
 
 
+def heldout_fold(model: Model, train: Problem, test: Problem, x0) -> float:
+    """Sum of squared residuals (deg^2, or the robust cost) on ``test`` of ``model`` fitted on
+    ``train`` from ``x0``."""
+    fr = fit(model, train, x0, uncertainty=False)
+    return cost(_residual_fn(model, test)(fr.theta))
+
+
 def heldout_sse(model: Model, problem: Problem, parts, previous=None) -> float:
     """Sum of squared residuals (deg^2) on each fold of a model fitted on the other fold."""
-    sse = 0.0
-    for k in range(2):
-        train, test = problem.subset(parts[1 - k]), problem.subset(parts[k])
-        fr = fit(model, train, model.start(previous), uncertainty=False)
-        fun = _residual_fn(model, test)
-        r = fun(fr.theta)
-        sse += cost(r)
-    return sse
+    return sum(heldout_fold(model, problem.subset(parts[1 - k]), problem.subset(parts[k]), model.start(previous))
+               for k in range(2))

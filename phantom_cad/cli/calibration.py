@@ -234,6 +234,9 @@ def diagnose(
     robust: bool = RobustOpt,
     degrees: bool = DegreesOpt,
     plugin: Optional[List[Path]] = PluginOpt,
+    jobs: Optional[int] = typer.Option(None, "--jobs", "-j", min=1,
+                                       help="Worker processes for the candidate fits (default: the CPUs available; "
+                                            "the result does not depend on it)."),
 ):
     """Which effect is missing? Score every effect of the library, add the ones the held-out data confirm."""
     from .. import load_hand
@@ -245,7 +248,7 @@ def diagnose(
     hand = load_hand(params)
     m = read_measurements(data, degrees=degrees).require_joints()
     names = _effect_names(candidates, "--candidates") if candidates else None
-    d = run(hand, m, names, robust=robust)
+    d = run(hand, m, names, robust=robust, jobs=jobs)
     result = d.to_json()
     text = diagnosis_text(d, result)
     typer.echo("\n".join(text))

@@ -48,6 +48,7 @@ from ..canon import canonical, plain, sha256
 from ..kinematics import routing
 from ..params import ParamError, load_document, parse
 from ..params.io import DEFAULT_PARAMS
+from .. import workers
 from . import cache as cache_mod
 from . import interface, pool as pool_mod
 from .bom import bom_csv
@@ -121,8 +122,8 @@ class _Build:
 
     def get_pool(self) -> ProcessPoolExecutor:
         if self.pool is None:
-            self.pool = ProcessPoolExecutor(max_workers=self.jobs, mp_context=pool_mod.mp_context(),
-                                            initializer=pool_mod.die_with_parent, initargs=(os.getpid(),))
+            self.pool = ProcessPoolExecutor(max_workers=self.jobs, mp_context=workers.mp_context(),
+                                            initializer=workers.die_with_parent, initargs=(os.getpid(),))
         return self.pool
 
     def close(self) -> None:

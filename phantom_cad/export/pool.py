@@ -10,10 +10,7 @@ build123d/OCP are imported inside the workers.
 from __future__ import annotations
 
 import json
-import multiprocessing
-import os
 import shutil
-import sys
 import time
 import traceback
 from pathlib import Path
@@ -36,31 +33,6 @@ VIEW_ANGULAR_TOLERANCE_RAD = 0.35
 STEP_VOLUME_RTOL = 1e-3
 #: STL volume vs solid volume (tessellation removes material on convex faces)
 STL_VOLUME_RTOL = 1e-2
-
-
-def mp_context():
-    """fork when this process has not loaded OCP yet (fast: the CLI's case); spawn once OCP
-    is loaded (its thread pools make a forked child deadlock) or where fork is missing."""
-    methods = multiprocessing.get_all_start_methods()
-    ocp_loaded = any(m == "OCP" or m.startswith("OCP.") for m in sys.modules)
-    return multiprocessing.get_context("fork" if "fork" in methods and not ocp_loaded else "spawn")
-
-
-def die_with_parent(parent_pid: int, interval_s: float = 0.5) -> None:
-    """Pool initializer: the worker exits as soon as the build that started it is gone (killed,
-    crashed), instead of living on as an orphan holding hundreds of MB. A daemon thread polls the
-    parent's pid (a reparented worker sees another one); no signal tied to the starting thread."""
-    import threading
-
-    def watch():
-        while True:
-            if os.getppid() != parent_pid:
-                os._exit(1)
-            time.sleep(interval_s)
-
-    if os.getppid() != parent_pid:
-        os._exit(1)
-    threading.Thread(target=watch, name="die-with-parent", daemon=True).start()
 
 
 def _bbox(v: np.ndarray) -> dict:

@@ -1,0 +1,53 @@
+"""Worker processes: the start method, and a worker that dies with the process that started it.
+
+Used by the parts build (export/pipeline.py) and by `diagnose`'s candidate fits
+(calibration/parallel.py). Pure standard library: every layer may import it.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import sys
+import time
+
+
+def mp_context():
+    """fork when this process has not loaded OCP yet (fast: the CLI's case); spawn once OCP
+    is loaded (its thread pools make a forked child deadlock) or where fork is missing."""
+    methods = multiprocessing.get_all_start_methods()
+    ocp_loaded = any(m == "OCP" or m.startswith("OCP.") for m in sys.modules)
+    return multiprocessing.get_context("fork" if "fork" in methods and not ocp_loaded else "spawn")
+
+
+def fork_context():
+    """The fork context, or None where fork is missing (workers that inherit their parent's state
+    and never call OCP may fork even after OCP is loaded: they take none of its locks)."""
+    if "fork" not in multiprocessing.get_all_start_methods():
+        return None
+    return multiprocessing.get_context("fork")
+
+
+def available_cpus() -> int:
+    """The CPUs this process may run on (its affinity), at least 1."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:      # not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def die_with_parent(parent_pid: int, interval_s: float = 0.5) -> None:
+    """Pool initializer: the worker exits as soon as the process that started it is gone (killed,
+    crashed), instead of living on as an orphan holding hundreds of MB. A daemon thread polls the
+    parent's pid (a reparented worker sees another one); no signal tied to the starting thread."""
+    import threading
+
+    def watch():
+        while True:
+            if os.getppid() != parent_pid:
+                os._exit(1)
+            time.sleep(interval_s)
+
+    if os.getppid() != parent_pid:
+        os._exit(1)
+    threading.Thread(target=watch, name="die-with-parent", daemon=True).start()
