@@ -51,6 +51,8 @@ SELECTION_ROWS = 20_000
 ROBUST_SCALE = 3.0
 #: a measured cell whose final residual is beyond this many of its joint's noise sd is an outlier
 OUTLIER_SIGMAS = 5.0
+#: an outlier stands out from the median of this many neighbouring samples on each side (an isolated glitch)
+OUTLIER_NEIGHBOURS = 2
 #: outliers listed at most (the count is always given)
 MAX_OUTLIERS = 100
 
@@ -225,10 +227,34 @@ def _value_json(value: float, std: float) -> dict:
 
 
 def outlier_cells(fr: FitResult, noise: NoiseFloor) -> np.ndarray:
-    """Boolean over a fit's cells: |residual| > OUTLIER_SIGMAS x the joint's noise sd."""
+    """Boolean over a fit's cells: an isolated glitch, |residual| > OUTLIER_SIGMAS x the joint's
+    noise sd **and** as far from the residual's local level (the median of the same joint's
+    residual on the OUTLIER_NEIGHBOURS rows either side in the same sweep). A residual the model
+    leaves over a stretch of the sweep (structure: an effect that is missing) is not an outlier: it
+    is what the verdict and the signature are about, and a robust verdict must not drop it."""
     p, r = fr.problem, fr.residual
     sig = np.array([noise.sigma_deg.get(c, np.nan) for c in Q_COLUMNS])[p.j_idx]
-    return np.abs(r) > OUTLIER_SIGMAS * np.nan_to_num(sig, nan=np.inf)
+    limit = OUTLIER_SIGMAS * np.nan_to_num(sig, nan=np.inf)
+    return (np.abs(r) > limit) & (np.abs(r - _local_level(p, r)) > limit)
+
+
+def _local_level(p: Problem, r: np.ndarray, k: int = OUTLIER_NEIGHBOURS) -> np.ndarray:
+    """Per cell: the median of its joint's residuals on the k measured rows before and after it in
+    its sweep (itself left out); the cell's own residual where it has no neighbour."""
+    level = r.copy()
+    for j in np.unique(p.j_idx):
+        cells = np.flatnonzero(p.j_idx == j)            # row order (cells are row-major)
+        e, sw = r[cells], p.sweep[p.r_idx[cells]]
+        n = cells.size
+        window = np.full((n, 2 * k), np.nan)
+        for col, shift in enumerate([*range(-k, 0), *range(1, k + 1)]):
+            src = np.arange(n) + shift
+            ok = (src >= 0) & (src < n)
+            ok[ok] &= sw[src[ok]] == sw[ok]
+            window[ok, col] = e[src[ok]]
+        has = np.isfinite(window).any(axis=1)
+        level[cells[has]] = np.nanmedian(window[has], axis=1)
+    return level
 
 
 def outliers(fr: FitResult, m: Measurements, noise: NoiseFloor, cells: np.ndarray | None = None) -> list[dict]:

@@ -382,9 +382,9 @@ def fit(
 ):
     """Fit effect parameters and write a parameter file whose model (forward / inverse) uses them.
 
-    The fit starts from the analytic model; the written file is the input file with its [effects]
+    The fit starts from the analytic model; the written file is the input file with its `effects` tables
     replaced by the fitted ones (tendon_elasticity written as 0 when not fitted: it replaces the
-    [mechanics] k_s/EA of the compensated model and nothing else) and its ``plugins`` extended by
+    k_s/EA (mechanics) of the compensated model and nothing else) and its ``plugins`` extended by
     the --plugin files (relative to the written file). Refused: an effect the control law cannot
     invert. The written file is loaded back and must reproduce the fit's prediction."""
     import os

@@ -204,3 +204,19 @@ def test_robust_fit_lists_the_glitches_and_is_not_bent_by_them(hand):
     err_rb = max(abs(fitted[f"q{j + 1}_deg"]["value"] - OFFSETS.get(j, 0.0)) for _, j, _ in GLITCHES)
     assert err_rb < 0.5 * err_ls
     assert plain["outliers_count"] == 6 and plain["explained"] is False
+
+
+def test_structure_left_is_not_an_outlier_a_glitch_on_it_is(hand):
+    """The eccentricity residual (1.5 deg, period 40 deg) stays beyond 5 noise sd over whole
+    stretches of the sweep: that is structure for the verdict, not a list of outliers, and a robust
+    verdict must not drop it. Two glitches written on top of it are still found, and only they."""
+    m = eccentric_data(hand)
+    plain = diagnose(hand, m).to_json()
+    assert plain["explained"] is False and plain["outliers"] == []
+    glitches = [(120, 3, 6.0), (300, 9, -6.0)]         # q4 (index), q10 (ring): on the structure
+    for row, j, g in glitches:
+        assert np.isfinite(m.q[row, j])
+        m.q[row, j] += np.radians(g)
+    out = diagnose(hand, m, robust=True).to_json()
+    assert {(o["row"], o["joint"]) for o in out["outliers"]} == {(r, f"q{j + 1}") for r, j, _ in glitches}
+    assert out["explained"] is False
