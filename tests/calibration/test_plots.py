@@ -128,3 +128,18 @@ def test_one_direction_data_say_so_on_the_hysteresis_plot(hand, tmp_path):
     notes = by_gid(fig, "one_direction")
     assert len(notes) == 15 and {n.axes for n in notes} == set(panels)
     assert "one direction only" in fig._suptitle.get_text()
+
+
+def test_one_joints_structure_is_inside_the_range(hand, tmp_path):
+    """A 2 deg sinusoid left on q4 alone (the others: 0.1 deg noise) is the picture's subject: the
+    shared range holds all of it, nothing is drawn as clipped. (Pooled over all joints, the Tukey
+    fences of the noise clipped it at about +-1 deg: 45 points per panel on the edge.)"""
+    m, q_true = noisy(hand, seed=3)
+    q_model = q_true.copy()
+    wave = 2.0 * np.sin(2 * np.pi * np.degrees(m.u[:, 1]) / 40.0)
+    q_model[:, 3] -= np.radians(wave)
+    fig = plot_residuals(tmp_path / "r.png", m, q_model, "t")
+    r = (m.q - q_model) * 180 / math.pi
+    lo, hi = fig.axes[0].get_ylim()
+    assert np.nanmax(r[:, 3]) > 1.9 and lo <= np.nanmin(r) and hi >= np.nanmax(r)
+    assert by_gid(fig, "clipped") == []
