@@ -384,9 +384,9 @@ def _summary(per: dict) -> dict:
     if periodic:
         ps = np.array(list(periodic.values()))
         out["periodic"] = {"period_deg": round(float(np.median(ps)), 2), "joints": sorted(periodic, key=Q_COLUMNS.index)}
+        # whether an effect predicts it is the match's to say (signature_report knows the registry)
         sentences.append(f"the residual is periodic in u with period {np.median(ps):.0f} deg on "
-                         f"{', '.join(out['periodic']['joints'])}: no library effect predicts that; look at the "
-                         "servo horn / pulley eccentricity")
+                         f"{', '.join(out['periodic']['joints'])}: look at the servo horn / pulley eccentricity")
     flip = {c: v for c, v in per.items() if "direction_flipping_rms_deg" in v}
     if flip:
         odd = float(np.sqrt(np.mean([v["direction_flipping_rms_deg"] ** 2 for v in flip.values()])))

@@ -443,7 +443,9 @@ def fit(
         doc["plugins"] = [os.path.relpath(f, here) for f in files]
     else:
         doc.pop("plugins", None)
-    header = [f"{FIT_MARKER} {one_line(data)} --effects {','.join(names)}{' --robust' if robust else ''}`",
+    command = (f"{one_line(data)} --effects {','.join(names)}" + (" --robust" if robust else "")
+               + "".join(f" --plugin {one_line(p)}" for p in plugin or []))
+    header = [f"{FIT_MARKER} {command}`",
               f"# from {one_line(hand.params.source)} (digest {hand.params.digest[:12]}), {len(m)} rows.",
               f"# MAE {mae(before):.4f} deg (analytic) -> {mae(res):.4f} deg (with the effects).",
               "# Fitted on the analytic model; [effects.tendon_elasticity] compliance_per_m replaces k_s/EA",
