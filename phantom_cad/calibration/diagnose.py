@@ -36,7 +36,7 @@ from .identify import combinations
 from .residual import (MAE_PER_SIGMA, NoiseFloor, made_worse, measured_features, noise_floor, signature,
                        signature_report, verdict)
 from .parallel import FitPool
-from .fitting import (FitResult, Model, Problem, fit, fit_streamed, folds, robust_loss,
+from .fitting import (FitResult, Model, Problem, fit, fit_streamed, folds, robust_active, robust_loss,
                       single_threaded_blas)
 
 #: a candidate must bring the held-out sum of squares below this fraction of the model's without it
@@ -286,11 +286,12 @@ def mae(fr: FitResult) -> float:
     return float(np.mean(np.abs(fr.residual))) if fr.m else float("nan")
 
 
-def mae_per_joint(fr: FitResult) -> dict[str, float]:
+def mae_per_joint(fr: FitResult, keep: np.ndarray | None = None) -> dict[str, float]:
+    """{joint: MAE (deg)} over the fit's cells (those of ``keep``, a boolean over them, if given)."""
     p = fr.problem
     out = {}
     for j, c in enumerate(Q_COLUMNS):
-        sel = p.j_idx == j
+        sel = p.j_idx == j if keep is None else (p.j_idx == j) & keep
         if sel.any():
             out[c] = float(np.mean(np.abs(fr.residual[sel])))
     return out
@@ -337,7 +338,7 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
             pool: FitPool) -> Diagnosis:
     notes: list[str] = []
     current = list(start)
-    base = fit(Model(hand, current, problem), problem)
+    base = pool.fit(Model(hand, current, problem))
     heldout_cache: dict[tuple, float] = {}
 
     def held(jobs: list[tuple[Model, FitResult]]) -> None:
@@ -418,6 +419,11 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
         for variant, parent, dic in simpler:
             notes.append(f"{variant} was replaced by its simpler form {parent} after {best.effect} was added: "
                          f"with the others in the model the extra parameters no longer pay (dIC {dic:+.1f})")
+    noise = noise_floor(m)
+    base, worse = _made_worse(hand, problem, current, base, len(start), pool, noise)
+    for name, joints in worse:
+        notes.append(f"{name} was dropped at the end: with it, {joints} fit worse than without it, beyond what "
+                     f"noise explains; a selected effect must not make any joint worse")
     before = fit(Model(hand, [], full), full)
     if problem is not full:
         model = Model(hand, current, full)
@@ -426,7 +432,7 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
                      f"the ranking above is theirs); the selected effects were then fitted on all rows, and the "
                      f"MAE and parameters below are of that fit")
     return Diagnosis(m, before, base, current[len(start):], rounds, ambiguities, [n for n in notes if n],
-                     noise_floor(m), hand)
+                     noise, hand)
 
 
 def _simplify(hand, problem, current: list[str], base: FitResult, keep: int, pool: FitPool):
@@ -447,6 +453,52 @@ def _simplify(hand, problem, current: list[str], base: FitResult, keep: int, poo
             base = res
             done.append((name, parent, float(dic)))
     return base, done
+
+
+def _made_worse(hand, problem: Problem, current: list[str], base: FitResult, keep: int, pool: FitPool,
+                noise: NoiseFloor):
+    """The last check of the selection: every selected effect must explain its share without making
+    a joint worse beyond noise (residual.made_worse: the joint's MAE with it exceeds that without it
+    by more than SMALL_SAMPLE x its noise floor / sqrt(cells)) on a joint that one of its parameters
+    moves together with others (a trade between joints). The model without each selected
+    effect is, for all but the last added, a fit the selection already made (FitPool.fitted); with
+    robust fits the cells either fit finds to be outliers are left out of the comparison; an
+    effect that fails is dropped (the worst first, by its largest rise in noise floors) and the
+    check runs again on what is left. Returns the final fit and [(effect, "q3 (0.081 -> 0.094 deg),
+    ...")]."""
+    dropped = []
+    cells = {Q_COLUMNS[j]: int(n) for j, n in zip(*np.unique(problem.j_idx, return_counts=True))}
+
+    def shared(name) -> set[str]:
+        """The joints one of the effect's parameters moves together with another joint: only there
+        can it trade one joint's fit for another's. A parameter of one joint alone (an offset, a
+        camera scale) fits that joint by least squares; a rise of its MAE there is the pull of
+        outliers (listed, and what --robust is for), not a trade."""
+        return {Q_COLUMNS[j] for p in get_effect(name).parameters(hand) if len(p.joints) > 1 for j in p.joints}
+    while len(current) > keep:
+        names = current[keep:]
+        models = [Model(hand, [n for n in current if n != name], problem) for name in names]
+        todo = [m for m in models if m.names not in pool.fitted]
+        pool.fits([(m, m.start(base)) for m in todo])
+        failing = []
+        for name, model in zip(names, models):
+            res = pool.fitted[model.names]
+            # robust fits: judged without the glitches of either fit, as the verdict is
+            judged = ~(outlier_cells(base, noise) | outlier_cells(res, noise)) if robust_active() else None
+            with_it, without = mae_per_joint(base, judged), mae_per_joint(res, judged)
+            bad = [c for c in made_worse(without, with_it, noise.floor_deg, cells) if c in shared(name)]
+            if bad:
+                floor = {c: noise.floor_deg.get(c) or 1.0 for c in bad}
+                rise = max((with_it[c] - without[c]) / floor[c] for c in bad)
+                text = ", ".join(f"{c} ({without[c]:.3f} -> {with_it[c]:.3f} deg)" for c in bad)
+                failing.append((rise, name, res, text))
+        if not failing:
+            break
+        _, name, res, text = max(failing, key=lambda f: f[0])
+        current.remove(name)
+        base = res
+        dropped.append((name, text))
+    return base, dropped
 
 
 def _prune(hand, problem, current: list[str], base: FitResult, keep: int, pool: FitPool):

@@ -43,6 +43,11 @@ def robust_loss(f_scale_deg: float):
         _LOSS.update(old)
 
 
+def robust_active() -> bool:
+    """True inside robust_loss()."""
+    return _LOSS["loss"] != "linear"
+
+
 def cost(r: np.ndarray) -> float:
     """Sum of squares, or the robust cost inside robust_loss()."""
     if _LOSS["loss"] == "linear":

@@ -61,6 +61,8 @@ class FitPool:
                                                  "fold1": problem.subset(parts[1])}}
         self.jobs = available_cpus() if jobs is None else max(1, int(jobs))
         self.executor: ProcessPoolExecutor | None = None
+        #: every fit made, by its effect names (the first of a model, whatever its start)
+        self.fitted: dict[tuple, FitResult] = {}
         ctx = fork_context()
         if ctx is not None and self.jobs > 1:
             _STATE.clear()
@@ -89,8 +91,11 @@ class FitPool:
     def fits(self, jobs: list[tuple[Model, np.ndarray | None]]) -> list[FitResult]:
         """fit(model, problem, x0) of each (model, x0), models on this pool's problem."""
         tasks = [("fit", model.names, None, x0, True) for model, x0 in jobs]
-        return [FitResult(model, theta, std, residual, self.problem, jtj=jtj)
-                for (model, _), (theta, std, residual, jtj) in zip(jobs, self._map(tasks))]
+        out = [FitResult(model, theta, std, residual, self.problem, jtj=jtj)
+               for (model, _), (theta, std, residual, jtj) in zip(jobs, self._map(tasks))]
+        for res in out:
+            self.fitted.setdefault(res.model.names, res)
+        return out
 
     def fit(self, model: Model, x0=None) -> FitResult:
         return self.fits([(model, x0)])[0]

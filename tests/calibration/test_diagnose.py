@@ -166,3 +166,32 @@ def test_effective_size_known_answer(hand):
     e2 = np.array([1.0, 2.0, 1.0, 0.5, 3.0, 4.0])
     rho2 = (2.0 + 1.0 + 3.0) / float(e2 @ e2)
     assert effective_size(p, e2) == pytest.approx(6 * (1 - rho2) / (1 + rho2))
+
+
+# -- a selected effect must not make a joint worse -----------------------------------------------
+
+def test_an_effect_that_makes_joints_worse_is_dropped(hand, monkeypatch):
+    """Issue 11, "honest selection": the index tendon alone is compliant (k_s/EA 0.6 1/m, eq. 13
+    written out in test_plugin.compliant); offered only a compliance for the whole hand, the fit
+    bends every other finger's PIP/DIP by 0.3-1.4 deg to halve the index's error. That passes dIC and
+    the held-out check, but it makes seven joints worse beyond noise, so it is dropped with the
+    joints named, and the verdict says what is left. With the per-finger variant offered (the whole
+    library) the index's compliance is found and no joint is made worse."""
+    from .test_noise_floor import measure, sweeps
+    from . import test_plugin
+
+    for digit in test_plugin.HIDDEN:
+        monkeypatch.setitem(test_plugin.HIDDEN, digit, 0.6 if digit == "index" else 0.0)
+    u, sweep, cj = sweeps(hand)
+    m = measure(hand, u, sweep, cj, test_plugin.compliant(hand, u), seed=4)
+    d = diagnose(hand, m, candidates=["tendon_elasticity", "joint_offset"])
+    out = d.to_json()
+    assert d.selected == [] and out["explained"] is False and out["made_worse"] == []
+    note = next(n for n in d.notes if n.startswith("tendon_elasticity was dropped at the end"))
+    for joint in ("q6", "q7", "q9", "q10", "q12", "q13"):          # middle, ring, pinky PIP and DIP
+        assert f"{joint} (" in note
+    assert "q3 (" not in note and "q4 (" not in note                  # the index's own joints improved
+    assert set(out["left"]) == {"q3", "q4"}
+    full = diagnose(hand, m).to_json()
+    assert full["selected"][0] == "tendon_elasticity_per_finger" and full["made_worse"] == []
+    assert full["explained"] is True
