@@ -395,7 +395,8 @@ class TendonElasticityPerFinger(Effect):
 class FrictionHysteresis(Effect):
     name = "friction_hysteresis"
     stage = "tension"
-    order = 31
+    #: after both elasticity effects: the capstan term stretches the tendon whose compliance they set
+    order = 35
     directional = True
     explanation = ("residual flips sign with the direction of motion and grows with tension: friction in the "
                    "tendon path (capstan)")
@@ -497,7 +498,8 @@ class CameraScale(Effect):
 class Backlash(Effect):
     name = "backlash"
     stage = "servo"
-    order = 12
+    #: first: the play is in the servo's drive, ahead of the tendon's slack (slack(play(u)))
+    order = 5
     directional = True
     explanation = ("after each reversal the joints stay still while the servo turns through a dead band, then "
                    "follow it lagging by half the band, on every joint of the chain: backlash (play) in the drive")
@@ -522,7 +524,7 @@ class Backlash(Effect):
             half = 0.5 * float(x[j]) * DEG
             runs = h.runs(int(j))
             y0 = h.cached(("backlash", int(j), half), lambda: play_start(runs, half))
-            # what the play takes off the command, added to what earlier servo-stage effects did
+            # what the play takes off the command (the first servo-stage effect: the slack acts on its output)
             u_eff[:, j] += play(ctx.u[:, j], ctx.rows, runs, half, y0) - ctx.u[:, j]
         ctx.u_eff = u_eff
 
@@ -548,7 +550,8 @@ def run_pipeline(hand, items: Sequence[tuple[Effect, np.ndarray]], u, direction=
     if history is not None and rows is None and len(history) != u.shape[0]:
         raise ValueError("run_pipeline: pass the rows of the history that u holds")
     ctx = Context(hand, u, direction, compliance, history, rows)
-    items = sorted(items, key=lambda it: (STAGES.index(it[0].stage), it[0].order))
+    # (stage, order, name): the result never depends on the order the effects were listed in
+    items = sorted(items, key=lambda it: (STAGES.index(it[0].stage), it[0].order, it[0].name))
     stage_of = [it[0].stage for it in items]
     for eff, x in items:
         if eff.stage == "servo":
@@ -631,7 +634,7 @@ class EffectStack:
         for name, table in params.effects.items():
             x = effect_values(name, table, None, params.source)
             self.items.append((get_effect(name), x))
-        self.items.sort(key=lambda it: (STAGES.index(it[0].stage), it[0].order))
+        self.items.sort(key=lambda it: (STAGES.index(it[0].stage), it[0].order, it[0].name))
         self.names = tuple(e.name for e, _ in self.items)
 
     def __bool__(self) -> bool:

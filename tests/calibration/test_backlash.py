@@ -117,3 +117,44 @@ def test_fit_writes_backlash_and_the_file_reproduces_it(hand, tmp_path):
     cal = load_hand(out)
     q0 = cal.forward(u[:3], compensated=True)
     assert np.allclose(cal.inverse(q0, compensated=True), u[:3], atol=1e-9)
+
+
+def test_slack_acts_on_the_plays_output(hand):
+    """The play is in the servo's drive, the slack in the tendon after it: u_eff = slack(play(u)).
+    Known answer by hand (index servo u2, u_min = 0, play 4 deg, slack 3 deg): commands 0, 2, 6, 9,
+    7, 5 deg -> play 0, 0, 4, 7, 7, 7 -> slack max(play - 3, 0) = 0, 0, 1, 4, 4, 4 deg. (The sum
+    slack(u) + play(u) - u the library computed before gives 0, -2, 1, 4, 4, 4: a joint pulled
+    2 deg past rest inside the dead band.)"""
+    from phantom_cad.calibration.effects import History, get_effect, run_pipeline
+
+    cmd = np.radians([0.0, 2.0, 6.0, 9.0, 7.0, 5.0])
+    u = np.zeros((cmd.size, 6))
+    u[:, 1] = cmd
+    sweep = np.zeros(cmd.size, dtype=int)
+    direction = np.zeros((cmd.size, 6))
+    direction[1:, 1] = np.sign(np.diff(cmd))
+    h = History(u, sweep, direction)
+    width = np.zeros(6)
+    width[1] = 4.0
+    slack = np.zeros(5)
+    slack[1] = 3.0
+    assert hand.u_min[1] == 0.0
+    for items in ([(get_effect("tendon_slack"), slack), (get_effect("backlash"), width)],
+                  [(get_effect("backlash"), width), (get_effect("tendon_slack"), slack)]):
+        q = run_pipeline(hand, items, u, direction, 0.0, h)
+        want = hand.forward(np.column_stack([np.zeros(cmd.size), np.radians([0, 0, 1, 4, 4, 4]),
+                                             np.zeros((cmd.size, 4))]), compensated=False)
+        np.testing.assert_allclose(q, want, atol=1e-12)
+
+
+def test_the_pipeline_does_not_depend_on_the_listed_order(hand):
+    """friction_hysteresis and the per-finger elasticity: the same parameters listed either way
+    give the same q (they shared order 31, and the output depended on the selection's order)."""
+    from phantom_cad.calibration.effects import get_effect, run_pipeline
+
+    rng = np.random.default_rng(0)
+    u = rng.uniform(hand.u_min, hand.u_max, (40, 6))
+    direction = np.where(rng.uniform(size=(40, 6)) < 0.5, -1.0, 1.0)
+    a = (get_effect("friction_hysteresis"), np.array([0.2]))
+    b = (get_effect("tendon_elasticity_per_finger"), np.array([0.1, 0.3, 0.2, 0.25, 0.15]))
+    np.testing.assert_array_equal(run_pipeline(hand, [a, b], u, direction), run_pipeline(hand, [b, a], u, direction))
