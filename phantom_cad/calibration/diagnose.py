@@ -350,16 +350,19 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
 
     rounds: list[list[Candidate]] = []
     ambiguities: list[dict] = []
+    saturated: FitResult | None = None           # the whole hand family at once (n_eff's floor)
+    n_floor = 0.0                                # the floor, once a round has used it
+    seen: set[frozenset] = set()                 # the models the rounds ended with
     directions_seen = {int(v) for v in np.unique(m.direction)}
     if not ({1, -1} <= directions_seen):
         notes.append("the data move in one direction only: direction-dependent effects (friction) cannot be "
                      "told from direction-independent ones")
     # the hand's physics first; the measurement's own errors (camera_scale) only on what it leaves
     measurement = {n for n in names if get_effect(n).stage == MEASUREMENT}
+    hand_names = [n for n in names if n not in measurement]
     family = "hand" if set(names) - measurement else "measurement"
     for _ in range(MAX_ROUNDS):
         candidates = [n for n in names if n not in current and (n in measurement) == (family == "measurement")]
-        scored: list[Candidate] = []
         models = []
         for n in candidates:
             model = Model(hand, current + [n], problem)
@@ -376,24 +379,40 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
                 continue
             rounds.append([])
             break
+
+        def score(n_eff: float) -> list[Candidate]:
+            dics = [delta_ic(base, res, n_eff) for _, _, res in fits]
+            # the held-out check only where it can decide: a candidate with dIC >= 0 fails already
+            # (each candidate starts from its own fit to all rows; the base from itself)
+            passing_ic = [(model, res) for (_, model, res), d in zip(fits, dics) if d < 0]
+            if passing_ic:
+                held([(base.model, base)] + passing_ic)
+            base_held = heldout_cache.get(base.model.names)
+            out = []
+            for (n, model, res), dic in zip(fits, dics):
+                if dic < 0:
+                    ratio_h = heldout_cache[model.names] / base_held if base_held > 0 else 1.0
+                else:
+                    ratio_h = float("nan")      # not run
+                passes = bool(dic < 0 and ratio_h < HELDOUT_RATIO)
+                out.append(Candidate(n, float(dic), res.rss / base.rss if base.rss > 0 else 1.0, float(ratio_h),
+                                     passes, float(n_eff), model.p - base.model.p, mae(res), res))
+            return sorted(out, key=lambda c: c.delta_ic)
+
         # one effective sample size for the whole round: that of the best-fitting candidate's residuals
         n_eff = max(min(fits, key=lambda f: f[2].rss)[2].n_eff, 2.0)
-        dics = [delta_ic(base, res, n_eff) for _, _, res in fits]
-        # the held-out check only where it can decide: a candidate with dIC >= 0 fails already
-        # (each candidate starts from its own fit to all rows; the base from itself)
-        passing_ic = [(model, res) for (_, model, res), d in zip(fits, dics) if d < 0]
-        if passing_ic:
-            held([(base.model, base)] + passing_ic)
-        base_held = heldout_cache.get(base.model.names)
-        for (n, model, res), dic in zip(fits, dics):
-            if dic < 0:
-                ratio_h = heldout_cache[model.names] / base_held if base_held > 0 else 1.0
-            else:
-                ratio_h = float("nan")      # not run
-            passes = bool(dic < 0 and ratio_h < HELDOUT_RATIO)
-            scored.append(Candidate(n, float(dic), res.rss / base.rss if base.rss > 0 else 1.0, float(ratio_h),
-                                    passes, float(n_eff), model.p - base.model.p, mae(res), res))
-        scored.sort(key=lambda c: c.delta_ic)
+        scored = score(n_eff)
+        if not any(c.passes for c in scored) and family == "hand" and len(hand_names) > 1 and n_eff < 0.5 * problem.m:
+            # nothing passes, on strongly correlated residuals: another hidden effect may keep the best
+            # candidate's residual as correlated as an unmodelled one. Floor: the residual of the whole
+            # hand family fitted at once, what the library can reach (fitted once, when first needed)
+            if saturated is None:
+                whole = Model(hand, list(dict.fromkeys([*start, *hand_names])), problem)
+                saturated = pool.fit(whole, whole.start(base))
+            if saturated.n_eff > n_eff:
+                scored = score(saturated.n_eff)
+                # from here on the backward step scores on the same scale (else it undoes the round)
+                n_floor = max(n_floor, saturated.n_eff)
         rounds.append(scored)
         passing = [c for c in scored if c.passes]
         if not passing:
@@ -411,14 +430,19 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
                 })
         current.append(best.effect)
         base = best.result
-        base, dropped = _prune(hand, problem, current, base, len(start), pool)
+        base, dropped = _prune(hand, problem, current, base, len(start), pool, n_floor)
         for name, dic in dropped:
             notes.append(f"{name} was dropped after {best.effect} was added: the model without it scores "
                          f"better (dIC {dic:+.1f}); what it explained is explained by the others")
-        base, simpler = _simplify(hand, problem, current, base, len(start), pool)
+        base, simpler = _simplify(hand, problem, current, base, len(start), pool, n_floor)
         for variant, parent, dic in simpler:
             notes.append(f"{variant} was replaced by its simpler form {parent} after {best.effect} was added: "
                          f"with the others in the model the extra parameters no longer pay (dIC {dic:+.1f})")
+        if frozenset(current) in seen:
+            notes.append(f"the selection returned to a model it had already reached ({', '.join(current) or 'analytic'}): "
+                         f"stopped there (forward and backward steps would cycle)")
+            break
+        seen.add(frozenset(current))
     noise = noise_floor(m)
     base, worse = _made_worse(hand, problem, current, base, len(start), pool, noise)
     for name, joints in worse:
@@ -435,7 +459,7 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
                      noise, hand)
 
 
-def _simplify(hand, problem, current: list[str], base: FitResult, keep: int, pool: FitPool):
+def _simplify(hand, problem, current: list[str], base: FitResult, keep: int, pool: FitPool, n_floor: float = 0.0):
     """A selected variant (an effect with ``simpler``: the per-finger elasticity) is replaced by its
     simpler form when that scores no worse with the model as it now is: a variant picked in an
     early round may have been absorbing what an effect added later explains."""
@@ -447,7 +471,7 @@ def _simplify(hand, problem, current: list[str], base: FitResult, keep: int, poo
         names = [parent if n == name else n for n in current]
         model = Model(hand, names, problem)
         res = pool.fit(model, model.start(base))
-        dic = delta_ic(base, res, max(base.n_eff, 2.0))      # IC(simpler) - IC(variant)
+        dic = delta_ic(base, res, max(base.n_eff, n_floor, 2.0))      # IC(simpler) - IC(variant)
         if dic <= 0:
             current[current.index(name)] = parent
             base = res
@@ -501,14 +525,14 @@ def _made_worse(hand, problem: Problem, current: list[str], base: FitResult, kee
     return base, dropped
 
 
-def _prune(hand, problem, current: list[str], base: FitResult, keep: int, pool: FitPool):
+def _prune(hand, problem, current: list[str], base: FitResult, keep: int, pool: FitPool, n_floor: float = 0.0):
     """Backward step: drop a selected effect whose removal lowers the information criterion."""
     dropped = []
     while len(current) - keep > 1:
         trials = []
         removable = current[keep:-1]           # the effect just added stays
         models = [Model(hand, [n for n in current if n != name], problem) for name in removable]
-        n_eff = max(base.n_eff, 2.0)
+        n_eff = max(base.n_eff, n_floor, 2.0)
         for name, res in zip(removable, pool.fits([(model, model.start(base)) for model in models])):
             dic = -delta_ic(res, base, n_eff)   # IC(without) - IC(with)
             trials.append((dic, name, res))
