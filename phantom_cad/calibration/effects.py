@@ -73,6 +73,7 @@ SIGNATURE_FEATURES = {
     "joints": ("all", "distal", "mcp", "any"),
     "periodic": (True, False),
     "reversal": ("jump", "none", "any"),
+    "digits": ("all", "some", "one", "any"),
 }
 
 
@@ -93,6 +94,8 @@ class Signature:
     ``periodic``   a periodic pattern in the servo angle.
     ``reversal``   "jump": the residual steps within a few samples after each reversal of the
                    servo; "none": it passes through reversals continuously.
+    ``digits``     the spread across the tendon-driven digits measured: "all" (on every one: an
+                   effect of the whole hand), "some", "one" (a per-digit effect on some of them).
     Any feature may be "any" (the effect does not fix it)."""
 
     direction: str = "any"
@@ -101,6 +104,7 @@ class Signature:
     joints: str = "any"
     periodic: bool = False
     reversal: str = "any"
+    digits: str = "any"
 
     def __post_init__(self):
         for key, allowed in SIGNATURE_FEATURES.items():
@@ -348,7 +352,8 @@ class TendonElasticity(Effect):
                "fitted: the compliance ratio c = k_s / EA (1/m), one for the whole hand")
     signature = "negative on PIP/DIP/IP, growing with flexion, zero on MCP/MP/CMC; no direction dependence"
     reference = "the paper's mechanics-based compensation, eq. (11)-(14)"
-    leaves = Signature(direction="same", at_rest="zero", trend="grows", joints="distal", reversal="none")
+    leaves = Signature(direction="same", at_rest="zero", trend="grows", joints="distal", reversal="none",
+                       digits="all")
 
     def parameters(self, hand):
         return [Param("compliance_per_m", 0.0, 5.0, (0.07, 0.27), False, DISTAL_JOINTS, True,
@@ -406,7 +411,8 @@ class FrictionHysteresis(Effect):
     signature = ("PIP/DIP/IP lag when flexing and lead when extending (a hysteresis loop), the gap grows with "
                  "flexion; MCP untouched; zero when the direction is unknown")
     reference = "capstan equation T2 = T1 exp(mu theta) (Euler-Eytelwein); Kaneko et al., IEEE T-RA 7(3), 1991"
-    leaves = Signature(direction="flips", at_rest="zero", trend="grows", joints="distal", reversal="jump")
+    leaves = Signature(direction="flips", at_rest="zero", trend="grows", joints="distal", reversal="jump",
+                       digits="all")
 
     def parameters(self, hand):
         return [Param("mu", 0.0, 1.0, (0.08, 0.25), False, DISTAL_JOINTS, True,

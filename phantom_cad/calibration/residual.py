@@ -47,7 +47,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kinematics.topology import DISTAL_JOINTS, JOINT_SERVO, Q_COLUMNS
+from ..kinematics.topology import CMC_SERVO, DISTAL_JOINTS, JOINT_SERVO, Q_COLUMNS, SERVOS
 from ..units import DEG_PER_RAD
 
 #: residual MAE up to this multiple of the noise floor is "consistent with noise" ...
@@ -431,6 +431,7 @@ FEATURE_WORDS = {
     ("periodic", False): "it is not periodic in u",
     ("reversal", "jump"): "it jumps after each reversal",
     ("reversal", "none"): "it passes through reversals without a jump",
+    ("digits", "all"): "it is on every digit measured",
 }
 #: what to look at when a measured feature is one no library effect declares
 FEATURE_HINTS = {
@@ -438,10 +439,14 @@ FEATURE_HINTS = {
     "joints": "a measurement-side error (camera scale or offset on those joints) or the guide geometry (d1, d2, alpha)",
     "reversal": "history after a reversal: backlash / a dead band in the drive",
     "direction": "friction or backlash (direction-dependent physics)",
+    "digits": "a per-digit effect (one tendon's slack, pulley radius or compliance)",
 }
 
 
 def _word(key, value, measured: dict | None = None) -> str:
+    if key == "digits" and value in ("one", "some"):
+        which = ", ".join((measured or {}).get("digits_with_structure", []))
+        return f"it is on {'one digit' if value == 'one' else 'some digits'} only" + (f" ({which})" if which else "")
     if key == "periodic" and value is True:
         period = (measured or {}).get("period_deg")
         return f"the residual is periodic in u with period {period:.0f} deg" if period else "the residual is periodic in u"
@@ -507,10 +512,28 @@ def measured_features(sig: dict, joints, noise: NoiseFloor) -> dict | None:
         out["reversal"] = "jump" if 2 * sum(jumps) > len(jumps) else "none"
     else:
         out["reversal"] = "unknown"
+    # spread across the tendon-driven digits that were measured: on every one, on some, on one
+    measured = {int(JOINT_SERVO[Q_COLUMNS.index(c)]) for c in per} - {CMC_SERVO}
+    structured = sorted({int(JOINT_SERVO[Q_COLUMNS.index(c)]) for c in J} - {CMC_SERVO})
+    if len(measured) < 2 or not structured:
+        out["digits"] = "unknown"
+    else:
+        out["digits"] = ("all" if set(structured) == measured else "one" if len(structured) == 1 else "some")
+        out["digits_with_structure"] = [SERVOS[k].digit for k in structured]
     return out
 
 
-FEATURE_KEYS = ("direction", "at_rest", "trend", "joints", "periodic", "reversal")
+FEATURE_KEYS = ("direction", "at_rest", "trend", "joints", "periodic", "reversal", "digits")
+
+
+def _predicts(leaves, key: str, value) -> bool:
+    """Whether a declared signature (or None) predicts a measured feature value. A per-digit effect
+    declares digits "any" (its parameters sit on any subset of the digits): it predicts "one" and
+    "some" as well; for the other features "any" only does not contradict."""
+    if leaves is None:
+        return False
+    declared = getattr(leaves, key)
+    return declared == value or (key == "digits" and declared == "any" and value != "unknown")
 
 
 def compare_features(measured: dict, declared) -> dict:
@@ -519,7 +542,7 @@ def compare_features(measured: dict, declared) -> dict:
     if declared is None:
         return {"declared": None, "matches": [], "mismatches": [], "unknown": list(FEATURE_KEYS)}
     for k in FEATURE_KEYS:
-        mv, dv = measured[k], getattr(declared, k)
+        mv, dv = measured.get(k, "unknown"), getattr(declared, k)
         if mv == "unknown":
             unknown.append(k)
         elif dv == "any" or mv == dv:
@@ -535,7 +558,7 @@ def signature_report(measured: dict | None, best: str | None, registry: dict) ->
     sentences to print."""
     if measured is None:
         return None
-    out: dict = {"measured": {k: measured[k] for k in FEATURE_KEYS},
+    out: dict = {"measured": {k: measured.get(k, "unknown") for k in FEATURE_KEYS},
                  "details": {k: v for k, v in measured.items() if k not in FEATURE_KEYS}}
     fits = [n for n, e in registry.items()
             if getattr(e, "leaves", None) is not None and not compare_features(measured, e.leaves)["mismatches"]]
@@ -550,13 +573,11 @@ def signature_report(measured: dict | None, best: str | None, registry: dict) ->
         else:
             # the features no library effect predicts first: they say most about what is missing
             def predicted(k):
-                return any(getattr(e, "leaves", None) is not None and getattr(e.leaves, k) == measured[k]
-                           for e in registry.values())
+                return any(_predicts(getattr(e, "leaves", None), k, measured[k]) for e in registry.values())
             for k in sorted(cmp["mismatches"], key=predicted):
                 said = _word(k, measured[k], measured)
                 decl = _word(k, getattr(registry[best].leaves, k))
-                others = [n for n, e in registry.items()
-                          if getattr(e, "leaves", None) is not None and getattr(e.leaves, k) == measured[k]]
+                others = [n for n, e in registry.items() if _predicts(getattr(e, "leaves", None), k, measured[k])]
                 if others:
                     sentences.append(f"does not match {best}, whose residual {decl[3:] if decl.startswith('it ') else decl}: "
                                      f"{said}; {', '.join(others)} predict{'s' if len(others) == 1 else ''} that")

@@ -36,12 +36,16 @@ def test_every_library_effect_declares_its_signature():
 
 def test_compare_features_known_answer():
     measured = {"direction": "flips", "at_rest": "zero", "trend": "flat", "joints": "all", "periodic": False,
-                "reversal": "unknown"}
-    declared = Signature(direction="flips", at_rest="any", trend="grows", joints="distal", reversal="jump")
+                "reversal": "unknown", "digits": "one"}
+    declared = Signature(direction="flips", at_rest="any", trend="grows", joints="distal", reversal="jump",
+                         digits="all")
     out = compare_features(measured, declared)
     assert out["matches"] == ["direction", "at_rest", "periodic"]
-    assert out["mismatches"] == ["trend", "joints"]
+    assert out["mismatches"] == ["trend", "joints", "digits"]
     assert out["unknown"] == ["reversal"]
+    # a feature the measurement does not give is unknown
+    del measured["digits"]
+    assert compare_features(measured, declared)["unknown"] == ["reversal", "digits"]
     assert compare_features(measured, None)["declared"] is None
 
 
@@ -86,8 +90,9 @@ def test_hand_written_offsets_match_joint_offset_only(hand):
     sm = out["signature_match"]["before"]
     assert sm["details"]["joints_used"] == ["q4", "q9", "q13"]
     # the offsets sit on PIP joints only: "distal" (joint_offset declares any joints)
+    # q4, q9, q13: the index, ring and pinky of the five tendon-driven digits
     assert sm["measured"] == {"direction": "same", "at_rest": "nonzero", "trend": "flat", "joints": "distal",
-                              "periodic": False, "reversal": "none"}
+                              "periodic": False, "reversal": "none", "digits": "some"}
     assert sm["best_candidate"] == "joint_offset" and sm["mismatches"] == []
     assert sm["effects_with_this_signature"] == ["joint_offset"]
     assert sm["sentences"][0].startswith("matches joint_offset: it is the same in both directions; it is present at rest")
@@ -101,10 +106,34 @@ def test_per_finger_compliance_matches_tendon_elasticity(hand):
     out = diagnose(hand, measure(hand, u, sweep, cj, compliant(hand, u), seed=12)).to_json()
     sm = out["signature_match"]["before"]
     assert sm["measured"] == {"direction": "same", "at_rest": "zero", "trend": "grows", "joints": "distal",
-                              "periodic": False, "reversal": "none"}
+                              "periodic": False, "reversal": "none", "digits": "all"}
     # the per-finger variant and a per-joint scale of the measurement leave the same features
     assert sm["effects_with_this_signature"] == ["tendon_elasticity", "tendon_elasticity_per_finger",
                                                  "camera_scale"]
     # the per-finger compliance is the best candidate (5 parameters fit what 15 scales only approach)
     assert sm["best_candidate"] == "tendon_elasticity_per_finger" and sm["mismatches"] == []
     assert out["selected"] == ["tendon_elasticity_per_finger"] and out["explained"] is True
+
+
+def test_the_spread_across_digits(hand, monkeypatch):
+    """The index tendon alone is compliant (eq. 13 written out in test_plugin.compliant): the
+    residual is on one digit, which the hand-wide tendon_elasticity (digits "all") does not leave and
+    the per-digit effects (digits "any") do; with every tendon compliant it is on every digit."""
+    from . import test_plugin
+
+    u, sweep, cj = sweeps(hand)
+    for digit in test_plugin.HIDDEN:
+        monkeypatch.setitem(test_plugin.HIDDEN, digit, 0.6 if digit == "index" else 0.0)
+    d = diagnose(hand, measure(hand, u, sweep, cj, test_plugin.compliant(hand, u), seed=4),
+                 candidates=["tendon_elasticity"])
+    before = d.to_json()["signature_match"]["before"]
+    assert before["measured"]["digits"] == "one"
+    assert before["best_candidate"] == "tendon_elasticity" and "digits" in before["mismatches"]
+    assert any(s.startswith("does not match tendon_elasticity, whose residual is on every digit measured: "
+                            "it is on one digit only (index)") and "tendon_elasticity_per_finger" in s
+               for s in before["sentences"])
+    for digit in test_plugin.HIDDEN:
+        monkeypatch.setitem(test_plugin.HIDDEN, digit, 0.3)
+    d = diagnose(hand, measure(hand, u, sweep, cj, test_plugin.compliant(hand, u), seed=4),
+                 candidates=["joint_offset"])
+    assert d.to_json()["signature_match"]["before"]["measured"]["digits"] == "all"
