@@ -438,6 +438,9 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
         for variant, parent, dic in simpler:
             notes.append(f"{variant} was replaced by its simpler form {parent} after {best.effect} was added: "
                          f"with the others in the model the extra parameters no longer pay (dIC {dic:+.1f})")
+        # keep only the fits the made-worse check may read (models within the current one): on a
+        # 20,000-row selection with every joint recorded each fit holds 2.4 MB of residuals
+        pool.fitted = {k: v for k, v in pool.fitted.items() if set(k) <= set(current)}
         if frozenset(current) in seen:
             notes.append(f"the selection returned to a model it had already reached ({', '.join(current) or 'analytic'}): "
                          f"stopped there (forward and backward steps would cycle)")

@@ -425,9 +425,3 @@ def heldout_fold(model: Model, train: Problem, test: Problem, x0) -> float:
     ``train`` from ``x0``."""
     fr = fit(model, train, x0, uncertainty=False)
     return cost(_residual_fn(model, test)(fr.theta))
-
-
-def heldout_sse(model: Model, problem: Problem, parts, previous=None) -> float:
-    """Sum of squared residuals (deg^2) on each fold of a model fitted on the other fold."""
-    return sum(heldout_fold(model, problem.subset(parts[1 - k]), problem.subset(parts[k]), model.start(previous))
-               for k in range(2))

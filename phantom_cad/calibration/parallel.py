@@ -102,7 +102,7 @@ class FitPool:
 
     def heldout(self, jobs: list[tuple[Model, np.ndarray | None]]) -> list[float]:
         """The held-out sum of squares of each (model, x0): fitted on each fold from x0, scored on
-        the other, summed (fitting.heldout_sse)."""
+        the other (fitting.heldout_fold), the two folds summed."""
         tasks = [("heldout", model.names, k, x0, False) for model, x0 in jobs for k in (0, 1)]
         sse = [r[0] for r in self._map(tasks)]
         return [sse[2 * i] + sse[2 * i + 1] for i in range(len(jobs))]
