@@ -313,7 +313,7 @@ def test_outside_physics_known_answers(hand):
 @pytest.mark.xfail(strict=True, reason=(
     "explained True, but the fitted model is 0.0449 deg from the truth (0.5x floor 0.0410): selected "
     "['joint_offset', 'camera_scale'] (pulley_radius_error picked in round 2, dropped by the backward step "
-    "after camera_scale), MAE after 0.0915 vs floor 0.0819: the sag, g (cos phi - 1) on the hand, is "
+    "after camera_scale), MAE after 0.0915 vs floor 0.0819: the sag, g cos(phi) on the hand, is "
     "absorbed by offsets and the camera's per-joint scales to within noise on the fit but not on the truth"))
 def test_gravity_sag_is_left_or_matched(hand):
     """A joint error that depends on the pose (gravity sag, hidden.gravity_sag: 1.0 / 0.6 / 0.3 deg at
