@@ -513,7 +513,8 @@ def _made_worse(hand, problem: Problem, current: list[str], base: FitResult, kee
             # robust fits: judged without the glitches of either fit, as the verdict is
             judged = ~(outlier_cells(base, noise) | outlier_cells(res, noise)) if robust_active() else None
             with_it, without = mae_per_joint(base, judged), mae_per_joint(res, judged)
-            bad = [c for c in made_worse(without, with_it, noise.floor_deg, cells) if c in shared(name)]
+            traded = shared(name)
+            bad = [c for c in made_worse(without, with_it, noise.floor_deg, cells) if c in traded]
             if bad:
                 floor = {c: noise.floor_deg.get(c) or 1.0 for c in bad}
                 rise = max((with_it[c] - without[c]) / floor[c] for c in bad)

@@ -260,12 +260,32 @@ def _forward_step(x, lo, hi) -> np.ndarray:
     return np.where((x + h > hi) | (x + h < lo), -h, h)
 
 
+def _parameter_cells(model: Model, j_idx) -> list[np.ndarray]:
+    """Per free parameter: which of the cells (of joints ``j_idx``) it moves."""
+    return [np.isin(j_idx, par.joints) for _, _, par in model.free]
+
+
+def _forward_difference(model: Model, groups, x, r0, evaluate, cells) -> np.ndarray:
+    """The (r0.size, p) forward-difference Jacobian at ``x`` of ``evaluate`` (theta -> the residual
+    r0 is at x): one evaluation per group of :func:`_groups`, each parameter's column filled on its
+    ``cells`` (:func:`_parameter_cells`)."""
+    h = _forward_step(x, model.lower, model.upper)
+    J = np.zeros((r0.size, model.p))
+    for members in groups:
+        step = np.zeros(model.p)
+        step[members] = h[members]
+        diff = evaluate(x + step) - r0
+        for k in members:
+            J[cells[k], k] = diff[cells[k]] / h[k]
+    return J
+
+
 def _grouped_jacobian(model: Model, problem: Problem, fun):
     """(fun, jac) for least_squares: a dense forward-difference Jacobian, one evaluation per group
     of :func:`_groups` (a dozen groups for forty parameters); the residual at x is the one
     least_squares has just evaluated there, remembered, not computed again."""
     groups = _groups(model)
-    cells = [np.isin(problem.j_idx, model.free[k][2].joints) for k in range(model.p)]
+    cells = _parameter_cells(model, problem.j_idx)
     last: dict = {}
 
     def f(x):
@@ -275,15 +295,7 @@ def _grouped_jacobian(model: Model, problem: Problem, fun):
 
     def jac(x):
         r0 = last["r"] if "x" in last and np.array_equal(last["x"], x) else fun(x)
-        h = _forward_step(x, model.lower, model.upper)
-        J = np.zeros((problem.m, model.p))
-        for members in groups:
-            step = np.zeros(model.p)
-            step[members] = h[members]
-            diff = fun(x + step) - r0
-            for k in members:
-                J[cells[k], k] = diff[cells[k]] / h[k]
-        return J
+        return _forward_difference(model, groups, x, r0, fun, cells)
     return f, jac
 
 
@@ -342,26 +354,18 @@ def fit_streamed(model: Model, problem: Problem, x0=None, max_iter: int = 50) ->
     theta = model.start() if x0 is None else np.clip(x0, lo, hi)
     chunks = _chunks(problem)
     groups = _groups(model)
-    joint_of = [np.array(sorted(par.joints)) for _, _, par in model.free]
 
     def sse(x) -> float:
         return float(sum(np.sum(_chunk_residual(model, problem, x, *c) ** 2) for c in chunks))
 
     def normal_equations(x):
         """J^T J, J^T r and r at x."""
-        h = _forward_step(x, lo, hi)
         JTJ, g, r = np.zeros((model.p, model.p)), np.zeros(model.p), np.empty(problem.m)
         for a, b, ca, cb in chunks:
             r0 = r[ca:cb] = _chunk_residual(model, problem, x, a, b, ca, cb)
-            j = problem.j_idx[ca:cb]
-            J = np.zeros((r0.size, model.p))
-            for members in groups:
-                step = np.zeros(model.p)
-                step[members] = h[members]
-                diff = _chunk_residual(model, problem, x + step, a, b, ca, cb) - r0
-                for k in members:
-                    cells = np.isin(j, joint_of[k])
-                    J[cells, k] = diff[cells] / h[k]
+            J = _forward_difference(model, groups, x, r0,
+                                    lambda t: _chunk_residual(model, problem, t, a, b, ca, cb),
+                                    _parameter_cells(model, problem.j_idx[ca:cb]))
             JTJ += J.T @ J
             g += J.T @ r0
         return JTJ, g, r
