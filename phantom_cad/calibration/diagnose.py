@@ -430,10 +430,17 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
                 })
         current.append(best.effect)
         base = best.result
+        if family == "measurement":
+            # the measurement's own error is now modelled: the hand's physics it masked may show
+            # (measured: a 6-parameter backlash, beaten under 15 camera scales by a 2-parameter
+            # friction band, is found only on the residual the scales leave)
+            family = "hand"
         base, dropped = _prune(hand, problem, current, base, len(start), pool, n_floor)
+        duplicates = _duplicated(best, dropped)
         for name, dic in dropped:
             notes.append(f"{name} was dropped after {best.effect} was added: the model without it scores "
-                         f"better (dIC {dic:+.1f}); what it explained is explained by the others")
+                         f"better (dIC {dic:+.1f}); what it explained is explained by the others"
+                         + duplicates.get(name, ""))
         base, simpler = _simplify(hand, problem, current, base, len(start), pool, n_floor)
         for variant, parent, dic in simpler:
             notes.append(f"{variant} was replaced by its simpler form {parent} after {best.effect} was added: "
@@ -460,6 +467,30 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
                      f"MAE and parameters below are of that fit")
     return Diagnosis(m, before, base, current[len(start):], rounds, ambiguities, [n for n in notes if n],
                      noise, hand)
+
+
+def _duplicated(best: Candidate, dropped) -> dict[str, str]:
+    """{hand effect dropped: the sentence that says so} for the hand effects a measurement effect
+    just added duplicates exactly on these data: their parameters and the measurement's form a
+    combination the fit with both cannot separate (calibration/identify.py). The backward step keeps
+    the simpler model, the measurement side; said so, because if the hand has the effect the
+    calibrated control law lacks it (a uniform tendon compliance scales each distal joint by a
+    constant: on a sweep it is a per-joint scale of the camera)."""
+    if not dropped or get_effect(best.effect).stage != MEASUREMENT:
+        return {}
+    out = {}
+    combos = combinations(best.result)
+    for name, _ in dropped:
+        for c in combos:
+            keys = list(c.weights)
+            if any(k.startswith(f"{name}.") for k in keys) and any(k.startswith(f"{best.effect}.") for k in keys):
+                shown = " ".join(f"{w:+.2f} {k}" for k, w in list(c.weights.items())[:4])
+                out[name] = (f"; but the data cannot tell {name} from {best.effect} (not identifiable together: "
+                             f"{shown}{' ...' if len(keys) > 4 else ''}): the measurement side is kept as the "
+                             f"simpler model, so a calibrated control law lacks {name}; if the hand has it, "
+                             f"calibrate the measurement on known angles and fit with --effects {name}")
+                break
+    return out
 
 
 def _simplify(hand, problem, current: list[str], base: FitResult, keep: int, pool: FitPool, n_floor: float = 0.0):

@@ -26,8 +26,8 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from ..kinematics.topology import (CHAINS, DISTAL_JOINTS, JOINTS, N_JOINTS, N_SERVOS, SERVOS, TENDON_SERVOS,
-                                   servo_joints)
+from ..kinematics.topology import (CHAINS, CMC_SERVO, DISTAL_JOINTS, JOINTS, N_JOINTS, N_SERVOS, SERVOS,
+                                   TENDON_SERVOS, servo_joints)
 from ..params.errors import ParamError
 from ..params.schema import register_effect_check, register_plugin_loader
 from ..units import DEG
@@ -120,7 +120,7 @@ class Runs:
     """One servo's runs of rows with one direction of motion within one sweep (a new run at every
     reversal and at every new sweep), over a :class:`History`: ``of_row`` (R,) the run of every
     row; per run, in row order: ``direction`` (+1/-1/0), ``first`` (the sweep's first run),
-    ``u_start`` and ``u_end`` (the command at its first and last row). Within a run the command
+    ``u_start`` and ``u_end`` (the command at its first and last row), ``last`` (its last row). Within a run the command
     is monotone (flat steps hold the direction)."""
 
     of_row: np.ndarray
@@ -128,6 +128,8 @@ class Runs:
     first: np.ndarray
     u_start: np.ndarray
     u_end: np.ndarray
+    #: the history row of each run's last command
+    last: np.ndarray
 
 
 class History:
@@ -170,11 +172,14 @@ class History:
             first_rows = np.flatnonzero(start)
             last_rows = np.append(first_rows[1:] - 1, n - 1)
             self._runs[servo] = Runs(np.cumsum(start) - 1, d[first_rows].astype(int), new_sweep[first_rows],
-                                     self.u[first_rows, servo], self.u[last_rows, servo])
+                                     self.u[first_rows, servo], self.u[last_rows, servo], last_rows)
         return self._runs[servo]
 
     def cached(self, key, compute):
-        if key not in self._cache:
+        """compute(), kept under ``key``; the least recently used of 64 entries goes first."""
+        if key in self._cache:
+            self._cache[key] = self._cache.pop(key)
+        else:
             if len(self._cache) >= 64:
                 self._cache.pop(next(iter(self._cache)))
             self._cache[key] = compute()
@@ -199,6 +204,10 @@ class Context:
         #: the sweep code of every row of the batch (N,), or None
         self.sweep = None if history is None else history.sweep[self.rows]
         self.u_eff = u.copy()                       # servo stage output
+        #: the plays on the drive applied so far ((key, half width function) pairs, see apply_play)
+        #: and u_eff as it was before the first of them
+        self.plays: list = []
+        self.u_before_play: np.ndarray | None = None
         self.radius_scale = np.ones(len(CHAINS))    # reference stage: r_eff = r * radius_scale
         self.s: np.ndarray | None = None            # reference angles (N, 6), after the reference stage
         #: k_s / EA (1/m) felt by each chain's elastic segments (N, chains); 0 = analytic model
@@ -454,29 +463,61 @@ class JointOffset(Effect):
         return q - x * DEG
 
 
-def play_start(runs: Runs, half: float) -> np.ndarray:
+def play_start(runs: Runs, half) -> np.ndarray:
     """The output of the play (backlash) operator of half width ``half`` when each run starts: a
     sweep starts with the output at the command; a run flexing ends at max(y0, u_end - half), one
-    extending at min(y0, u_end + half) (the command is monotone within a run)."""
+    extending at min(y0, u_end + half) (the command is monotone within a run). ``half``: one value,
+    or one per run (the half width at the run's last command, for a play whose width follows the
+    command: drive_friction)."""
     y0 = np.empty(runs.direction.size)
+    halves = np.broadcast_to(np.asarray(half, dtype=float), runs.direction.shape)
     y = 0.0
-    for i, (d, first, us, ue) in enumerate(zip(runs.direction, runs.first, runs.u_start, runs.u_end)):
+    for i, (d, first, us, ue, h) in enumerate(zip(runs.direction, runs.first, runs.u_start, runs.u_end, halves)):
         y = us if first else y
         y0[i] = y
         if d > 0:
-            y = max(y, ue - half)
+            y = max(y, ue - h)
         elif d < 0:
-            y = min(y, ue + half)
+            y = min(y, ue + h)
     return y0
 
 
-def play(u: np.ndarray, rows: np.ndarray, runs: Runs, half: float, y0: np.ndarray) -> np.ndarray:
+def play(u: np.ndarray, rows: np.ndarray, runs: Runs, half, y0: np.ndarray) -> np.ndarray:
     """The play operator's output at ``rows`` of the history (their commands ``u``): within a run
-    flexing max(y0, u - half), extending min(y0, u + half), at rest y0."""
+    flexing max(y0, u - half), extending min(y0, u + half), at rest y0. ``half``: one value or one
+    per row (u - half must not fall as u grows: a width that grows by less than the command)."""
     r = runs.of_row[rows]
     d, start = runs.direction[r], y0[r]
     return np.where(d > 0, np.maximum(start, u - half),
                     np.where(d < 0, np.minimum(start, u + half), np.clip(start, u - half, u + half)))
+
+
+def apply_play(ctx: Context, key, half_width, servos) -> None:
+    """Add a play (a dead band at each reversal) to the drive of ``servos`` (0-based): its half width
+    (indices or a slice) in rad ``half_width(rows)`` (len(rows), 6) at rows of the history (one value per servo, from the
+    command there; 0 on the other servos). ``key`` names the play and its parameters (the cache of
+    the run starts). Plays in series (the servo gear's backlash, then the drive tendon's friction
+    band) act as one play of the summed width: after a reversal the output stands still until the
+    command has crossed both bands, then trails it by both halves. So the servo stage keeps one play,
+    of every width added so far, on what came before the first (exact for constant widths; a width
+    that follows the command is taken at the command). The output at the start of each run comes
+    from the whole history (play_start), computed once per set of plays."""
+    h = ctx.history
+    if ctx.u_before_play is None:
+        ctx.u_before_play = ctx.u_eff.copy()
+    ctx.plays.append((key, half_width, frozenset(int(j) for j in np.arange(N_SERVOS)[servos])))
+    keys = tuple(k for k, _, _ in ctx.plays)
+
+    def total(rows):
+        return sum(f(rows) for _, f, _ in ctx.plays)
+
+    half_rows = total(ctx.rows)
+    u_eff = ctx.u_before_play.copy()
+    for j in sorted(set().union(*(sv for _, _, sv in ctx.plays))):
+        runs = h.runs(j)
+        y0 = h.cached(("play", keys, j), lambda runs=runs, j=j: play_start(runs, total(runs.last)[:, j]))
+        u_eff[:, j] += play(ctx.u[:, j], ctx.rows, runs, half_rows[:, j], y0) - ctx.u[:, j]
+    ctx.u_eff = u_eff
 
 
 @register_effect
@@ -524,18 +565,79 @@ class Backlash(Effect):
     def apply(self, ctx, x):
         if ctx.history is None or not np.any(x):
             return
-        h = ctx.history
-        u_eff = ctx.u_eff.copy()
-        for j in np.flatnonzero(x > 0):
-            half = 0.5 * float(x[j]) * DEG
-            runs = h.runs(int(j))
-            y0 = h.cached(("backlash", int(j), half), lambda: play_start(runs, half))
-            # what the play takes off the command (the first servo-stage effect: the slack acts on its output)
-            u_eff[:, j] += play(ctx.u[:, j], ctx.rows, runs, half, y0) - ctx.u[:, j]
-        ctx.u_eff = u_eff
+        half = 0.5 * np.asarray(x, dtype=float) * DEG
+        apply_play(ctx, ("backlash", tuple(half)), lambda rows: np.broadcast_to(half, (len(rows), N_SERVOS)),
+                   np.flatnonzero(half > 0))
 
     #: the control law does not know the direction of the next move: it aims at the middle of the
     #: play (u = u_eff), as it aims at the middle of the friction band
+    invertible = True
+
+
+@register_effect
+class DriveFriction(Effect):
+    name = "drive_friction"
+    stage = "servo"
+    #: after the drive's play (5), before the tendon's slack (10): the friction acts along the
+    #: drive tendon between the servo pulley and the finger
+    order = 7
+    directional = True
+    explanation = ("every joint of the chain, MCP included, lags when flexing and leads when extending by a "
+                   "band already there at rest and wider as the spring's tension grows, and stands still for "
+                   "the band's width after each reversal: friction along the drive tendon's path (guides, "
+                   "palm channels), loaded by the return spring's pre-tension and tension")
+    formula = ("a play of full width w(u) on each tendon servo's command, within each sweep: flexing "
+               "u_eff = max(u_eff,prev, u - w/2), extending min(u_eff,prev, u + w/2), u_eff = u at the start "
+               "of a sweep; w(u) = w_rest + w_growth (s - s_min) / (s_max - s_min), s = eq. (6)'s MCP "
+               "reference angle, to which the spring's tension (eq. 11, T = k_s sum R_i q_i) is proportional; "
+               "in series with backlash the two plays act as one of the summed width")
+    signature = ("a band between the flexing and the extending branch on every joint of the chain (MCP "
+                 "included), present where the travel starts back (at rest) and widening with flexion; after "
+                 "each reversal the joints stand still through the band; the same width law on every digit")
+    reference = ("Coulomb friction in series with an elastic tendon is a play (Prandtl's elastic-plastic "
+                 "element; Krasnosel'skii & Pokrovskii 1989); tension-proportional friction in tendon-sheath "
+                 "and guide paths: Kaneko et al., IEEE T-RA 7(3), 1991")
+    leaves = Signature(direction="flips", at_rest="any", trend="any", joints="all", reversal="jump",
+                       digits="all")
+
+    def parameters(self, hand):
+        servos = tuple(j for sv in CHAIN_SERVOS for j in servo_joints(sv.index))
+        return [Param("width_at_rest_deg", 0.0, 10.0, (0.8, 2.0), False, servos, True,
+                      "full width of the friction band at rest (the spring's pre-tension), servo degrees"),
+                Param("width_growth_deg", 0.0, 10.0, (0.8, 2.0), False, servos, True,
+                      "what the band's full width gains from rest to full flexion (the spring's tension), "
+                      "servo degrees")]
+
+    @staticmethod
+    def tension(hand, u) -> np.ndarray:
+        """(s - s_min) / (s_max - s_min) at commands u (..., 6): the spring's tension from rest (0) to
+        full flexion (1), s = eq. (6)'s reference angle (0 on the CMC's direct drive)."""
+        s = hand.reference_angles(np.asarray(u, dtype=float), hand.servo_radius)
+        out = np.zeros(np.shape(u))
+        span = hand.s_max - hand.s_min
+        out[..., TENDON_SERVOS] = ((s - hand.s_min) / np.where(span > 0, span, 1.0))[..., TENDON_SERVOS]
+        return out
+
+    @classmethod
+    def half_width(cls, hand, u, x) -> np.ndarray:
+        """w(u) / 2 in rad at commands u (..., 6), per servo (0 on the CMC's direct drive)."""
+        return cls.band(cls.tension(hand, u), x)
+
+    @staticmethod
+    def band(tension, x) -> np.ndarray:
+        out = 0.5 * (x[0] + x[1] * tension) * DEG
+        out[..., CMC_SERVO] = 0.0
+        return out
+
+    def apply(self, ctx, x):
+        if ctx.history is None or not np.any(x):
+            return
+        h, hand, x = ctx.history, ctx.hand, np.asarray(x, dtype=float)
+        # the tension at every row of the recording does not depend on x: computed once
+        t = h.cached(("drive_friction tension",), lambda: self.tension(hand, h.u))
+        apply_play(ctx, ("drive_friction", tuple(x)), lambda rows: self.band(t[rows], x), TENDON_SERVOS)
+
+    #: the control law aims at the middle of the band (u = u_eff), as for backlash and friction
     invertible = True
 
 

@@ -5,8 +5,11 @@ data: the geometry is read from ``hand.params`` (guides, pulley radii, joint rad
 mechanics), the servo travel from ``hand.u_min / u_max``, and the physics is numpy, stage by stage
 in the order the hand works:
 
-    drive      play of full width b_s in the servo's drive (test_backlash.played), then the tendon's
-               slack: a dead band delta_s at the start of travel (tendon servos u1..u5)
+    drive      play of full width b_s in the servo's drive (test_backlash.played), then the drive
+               tendon's friction band (a second play, in series, of full width w_rest + w_growth
+               (s - s_min) / (s_max - s_min) at the angle it receives, s the cosine law's MCP angle:
+               the spring's tension), then the tendon's slack: a dead band delta_s at the start of
+               travel (tendon servos u1..u5)
     cosine law q_MCP = alpha - arccos((d1^2 + d2^2 - L^2) / (2 d1 d2)), L = L0 - r (1 + e) u_eff
     tendon     eq. (13): M q = A q_MCP, row k >= 1 of M is e_k + kappa (l_1 + .. + l_k) / R_k R^T,
                kappa per chain and per row = elastic compliance (common, per finger, or both
@@ -31,7 +34,7 @@ from .test_backlash import played
 
 #: the hand effects of the library, and the measurement-side one
 HAND_EFFECTS = ("tendon_slack", "pulley_radius_error", "tendon_elasticity", "tendon_elasticity_per_finger",
-                "friction_hysteresis", "joint_offset", "backlash")
+                "friction_hysteresis", "joint_offset", "backlash", "drive_friction")
 MEASUREMENT_EFFECTS = ("camera_scale",)
 
 
@@ -79,6 +82,30 @@ def slack(hand, u, delta_deg) -> np.ndarray:
     return y
 
 
+def friction_band(hand, y, sweep, rest_deg, growth_deg) -> np.ndarray:
+    """The drive tendon's friction band on the angle ``y`` (N, 6) the drive delivers, row by row:
+    the finger's side moves only when the drive is more than w/2 away, then trails it by w/2, with
+    w = rest + growth (s(y) - s(u_min)) / (s(u_max) - s(u_min)) degrees (the spring's tension grows
+    with the MCP angle s of the cosine law); each sweep starts with the output at its input; the
+    tendon servos u1..u5 only."""
+    out = np.array(y, dtype=float)
+    s = mcp_angles(hand, y)
+    s0 = mcp_angles(hand, hand.u_min[None, :])[0]
+    s1 = mcp_angles(hand, hand.u_max[None, :])[0]
+    for k in range(5):
+        half = np.radians(rest_deg + growth_deg * (s[:, k] - s0[k]) / (s1[k] - s0[k])) / 2.0
+        z = None
+        for i in range(len(y)):
+            if i == 0 or sweep[i] != sweep[i - 1]:
+                z = y[i, k]
+            elif y[i, k] - z > half[i]:
+                z = y[i, k] - half[i]
+            elif z - y[i, k] > half[i]:
+                z = y[i, k] + half[i]
+            out[i, k] = z
+    return out
+
+
 def mcp_angles(hand, u_eff, radius_rel=None) -> np.ndarray:
     """q_MCP (thumb q_MP) of each tendon chain (N, 5) by the cosine law with the pulley radius
     r (1 + e_s); the reference angle of the CMC is u6 itself (gain 1)."""
@@ -121,6 +148,8 @@ def truth(hand, u, sweep, hidden: dict, extra=None) -> np.ndarray:
     chains = hand.params.chains
     # drive: play in the drive, then the tendon's slack on what the drive delivers
     u_eff = played(u, sweep, h["backlash"]) if "backlash" in h else np.array(u, dtype=float)
+    if "drive_friction" in h:
+        u_eff = friction_band(hand, u_eff, sweep, *h["drive_friction"])
     if "tendon_slack" in h:
         u_eff = slack(hand, u_eff, h["tendon_slack"])
     s = mcp_angles(hand, u_eff, h.get("pulley_radius_error"))

@@ -17,7 +17,7 @@ from .test_noise_floor import OFFSETS, analytic, eccentric_data, measure, sweeps
 from .test_plugin import compliant
 
 LIBRARY = ("tendon_slack", "pulley_radius_error", "tendon_elasticity", "tendon_elasticity_per_finger",
-           "friction_hysteresis", "joint_offset", "camera_scale", "backlash")
+           "friction_hysteresis", "joint_offset", "camera_scale", "backlash", "drive_friction")
 PERIODIC = ("the residual is periodic in u with period 40 deg: no library effect predicts that; "
             "look at the servo horn / pulley eccentricity")
 
@@ -113,6 +113,28 @@ def test_per_finger_compliance_matches_tendon_elasticity(hand):
     # the per-finger compliance is the best candidate (5 parameters fit what 15 scales only approach)
     assert sm["best_candidate"] == "tendon_elasticity_per_finger" and sm["mismatches"] == []
     assert out["selected"] == ["tendon_elasticity_per_finger"] and out["explained"] is True
+
+
+def test_a_friction_band_on_the_drive_matches_drive_friction(hand):
+    """The drive tendon's friction band (written row by row in hidden.friction_band, 1.5 deg at rest,
+    3 deg more at full flexion): a band between the branches on the MCP as on the distal joints, a
+    jump after each reversal, on every digit. Its width triples, yet the trend measures "flat" (the
+    upper half of the travel carries 1.7x the lower half's, not 2x): backlash's signature too, and
+    the fit, not the signature, picks drive_friction (widths 1.51 and 2.99 deg fitted)."""
+    from .hidden import truth
+
+    u, sweep, cj = sweeps(hand)
+    q = truth(hand, u, sweep, {"drive_friction": np.array([1.5, 3.0])})
+    out = diagnose(hand, measure(hand, u, sweep, cj, q, seed=14)).to_json()
+    sm = out["signature_match"]["before"]
+    m = sm["measured"]
+    assert (m["direction"], m["joints"], m["reversal"], m["digits"]) == ("flips", "all", "jump", "all"), m
+    assert sm["best_candidate"] == "drive_friction" and sm["mismatches"] == [], sm
+    assert sm["effects_with_this_signature"] == ["backlash", "drive_friction"]
+    assert out["selected"] == ["drive_friction"] and out["explained"] is True
+    fitted = out["effects"]["drive_friction"]["parameters"]
+    assert fitted["width_at_rest_deg"]["value"] == pytest.approx(1.5, abs=0.05)
+    assert fitted["width_growth_deg"]["value"] == pytest.approx(3.0, abs=0.1)
 
 
 def test_the_spread_across_digits(hand, monkeypatch):
