@@ -148,7 +148,8 @@ class Diagnosis:
         out["before"] = signature_report(measured_features(sig["before"], left_before, self.noise), best, REGISTRY)
         if not v["explained"]:
             left = [c for c, pj in v["per_joint"].items() if not pj["consistent"]]
-            last = self.rounds[-1] if self.rounds and self.rounds[-1] else None
+            # the last round that scored anything (a family with nothing left to score ends empty)
+            last = next((r for r in reversed(self.rounds) if r), None)
             best_after = last[0].effect if last and not last[0].passes else None
             out["after"] = signature_report(measured_features(sig["after"], left, self.noise), best_after, REGISTRY)
         return out

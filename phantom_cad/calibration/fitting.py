@@ -196,16 +196,22 @@ def effective_size(problem: Problem, residual: np.ndarray) -> float:
     m = residual.size
     if m < 3:
         return float(m)
-    # pairs of cells of one joint on consecutive rows of one sweep (cells sorted by joint, then row)
-    order = np.lexsort((problem.r_idx, problem.j_idx))
-    r, j, e = problem.r_idx[order], problem.j_idx[order], residual[order]
-    pair = (j[1:] == j[:-1]) & (r[1:] == r[:-1] + 1) & (problem.sweep[r[1:]] == problem.sweep[r[:-1]])
+    a, b = lag_pairs(problem)
     den = float(residual @ residual)
-    if den <= 0 or not pair.any():
+    if den <= 0 or not a.size:
         return float(m)
-    rho = float(np.sum(e[:-1][pair] * e[1:][pair])) / den
+    rho = float(np.sum(residual[a] * residual[b])) / den
     rho = min(max(rho, 0.0), 0.95)
     return m * (1.0 - rho) / (1.0 + rho)
+
+
+def lag_pairs(problem: Problem) -> tuple[np.ndarray, np.ndarray]:
+    """(a, b): the cells (indices into a residual of ``problem``) of every pair of one joint on
+    consecutive rows of one sweep, b the later one."""
+    order = np.lexsort((problem.r_idx, problem.j_idx))
+    r, j = problem.r_idx[order], problem.j_idx[order]
+    pair = (j[1:] == j[:-1]) & (r[1:] == r[:-1] + 1) & (problem.sweep[r[1:]] == problem.sweep[r[:-1]])
+    return order[:-1][pair], order[1:][pair]
 
 
 #: rows predicted at once: the effects' intermediates stay small on a 1,000,000-row file

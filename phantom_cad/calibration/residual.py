@@ -19,7 +19,18 @@ Noise floor (from the data, not from a model)
 Verdict
     A joint is consistent with noise when its residual MAE <= FLOOR_FACTOR * its floor * (1 +
     SMALL_SAMPLE / sqrt(n)), n its number of measured cells; overall likewise with every cell.
-    ``explained`` is true only when every joint and the whole are consistent.
+    And the residual must be white: noise is independent from sample to sample, structure is not.
+    Over the pairs of neighbouring cells (one joint, consecutive rows of one sweep) the sum
+    S = sum e_k e_k+1 has mean 0 for independent noise and standard error sqrt(sum (e_k e_k+1)^2)
+    (self-normalised: each joint's own noise level counts); z = S / that error is about N(0, 1).
+    Overall z > WHITENESS_Z (4: one false alarm in 30,000 reports) is structure the MAE test can
+    miss (a smooth 0.05 deg error under 0.1 deg noise raises the MAE by 12 %, under the 20 % of
+    FLOOR_FACTOR, but correlates neighbours: z 5.2 for the hidden gravity sag of
+    tests/calibration, at most 1.7 over the hidden-effect matrix's library cases). A joint is then
+    not consistent when its own z > JOINT_Z (the joints that carry it; the largest if none does);
+    a joint whose own z > WHITENESS_Z is not consistent in any case. The lag-1 autocorrelation
+    S / sum e^2 is reported with z. ``explained`` is true only when every joint and the whole are
+    consistent.
 
 Signature (per joint, of a residual)
     the part that flips with the direction of motion and the part that does not (bins of the
@@ -50,6 +61,10 @@ import numpy as np
 from ..kinematics.topology import CMC_SERVO, DISTAL_JOINTS, JOINT_SERVO, Q_COLUMNS, SERVOS
 from ..units import DEG_PER_RAD
 
+#: the residual is white when its neighbours' correlation stands at most this many standard errors above 0
+WHITENESS_Z = 4.0
+#: when the whole is not white: the joints whose own correlation stands this many standard errors above 0
+JOINT_Z = 2.5
 #: residual MAE up to this multiple of the noise floor is "consistent with noise" ...
 FLOOR_FACTOR = 1.2
 #: ... times (1 + SMALL_SAMPLE / sqrt(n)): the spread of an n-cell MAE and of the floor's own estimate
@@ -168,14 +183,33 @@ def _cells(fr):
     return p.rows[p.r_idx], p.j_idx, fr.residual
 
 
+def whiteness(e: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
+    """(lag-1 autocorrelation, z) of a residual ``e`` over its neighbour pairs (a, b) (module
+    docstring, Verdict): z = sum e_a e_b / sqrt(sum (e_a e_b)^2), about N(0, 1) for white noise."""
+    prod = e[a] * e[b]
+    den, se = float(e @ e), math.sqrt(float(prod @ prod))
+    s = float(prod.sum())
+    return (s / den if den > 0 else 0.0), (s / se if se > 0 else 0.0)
+
+
 def verdict(fr, noise: NoiseFloor, keep: np.ndarray | None = None) -> dict:
-    """``explained`` and, per joint, MAE / RMS / tolerance and the structured part beyond the noise;
-    ``keep``: the cells to judge (default all)."""
+    """``explained`` and, per joint, MAE / RMS / tolerance, the neighbours' correlation and the
+    structured part beyond the noise; ``keep``: the cells to judge (default all)."""
+    from .fitting import lag_pairs
+
     rows, jj, r = _cells(fr)
+    a, b = lag_pairs(fr.problem)
+    e = np.asarray(fr.residual, dtype=float)
     if keep is not None:
         rows, jj, r = rows[keep], jj[keep], r[keep]
+        both = keep[a] & keep[b]
+        a, b = a[both], b[both]
+        e = np.where(keep, e, 0.0)
+    rho_all, z_all = whiteness(e, a, b)
+    white_all = z_all <= WHITENESS_Z
+    cell_joint = fr.problem.j_idx
+    pair_joint = cell_joint[a]
     per = {}
-    ok_all = True
     for j, c in enumerate(Q_COLUMNS):
         sel = jj == j
         if not sel.any() or c not in noise.floor_deg or not np.isfinite(noise.floor_deg[c]):
@@ -185,16 +219,28 @@ def verdict(fr, noise: NoiseFloor, keep: np.ndarray | None = None) -> dict:
         rms_j = float(np.sqrt(np.mean(x * x)))
         tol = tolerance(noise.floor_deg[c], x.size)
         structured_rms = math.sqrt(max(0.0, rms_j ** 2 - noise.sigma_deg[c] ** 2))
-        consistent = mae_j <= tol
-        ok_all &= consistent
+        pj = pair_joint == j
+        rho_j, z_j = whiteness(np.where(cell_joint == j, e, 0.0), a[pj], b[pj])
         per[c] = {"mae_deg": round(mae_j, 5), "rms_deg": round(rms_j, 5), "tolerance_deg": round(tol, 5),
-                  "consistent": bool(consistent), "structured_rms_deg": round(structured_rms, 5),
+                  "consistent": bool(mae_j <= tol and z_j <= WHITENESS_Z),
+                  "autocorrelation": round(rho_j, 4), "whiteness_z": round(z_j, 2),
+                  "structured_rms_deg": round(structured_rms, 5),
                   "structured_mae_deg": round(structured_rms * MAE_PER_SIGMA, 5)}
+    if not white_all and per:
+        # the whole holds structure: the joints that carry it (the largest if none stands out alone)
+        carry = ([c for c, v in per.items() if v["whiteness_z"] > JOINT_Z]
+                 or [max(per, key=lambda c: per[c]["whiteness_z"])])
+        for c in carry:
+            per[c]["consistent"] = False
+    ok_all = all(v["consistent"] for v in per.values())
     mae_all = float(np.mean(np.abs(r))) if r.size else float("nan")
     tol_all = tolerance(noise.overall_deg, r.size)
-    overall_ok = bool(mae_all <= tol_all)
-    return {"explained": bool(ok_all and overall_ok), "overall": {"mae_deg": round(mae_all, 5),
-            "tolerance_deg": round(tol_all, 5), "consistent": overall_ok}, "per_joint": per}
+    overall_ok = bool(mae_all <= tol_all and white_all)
+    return {"explained": bool(ok_all and overall_ok),
+            "overall": {"mae_deg": round(mae_all, 5), "tolerance_deg": round(tol_all, 5), "consistent": overall_ok,
+                        "autocorrelation": round(rho_all, 4), "whiteness_z": round(z_all, 2),
+                        "white": bool(white_all)},
+            "per_joint": per}
 
 
 def made_worse(before: dict, after: dict, floor: dict | None, cells: dict | None) -> list[str]:
@@ -592,9 +638,11 @@ def signature_report(measured: dict | None, best: str | None, registry: dict) ->
         sentences.append("no single library effect leaves this signature (two effects at once, or one outside the library)")
     elif best is not None and best not in fits:
         sentences.append(f"the library effects whose declared signature matches: {', '.join(fits)}")
+    elif best is None:
+        sentences.append(f"the library effects whose declared signature matches: {', '.join(fits)}")
     out["sentences"] = sentences
     return out
 
 
 __all__ = ["NoiseFloor", "noise_floor", "verdict", "made_worse", "measured_features", "compare_features",
-           "signature_report", "signature", "tolerance", "FLOOR_FACTOR", "SMALL_SAMPLE"]
+           "signature_report", "signature", "tolerance", "whiteness", "FLOOR_FACTOR", "SMALL_SAMPLE", "WHITENESS_Z"]

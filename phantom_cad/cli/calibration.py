@@ -353,8 +353,11 @@ def verdict_lines(result) -> list[str]:
         worst = sorted(left, key=lambda c: -left[c]["structured_rms_deg"])
         joints = ", ".join(f"{c} {left[c]['structured_rms_deg']:.2f}" for c in worst)
         overall = result["verdict"]["overall"]
+        white = ("" if overall["white"] else
+                 f"; neighbouring residuals are correlated: lag-1 autocorrelation {overall['autocorrelation']:.2f}, "
+                 f"{overall['whiteness_z']:.1f} standard errors above white noise's 0")
         out.append(f"explained: no - {model} leaves structure beyond the noise "
-                   f"(overall {overall['mae_deg']:.3f} deg MAE, consistent up to {overall['tolerance_deg']:.3f}); "
+                   f"(overall {overall['mae_deg']:.3f} deg MAE, consistent up to {overall['tolerance_deg']:.3f}{white}); "
                    f"RMS beyond the noise, deg: {joints or 'none per joint'}")
     for when, key in (("the analytic model's residual", "before"), ("what is left", "after")):
         sentences = result["signature"][key]["sentences"]

@@ -73,6 +73,24 @@ def test_unit_noise_samples_known_answer():
     assert np.allclose(unit_noise_samples(np.arange(5.0), 2.0 * np.arange(5.0) + 1.0), 0.0)
 
 
+def test_whiteness_known_answer_and_null_distribution():
+    """residual.whiteness: by hand on three samples; on white noise z is N(0, 1) (200 draws); on a
+    smooth error of half the noise's sd under it (a sinusoid over the sweep) z stands above 4."""
+    from phantom_cad.calibration.residual import WHITENESS_Z, whiteness
+
+    e = np.array([1.0, 2.0, 3.0])
+    rho, z = whiteness(e, np.array([0, 1]), np.array([1, 2]))
+    assert rho == pytest.approx(8 / 14) and z == pytest.approx(8 / math.sqrt(40))
+    rng = np.random.default_rng(11)
+    n = 1000
+    a, b = np.arange(n - 1), np.arange(1, n)
+    zs = np.array([whiteness(rng.normal(0, 0.1, n), a, b)[1] for _ in range(200)])
+    assert abs(zs.mean()) < 0.25 and 0.8 < zs.std() < 1.2 and zs.max() < WHITENESS_Z
+    smooth = 0.05 * math.sqrt(2) * np.sin(np.linspace(0, 4 * np.pi, n))       # RMS 0.05
+    # expected z = sqrt(n) s^2 / (sigma^2 + s^2) = 6.3
+    assert whiteness(rng.normal(0, 0.1, n) + smooth, a, b)[1] > WHITENESS_Z
+
+
 def test_nothing_hidden_floor_and_explained_in_19_of_20_seeds(hand):
     u, sweep, cj = sweeps(hand)
     q_true = analytic(hand, u)
