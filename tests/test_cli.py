@@ -125,7 +125,7 @@ def test_params_validate_good_and_bad(tmp_path, document):
     bad.write_text(tomli_w.dumps(document))
     proc = cli("params", "validate", bad, check=False)
     assert proc.returncode == 2
-    assert proc.stderr.strip() == f"FAIL {bad}: fingers.index.pulley_radius_mm.dip = 0: must be > 0"
+    assert proc.stderr.strip() == f"error: {bad}: fingers.index.pulley_radius_mm.dip = 0: must be > 0"
 
 
 def test_params_show_prints_derived_quantities():
@@ -192,8 +192,8 @@ def test_params_validate_goes_on_after_a_bad_file(tmp_path):
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert r.stdout.count(f"OK {DEFAULT_PARAMS}") == 2
     assert r.stderr.splitlines() == [
-        f"FAIL <file> = {str(binary)!r}: is not UTF-8 text (invalid start byte at byte 0)",
-        f"FAIL <file> = {str(tmp_path)!r}: is a folder, not a parameter file"]
+        f"error: <file> = {str(binary)!r}: is not UTF-8 text (invalid start byte at byte 0)",
+        f"error: <file> = {str(tmp_path)!r}: is a folder, not a parameter file"]
 
 
 def test_model_warns_outside_the_travel_and_strict_refuses(tmp_path):
