@@ -204,10 +204,10 @@ class Context:
         #: the sweep code of every row of the batch (N,), or None
         self.sweep = None if history is None else history.sweep[self.rows]
         self.u_eff = u.copy()                       # servo stage output
-        #: the plays on the drive applied so far ((key, half width function) pairs, see apply_play)
-        #: and u_eff as it was before the first of them
+        #: the plays on the drive applied so far ((key, half width function, servos), see apply_play)
+        #: and what their one combined play adds to u_eff (N, 6)
         self.plays: list = []
-        self.u_before_play: np.ndarray | None = None
+        self.play_delta = np.zeros_like(self.u_eff)
         self.radius_scale = np.ones(len(CHAINS))    # reference stage: r_eff = r * radius_scale
         self.s: np.ndarray | None = None            # reference angles (N, 6), after the reference stage
         #: k_s / EA (1/m) felt by each chain's elastic segments (N, chains); 0 = analytic model
@@ -499,12 +499,11 @@ def apply_play(ctx: Context, key, half_width, servos) -> None:
     the run starts). Plays in series (the servo gear's backlash, then the drive tendon's friction
     band) act as one play of the summed width: after a reversal the output stands still until the
     command has crossed both bands, then trails it by both halves. So the servo stage keeps one play,
-    of every width added so far, on what came before the first (exact for constant widths; a width
-    that follows the command is taken at the command). The output at the start of each run comes
-    from the whole history (play_start), computed once per set of plays."""
+    of every width added so far: its contribution to u_eff (``ctx.play_delta``) is replaced, what
+    other servo-stage effects did stays (exact for constant widths; a width that follows the
+    command is taken at the command). The output at the start of each run comes from the whole
+    history (play_start), computed once per set of plays."""
     h = ctx.history
-    if ctx.u_before_play is None:
-        ctx.u_before_play = ctx.u_eff.copy()
     ctx.plays.append((key, half_width, frozenset(int(j) for j in np.arange(N_SERVOS)[servos])))
     keys = tuple(k for k, _, _ in ctx.plays)
 
@@ -512,12 +511,13 @@ def apply_play(ctx: Context, key, half_width, servos) -> None:
         return sum(f(rows) for _, f, _ in ctx.plays)
 
     half_rows = total(ctx.rows)
-    u_eff = ctx.u_before_play.copy()
+    delta = np.zeros_like(ctx.u_eff)
     for j in sorted(set().union(*(sv for _, _, sv in ctx.plays))):
         runs = h.runs(j)
         y0 = h.cached(("play", keys, j), lambda runs=runs, j=j: play_start(runs, total(runs.last)[:, j]))
-        u_eff[:, j] += play(ctx.u[:, j], ctx.rows, runs, half_rows[:, j], y0) - ctx.u[:, j]
-    ctx.u_eff = u_eff
+        delta[:, j] = play(ctx.u[:, j], ctx.rows, runs, half_rows[:, j], y0) - ctx.u[:, j]
+    ctx.u_eff = ctx.u_eff - ctx.play_delta + delta
+    ctx.play_delta = delta
 
 
 @register_effect

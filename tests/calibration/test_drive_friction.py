@@ -75,3 +75,29 @@ def test_without_history_nothing_and_the_control_law_aims_at_the_middle(hand, re
     w = 2 * np.degrees(eff.half_width(hand, np.stack([hand.u_min, hand.u_max]), x))
     assert w[:, :5] == pytest.approx(np.array([[2.0] * 5, [4.0] * 5]), abs=1e-12)
     assert np.all(w[:, 5] == 0.0)
+
+
+def test_a_servo_effect_between_the_two_plays_is_kept(hand, recording):
+    """The servo stage keeps one play of the summed widths and replaces only its own contribution:
+    an effect ordered between backlash (5) and drive_friction (7) (here a constant 1 deg on u2)
+    acts as it would after both."""
+    from phantom_cad.calibration.effects import Effect
+
+    class Shift(Effect):
+        name, stage = "shift_u2", "servo"
+
+        def __init__(self, order):
+            self.order = order
+
+        def apply(self, ctx, x):
+            ctx.u_eff[:, 1] += np.radians(1.0)
+
+    u, sweep, d, hist = recording
+    b = np.full(6, 2.0)
+    x = np.array([1.0, 1.5])
+    plays = [(get_effect("backlash"), b), (get_effect("drive_friction"), x)]
+    between = run_pipeline(hand, [*plays, (Shift(6), np.zeros(0))], u, d, 0.0, hist)
+    after = run_pipeline(hand, [*plays, (Shift(8), np.zeros(0))], u, d, 0.0, hist)
+    without = run_pipeline(hand, plays, u, d, 0.0, hist)
+    assert np.allclose(between, after, rtol=0, atol=1e-14)
+    assert not np.allclose(between, without)
