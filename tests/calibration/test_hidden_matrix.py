@@ -283,16 +283,9 @@ PAIR_XFAIL: dict[tuple[str, str], str] = {
     ("pulley_radius_error", "camera_scale"):
         "selected ['camera_scale'] only: " + _CAMERA_PRUNE.format("pulley_radius_error, joint_offset",
                                                                   "pulley_radius_error")
-        + "; MAE after 0.0766 vs floor 0.0782, model-vs-truth 0.0148 (the fit is fine, the attribution is not)",
-    ("tendon_elasticity", "camera_scale"):
-        "selected ['camera_scale'] only: " + _CAMERA_PRUNE.format("tendon_elasticity, joint_offset",
-                                                                  "tendon_elasticity")
-        + " (a uniform compliance is exactly a per-joint scale of the distal joints, q_k = c_k(kappa) q_MCP); "
-        "MAE after 0.0816 vs floor 0.0809, model-vs-truth 0.0068",
-    ("tendon_elasticity_per_finger", "camera_scale"):
-        "selected ['camera_scale'] only: " + _CAMERA_PRUNE.format(
-            "pulley_radius_error, tendon_elasticity_per_finger, joint_offset", "tendon_elasticity_per_finger")
-        + "; MAE after 0.0797 vs floor 0.0776, model-vs-truth 0.0095",
+        + "; MAE after 0.0766 vs floor 0.0782, model-vs-truth 0.0148 (the fit is fine, the attribution is not: "
+        "identifiable next to the scales by the singular values, but refitted with them the radius errors stand "
+        "at |z| <= 3.0, where spurious ones on camera-only data reach 2.4)",
 }
 
 
@@ -303,6 +296,16 @@ def pair_cases():
         yield pytest.param(a, b, k, marks=marks, id=f"{a}+{b}")
 
 
+#: a hand effect a camera's per-joint scales duplicate exactly on a sweep (a compliance scales each
+#: distal joint by a constant, q_k = c_k(kappa) q_MCP): no rule on these data can attribute it, so
+#: what is asserted is that the report says so (diagnose._duplicated: "the data cannot tell X from
+#: camera_scale", and that a calibrated control law lacks X) and that the fit meets the criteria.
+#: Measured: the backward step after camera_scale drops the hidden compliance (dIC -6.8 / -34.0),
+#: MAE after 0.0816 / 0.0797 against floors 0.0809 / 0.0776, model-vs-truth 0.0068 / 0.0095 deg.
+#: (Strict xfails until the report named the ambiguity.)
+DUPLICATED_BY_CAMERA = {"tendon_elasticity", "tendon_elasticity_per_finger"}
+
+
 @pytest.mark.parametrize("a, b, k", list(pair_cases()))
 def test_two_hidden_effects(hand, a, b, k):
     hidden = hidden_values(hand, [a, b], seed=100 + k)
@@ -310,13 +313,18 @@ def test_two_hidden_effects(hand, a, b, k):
     info = summary(out, floor, vs_truth)
     if (a, b) in NESTED:
         assert out["selected"] == NESTED[a, b], info
+    elif b == "camera_scale" and a in DUPLICATED_BY_CAMERA and a not in out["selected"]:
+        assert b in out["selected"], info
+        named = [n for n in out["notes"] if n.startswith(f"{a} was dropped after camera_scale")]
+        assert named and f"the data cannot tell {a} from camera_scale" in named[0], (info, out["notes"])
+        assert f"a calibrated control law lacks {a}" in named[0]
     else:
         assert a in out["selected"] and b in out["selected"], info
     check_fit(out, floor, vs_truth)
 
 
 def test_a_hand_effect_the_camera_duplicates_is_named(hand):
-    """A uniform compliance and a camera scale hidden together (the strict xfail above): the
+    """A uniform compliance and a camera scale hidden together (DUPLICATED_BY_CAMERA above): the
     attribution cannot be right from these data (a compliance scales each distal joint by a
     constant, a per-joint scale), so the report must say which hand effect the measurement side
     replaced and that the control law lacks it; a joint offset it dropped (separable: it is there
