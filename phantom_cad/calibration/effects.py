@@ -120,8 +120,8 @@ class Runs:
     """One servo's runs of rows with one direction of motion within one sweep (a new run at every
     reversal and at every new sweep), over a :class:`History`: ``of_row`` (R,) the run of every
     row; per run, in row order: ``direction`` (+1/-1/0), ``first`` (the sweep's first run),
-    ``u_start`` and ``u_end`` (the command at its first and last row), ``last`` (its last row). Within a run the command
-    is monotone (flat steps hold the direction)."""
+    ``u_start`` and ``u_end`` (the command at its first and last row), ``last`` (its last row).
+    Within a run the command is monotone (flat steps hold the direction)."""
 
     of_row: np.ndarray
     direction: np.ndarray
@@ -493,11 +493,11 @@ def play(u: np.ndarray, rows: np.ndarray, runs: Runs, half, y0: np.ndarray) -> n
 
 
 def apply_play(ctx: Context, key, half_width, servos) -> None:
-    """Add a play (a dead band at each reversal) to the drive of ``servos`` (0-based): its half width
-    (indices or a slice) in rad ``half_width(rows)`` (len(rows), 6) at rows of the history (one value per servo, from the
-    command there; 0 on the other servos). ``key`` names the play and its parameters (the cache of
-    the run starts). Plays in series (the servo gear's backlash, then the drive tendon's friction
-    band) act as one play of the summed width: after a reversal the output stands still until the
+    """Add a play (a dead band at each reversal) to the drive of ``servos`` (0-based indices or a
+    slice): its half width in rad ``half_width(rows)`` (len(rows), 6) at rows of the history (one
+    value per servo, from the command there; 0 on the other servos). ``key`` names the play and its
+    parameters (the cache of the run starts). Plays in series (the servo gear's backlash, then the
+    drive tendon's friction band) act as one play of the summed width: after a reversal the output stands still until the
     command has crossed both bands, then trails it by both halves. So the servo stage keeps one play,
     of every width added so far: its contribution to u_eff (``ctx.play_delta``) is replaced, what
     other servo-stage effects did stays (exact for constant widths; a width that follows the
