@@ -618,13 +618,9 @@ class DriveFriction(Effect):
         out[..., TENDON_SERVOS] = ((s - hand.s_min) / np.where(span > 0, span, 1.0))[..., TENDON_SERVOS]
         return out
 
-    @classmethod
-    def half_width(cls, hand, u, x) -> np.ndarray:
-        """w(u) / 2 in rad at commands u (..., 6), per servo (0 on the CMC's direct drive)."""
-        return cls.band(cls.tension(hand, u), x)
-
     @staticmethod
     def band(tension, x) -> np.ndarray:
+        """w / 2 in rad, per servo (0 on the CMC's direct drive), at the tensions of :meth:`tension`."""
         out = 0.5 * (x[0] + x[1] * tension) * DEG
         out[..., CMC_SERVO] = 0.0
         return out

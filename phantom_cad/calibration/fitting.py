@@ -11,6 +11,7 @@ combination the data cannot separate (:mod:`.identify`) has none (NaN: not ident
 from __future__ import annotations
 
 import contextlib
+import functools
 
 from dataclasses import dataclass, field
 
@@ -88,6 +89,16 @@ class Problem:
         self.mask = np.isfinite(self.q)
         self.r_idx, self.j_idx = np.nonzero(self.mask)
         self.meas = self.q[self.mask]
+
+    @functools.cached_property
+    def lag_pairs(self) -> tuple[np.ndarray, np.ndarray]:
+        """(a, b): the cells (indices into a residual of this problem) of every pair of one joint on
+        consecutive rows of one sweep, b the later one; computed once (every fit's n_eff and the
+        verdict's whiteness read them)."""
+        order = np.lexsort((self.r_idx, self.j_idx))
+        r, j = self.r_idx[order], self.j_idx[order]
+        pair = (j[1:] == j[:-1]) & (r[1:] == r[:-1] + 1) & (self.sweep[r[1:]] == self.sweep[r[:-1]])
+        return order[:-1][pair], order[1:][pair]
 
     def subset(self, rows) -> "Problem":
         return Problem(self.hand, self.data, self.rows[np.asarray(rows)], self.all_directions, self.history)
@@ -196,22 +207,13 @@ def effective_size(problem: Problem, residual: np.ndarray) -> float:
     m = residual.size
     if m < 3:
         return float(m)
-    a, b = lag_pairs(problem)
+    a, b = problem.lag_pairs
     den = float(residual @ residual)
     if den <= 0 or not a.size:
         return float(m)
     rho = float(np.sum(residual[a] * residual[b])) / den
     rho = min(max(rho, 0.0), 0.95)
     return m * (1.0 - rho) / (1.0 + rho)
-
-
-def lag_pairs(problem: Problem) -> tuple[np.ndarray, np.ndarray]:
-    """(a, b): the cells (indices into a residual of ``problem``) of every pair of one joint on
-    consecutive rows of one sweep, b the later one."""
-    order = np.lexsort((problem.r_idx, problem.j_idx))
-    r, j = problem.r_idx[order], problem.j_idx[order]
-    pair = (j[1:] == j[:-1]) & (r[1:] == r[:-1] + 1) & (problem.sweep[r[1:]] == problem.sweep[r[:-1]])
-    return order[:-1][pair], order[1:][pair]
 
 
 #: rows predicted at once: the effects' intermediates stay small on a 1,000,000-row file

@@ -72,7 +72,7 @@ def test_without_history_nothing_and_the_control_law_aims_at_the_middle(hand, re
     assert np.allclose(run_pipeline(hand, [(eff, x)], u, d, 0.0), analytic(hand, u), atol=1e-13)
     assert eff.invertible and np.array_equal(eff.invert(hand, u, x), u)
     # the band's width at rest and at full flexion, from its parameters (file units: degrees)
-    w = 2 * np.degrees(eff.half_width(hand, np.stack([hand.u_min, hand.u_max]), x))
+    w = 2 * np.degrees(eff.band(eff.tension(hand, np.stack([hand.u_min, hand.u_max])), x))
     assert w[:, :5] == pytest.approx(np.array([[2.0] * 5, [4.0] * 5]), abs=1e-12)
     assert np.all(w[:, 5] == 0.0)
 
