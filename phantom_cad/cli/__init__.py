@@ -59,7 +59,8 @@ def _outside(values, lo, hi, columns, lines, path, degrees: bool, strict: bool, 
 @params_app.command("validate")
 def params_validate(files: list[Path] = typer.Argument(None, help="Parameter files (default: params/phantom.toml)."),
                     params: list[Path] = typer.Option(None, "--params", "-p", help="More parameter files.")):
-    """Validate parameter files (every rule the build relies on); print OK or, as an error line, the first broken rule of each."""
+    """Validate parameter files (every rule the build relies on); print OK or, as an error line, the first
+    broken rule of each."""
     from ..cad import preflight
     from ..params import ParamError, load_params
 
