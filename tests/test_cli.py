@@ -6,6 +6,7 @@ import math
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import pytest
 import tomli_w
@@ -133,6 +134,34 @@ def test_params_show_prints_derived_quantities():
     assert "ip: 0.8000 / 0.7915" in out or "ip: 0.8000 /" in out   # thumb coupling from 5:4 radii
     assert "pip: 1.2500 /" in out
     assert "q15  thumb_cmc" in out
+    assert "opposition (thumb pad to fingertip pad" in out and "(not required)" in out
+
+
+def test_params_opposition_solves_a_placement_the_file_then_reaches(tmp_path):
+    """--solve prints parameter-file lines; pasted into a copy of the file, the hand they describe
+    is read back through the parameter path and its thumb meets the three pads."""
+    import re
+    import tomllib
+
+    from phantom_cad.params import DEFAULT_PARAMS
+
+    out = cli("params", "opposition", "--solve").stdout
+    assert "index   pads +" in out                  # today's palm: not reached (issue 12)
+    lines = out[out.index("[palm]"):].splitlines()
+    solved = tomllib.loads("\n".join(lines))["palm"]
+    text = Path(DEFAULT_PARAMS).read_text()
+    for key in ("thumb_cmc_offset_mm", "thumb_cmc_axis_deg"):
+        text, n = re.subn(rf"^{key} = \[[^\]]*\]", f"{key} = {solved[key]}", text, flags=re.M)
+        assert n == 1
+    f = tmp_path / "solved.toml"
+    f.write_text(text)
+    again = cli("params", "opposition", "-p", f).stdout
+    for finger in ("index", "middle", "ring"):
+        row = next(ln for ln in again.splitlines() if ln.strip().startswith(finger))
+        pad = float(re.search(r"pads ([+-][0-9.]+) mm", row).group(1))
+        margin = float(re.search(r"margin ([+-][0-9.]+) deg", row).group(1))
+        assert pad <= 0.0 and margin > 0.0, row
+    assert "pinky" in again and "(not required)" in again
 
 
 def test_model_commands_never_import_cad(tmp_path):

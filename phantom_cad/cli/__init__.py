@@ -112,7 +112,71 @@ def describe(hand) -> str:
     out.append("")
     out.append("servos: " + ", ".join(f"{sv.label} {sv.name} [{deg(hand.u_min[sv.index]):.1f}, "
                                       f"{deg(hand.u_max[sv.index]):.1f}] deg" for sv in SERVOS))
+    out += ["", *opposition_lines(hand)]
     return "\n".join(out)
+
+
+def opposition_lines(hand, reach=None) -> list[str]:
+    """The thumb pad's closest approach to each fingertip pad over the servo travel, and how squarely
+    they meet (kinematics/opposition.py; docs/opposition.md)."""
+    import math
+
+    from ..kinematics import opposition
+    from ..units import deg, mm
+
+    reach = opposition.reach(hand) if reach is None else reach
+    out = ["opposition (thumb pad to fingertip pad over the travel; pads <= 0 mm: they meet; margin: how far "
+           f"inside the {deg(opposition.PAD_CONE):g} deg pad cone the contact direction stays):"]
+    for f, r in reach.items():
+        pad = (f"pads {mm(r.gap):+.1f} mm at u1 {deg(r.u_thumb[0]):.1f}, u6 {deg(r.u_thumb[1]):.1f}, "
+               f"{f} {deg(r.u_finger):.1f} deg" if math.isfinite(r.gap) else "the pads never face each other")
+        squarely = (f"; margin {deg(r.margin):+.1f} deg at u1 {deg(r.u_contact[0]):.1f}, u6 {deg(r.u_contact[1]):.1f}, "
+                    f"{f} {deg(r.u_contact[2]):.1f} deg" if math.isfinite(r.margin) else "")
+        need = "" if f in opposition.OPPOSED else " (not required)"
+        out.append(f"  {f:7s} {pad}{squarely}; tips on any side {mm(r.surface_gap):+.1f} mm{need}")
+    return out
+
+
+@params_app.command("opposition")
+def params_opposition(params: Optional[Path] = ParamsOpt,
+                      solve: bool = typer.Option(False, "--solve", help="Search the thumb's CMC placement that "
+                                                 "maximizes the opposition margin (seconds) and print it as "
+                                                 "parameter-file lines.")):
+    """The thumb's reach to the fingertip pads; with --solve, the CMC placement that opposes index,
+    middle and ring best (docs/opposition.md). Nothing is written: paste the printed lines."""
+    import math
+
+    from .. import load_hand
+    from ..kinematics import opposition
+    from ..units import deg, mm
+
+    hand = load_hand(params)
+    p = hand.params
+    typer.echo(f"{p.source}: CMC at {[round(mm(v), 2) for v in p.palm.thumb_cmc_offset]} mm, axis "
+               f"{[round(deg(v), 2) for v in p.palm.thumb_cmc_axis]} deg")
+    typer.echo("\n".join(opposition_lines(hand)))
+    if not solve:
+        return
+    sol = opposition.solve(hand)
+    b = opposition.default_bounds(p)
+    typer.echo("")
+    typer.echo(f"solved ({sol.evaluations} evaluations; bounds: CMC "
+               + ", ".join(f"{a} [{mm(lo):.1f}, {mm(hi):.1f}] mm" for a, (lo, hi) in zip("xyz", b.offset)) + "; "
+               + ", ".join(f"{a} [{deg(lo):.0f}, {deg(hi):.0f}] deg"
+                           for a, (lo, hi) in zip(("roll", "pitch", "yaw"), b.axis))
+               + "):")
+    typer.echo("\n".join(opposition_lines(hand, sol.reach)))
+    verdict = ("the pads of index, middle and ring all meet" if math.isfinite(sol.margin) and sol.margin >= 0.0
+               else "index, middle and ring are not all met pad to pad")
+    typer.echo(f"margin {deg(sol.margin):+.1f} deg ({verdict}); the thumb's links stay "
+               f"{mm(-sol.intrusion):.1f} mm outside the palm envelope" if sol.intrusion <= 0.0 else
+               f"margin {deg(sol.margin):+.1f} deg ({verdict}); the thumb's links reach {mm(sol.intrusion):.1f} mm "
+               "into the palm envelope")
+    typer.echo("")
+    typer.echo("[palm]")
+    typer.echo(f"thumb_cmc_offset_mm = [{', '.join(f'{mm(v):.2f}' for v in sol.offset)}]"
+               f"  # solved: opposition margin {deg(sol.margin):+.1f} deg (phantom-cad params opposition --solve)")
+    typer.echo(f"thumb_cmc_axis_deg = [{', '.join(f'{deg(v):.2f}' for v in sol.axis)}]")
 
 
 # -- model ---------------------------------------------------------------------

@@ -35,6 +35,7 @@ import math
 import numpy as np
 
 from .. import units
+from ..params.rules import slot_back
 from .topology import CMC_Q, FINGERS, JOINTS, LINKS, N_JOINTS, SERVOS, chain, joint, link, servo_joints
 
 MIRROR = np.diag([-1.0, 1.0, 1.0, 1.0])
@@ -127,11 +128,17 @@ def T_palm_socket(params, finger: str) -> np.ndarray:
     return T_palm_finger_base(params, finger) @ trans(0.0, -params.cad.finger_base_length, 0.0)
 
 
-def T_palm_thumb_cmc_base(params, q15: float = 0.0) -> np.ndarray:
-    roll, pitch, yaw = params.palm.thumb_cmc_axis
+def thumb_cmc_placement(offset, axis) -> np.ndarray:
+    """T_palm_cmc_base at q15 = 0 for a CMC centre ``offset`` (m, palm frame) and ``axis`` =
+    (roll, pitch, yaw) (rad): R = Rz(yaw) Ry(pitch) Rx(roll); the CMC axis is the frame's z."""
+    roll, pitch, yaw = axis
     T = rot_z(yaw) @ rot_y(pitch) @ rot_x(roll)
-    T[:3, 3] = params.palm.thumb_cmc_offset
-    return T @ rot_z(q15)
+    T[:3, 3] = offset
+    return T
+
+
+def T_palm_thumb_cmc_base(params, q15: float = 0.0) -> np.ndarray:
+    return thumb_cmc_placement(params.palm.thumb_cmc_offset, params.palm.thumb_cmc_axis) @ rot_z(q15)
 
 
 def tendon_height(params) -> float:
@@ -235,6 +242,33 @@ def guide_sites(params, digit: str) -> tuple[tuple[str, np.ndarray], tuple[str, 
     if params.side == "left":
         p1, p2 = MIRROR[:3, :3] @ p1, MIRROR[:3, :3] @ p2
     return (ref.parent, p1), (ref.child, p2)
+
+
+#: where a fingertip's pad centre sits on the tip's half cylinder: this far (rad) from the palmar
+#: face toward the tip (the flat palmar face carries the tendon's knot well)
+PAD_ANGLE = math.pi / 4.0
+
+
+def fingertip(params, digit: str) -> tuple[float, float, float]:
+    """(length, tip radius, half width), metres, of a digit's distal phalanx: its tip is a half
+    cylinder about the link's x at y = length - radius, of radius half the thickness (or less, when
+    the phalanx is shorter than the clevis slot behind it needs), across the digit's width."""
+    d = params.digit(digit)
+    L = d.distal
+    return L, min(d.thickness / 2.0, L - slot_back(d.thickness, params.print.hole_clearance)), d.width / 2.0
+
+
+def T_distal_pad(params, digit: str) -> np.ndarray:
+    """T_link_pad (metres, right hand) of a fingertip: the centre of its contact pad on the tip's
+    half cylinder, PAD_ANGLE from the palmar face toward the tip; z the outward surface normal
+    there, x the link's x."""
+    L, r, _ = fingertip(params, digit)
+    n = np.array([0.0, math.sin(PAD_ANGLE), -math.cos(PAD_ANGLE)])
+    T = np.eye(4)
+    T[:3, 0], T[:3, 2] = (1.0, 0.0, 0.0), n
+    T[:3, 1] = np.cross(n, T[:3, 0])
+    T[:3, 3] = np.array([0.0, L - r, 0.0]) + r * n
+    return T
 
 
 def rest_transforms(params) -> dict[str, np.ndarray]:

@@ -17,6 +17,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 FINGERS = ("index", "middle", "ring", "pinky")
+#: the fingers whose pads the thumb's pad must reach (the paper's opposition postures 1-3)
+OPPOSED_FINGERS = ("index", "middle", "ring")
 DIGITS = ("thumb",) + FINGERS
 
 

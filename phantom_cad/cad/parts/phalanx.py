@@ -18,6 +18,7 @@ import math
 import numpy as np
 
 from ... import canon
+from ...kinematics import frames as F
 from ...kinematics.topology import CMC_Q, LINKS, digit_links, joint
 from ..measure import eyelet_centres, point_line_distance
 from .base import Part, child_joint, digit_table, parent_joint
@@ -199,25 +200,17 @@ class Phalanx(Part):
 
     @property
     def tip_radius(self) -> float:
-        """Radius of the fingertip's half cylinder (distal phalanx): half the thickness, or less."""
-        return min(self.sec.thickness / 2.0, self.length - self.sec.slot_back)
-
-    #: where the pad centre sits on the fingertip's round: this far from palmar toward the tip
-    PAD_ANGLE = math.pi / 4.0
+        """Radius of the fingertip's half cylinder (distal phalanx): half the thickness, or less
+        (``frames.fingertip``)."""
+        return mm(F.fingertip(self.params, self.digit)[1])
 
     def pad(self) -> np.ndarray:
-        """T_link_pad (mm) of a fingertip: the centre of its contact pad, on the tip's half cylinder
-        PAD_ANGLE (45 deg) from the palmar face toward the tip (the flat palmar face carries the
-        tendon's knot well), its z axis the outward surface normal there, its x the link's x."""
+        """T_link_pad (mm) of a fingertip (``frames.T_distal_pad``): the centre of its contact pad,
+        on the tip's half cylinder ``frames.PAD_ANGLE`` (45 deg) from the palmar face toward the
+        tip, its z axis the outward surface normal there, its x the link's x."""
         if self.distal_joint is not None:
             raise ValueError(f"{self.name} is not a fingertip")
-        r, a = self.tip_radius, self.PAD_ANGLE
-        n = np.array([0.0, math.sin(a), -math.cos(a)])          # outward normal, link frame
-        T = np.eye(4)
-        T[:3, 0], T[:3, 2] = (1.0, 0.0, 0.0), n
-        T[:3, 1] = np.cross(n, T[:3, 0])
-        T[:3, 3] = np.array([0.0, self.length - r, 0.0]) + r * n
-        return T
+        return F.to_mm(F.T_distal_pad(self.params, self.digit))
 
     def verify(self, shape) -> list[str]:
         """The routing model's grooves on this link (floor R - cord / 2); on the guide link, the

@@ -1,0 +1,380 @@
+"""Thumb opposition: can the thumb's pad reach the fingertips' pads, and where should the thumb sit?
+numpy only (docs/opposition.md).
+
+Each fingertip is modelled by the capsule inside its printed tip: the tip is a half cylinder about
+the distal link's x (``frames.fingertip``: length L, radius r, half width w); the capsule's segment
+runs along x over |x| <= max(w - r, 0) at y = L - r, with radius r. The capsule lies inside the
+printed tip, so a capsule gap is never smaller than the solids' gap.
+
+For the thumb at commands (u1, u6) and a finger at its command u_k, the two capsules' closest
+points give the *gap* (distance between the segments minus the two radii: negative when they
+overlap) and the contact direction v (thumb to finger). The contact is *pad to pad* when v lies
+within ``PAD_CONE`` of the thumb pad's outward normal and -v within it of the finger pad's
+(``frames.T_distal_pad``: 45 deg from the palmar face toward the tip; a 45 deg cone spans the
+palmar face to the very tip). The joint angles are the model's at the commands
+(``hand.forward(u, compensated=True)``), over a grid of each servo's travel.
+
+* ``reach(hand)``: per finger, the smallest pad-to-pad gap over the commands (<= 0: the pads meet
+  at some command; by continuity the contact gap 0 is passed on the way from rest) and how
+  squarely they meet: the *margin*, ``PAD_CONE`` less the smallest facing angle of the command
+  pairs in contact (overlapping by at most ``CONTACT_BAND``). A positive margin means the pads meet
+  with the contact direction that far inside the pad cone: a margin for build error.
+* ``solve(hand)``: the thumb's CMC centre and axis (``palm.thumb_cmc_offset_mm``,
+  ``palm.thumb_cmc_axis_deg``) within bounds that maximize the *opposition margin*, the smallest
+  margin of index, middle and ring, with the thumb's links kept out of the palm a human-scale hand
+  has (``palm_envelope``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import frames as F
+from .topology import CMC_Q, FINGERS, N_SERVOS, OPPOSED_FINGERS, SERVOS, THUMB_CHAIN, chain
+
+#: the half angle (rad) of the cone around a pad's normal in which a contact counts as pad to pad
+PAD_CONE = math.radians(45.0)
+#: the fingers the thumb opposes (the paper's postures 1-3); the pinky is reported, not required
+OPPOSED = OPPOSED_FINGERS
+THUMB = THUMB_CHAIN.digit
+#: a pair of commands counts as *in contact* when its capsules overlap by at most this (m): the
+#: pads have met on the way there and press by less than a grid step
+CONTACT_BAND = 3e-3
+#: the search's price (rad of margin) of a metre of the thumb inside the palm envelope
+INTRUSION_WEIGHT = 100.0
+
+
+@dataclass(frozen=True)
+class Tips:
+    """Fingertip capsules at a batch of commands, in the palm frame (right hand, metres)."""
+    a: np.ndarray        # (n, 3) one end of the capsule's segment
+    b: np.ndarray        # (n, 3) the other end
+    normal: np.ndarray   # (n, 3) the pad's outward normal
+    radius: float
+    u: np.ndarray        # (n, k) the commands (rad) of the servos that move it
+
+
+def _servo(digit: str) -> int:
+    return chain(digit).servo
+
+
+def _planar(params, digit: str, q: np.ndarray, origin_y: float):
+    """The distal link of ``digit`` in its chain's root frame (the finger base; the thumb's CMC
+    base), for joint angles q (n, 15): flexion turns about -x, so every link of the chain stays in
+    the root's y-z plane. Returns the tip segment's ends (n, 3) x2 and the pad normal (n, 3)."""
+    a, b, n, r, _ = _chain(params, digit, q, origin_y)
+    return a, b, n, r
+
+
+def _chain(params, digit, q, origin_y):
+    """:func:`_planar`, and the joint centres (n, 3) in chain order (the reference joint first),
+    then the tip's centre."""
+    ch = chain(digit)
+    d = params.digit(digit)
+    lengths = [getattr(d, seg) for seg in ch.segments[1:]]     # the links after each joint
+    theta = np.zeros(len(q))
+    yz = np.zeros((len(q), 2))
+    yz[:, 0] = origin_y
+    centres = []
+    for k, qi in enumerate(ch.q_index):
+        centres.append(yz.copy())
+        theta = theta + q[:, qi]
+        if k < len(ch.q_index) - 1:
+            yz += lengths[k] * np.stack([np.cos(theta), -np.sin(theta)], axis=1)
+    ey = np.stack([np.cos(theta), -np.sin(theta)], axis=1)
+    ez = np.stack([np.sin(theta), np.cos(theta)], axis=1)
+    L, r, w = F.fingertip(params, digit)
+    c = yz + (L - r) * ey
+    half = max(w - r, 0.0)
+    n = math.sin(F.PAD_ANGLE) * ey - math.cos(F.PAD_ANGLE) * ez
+    zeros = np.zeros((len(q), 1))
+    a = np.hstack([zeros - half, c])
+    b = np.hstack([zeros + half, c])
+    centres = [np.hstack([zeros, v]) for v in (*centres, c)]
+    return a, b, np.hstack([zeros, n]), r, centres
+
+
+def _apply(T: np.ndarray, p: np.ndarray, w: float = 1.0) -> np.ndarray:
+    return p @ T[:3, :3].T + (T[:3, 3] if w else 0.0)
+
+
+def _travel(hand, servo: int, n: int) -> np.ndarray:
+    return np.linspace(hand.u_min[servo], hand.u_max[servo], n)
+
+
+def finger_tips(hand, finger: str, n: int = 41) -> Tips:
+    """The fingertip capsule of ``finger`` at n commands over its servo's travel."""
+    s = _servo(finger)
+    u = np.zeros((n, N_SERVOS))
+    u[:, s] = _travel(hand, s, n)
+    q = hand.forward(u, compensated=True)
+    a, b, nrm, r = _planar(hand.params, finger, q, 0.0)
+    T = F.T_palm_finger_base(hand.params, finger)
+    return Tips(_apply(T, a), _apply(T, b), _apply(T, nrm, 0.0), r, u[:, [s]])
+
+
+@dataclass(frozen=True)
+class ThumbTips:
+    """The thumb's capsule in its CMC base frame at q15 = 0, over a grid of (u1, u6): placed in the
+    palm by :meth:`placed` for any CMC placement."""
+    a: np.ndarray        # (n1 * n6, 3), CMC base frame before the CMC's own rotation
+    b: np.ndarray
+    normal: np.ndarray
+    q15: np.ndarray      # (n1 * n6,)
+    radius: float
+    u: np.ndarray        # (n1 * n6, 2): u1, u6
+    body: np.ndarray     # (n1 * n6, m, 3): points along the axes of the thumb's links
+    body_radius: float   # half the thumb's thickness
+
+    def _rz(self, p):
+        """Rz(q15) of each command's points (the CMC's own rotation)."""
+        c, s = np.cos(self.q15), np.sin(self.q15)
+        if p.ndim == 3:
+            c, s = c[:, None], s[:, None]
+        out = np.empty_like(p)
+        out[..., 0] = c * p[..., 0] - s * p[..., 1]
+        out[..., 1] = s * p[..., 0] + c * p[..., 1]
+        out[..., 2] = p[..., 2]
+        return out
+
+    def placed(self, T0: np.ndarray) -> Tips:
+        return Tips(_apply(T0, self._rz(self.a)), _apply(T0, self._rz(self.b)),
+                    _apply(T0, self._rz(self.normal), 0.0), self.radius, self.u)
+
+    def body_placed(self, T0: np.ndarray) -> np.ndarray:
+        return _apply(T0, self._rz(self.body))
+
+
+def thumb_tips(hand, n1: int = 21, n6: int = 21) -> ThumbTips:
+    s1, s6 = _servo(THUMB), next(s.index for s in SERVOS if s.drive == "direct")
+    g1, g6 = np.meshgrid(_travel(hand, s1, n1), _travel(hand, s6, n6), indexing="ij")
+    u = np.zeros((n1 * n6, N_SERVOS))
+    u[:, s1], u[:, s6] = g1.ravel(), g6.ravel()
+    q = hand.forward(u, compensated=True)
+    p = hand.params
+    a, b, nrm, r, centres = _chain(p, THUMB, q, p.thumb.metacarpal)
+    # the links' axes: the metacarpal from its hub's rim (the hub sits on the palm) to the MP, the
+    # proximal phalanx to the IP, the distal phalanx to its tip's centre, 8 points each
+    hub = np.zeros_like(centres[0])
+    hub[:, 1] = min(p.thumb.cmc_horn_radius, p.thumb.metacarpal)
+    ends = [hub, *centres]
+    t = np.linspace(0.0, 1.0, 8)[None, :, None]
+    body = np.concatenate([e0[:, None] + t * (e1 - e0)[:, None] for e0, e1 in zip(ends, ends[1:])], axis=1)
+    return ThumbTips(a, b, nrm, q[:, CMC_Q].copy(), r, u[:, [s1, s6]], body, p.thumb.thickness / 2.0)
+
+
+def segment_distance(p1, q1, p2, q2):
+    """Closest points of segments p1-q1 and p2-q2 (broadcast over leading axes): returns
+    (distance, point on the first, point on the second). Ericson, Real-Time Collision Detection,
+    5.1.9, with its degenerate cases."""
+    d1, d2, r = q1 - p1, q2 - p2, p1 - p2
+    a = np.einsum("...i,...i", d1, d1)
+    e = np.einsum("...i,...i", d2, d2)
+    f = np.einsum("...i,...i", d2, r)
+    c = np.einsum("...i,...i", d1, r)
+    b = np.einsum("...i,...i", d1, d2)
+    eps = 1e-18
+    denom = a * e - b * b
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = np.where(denom > eps, np.clip((b * f - c * e) / np.where(denom > eps, denom, 1.0), 0.0, 1.0), 0.0)
+        s = np.where(a > eps, s, 0.0)
+        t = np.where(e > eps, (b * s + f) / np.where(e > eps, e, 1.0), 0.0)
+        # t outside [0, 1]: clamp it and recompute s for the clamped t
+        s = np.where(t < 0.0, np.where(a > eps, np.clip(-c / np.where(a > eps, a, 1.0), 0.0, 1.0), 0.0), s)
+        s = np.where(t > 1.0, np.where(a > eps, np.clip((b - c) / np.where(a > eps, a, 1.0), 0.0, 1.0), 0.0), s)
+        t = np.clip(t, 0.0, 1.0)
+    c1 = p1 + s[..., None] * d1
+    c2 = p2 + t[..., None] * d2
+    return np.linalg.norm(c1 - c2, axis=-1), c1, c2
+
+
+def contacts(thumb: Tips, finger: Tips):
+    """(gap, angle) over every (thumb command, finger command) pair, shape (n_thumb, n_finger):
+    the capsules' gap (m; < 0 overlapping) and the *facing angle* (rad), the larger of the angles
+    between the contact direction and the two pads' normals (pi where the axes meet)."""
+    T, Fg = thumb, finger
+    dist, c1, c2 = segment_distance(T.a[:, None], T.b[:, None], Fg.a[None], Fg.b[None])
+    gap = dist - T.radius - Fg.radius
+    v = c2 - c1
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = v / np.linalg.norm(v, axis=-1, keepdims=True)
+    cos = np.minimum(np.einsum("tfi,ti->tf", v, T.normal), np.einsum("tfi,fi->tf", -v, Fg.normal))
+    return gap, np.arccos(np.clip(np.nan_to_num(cos, nan=-1.0), -1.0, 1.0))
+
+
+@dataclass(frozen=True)
+class Reach:
+    """The thumb's pad against one fingertip's pad over the commands."""
+    finger: str
+    gap: float              # m: the smallest gap of the pairs facing pad to pad (<= 0: the pads meet); inf if none
+    u_thumb: tuple          # (u1, u6) rad at that gap
+    u_finger: float         # rad
+    surface_gap: float      # m: the smallest gap of any contact (pad or not)
+    margin: float           # rad: PAD_CONE less the smallest facing angle of the pairs in contact
+    #                         (overlap within CONTACT_BAND); -inf if no pair is
+    u_contact: tuple        # (u1, u6, u_finger) rad of that pair
+
+    @property
+    def reaches(self) -> bool:
+        return self.gap <= 0.0
+
+
+def reach(hand, thumb: ThumbTips | None = None, T0: np.ndarray | None = None, fingers=FINGERS,
+          n_finger: int = 41) -> dict[str, Reach]:
+    """Per finger, the thumb pad's closest approach to its pad and how squarely they meet (right-hand
+    frames; a left hand is the mirror image and reaches the same). ``T0``: a CMC placement
+    (default: the file's)."""
+    p = hand.params
+    thumb = thumb_tips(hand) if thumb is None else thumb
+    T0 = F.thumb_cmc_placement(p.palm.thumb_cmc_offset, p.palm.thumb_cmc_axis) if T0 is None else T0
+    tt = thumb.placed(T0)
+    out = {}
+    for f in fingers:
+        ft = finger_tips(hand, f, n_finger)
+        gap, angle = contacts(tt, ft)
+        masked = np.where(angle <= PAD_CONE, gap, np.inf)
+        i, j = np.unravel_index(int(np.argmin(masked)), masked.shape)
+        touching = np.where((gap <= 0.0) & (gap >= -CONTACT_BAND), angle, np.inf)
+        k, m = np.unravel_index(int(np.argmin(touching)), touching.shape)
+        out[f] = Reach(f, float(masked[i, j]), tuple(float(v) for v in tt.u[i]), float(ft.u[j, 0]),
+                       float(gap.min()), PAD_CONE - float(touching[k, m]),
+                       (*(float(v) for v in tt.u[k]), float(ft.u[m, 0])))
+    return out
+
+
+# ---------------------------------------------------------------------------
+# the solve
+# ---------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Bounds:
+    """Where the thumb's CMC may sit: its centre (m, palm frame, index MCP at the origin, right
+    hand) and its axis angles (rad), each as (low, high)."""
+    offset: tuple[tuple[float, float], ...]
+    axis: tuple[tuple[float, float], ...]
+
+    def array(self) -> np.ndarray:
+        return np.array([*self.offset, *self.axis], float)
+
+
+def default_bounds(params) -> Bounds:
+    """The thenar region of a palm of human breadth, scaled with the hand length (189 mm: the
+    reference hand): the CMC centre up to 35 mm radial of the palm's radial edge
+    (:func:`palm_envelope`), 20-75 mm proximal of the index MCP and 30 mm palmar to 10 mm dorsal
+    of it (the search keeps the thumb's links out of :func:`palm_envelope`); the axis angles within
+    +-90 deg roll, -90..30 deg pitch and +-90 deg yaw (docs/opposition.md)."""
+    k = params.hand_length / 0.189
+    mm = 1e-3 * k
+    deg = math.radians
+    x_edge = palm_envelope(params)[0][0]
+    return Bounds(offset=((x_edge - 35 * mm, x_edge), (-75 * mm, -20 * mm), (-30 * mm, 10 * mm)),
+                  axis=((deg(-90), deg(90)), (deg(-90), deg(30)), (deg(-90), deg(90))))
+
+
+def palm_envelope(params) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) corners (m, palm frame, right hand) of the palm a human-scale hand has behind its
+    knuckles: across the four fingers' sockets from the index's radial edge to the pinky's ulnar
+    edge, one palm wall beyond each; from the socket faces back by the index metacarpal's length
+    (wrist crease to knuckle); the palm's thickness about the MCP axes' plane. The thumb's links
+    stay outside it (the thenar side of a human palm is the thumb's own metacarpal)."""
+    w = params.palm.wall
+    first, last = FINGERS[0], FINGERS[-1]
+    x0 = F.mcp_position(params, 0)[0] - params.fingers[first].width / 2.0 - w
+    x1 = F.mcp_position(params, len(FINGERS) - 1)[0] + params.fingers[last].width / 2.0 + w
+    y1 = min(F.T_palm_socket(params, f)[1, 3] for f in FINGERS)
+    y0 = -params.fingers[first].metacarpal
+    T = params.palm.thickness / 2.0
+    return np.array([x0, y0, -T]), np.array([x1, y1, T])
+
+
+def box_distance(p: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Signed distance (m) of points p (..., 3) to the box [lo, hi]: negative inside."""
+    c, h = (lo + hi) / 2.0, (hi - lo) / 2.0
+    d = np.abs(p - c) - h
+    outside = np.linalg.norm(np.maximum(d, 0.0), axis=-1)
+    inside = np.minimum(d.max(axis=-1), 0.0)
+    return outside + inside
+
+
+def palm_intrusion(thumb: ThumbTips, T0: np.ndarray, envelope) -> float:
+    """How far (m) the thumb's links reach into the palm envelope over its commands (<= 0: they
+    stay out, by that much)."""
+    sd = box_distance(thumb.body_placed(T0), *envelope)
+    return float(thumb.body_radius - sd.min())
+
+
+def _placement(x: np.ndarray) -> np.ndarray:
+    return F.thumb_cmc_placement(x[:3], x[3:])
+
+
+def margin(thumb: ThumbTips, fingers: dict[str, Tips], x: np.ndarray) -> float:
+    """The search's opposition margin (rad) of placement x = (offset, axis): min over the opposed
+    fingers of :attr:`Reach.margin` on these grids. A finger no pair of which is in contact scores
+    below every finger that has one: -(pi - PAD_CONE) less its distance to the contact band over
+    the two radii (so the search moves toward contact)."""
+    tt = thumb.placed(_placement(x))
+    worst = math.inf
+    for f in OPPOSED:
+        Fg = fingers[f]
+        gap, angle = contacts(tt, Fg)
+        band = (gap <= 0.0) & (gap >= -CONTACT_BAND)
+        if band.any():
+            m = PAD_CONE - float(angle[band].min())
+        else:
+            miss = float(np.min(np.where(gap > 0.0, gap, -CONTACT_BAND - gap)))
+            m = -(math.pi - PAD_CONE) - miss / (tt.radius + Fg.radius)
+        worst = min(worst, m)
+    return worst
+
+
+@dataclass(frozen=True)
+class Solution:
+    offset: tuple[float, float, float]     # m
+    axis: tuple[float, float, float]       # rad
+    margin: float                          # rad: the smallest Reach.margin of the opposed fingers
+    reach: dict                            # finger -> Reach at the solution (fine grid)
+    evaluations: int
+    intrusion: float                       # m: the thumb's reach into the palm envelope (<= 0: clear)
+
+
+def solve(hand, bounds: Bounds | None = None, seed: int = 0, coarse=(11, 11, 21), generations: int = 60,
+          population: int = 8, iterations: int = 300) -> Solution:
+    """Maximize the opposition margin over the CMC placement within ``bounds``, with the thumb's
+    links kept out of the palm envelope (a penalty of ``INTRUSION_WEIGHT`` per metre inside):
+    differential evolution (scipy, seeded: deterministic) on a coarse command grid (``coarse``: n1,
+    n6, n_finger), the file's placement in its first population, then Nelder-Mead from the best.
+    The result is judged on :func:`reach`'s fine grid (21 x 21 x 41), which contains the coarse
+    one, so the fine margin is at least the searched one."""
+    from scipy.optimize import differential_evolution, minimize
+
+    p = hand.params
+    bounds = default_bounds(p) if bounds is None else bounds
+    box = bounds.array()
+    lo, hi = box[:, 0], box[:, 1]
+    env = palm_envelope(p)
+    thumb = thumb_tips(hand, coarse[0], coarse[1])
+    fingers = {f: finger_tips(hand, f, coarse[2]) for f in OPPOSED}
+    count = [0]
+
+    def cost(z):
+        count[0] += 1
+        x = np.clip(z, lo, hi)
+        return -margin(thumb, fingers, x) + INTRUSION_WEIGHT * max(palm_intrusion(thumb, _placement(x), env), 0.0)
+
+    rng = np.random.default_rng(seed)
+    n = population * len(lo)
+    init = lo + (hi - lo) * rng.random((n, len(lo)))
+    init[0] = np.clip(np.array([*p.palm.thumb_cmc_offset, *p.palm.thumb_cmc_axis]), lo, hi)
+    de = differential_evolution(cost, list(zip(lo, hi)), init=init, maxiter=generations, tol=0.0,
+                                seed=seed, polish=False)
+    res = minimize(cost, de.x, method="Nelder-Mead",
+                   options={"maxiter": iterations, "xatol": 1e-6, "fatol": 1e-7})
+    x = np.clip(res.x if res.fun <= de.fun else de.x, lo, hi)
+    fine_thumb = thumb_tips(hand)
+    fine = reach(hand, thumb=fine_thumb, T0=_placement(x))
+    return Solution(tuple(float(v) for v in x[:3]), tuple(float(v) for v in x[3:]),
+                    min(fine[f].margin for f in OPPOSED), fine, count[0],
+                    palm_intrusion(fine_thumb, _placement(x), env))

@@ -1,0 +1,229 @@
+"""Thumb opposition (kinematics/opposition.py), against answers computed another way: the
+closest points of segments by dense sampling, the fingertips by the per-pose transforms of
+``frames.link_transforms`` (the chain the descriptions are written from), distances to a box by
+enumeration, and the reach by brute force over sampled capsule axes."""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from phantom_cad.kinematics import frames as F, opposition as O
+from phantom_cad.kinematics.model import Hand
+from phantom_cad.kinematics.topology import CMC_Q, FINGERS, N_SERVOS
+from phantom_cad.params.io import load_params
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def hand():
+    return Hand(load_params(None))
+
+
+def _sampled_distance(p1, q1, p2, q2, n=801):
+    t = np.linspace(0.0, 1.0, n)
+    a = p1 + t[:, None] * (q1 - p1)
+    b = p2 + t[:, None] * (q2 - p2)
+    return np.linalg.norm(a[:, None] - b[None], axis=-1).min()
+
+
+def test_segment_distance_is_the_sampled_minimum():
+    rng = np.random.default_rng(3)
+    cases = [rng.normal(size=(4, 3)) for _ in range(40)]
+    # parallel, collinear-overlapping, crossing, and a segment shrunk to a point
+    cases += [np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], float),
+              np.array([[0, 0, 0], [2, 0, 0], [1, 0, 0], [3, 0, 0]], float),
+              np.array([[-1, 0, 0], [1, 0, 0], [0, -1, 0.5], [0, 1, 0.5]], float),
+              np.array([[0.3, 0.2, 0.1], [0.3, 0.2, 0.1], [0, 0, 0], [1, 0, 0]], float)]
+    for p1, q1, p2, q2 in cases:
+        d, c1, c2 = O.segment_distance(p1, q1, p2, q2)
+        want = _sampled_distance(p1, q1, p2, q2)
+        # the sampled minimum is an upper bound within the sampling step
+        assert want - 0.01 <= d <= want + 1e-12
+        assert abs(np.linalg.norm(c1 - c2) - d) < 1e-12
+    # by hand: two parallel unit segments one apart, a crossing 0.5 above
+    assert O.segment_distance(*cases[-4])[0] == pytest.approx(1.0)
+    assert O.segment_distance(*cases[-2])[0] == pytest.approx(0.5)
+    assert O.segment_distance(*cases[-3])[0] == pytest.approx(0.0)
+
+
+def test_box_distance_by_hand():
+    lo, hi = np.zeros(3), np.array([2.0, 4.0, 6.0])
+    pts = np.array([[1, 2, 3], [3, 2, 3], [3, 5, 3], [1, 2, 0.5], [-1, -1, -1]], float)
+    want = [-1.0, 1.0, math.sqrt(2.0), -0.5, math.sqrt(3.0)]
+    assert O.box_distance(pts, lo, hi) == pytest.approx(want)
+
+
+def _per_pose_tip(params, digit, q):
+    """The tip capsule's ends and pad normal of ``digit`` at joint angles q, palm frame, through
+    frames.link_transforms (right hand) and the tip's geometry worked out here."""
+    T = F.link_transforms(params, q)[f"{digit}_distal"]
+    d = params.digit(digit)
+    back = d.thickness / 2.0 + params.print.hole_clearance           # the clevis slot behind the tip
+    r = min(d.thickness / 2.0, d.distal - back)
+    half = max(d.width / 2.0 - r, 0.0)
+    ends = [(T @ np.array([s * half, d.distal - r, 0.0, 1.0]))[:3] for s in (-1.0, 1.0)]
+    n = T[:3, :3] @ np.array([0.0, math.sqrt(0.5), -math.sqrt(0.5)])
+    return ends, n, r
+
+
+def test_the_batched_tips_are_the_per_pose_chain(hand):
+    p = hand.params
+    rng = np.random.default_rng(7)
+    n = 9
+    for f in FINGERS:
+        tips = O.finger_tips(hand, f, n)
+        u = np.zeros((n, N_SERVOS))
+        u[:, hand.params.digit(f).chain.spec.servo] = tips.u[:, 0]
+        for k, q in enumerate(hand.forward(u, compensated=True)):
+            (a, b), nrm, r = _per_pose_tip(p, f, q)
+            assert np.allclose(tips.a[k], a, atol=1e-12) and np.allclose(tips.b[k], b, atol=1e-12)
+            assert np.allclose(tips.normal[k], nrm, atol=1e-12) and tips.radius == pytest.approx(r)
+    # the thumb, placed at the file's CMC and at a random one (the file rewritten in memory)
+    thumb = O.thumb_tips(hand, 5, 4)
+    for offset, axis in [(p.palm.thumb_cmc_offset, p.palm.thumb_cmc_axis),
+                         (tuple(rng.normal(scale=0.03, size=3)), tuple(rng.uniform(-1.5, 1.5, size=3)))]:
+        placed = thumb.placed(F.thumb_cmc_placement(offset, axis))
+        moved = _with_thumb(p, offset, axis)
+        u = np.zeros((len(thumb.u), N_SERVOS))
+        u[:, 0], u[:, 5] = thumb.u[:, 0], thumb.u[:, 1]
+        for k, q in enumerate(hand.forward(u, compensated=True)):
+            assert q[CMC_Q] == pytest.approx(thumb.q15[k])
+            (a, b), nrm, r = _per_pose_tip(moved, "thumb", q)
+            assert np.allclose(placed.a[k], a, atol=1e-12) and np.allclose(placed.normal[k], nrm, atol=1e-12)
+
+
+def _with_thumb(params, offset, axis):
+    from dataclasses import replace
+    return replace(params, palm=replace(params.palm, thumb_cmc_offset=tuple(offset), thumb_cmc_axis=tuple(axis)))
+
+
+def test_the_pad_is_the_parts_pad(hand):
+    """The phalanx part places its pad (the URDF's tip frame, measured on the solid in
+    tests/export/test_description.py) from the same formula: 45 deg round the tip's half cylinder."""
+    p = hand.params
+    for digit in (*FINGERS, "thumb"):
+        d = p.digit(digit)
+        r = min(d.thickness / 2.0, d.distal - d.thickness / 2.0 - p.print.hole_clearance)
+        T = F.T_distal_pad(p, digit)
+        centre = np.array([0.0, d.distal - r, 0.0])
+        assert np.linalg.norm(T[:3, 3] - centre) == pytest.approx(r)
+        assert T[:3, 2] == pytest.approx((T[:3, 3] - centre) / r)
+        assert math.degrees(math.atan2(T[2, 2], T[1, 2])) == pytest.approx(-45.0)
+
+
+#: a placement the search found for the default hand (docs/opposition.md): there the pads meet
+SOLVED = ((-0.04401, -0.07081, -0.01285), tuple(math.radians(v) for v in (-31.18, 8.05, -88.09)))
+
+
+@pytest.mark.parametrize("placement", ["file", "solved"])
+def test_reach_is_the_brute_force_minimum(hand, placement):
+    """The closest pad-facing approach and the squarest contact over a coarse command grid, by
+    sampling points along the capsules' axes and taking the contact direction between the nearest
+    samples."""
+    p = hand.params
+    offset, axis = (p.palm.thumb_cmc_offset, p.palm.thumb_cmc_axis) if placement == "file" else SOLVED
+    T0 = F.thumb_cmc_placement(offset, axis)
+    thumb = O.thumb_tips(hand, 7, 7)
+    got = O.reach(hand, thumb=thumb, T0=T0, n_finger=9)
+    tt = thumb.placed(T0)
+    t = np.linspace(0.0, 1.0, 201)[:, None]
+    for f in FINGERS:
+        ft = O.finger_tips(hand, f, 9)
+        best, surface, square = math.inf, math.inf, math.inf
+        for i in range(len(tt.a)):
+            A = tt.a[i] + t * (tt.b[i] - tt.a[i])
+            for j in range(len(ft.a)):
+                B = ft.a[j] + t * (ft.b[j] - ft.a[j])
+                D = np.linalg.norm(A[:, None] - B[None], axis=-1)
+                k, m = np.unravel_index(np.argmin(D), D.shape)
+                gap = D[k, m] - tt.radius - ft.radius
+                v = (B[m] - A[k]) / D[k, m]
+                angle = max(math.acos(np.clip(v @ tt.normal[i], -1, 1)), math.acos(np.clip(-v @ ft.normal[j], -1, 1)))
+                surface = min(surface, gap)
+                if angle <= O.PAD_CONE:
+                    best = min(best, gap)
+                if -O.CONTACT_BAND <= gap <= 0.0:
+                    square = min(square, angle)
+        assert got[f].surface_gap == pytest.approx(surface, abs=2e-4)
+        assert got[f].gap == pytest.approx(best, abs=2e-4) if math.isfinite(best) else not math.isfinite(got[f].gap)
+        want = O.PAD_CONE - square
+        assert got[f].margin == pytest.approx(want, abs=math.radians(0.5)) if math.isfinite(want) \
+            else not math.isfinite(got[f].margin)
+    if placement == "file":       # today's palm (issue 12): the thumb reaches none of the pads
+        assert all(not r.reaches for r in got.values())
+    else:                         # the solved placement, on reach's own grid: the pads of index, middle and ring meet
+        fine = O.reach(hand, T0=T0)
+        assert all(fine[f].reaches and fine[f].margin > 0.0 for f in O.OPPOSED)
+
+
+def test_a_placement_built_to_touch_is_found_touching(hand):
+    """Put the thumb's CMC where, with the thumb at rest and the index at a command of the grid, the
+    thumb's pad point sits 2 mm inside the index's pad along the index pad's normal, the two pad
+    normals opposed (worked out here from the per-pose chain): the capsules' axes are then at most
+    r_t + r_f - 2 mm apart along the pads' common normal, so reach finds the pads meeting, at least
+    2 mm deep."""
+    p = hand.params
+    u = np.zeros(N_SERVOS)
+    u[1] = hand.u_max[1] * 22 / 40                               # on reach's 41-point grid
+    (a, b), n_f, r_f = _per_pose_tip(p, "index", hand.forward(u, compensated=True))
+    P_f = (a + b) / 2.0 + r_f * n_f                              # the index pad's surface point
+    q0 = hand.forward(np.zeros(N_SERVOS), compensated=True)
+    (ta, tb), n_t, r_t = _per_pose_tip(_with_thumb(p, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)), "thumb", q0)
+    P_t = (ta + tb) / 2.0 + r_t * n_t                            # the thumb pad's, CMC base frame
+    R = _rotation_between(n_t, -n_f)
+    offset = P_f - 0.002 * n_f - R @ P_t
+    got = O.reach(hand, T0=F.thumb_cmc_placement(offset, _rpy(R)), fingers=("index",))["index"]
+    assert got.reaches and got.gap <= -0.002 + 1e-9
+
+
+def _rotation_between(a, b):
+    a, b = a / np.linalg.norm(a), b / np.linalg.norm(b)
+    v, c = np.cross(a, b), float(a @ b)
+    K = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+    return np.eye(3) + K + K @ K / (1.0 + c)
+
+
+def _rpy(R):
+    """(roll, pitch, yaw) with R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    pitch = math.asin(-R[2, 0])
+    return (math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0]))
+
+
+def test_the_palm_envelope_by_hand(hand):
+    p = hand.params
+    lo, hi = O.palm_envelope(p)
+    doc = tomllib.loads((ROOT / "params" / "phantom.toml").read_text())
+    wall = doc["palm"]["wall_mm"]
+    # the MCPs lie on an arc, pitch apart along chords at the mean of adjacent finger directions:
+    # -5, 0 and +5 deg for a 5 deg arc offset
+    x_pinky = doc["palm"]["finger_pitch_mm"] * (1.0 + 2.0 * math.cos(math.radians(doc["palm"]["arc_offset_deg"])))
+    assert lo[0] * 1e3 == pytest.approx(-doc["fingers"]["index"]["width_mm"] / 2 - wall)
+    assert hi[2] * 1e3 == pytest.approx(doc["palm"]["thickness_mm"] / 2)
+    metacarpal = doc["fingers"]["index"]["length_fraction"]["metacarpal"] * doc["hand"]["hand_length_mm"]
+    assert lo[1] * 1e3 == pytest.approx(-metacarpal)
+    assert hi[0] * 1e3 == pytest.approx(x_pinky + doc["fingers"]["pinky"]["width_mm"] / 2 + wall)
+
+
+def test_solve_improves_on_the_file(hand):
+    """A short search returns a placement inside its bounds whose margin (measured again here on
+    the search's grid) is no worse than the file's placement, which is in its first population,
+    and whose thumb stays out of the palm envelope; the fine grid's margin is at least the
+    coarse one's (the grids are nested)."""
+    sol = O.solve(hand, generations=4, population=3, iterations=40)
+    b = O.default_bounds(hand.params).array()
+    x = np.array([*sol.offset, *sol.axis])
+    assert np.all(x >= b[:, 0] - 1e-12) and np.all(x <= b[:, 1] + 1e-12)
+    thumb = O.thumb_tips(hand, 11, 11)
+    fingers = {f: O.finger_tips(hand, f, 21) for f in O.OPPOSED}
+    p = hand.params
+    start = np.clip(np.array([*p.palm.thumb_cmc_offset, *p.palm.thumb_cmc_axis]), b[:, 0], b[:, 1])
+    coarse = O.margin(thumb, fingers, x)
+    assert coarse >= O.margin(thumb, fingers, start)
+    assert sol.margin >= coarse - 1e-12 or coarse < -O.PAD_CONE
+    assert sol.intrusion <= 0.0
