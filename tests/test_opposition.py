@@ -118,7 +118,7 @@ def test_the_pad_is_the_parts_pad(hand):
 
 
 #: a placement the search found for the default hand (docs/opposition.md): there the pads meet
-SOLVED = ((-0.04401, -0.07081, -0.01285), tuple(math.radians(v) for v in (-31.18, 8.05, -88.09)))
+SOLVED = ((-0.04521, -0.07500, -0.00988), tuple(math.radians(v) for v in (-24.42, -4.56, -79.42)))
 
 
 @pytest.mark.parametrize("placement", ["file", "solved"])
@@ -200,9 +200,18 @@ def test_the_palm_envelope_by_hand(hand):
     lo, hi = O.palm_envelope(p)
     doc = tomllib.loads((ROOT / "params" / "phantom.toml").read_text())
     wall = doc["palm"]["wall_mm"]
-    # the MCPs lie on an arc, pitch apart along chords at the mean of adjacent finger directions:
-    # -5, 0 and +5 deg for a 5 deg arc offset
-    x_pinky = doc["palm"]["finger_pitch_mm"] * (1.0 + 2.0 * math.cos(math.radians(doc["palm"]["arc_offset_deg"])))
+    # the MCPs lie on an arc, pitch apart along chords at the mean of adjacent finger directions
+    # (-5, 0 and +5 deg for a 5 deg arc offset); the pinky's then steps back along its column
+    # (turned 7.5 deg) by its metacarpal less the index's
+    hl, frac = doc["hand"]["hand_length_mm"], {f: doc["fingers"][f]["length_fraction"]["metacarpal"] for f in FINGERS}
+    step = (frac["pinky"] - frac["index"]) * hl
+    x_pinky = (doc["palm"]["finger_pitch_mm"] * (1.0 + 2.0 * math.cos(math.radians(doc["palm"]["arc_offset_deg"])))
+               + step * math.sin(math.radians(1.5 * doc["palm"]["arc_offset_deg"])))
+    # the most distal socket face: the middle's (its MCP 1.5 mm ahead of the index's), a finger
+    # base length behind its MCP along its column (turned 2.5 deg)
+    face = (doc["palm"]["finger_pitch_mm"] * math.sin(math.radians(5.0)) + (frac["middle"] - frac["index"]) * hl
+            * math.cos(math.radians(2.5)) - doc["cad"]["finger_base_length_mm"] * math.cos(math.radians(2.5)))
+    assert hi[1] * 1e3 == pytest.approx(face)
     assert lo[0] * 1e3 == pytest.approx(-doc["fingers"]["index"]["width_mm"] / 2 - wall)
     assert hi[2] * 1e3 == pytest.approx(doc["palm"]["thickness_mm"] / 2)
     metacarpal = doc["fingers"]["index"]["length_fraction"]["metacarpal"] * doc["hand"]["hand_length_mm"]

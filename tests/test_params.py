@@ -382,7 +382,8 @@ def test_hand_name_makes_a_file_name(document):
 
 
 def test_parallel_fingers(document):
-    """arc_offset_deg = 0 (documented as allowed): a straight row, finger_pitch apart, no division by zero."""
+    """arc_offset_deg = 0 (documented as allowed): a straight row, finger_pitch apart, no division by
+    zero; each MCP stepped straight along y by its metacarpal less the index's (the stepped heads)."""
     import numpy as np
 
     from phantom_cad.kinematics import frames
@@ -390,5 +391,31 @@ def test_parallel_fingers(document):
     document["palm"]["arc_offset_deg"] = 0.0
     p = parse(document)
     assert p.palm.arc_radius == math.inf
+    hl = document["hand"]["hand_length_mm"]
+    meta = [document["fingers"][f]["length_fraction"]["metacarpal"] * hl for f in ("index", "middle", "ring", "pinky")]
     for i in range(4):
-        assert np.allclose(frames.mcp_position(p, i), [0.0195 * i, 0.0, 0.0], atol=1e-15)
+        want = [19.5 * i, meta[i] - meta[0], 0.0]
+        assert np.allclose(frames.mcp_position(p, i) * 1e3, want, atol=1e-12)
+
+
+def test_stepped_metacarpal_heads(document):
+    """The default hand's knuckle line by hand: on the 5 degree arc (chords 19.5 mm at -5, 0, +5
+    degrees), each MCP then steps along its own column (turned by -7.5, -2.5, 2.5, 7.5 degrees) by
+    its metacarpal less the index's (0.374, 0.373, 0.336, 0.295 of 189 mm)."""
+    import numpy as np
+
+    from phantom_cad.kinematics import frames
+
+    p = parse(document)
+    d = math.radians
+    arc = [(0.0, 0.0)]
+    for m in (-5.0, 0.0, 5.0):
+        x, y = arc[-1]
+        arc.append((x + 19.5 * math.cos(d(m)), y - 19.5 * math.sin(d(m))))
+    steps = [(f - 0.374) * 189.0 for f in (0.374, 0.373, 0.336, 0.295)]
+    for i, ((x, y), s, phi) in enumerate(zip(arc, steps, (-7.5, -2.5, 2.5, 7.5))):
+        want = [x + s * math.sin(d(phi)), y + s * math.cos(d(phi)), 0.0]
+        assert np.allclose(frames.mcp_position(p, i) * 1e3, want, atol=1e-9)
+    # the knuckle line: middle 1.5 mm ahead of the index, ring 5.5 and pinky 14.8 mm behind it
+    ys = [frames.mcp_position(p, i)[1] * 1e3 for i in range(4)]
+    assert [round(v, 1) for v in ys] == [0.0, 1.5, -5.5, -14.8]

@@ -14,8 +14,12 @@ Units: metres (SI, like the parameter object). The CAD layer converts to millime
 * A finger base has no proximal joint (it is fixed to the palm by magnets); its origin is
   on its distal (MCP) axis, so T_index_base_index_proximal(0) is the identity.
 * Finger columns fan out on an arc: finger i (index 0 .. pinky 3) points along
-  Rz(-phi_i) y with phi_i = (i - 1.5) arc_offset; adjacent MCPs are finger_pitch apart
+  Rz(-phi_i) y with phi_i = (i - 1.5) arc_offset; adjacent columns are finger_pitch apart
   on the arc of radius palm.arc_radius whose centre lies proximal of the MCPs.
+* The metacarpal heads are stepped (the paper's stepped knuckle line): each MCP sits
+  metacarpal_i - metacarpal_index further along its column than the arc, as if the
+  metacarpals' bases sat on the arc and their heads ended at their own lengths
+  (fingers.<f>.length_fraction.metacarpal). The index MCP stays at the origin.
 * Thumb: the CMC base frame sits at palm.thumb_cmc_offset (from the index MCP, palm
   frame) turned by R = Rz(yaw) Ry(pitch) Rx(roll) of palm.thumb_cmc_axis; the CMC joint
   axis is its z (q15 rotates about +z: abduction toward opposition); MP and IP flex about
@@ -35,7 +39,7 @@ import math
 import numpy as np
 
 from .. import units
-from ..params.rules import slot_back
+from ..params.rules import finger_columns, slot_back
 from .topology import CMC_Q, FINGERS, JOINTS, LINKS, N_JOINTS, SERVOS, chain, joint, link, servo_joints
 
 MIRROR = np.diag([-1.0, 1.0, 1.0, 1.0])
@@ -104,16 +108,18 @@ def finger_direction(params, i: int) -> np.ndarray:
     return np.array([math.sin(phi), math.cos(phi), 0.0])
 
 
+def knuckle_step(params, i: int) -> float:
+    """How far (m) finger i's MCP sits beyond the palm arc along its column: its metacarpal's
+    length less the index's (the stepped metacarpal heads; 0 for the index)."""
+    return params.fingers[FINGERS[i]].metacarpal - params.fingers[FINGERS[0]].metacarpal
+
+
 def mcp_position(params, i: int) -> np.ndarray:
-    """MCP axis centre of finger i in the palm frame (index at the origin), on the palm arc:
-    adjacent MCPs are finger_pitch apart along the chord between them, perpendicular to the mean
-    of their two directions (a straight row when arc_offset = 0)."""
-    p = params.palm.finger_pitch
-    out = np.zeros(3)
-    for k in range(i):
-        m = (finger_angle(params, k) + finger_angle(params, k + 1)) / 2.0
-        out += p * np.array([math.cos(m), -math.sin(m), 0.0])
-    return out
+    """MCP axis centre of finger i in the palm frame (index at the origin): on the palm arc,
+    stepped along its column by :func:`knuckle_step` (``params.rules.finger_columns``)."""
+    x, y, _ = finger_columns(params.palm.finger_pitch, params.palm.arc_offset,
+                             [params.fingers[f].metacarpal for f in FINGERS])[i]
+    return np.array([x, y, 0.0])
 
 
 def T_palm_finger_base(params, finger: str) -> np.ndarray:

@@ -277,14 +277,15 @@ def default_bounds(params) -> Bounds:
 def palm_envelope(params) -> tuple[np.ndarray, np.ndarray]:
     """(lo, hi) corners (m, palm frame, right hand) of the palm a human-scale hand has behind its
     knuckles: across the four fingers' sockets from the index's radial edge to the pinky's ulnar
-    edge, one palm wall beyond each; from the socket faces back by the index metacarpal's length
-    (wrist crease to knuckle); the palm's thickness about the MCP axes' plane. The thumb's links
+    edge, one palm wall beyond each; from the most distal socket face back to the index
+    metacarpal's length behind the index MCP (the wrist crease); the palm's thickness about the
+    MCP axes' plane. The thumb's links
     stay outside it (the thenar side of a human palm is the thumb's own metacarpal)."""
     w = params.palm.wall
     first, last = FINGERS[0], FINGERS[-1]
     x0 = F.mcp_position(params, 0)[0] - params.fingers[first].width / 2.0 - w
     x1 = F.mcp_position(params, len(FINGERS) - 1)[0] + params.fingers[last].width / 2.0 + w
-    y1 = min(F.T_palm_socket(params, f)[1, 3] for f in FINGERS)
+    y1 = max(F.T_palm_socket(params, f)[1, 3] for f in FINGERS)
     y0 = -params.fingers[first].metacarpal
     T = params.palm.thickness / 2.0
     return np.array([x0, y0, -T]), np.array([x1, y1, T])

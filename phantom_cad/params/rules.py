@@ -156,12 +156,46 @@ def _magnets(c, fingers, palm, hardware, printing, cad) -> None:
                          "flexion limiter sits under each finger base", c.source)
 
 
+def finger_columns(pitch: float, arc_offset: float, metacarpals) -> list[tuple[float, float, float]]:
+    """(x, y, phi) of each finger column's MCP (palm frame, SI, index at the origin) and its turn
+    phi about -z: the columns fan out by arc_offset, phi_i = (i - (n - 1) / 2) arc_offset;
+    adjacent columns meet the palm arc finger_pitch apart along the chord between them,
+    perpendicular to the mean of their directions; each MCP then steps along its column by its
+    metacarpal's length less the first's (the stepped metacarpal heads). One implementation:
+    ``kinematics.frames`` places the fingers with it."""
+    n = len(metacarpals)
+    phis = [(i - (n - 1) / 2.0) * arc_offset for i in range(n)]
+    x = y = 0.0
+    out = []
+    for i, phi in enumerate(phis):
+        if i:
+            m = (phis[i - 1] + phi) / 2.0
+            x, y = x + pitch * math.cos(m), y - pitch * math.sin(m)
+        step = metacarpals[i] - metacarpals[0]
+        out.append((x + step * math.sin(phi), y + step * math.cos(phi), phi))
+    return out
+
+
+def _base_room(a: tuple[float, float, float], b: tuple[float, float, float], base_length: float) -> float:
+    """Distance from the centre of finger a's magnet face (base_length behind its MCP) to finger
+    b's column centreline, when that face lies beside b's column (behind b's MCP); inf if not."""
+    ax, ay, pa = a
+    bx, by, pb = b
+    fx, fy = ax - base_length * math.sin(pa), ay - base_length * math.cos(pa)
+    dx, dy = math.sin(pb), math.cos(pb)
+    along = (fx - bx) * dx + (fy - by) * dy
+    return abs((fx - bx) * dy - (fy - by) * dx) if along <= 0.0 else math.inf
+
+
 def _guides(c, fingers, thumb, palm, hardware, printing, cad) -> None:
     names = list(fingers)
+    metacarpals = [f.metacarpal for f in fingers.values()]
+    cols = dict(zip(names, finger_columns(palm.finger_pitch, palm.arc_offset, metacarpals)))
     for a, b in zip(names, names[1:]):
-        # adjacent finger bases converge toward the arc centre: their back corners must clear
-        # (finger_pitch apart at the MCPs, 2 sin(arc_offset / 2) closer per unit of base length)
-        room = palm.finger_pitch - 2.0 * cad.finger_base_length * math.sin(palm.arc_offset / 2.0)
+        # adjacent finger bases converge toward the arc centre, and the stepped heads put one face
+        # behind the other: each magnet face must clear the neighbour's column
+        room = min(_base_room(cols[a], cols[b], cad.finger_base_length),
+                   _base_room(cols[b], cols[a], cad.finger_base_length))
         need = (fingers[a].width + fingers[b].width) / 2.0 + printing.hole_clearance
         if room < need - 1e-12:
             raise c.error("finger_base_length_mm", cad.finger_base_length / MM,

@@ -53,7 +53,7 @@ def test_part_inputs_follow_the_digit(params, variant):
     after = {n: assembly.part_inputs(p, n) for n in names}
     changed = {n for n in names if before[n] != after[n]}
     assert changed == {"palm", "ring_base", "ring_proximal", "ring_middle", "ring_distal"}
-    p = variant(lambda d: d["print"].__setitem__("hole_clearance_mm", 0.25))
+    p = variant(lambda d: d["print"].__setitem__("hole_clearance_mm", 0.15))
     after = {n: assembly.part_inputs(p, n) for n in names}
     assert all(before[n] != after[n] for n in names)
 
