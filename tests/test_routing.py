@@ -140,3 +140,73 @@ def test_routing_document_round_trips(tmp_path):
             for k, e in enumerate(s["elements"]):
                 if e["type"] == "pulley":       # bracketed by points, as MuJoCo's spatial tendons need
                     assert kinds[k - 1] != "pulley" and kinds[k + 1] != "pulley"
+
+
+@pytest.mark.parametrize("path,side", CASES, ids=[f"{p.stem}-{s}" for p, s in CASES])
+def test_the_finger_drives_are_split_at_the_socket(path, side):
+    """The coupler of each finger drive by hand from the file (docs/transmission.md): its envelope
+    stop + 2 cords by 1 + stop + 3 cords, its bore two clearances wider, at rest 2 clearances in
+    from the socket face and r u_max deeper at full travel; the service angle unwinds the wrap
+    from 172 deg at u_max to 8 deg, paying out r (164 deg - travel); its run is the distance from
+    the socket's tendon point to the servo pulley's tangent point (frames), its channel that less
+    the pulley cavity's reach sqrt((r + m)^2 - r^2); the two strands add up to the drive."""
+    from phantom_cad.kinematics import frames as Fr
+    from phantom_cad.kinematics.topology import chain
+
+    p = _params(path, side)
+    doc = tomllib.loads(path.read_text())
+    hw, c = doc["hardware"], doc["print"]["hole_clearance_mm"]
+    stop = hw.get("tendon_stop", {"diameter_mm": 2.0, "length_mm": 3.0})
+    d = hw["tendon_diameter_mm"]
+    cps = routing.couplers(p)
+    assert sorted(cps) == ["index", "middle", "pinky", "ring"]          # the thumb is not detachable
+    rest = routing.lengths(p)
+    for f, cp in cps.items():
+        src = doc["fingers"][f]
+        r, travel = src["servo_pulley_radius_mm"], src["servo_travel_deg"][1]
+        assert cp.diameter * 1e3 == pytest.approx(stop["diameter_mm"] + 2 * d)
+        assert cp.length * 1e3 == pytest.approx(d + stop["length_mm"] + 3 * d)
+        assert cp.bore * 1e3 == pytest.approx(stop["diameter_mm"] + 2 * d + 2 * c)
+        assert cp.rest[0] * 1e3 == pytest.approx(2 * c)
+        assert cp.full[1] * 1e3 == pytest.approx(2 * c + d + stop["length_mm"] + 3 * d + r * math.radians(travel))
+        assert math.degrees(cp.service_angle) == pytest.approx(-(164.0 - travel))
+        assert cp.payout * 1e3 == pytest.approx(r * math.radians(164.0 - travel))
+        k = chain(f).servo
+        exit_ = Fr.socket_tendon_point(p, f)
+        tangent = (Fr.T_palm_servo(p, k) @ np.array([-r * 1e-3, 0.0, 0.0, 1.0]))[:3]
+        if side == "left":
+            exit_ = np.diag([-1.0, 1.0, 1.0]) @ exit_
+            tangent = np.diag([-1.0, 1.0, 1.0]) @ tangent
+        assert cp.run == pytest.approx(float(np.linalg.norm(tangent - exit_)), abs=1e-9)
+        lip, wiggle = 2 * d, d + c                       # the cavity: flanges, running room, clearance
+        cavity = math.sqrt((r + lip + wiggle) ** 2 - r ** 2)
+        assert cp.channel * 1e3 == pytest.approx(cp.run * 1e3 - cavity)
+        assert cp.full[1] * 1e3 + c <= cp.channel * 1e3
+        palm, finger = routing.split_lengths(p, cp)
+        assert palm + finger == pytest.approx(rest[f"{f}_drive"], abs=1e-12)
+
+
+def test_a_coupler_without_room_is_refused(monkeypatch):
+    """Two rules, by hand for the default hand. A 4 mm stop makes the coupler 0.6 + 4 + 1.8 =
+    6.4 mm long: at the service angle (164 - 93 = 71 deg of unwinding, 7 mm x 1.239 rad = 8.67 mm)
+    the index's comes 8.67 - 0.4 - 6.4 = 1.87 mm out, less than the stop's 2 mm diameter. That rule
+    binds first on the default hand; with a 2 deg wrap margin instead of 8 (more payout) a 4.2 mm
+    stop comes out far enough, but the ring's coupler then needs 0.4 + 6.6 + 11.12 + 0.2 =
+    18.32 mm of its 18.07 mm channel (7 mm x 91 deg = 11.12 mm): the ring is named."""
+    from phantom_cad.params import ParamError, load_document, parse
+
+    doc = load_document(FILES[0])
+    doc["hardware"]["tendon_stop"] = {"diameter_mm": 2.0, "length_mm": 4.0}
+    with pytest.raises(ParamError) as e:
+        routing.couplers(parse(doc))
+    assert e.value.field == "hardware.tendon_stop.length_mm"
+    assert "the index coupler (6.40 mm) comes 1.87 mm out of the socket" in str(e.value)
+    for memo in ("_ROUTES", "_RUNS", "_COUPLERS"):
+        monkeypatch.setattr(routing, memo, {})
+    monkeypatch.setattr(routing, "WRAP_MARGIN", math.radians(2.0))
+    doc["hardware"]["tendon_stop"] = {"diameter_mm": 2.0, "length_mm": 4.2}
+    with pytest.raises(ParamError) as e:
+        routing.couplers(parse(doc))
+    assert e.value.field == "hardware.tendon_stop.length_mm"
+    assert "the ring drive's coupler (stop, loop and knot: 6.60 mm) travels 11.12 mm" in str(e.value)
+    assert "needs 18.32 mm of channel, the palm has 18.07 mm" in str(e.value)

@@ -24,17 +24,42 @@ def _cords(params) -> list[dict]:
     knot allowance per end, and how it is anchored and tensioned."""
     from ..kinematics import routing
     rest = routing.lengths(params)
+    split = routing.couplers(params)
     hw = params.hardware
     g = lambda v: f"{units.mm(v):g}"  # noqa: E731
     rows = []
     for r in routing.routes(params):
         t = r.tendon
         run = sum(rest[st.name] for st in r.strands)
+        if t.kind == "drive" and t.digit in split:
+            cp = split[t.digit]
+            ch = params.digit(t.digit).chain
+            palm, finger = routing.split_lengths(params, cp)
+            servo = SERVOS[ch.spec.servo]
+            # the palm strand winds r u_max on its pulley; the finger strand's loop is doubled round
+            # the cord behind the stop: its two legs run from the bight to the knot ahead of the stop
+            cut_palm = units.mm(palm + ch.servo_radius * ch.travel[1]) + 2 * KNOT_ALLOWANCE_MM
+            cut_finger = units.mm(finger + cp.length) + 2 * KNOT_ALLOWANCE_MM
+            rows.append({"item": "tendon", "spec": f"{g(hw.tendon_diameter)} mm braided UHMWPE, {cut_palm:.0f} mm",
+                         "quantity": 1, "used_in": (
+                             f"{t.name}, palm strand (drive, split at the {t.digit} socket): knotted in "
+                             f"{servo.link}'s anchor hole, wound on it, through the palm to the socket; the crimp "
+                             f"stop crimped on its end {units.mm(palm):.1f} mm from the anchor (working length), "
+                             "with the servo at u = 0")})
+            rows.append({"item": "tendon", "spec": f"{g(hw.tendon_diameter)} mm braided UHMWPE, {cut_finger:.0f} mm",
+                         "quantity": 1, "used_in": (
+                             f"{t.name}, finger strand: a loop (knot {units.mm(3 * hw.tendon_diameter):.1f} mm "
+                             f"ahead of the stop) hooked round the palm strand behind its stop, through the finger "
+                             f"base's entry, G1 and G2, knotted behind G2 {units.mm(finger):.1f} mm from the loop's "
+                             "bight (working length); detach at the service angle "
+                             f"{np.degrees(cp.service_angle):.1f} deg (docs/assembly.md)")})
+            continue
         if t.kind == "drive":
             ch = params.digit(t.digit).chain
             cut = units.mm(run + ch.servo_radius * ch.travel[1]) + 2 * KNOT_ALLOWANCE_MM
-            how = ("knotted in the servo pulley's anchor hole, wound on it, through the palm and across the "
-                   "magnet face to G1 and G2, knotted behind G2; tensioned by setting the servo horn's zero")
+            how = ("knotted in the servo pulley's anchor hole, wound on it, through the palm (and, for the thumb, "
+                   "up the CMC post and down the CMC axis) to G1 and G2, knotted behind G2; tensioned by "
+                   "setting the servo horn's zero")
             spec = f"{g(hw.tendon_diameter)} mm braided UHMWPE, {cut:.0f} mm"
         elif t.kind == "coupling":
             cut = units.mm(run) + 2 * KNOT_ALLOWANCE_MM
@@ -107,6 +132,11 @@ def bill_of_materials(params) -> list[dict]:
     bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} x {int(units.mm(pilot))} set screw (grub screw)",
                 "quantity": n_loops, "used_in": "one per coupling loop: clamps and tensions it in its hub"})
     bom += _cords(params)
+    split = routing.couplers(params)
+    bom.append({"item": "crimp stop", "spec": f"crimp sleeve {g(hw.stop_diameter)} x {g(hw.stop_length)} mm "
+                f"for {g(hw.tendon_diameter)} mm cord", "quantity": len(split),
+                "used_in": "ends the palm strand of each finger drive at the magnet face: "
+                + ", ".join(f"{d}_drive" for d in split)})
     sv = params.servo
     bom.append({"item": "servo",
                 "spec": "micro servo, body " + " x ".join(g(v) for v in sv.body) + " mm (SCS0009 class)",

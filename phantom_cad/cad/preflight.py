@@ -76,10 +76,13 @@ def check(params) -> None:
     the thenar housing of the CMC servo does not join the palm, or if the CMC servo's hub (which
     turns with the thumb) or the thumb tendon's post comes closer to the palm than a clearance; and
     if the routing model finds no clamp position for a loop or a drive (``routing.routes`` raises
-    the ParamError: a joint's travel too large for its loop's pulleys and carrier)."""
+    the ParamError: a joint's travel too large for its loop's pulleys and carrier), or a finger
+    drive's coupler has no room in its palm channel or does not come out at the service angle
+    (``routing.couplers``)."""
     from ..kinematics import routing
 
     routing.routes(params)
+    routing.couplers(params)
     palm = Palm(params)
     src = params.source
     pockets = {f: magnet_pockets(palm, f) for f in FINGERS}

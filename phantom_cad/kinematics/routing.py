@@ -283,14 +283,17 @@ def thumb_arch(params) -> dict[str, float]:
 
 
 def servo_clamp_wrap(params, servo: int) -> float:
-    """Wrap (rad) of a drive on its servo pulley at u = 0: the middle of what keeps the wrap inside
-    (margin, 180 deg - margin) over the servo's travel."""
+    """Wrap (rad) of a drive on its servo pulley at u = 0: the largest that keeps the wrap inside
+    (margin, 180 deg - margin) over the servo's travel, so that unwinding below the travel to the
+    service angle pays the most cord out (:class:`Coupler`)."""
     digit = SERVOS[servo].digit
     lo, travel = params.digit(digit).chain.travel
     m = math.degrees(WRAP_MARGIN)
-    return _clamp_angle(WRAP_MARGIN, math.pi - WRAP_MARGIN - travel, f"servo {servo + 1} pulley", params,
-                        f"{digit_field(digit)}.servo_travel_deg", [round(math.degrees(lo), 6), round(math.degrees(travel), 6)],
-                        f"the servo's travel must be at most {180 - 2 * m:g} deg (a wrap is modelled up to 180 deg)")
+    hi = math.pi - WRAP_MARGIN - travel
+    _clamp_angle(WRAP_MARGIN, hi, f"servo {servo + 1} pulley", params,
+                 f"{digit_field(digit)}.servo_travel_deg", [round(math.degrees(lo), 6), round(math.degrees(travel), 6)],
+                 f"the servo's travel must be at most {180 - 2 * m:g} deg (a wrap is modelled up to 180 deg)")
+    return hi
 
 
 def _drive(params, digit: str) -> Strand:
@@ -641,15 +644,20 @@ def document(params) -> dict:
     """``routing.json``: per tendon its kind, links, joints, servo, cord and strands (each a list of
     path elements in link frames, millimetres), and the rest length of every strand."""
     rest = lengths(params)
+    split = couplers(params)
     tendons = []
     for r in routes(params):
         t = r.tendon
+        extra = {}
+        if t.kind == "drive" and t.digit in split:
+            extra["split"] = coupler_document(params, split[t.digit])
         tendons.append({
             "name": t.name, "kind": t.kind, "digit": t.digit, "links": list(t.links), "joints": list(t.joints),
             "servo": None if t.servo is None else SERVOS[t.servo].name,
             "cord": {"diameter_mm": round(r.diameter * 1e3, 6), "stiffness": r.stiffness},
             "strands": [{"name": s.name, "rest_length_mm": round(rest[s.name] * 1e3, 6),
                          "elements": [_element_doc(e) for e in s.elements]} for s in r.strands],
+            **extra,
         })
     return {"format": "phantom_cad routing 1", "hand": params.name, "side": params.side,
             "frames": "link frames of docs/frames.md; millimetres; a pulley's strand turns positively about its axis",
@@ -694,3 +702,134 @@ def side_sites(params, strand: Strand, Ts=None) -> list[tuple[str, tuple[float, 
         local = np.linalg.inv(Ts[carrier]) @ np.array([*s, 1.0])
         out.append((carrier, tuple(float(v) for v in local[:3])))
     return out
+
+
+# ---------------------------------------------------------------------------
+# the drive's split at the magnet face
+# ---------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Coupler:
+    """The drive of a magnet-held finger is split at the socket face into a *palm strand* (servo
+    pulley to a crimped stop) and a *finger strand* (a loop round the palm strand behind the stop,
+    to G2). Distances ``s`` run from the socket face into the palm along the drive's straight run
+    (metres); the coupler is the stop with the loop on it: its knot (3 cord diameters), the stop,
+    and the loop's bight behind it (1 cord diameter)."""
+    digit: str
+    diameter: float          # its envelope: the stop and the loop's two legs beside it
+    length: float            # its envelope along the run
+    bore: float              # the palm's bore for it (envelope + two clearances)
+    run: float               # the straight run from the socket face to the servo pulley's tangent point
+    channel: float           # the part of the run outside the pulley's cavity: the bore's room
+    rest: tuple[float, float]          # s of its distal and proximal ends at u = 0
+    full: tuple[float, float]          # at the end of the travel
+    service_angle: float     # rad (< 0): the servo command that pays the palm strand out
+    payout: float            # how much it pays out
+    bearing: float           # s of the stop's proximal face at rest (where the loop's bight bears)
+
+    @property
+    def emergence(self) -> float:
+        """How far beyond the socket face the coupler's proximal end comes at the service angle."""
+        return self.payout - self.rest[1]
+
+    @property
+    def bore_end(self) -> float:
+        """s where the palm's bore ends: a clearance past the coupler at full travel."""
+        return self.full[1] + self.bore / 2.0 - self.diameter / 2.0
+
+
+def _drive_strand(params, digit: str) -> Strand:
+    """The drive's strand as :func:`routes` gives it (mirrored for a left hand), for posing with
+    :func:`pose`."""
+    return next(r.strands[0] for r in routes(params) if r.tendon.kind == "drive" and r.tendon.digit == digit)
+
+
+def split_digits() -> tuple[str, ...]:
+    """The digits whose drive is split at their magnet face: the magnet-held fingers (the thumb is
+    fixed to the palm)."""
+    return tuple(ch.digit for ch in CHAINS if link(joint(ch.joint_names[0]).parent).segment == "base")
+
+
+def couplers(params) -> dict[str, Coupler]:
+    """The coupler of every split drive (right-hand frames; the left hand's are their mirror image,
+    of the same dimensions). Refuses, naming ``hardware.tendon_stop``, a file whose coupler does not
+    stay in its channel over the travel or does not come out of the socket at the service angle."""
+    return memoised(_COUPLERS, params.digest, lambda: _couplers(params), cap=16)
+
+
+_COUPLERS: dict = {}
+
+
+def _couplers(params) -> dict[str, Coupler]:
+    hw, c = params.hardware, params.print.hole_clearance
+    d = hw.tendon_diameter
+    D = hw.stop_diameter + 2.0 * d
+    Lc = d + hw.stop_length + 3.0 * d
+    s0 = 2.0 * c
+    Ts = pose(params)
+    out = {}
+    for digit in split_digits():
+        spec = chain(digit)
+        servo = SERVOS[spec.servo]
+        ch = params.digit(digit).chain
+        r = ch.servo_radius
+        strand = _drive_strand(params, digit)
+        nodes = _nodes(strand, Ts)
+        k = next(i for i, e in enumerate(strand.elements) if isinstance(e, Point) and e.role == "interface")
+        tangent, face = nodes[k - 1][1], nodes[k][0]
+        run = float(np.linalg.norm(face - tangent))
+        cavity = math.sqrt((r + F.pulley_cavity_margin(params)) ** 2 - r ** 2)
+        channel = run - cavity
+        travel = r * ch.travel[1]
+        full = (s0 + travel, s0 + Lc + travel)
+        field = "hardware.tendon_stop.length_mm"
+        value = round(hw.stop_length * 1e3, 6)
+        if full[1] + c > channel + 1e-12:
+            raise ParamError(field, value, f"the {digit} drive's coupler (stop, loop and knot: {Lc * 1e3:.2f} mm) "
+                             f"travels {travel * 1e3:.2f} mm into the palm from {s0 * 1e3:.2f} mm behind the socket "
+                             "face; "
+                             f"with a clearance it needs {(full[1] + c) * 1e3:.2f} mm of channel, the palm has "
+                             f"{channel * 1e3:.2f} mm before servo {servo.index + 1}'s pulley cavity", params.source)
+        # the clamp sits for the largest wrap the travel allows (servo_clamp_wrap): unwinding to the
+        # smallest (WRAP_MARGIN) pays the palm strand out
+        service = WRAP_MARGIN - servo_clamp_wrap(params, servo.index)
+        payout = -r * service
+        cp = Coupler(digit, D, Lc, D + 2.0 * c, run, channel, (s0, s0 + Lc), full, service, payout,
+                     s0 + 3.0 * d + hw.stop_length)
+        if cp.emergence < hw.stop_diameter - 1e-12:
+            raise ParamError(field, value, f"at the service angle ({math.degrees(cp.service_angle):.1f} deg) servo "
+                             f"{servo.index + 1} pays out {payout * 1e3:.2f} mm: the {digit} coupler "
+                             f"({Lc * 1e3:.2f} mm) "
+                             f"comes {cp.emergence * 1e3:.2f} mm out of the socket, it must come at least the stop's "
+                             f"diameter ({hw.stop_diameter * 1e3:g} mm) out to slip the loop off", params.source)
+        out[digit] = cp
+    return out
+
+
+def split_lengths(params, cp: Coupler) -> tuple[float, float]:
+    """Working lengths (m) of a split drive's two strands at rest: the palm strand from its clamp
+    on the servo pulley to the stop's proximal face (where the loop's bight bears), the finger
+    strand from that bight to its knot at G2. They add up to the drive's rest length."""
+    strand = _drive_strand(params, cp.digit)
+    Ts = pose(params)
+    els = strand.elements
+    k = next(i for i, e in enumerate(els) if isinstance(e, Point) and e.role == "interface")
+    to_face, _ = strand_path(params, Strand(strand.name, els[:k + 1]), Ts)
+    from_face, _ = strand_path(params, Strand(strand.name, els[k:]), Ts)
+    return to_face - cp.bearing, from_face + cp.bearing
+
+
+def coupler_document(params, cp: Coupler) -> dict:
+    """A split drive in ``routing.json`` (millimetres, degrees; s from the socket face into the palm)."""
+    palm, finger = split_lengths(params, cp)
+    mm = lambda v: round(v * 1e3, 6)  # noqa: E731
+    return {"at": "socket face", "coupler": {"stop_diameter_mm": mm(params.hardware.stop_diameter),
+                                              "stop_length_mm": mm(params.hardware.stop_length),
+                                              "envelope_diameter_mm": mm(cp.diameter),
+                                              "envelope_length_mm": mm(cp.length),
+                                              "bore_mm": mm(cp.bore)},
+            "s_rest_mm": [mm(v) for v in cp.rest], "s_full_travel_mm": [mm(v) for v in cp.full],
+            "channel_mm": mm(cp.channel), "run_mm": mm(cp.run),
+            "palm_strand_mm": mm(palm), "finger_strand_mm": mm(finger),
+            "service_angle_deg": round(math.degrees(cp.service_angle), 6), "service_payout_mm": mm(cp.payout),
+            "service_emergence_mm": mm(cp.emergence)}

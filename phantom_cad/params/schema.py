@@ -180,6 +180,10 @@ class Hardware:
     magnet_thickness: float
     screw_diameter: float
     tendon_diameter: float
+    #: the crimped stop that ends each finger drive's palm strand at the magnet face (the drive's
+    #: split: docs/transmission.md)
+    stop_diameter: float = 2.0e-3
+    stop_length: float = 3.0e-3
 
 
 @dataclass(frozen=True)
@@ -510,8 +514,17 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
     mg = hw.table("magnet")
     magnet_d, magnet_t = mg.number("diameter_mm", gt=0) * MM, mg.number("thickness_mm", gt=0) * MM
     mg.done()
+    tendon = hw.number("tendon_diameter_mm", gt=0) * MM
+    st = hw.table("tendon_stop", default={})
+    stop_d = st.number("diameter_mm", gt=0, default=2.0) * MM
+    stop_len = st.number("length_mm", gt=0, default=3.0) * MM
+    if stop_d < 2.0 * tendon - 1e-12:
+        raise st.error("diameter_mm", stop_d / MM, "must be >= twice hardware.tendon_diameter_mm = "
+                       f"{2.0 * tendon / MM:g} "
+                       "(a crimp stop is a sleeve round the cord)")
+    st.done()
     hardware = Hardware(bore, outer, bw, axle, magnet_d, magnet_t,
-                        hw.number("screw_diameter_mm", gt=0) * MM, hw.number("tendon_diameter_mm", gt=0) * MM)
+                        hw.number("screw_diameter_mm", gt=0) * MM, tendon, stop_d, stop_len)
     hw.done()
     for n in FINGERS:
         f = fingers[n]

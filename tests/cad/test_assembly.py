@@ -135,14 +135,24 @@ def test_bill_of_materials(params):
     # two magnets per finger base and two per palm socket
     assert qty["magnet"] == 16
     assert qty["servo"] == 6
-    # a drive per tendon servo (5), a coupling loop per pair of adjacent joints (4 x 2 + 1), a
-    # return cord per digit (5)
-    assert qty["tendon"] == 5 + 9
+    # a drive per tendon servo (5), split in two strands for the four magnet-held fingers (+4), a
+    # coupling loop per pair of adjacent joints (4 x 2 + 1), a return cord per digit (5); a crimp
+    # stop per split drive
+    assert qty["tendon"] == 5 + 4 + 9
     assert qty["cable spring"] == 5
+    assert qty["crimp stop"] == 4
     # every tendon's cut length is its routed length (routing.lengths) plus what its ends need
     from phantom_cad.kinematics import routing
     rest = routing.lengths(params)
+    working = {}
     for row in bom:
+        if row["item"] == "tendon" and " strand" in row["used_in"].split(":", 1)[0]:
+            # a split drive's strand: its working length, and its cut at least that plus two knots
+            name = row["used_in"].split(",", 1)[0]
+            w = float(re.search(r"(\d+\.\d) mm from the (?:anchor|loop's bight)", row["used_in"]).group(1))
+            working[name] = working.get(name, 0.0) + w
+            assert w + 40 - 0.5 <= float(re.search(r"(\d+) mm$", row["spec"]).group(1))
+            continue
         if row["item"] in ("tendon", "cable spring"):
             name = row["used_in"].split(" ", 1)[0]
             run = sum(v for k, v in rest.items() if k == name or k.startswith(name + "_")) * 1e3
@@ -152,10 +162,14 @@ def test_bill_of_materials(params):
             else:
                 cut = float(re.search(r"(\d+) mm$", row["spec"]).group(1))
                 assert run + 40 - 0.5 <= cut
-    # the index drive reaches from its servo pulley past the MCP
-    tendon = next(r for r in bom if r["item"] == "tendon" and r["used_in"].startswith("index_drive"))
+    # the two strands of a split drive add up to the drive's routed length (to their 0.1 mm print)
+    assert sorted(working) == ["index_drive", "middle_drive", "pinky_drive", "ring_drive"]
+    for name, w in working.items():
+        assert w == pytest.approx(rest[name] * 1e3, abs=0.11)
+    # the index drive's palm strand reaches from its servo pulley to the socket, 29.3 mm of straight run
+    tendon = next(r for r in bom if r["item"] == "tendon" and r["used_in"].startswith("index_drive, palm"))
     length = float(re.search(r"(\d+) mm$", tendon["spec"]).group(1))
-    assert length > 189.0 * 0.245 / 2
+    assert length > 29.3 + 40
 
 
 def test_built_parts_carry_their_placement(built, params):

@@ -191,9 +191,10 @@ def test_servo_pulley_groove_radius_is_r(built, document, k):
 @pytest.mark.parametrize("k", [1, 2, 3, 4, 5])
 def test_servo_pulley_anchor_at_the_clamp_and_clear_of_the_horn_screws(built, document, k):
     """The knot well (an axial hole of twice the tendon hole's diameter) sits at the polar angle
-    where the drive is clamped: the wrap at u = 0 is the middle of (8 deg, 172 deg - travel), so the
-    clamp is at 180 deg + (180 deg - travel) / 2 = 270 deg - travel / 2; every horn-screw hole
-    stands a print wall away from it."""
+    where the drive is clamped: the wrap at u = 0 is the largest of (8 deg, 172 deg - travel), so
+    that the service angle below the travel pays the most cord out, and the clamp is at
+    180 deg + 172 deg - travel = 352 deg - travel; every horn-screw hole stands a print wall away
+    from it."""
     src = document["thumb"] if k == 1 else document["fingers"][FINGERS[k - 2]]
     travel = src["servo_travel_deg"][1]
     pr, hw = document["print"], document["hardware"]
@@ -206,7 +207,7 @@ def test_servo_pulley_anchor_at_the_clamp_and_clear_of_the_horn_screws(built, do
     assert len(wells) == 1 and len(screws) == 2
     w = wells[0]["point"][:2]
     angle = math.degrees(math.atan2(w[1], w[0])) % 360.0
-    assert angle == pytest.approx(270.0 - travel / 2.0, abs=1e-6)
+    assert angle == pytest.approx(352.0 - travel, abs=1e-6)
     for sc in screws:
         wall = np.linalg.norm(sc["point"][:2] - w) - well_r - screw_r
         assert wall >= document["palm"]["wall_mm"]
@@ -300,6 +301,33 @@ def test_palm_sockets_are_arc_offset_apart(built, document):
         assert np.cross(a, b)[2] < 0
     # the sockets face distally
     assert all(n[1] > 0.95 for n in normals)
+
+
+def test_palm_socket_faces_step_with_the_metacarpals(built, document):
+    """The stepped metacarpal heads, measured on the palm: the magnet pockets' openings lie on each
+    socket's face, whose centre is the MCP (on the 5 deg arc, chords 19.5 mm at -5 / 0 / +5 deg,
+    then stepped along its column, turned -7.5 / -2.5 / 2.5 / 7.5 deg, by its metacarpal less the
+    index's) less a finger base length along the column: the knuckle line is not a symmetric arc."""
+    pockets = sorted(check.circular_pockets(built["palm"].shape, _magnet_r(document)), key=lambda p: p["centre"][0])
+    hl, base = document["hand"]["hand_length_mm"], document["cad"]["finger_base_length_mm"]
+    pitch, d = document["palm"]["finger_pitch_mm"], math.radians
+    meta = [document["fingers"][f]["length_fraction"]["metacarpal"] * hl for f in FINGERS]
+    x = y = 0.0
+    faces = []
+    for i, phi in enumerate((-7.5, -2.5, 2.5, 7.5)):
+        if i:
+            m = (i - 2) * 5.0
+            x, y = x + pitch * math.cos(d(m)), y - pitch * math.sin(d(m))
+        step = meta[i] - meta[0] - base
+        faces.append((x + step * math.sin(d(phi)), y + step * math.cos(d(phi))))
+    for i, (fx, fy) in enumerate(faces):
+        pair = pockets[2 * i: 2 * i + 2]
+        mid = (pair[0]["centre"] + pair[1]["centre"]) / 2.0
+        assert mid[:2] == pytest.approx([fx, fy], abs=1e-6)
+    # the stepped line of the socket faces: the middle's 1.4 mm ahead of the index's, the ring's 5.6
+    # and the pinky's 14.8 mm behind it, along the palm's y (a symmetric arc would give 1.7 / 1.7 / 0)
+    ys = [fy - faces[0][1] for _, fy in faces]
+    assert [round(v, 1) for v in ys[1:]] == [1.4, -5.6, -14.8]
 
 
 @pytest.mark.parametrize("finger", FINGERS)

@@ -12,7 +12,9 @@ y distal, z dorsal. Built from:
   the dorsal side for assembly), pulley cavities and M2 pilot holes at the flange ears;
 * the thenar housing of the direct-drive CMC servo, coaxial with the thumb CMC axis (open on the shaft side);
 * tendon channels from each socket's tendon exit straight back to its servo pulley's
-  tangent point, and the thumb tendon's channel from servo 1 out of the palm's radial side;
+  tangent point, each with the bore its drive's coupler (the crimp stop and the finger strand's
+  loop, ``routing.couplers``) travels in, and the thumb tendon's channel from servo 1 out of the
+  palm's radial side;
 * the CMC post and arch: the thumb tendon climbs a post on servo 6's housing and reaches the
   CMC axis above the CMC base, so turning the thumb about the CMC does not change its length;
 * the flexion-limiting housing (rails under each finger base, at the Table I MCP limit).
@@ -111,6 +113,11 @@ class Palm(Part):
 
     def pulley_radius(self, servo: int) -> float:
         return mm(F.servo_radius(self.params, servo))
+
+    @property
+    def couplers(self) -> dict:
+        """The finger drives' couplers (``routing.couplers``: metres, s from the socket face)."""
+        return routing.couplers(self.params)
 
     def body_box(self, servo: int, grow: float = 0.0):
         """The servo's body as (lo, hi) corners in its servo frame, grown by ``grow``."""
@@ -290,6 +297,10 @@ class Palm(Part):
             exit_ = (T @ np.array([0.0, 0.0, self.tendon_z, 1.0]))[:3]
             u = (tangent - exit_) / np.linalg.norm(tangent - exit_)
             tools.append(cylinder(exit_ - u, tangent + u, t.tendon_hole / 2.0))
+            # the drive's coupler (crimp stop and loop): a bore from the socket face to a clearance
+            # past where it is at full travel (routing.couplers)
+            cp = self.couplers[f]
+            tools.append(cylinder(exit_ - u, exit_ + u * mm(cp.bore_end), mm(cp.bore) / 2.0))
         # flexion-limiting housing: two rails under each finger base whose sloped fronts are
         # where the proximal phalanx's palmar face lies at the MCP limit (Table I)
         for f in FINGERS:
