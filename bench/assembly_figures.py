@@ -230,6 +230,14 @@ def marks(scene: Scene, tendon: str) -> list[tuple[np.ndarray, str | None, str]]
                 out.append((P, f"{where}:\n{DOES[role]}", "o"))
             elif isinstance(e, routing.Point) and e.role == "crossing":
                 out.append((P, f"{e.link}: the ends cross once\n(its two crossing channels)", "X"))
+            elif isinstance(e, routing.Point) and e.role == "interface" and scene.digit in routing.couplers(scene.p):
+                # the drive's split: the crimp stop at rest in the palm's bore, the loop behind it
+                cp = routing.couplers(scene.p)[scene.digit]
+                back = scene.base(routing._nodes(st, scene.Ts)[i - 1][1])[0]
+                u = (back - P) / np.linalg.norm(back - P)
+                mid = (cp.bearing - scene.p.hardware.stop_length / 2.0) * 1e3
+                out.append((P + mid * u, "palm bore: the crimp stop, the finger\nstrand's loop hooked behind it", "D"))
+                out.append((P, f"{e.link}: entry channel\n(the split: docs/transmission.md)", "s"))
             elif isinstance(e, routing.Point) and e.role in ("interface", "guide G1"):
                 entry = ("down the CMC axis\n(from the palm's arch)" if scene.digit == "thumb"
                          else "entry channel\n(from the palm channel)")
@@ -247,7 +255,7 @@ def draw_marks(ax, scene: Scene, view: str, tendon: str, labelled: bool) -> None
     h, v, _ = VIEWS[view]
     ms = marks(scene, tendon)
     for P, _, m in ms:
-        ax.plot(P[h], P[v], m, ms=6 if m != "+" else 9, mfc="white" if m == "o" else "k", mec="k",
+        ax.plot(P[h], P[v], m, ms=6 if m != "+" else 9, mfc="white" if m in ("o", "D") else "k", mec="k",
                 mew=1.2, zorder=6)
     if not labelled:
         return
@@ -330,6 +338,8 @@ def figure(scene: Scene, step: int, tendon: str, title: str, out: Path, what: st
         seen["crossing"] = Line2D([], [], ls="", marker="X", mfc="k", mec="k")
     if "s" in ms:
         seen["via (entry, G1)"] = Line2D([], [], ls="", marker="s", mfc="k", mec="k")
+    if "D" in ms:
+        seen["crimp stop (the drive's split)"] = Line2D([], [], ls="", marker="D", mfc="white", mec="k")
     fig.legend(seen.values(), seen.keys(), fontsize=7, loc="outside lower center", ncol=4, framealpha=0.9)
     fig.savefig(out, dpi=120)
     plt.close(fig)

@@ -92,6 +92,18 @@ def _envelope(exit_mm, u, s_from, s_to, radius, step=0.25, n=16):
 
 
 def test_the_drive_couplers_travel_in_the_palms_bore(params, document, right_solids):
+    _couplers_travel_in_the_bore(params, document, right_solids["palm"])
+
+
+def test_slender_hand_couplers_travel_in_the_palms_bore():
+    from phantom_cad.params import load_document
+    path = ROOT / "params" / "examples" / "slender.toml"
+    p, doc = load_params(path), load_document(path)
+    doc["hardware"].setdefault("tendon_stop", {"diameter_mm": 2.0, "length_mm": 3.0})
+    _couplers_travel_in_the_bore(p, doc, registry.part(p, "palm").build())
+
+
+def _couplers_travel_in_the_bore(params, document, palm):
     """Each finger drive's coupler (the crimp stop with the loop on it, docs/transmission.md): its
     envelope, a cylinder of stop + 2 cords by 1 + stop + 3 cords (worked out here from the file),
     from 2 clearances inside the socket face at u = 0 to r u_max deeper at full travel, lies in no
@@ -101,7 +113,6 @@ def test_the_drive_couplers_travel_in_the_palms_bore(params, document, right_sol
     from phantom_cad.kinematics import frames as Fr
     from phantom_cad.kinematics.topology import chain
 
-    palm = right_solids["palm"]
     hw, pr = document["hardware"], document["print"]
     d, c = hw["tendon_diameter_mm"], pr["hole_clearance_mm"]
     D = hw["tendon_stop"]["diameter_mm"] + 2 * d
