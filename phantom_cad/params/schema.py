@@ -194,6 +194,8 @@ class Print:
     stl_tolerance: float
     density: float      # kg/m^3
     infill: float
+    #: a thread-forming screw's pilot hole, as a fraction of the screw's diameter
+    screw_pilot_ratio: float = 0.8
 
 
 @dataclass(frozen=True)
@@ -544,6 +546,7 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
         stl_tolerance=pr.number("stl_tolerance_mm", ge=0.001, le=1) * MM,
         density=pr.number("density_g_per_cm3", gt=0, lt=25) * G_PER_CM3,
         infill=pr.number("infill", gt=0, le=1),
+        screw_pilot_ratio=pr.number("screw_pilot_ratio", gt=0.6, lt=1.0, default=0.8),
     )
     pr.done()
 

@@ -383,7 +383,7 @@ def test_axle_bore_and_bearing_seats_are_coaxial(built, document, parent, child)
 def test_cmc_base_screws_meet_the_hub(built, document):
     hw, pr = document["hardware"], document["print"]
     clear = hw["screw_diameter_mm"] / 2 + pr["hole_clearance_mm"]
-    pilot = (hw["screw_diameter_mm"] - pr["press_fit_interference_mm"]) / 2
+    pilot = 0.8 * hw["screw_diameter_mm"] / 2           # print.screw_pilot_ratio's default: 1.6 mm for M2
     base, hub = built["thumb_cmc_base"], built["servo_pulley_6"]
     base_axes = [(_hand(base.T_hand_link, c["point"]), _dir(base.T_hand_link, c["direction"]))
                  for c in check.cylinders(base.shape) if abs(c["radius"] - clear) < 1e-6]
@@ -629,8 +629,8 @@ def test_thumb_tendon_reaches_the_cmc_base_on_its_axis(built, document):
 
 
 def test_palm_has_two_flange_screw_pilots_per_servo(built, document):
-    hw, pr, sv = document["hardware"], document["print"], document["servo"]
-    pilot = (hw["screw_diameter_mm"] - pr["press_fit_interference_mm"]) / 2
+    hw, sv = document["hardware"], document["servo"]
+    pilot = 0.8 * hw["screw_diameter_mm"] / 2           # print.screw_pilot_ratio's default: 1.6 mm for M2
     holes = [c for c in check.cylinders(built["palm"].shape) if abs(c["radius"] - pilot) < 1e-6]
     assert len(holes) == 12
     # mid-ear on both ends: (body length / 2 + flange span / 2) apart, along the body length

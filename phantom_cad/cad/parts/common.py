@@ -50,6 +50,7 @@ class Tolerances:
         self.wall = mm(params.palm.wall)
         self.spring = mm(params.cad.spring_diameter)
         self.eyelet_length = mm(params.cad.eyelet_length)
+        self.pilot_ratio = params.print.screw_pilot_ratio
 
     @property
     def tendon_hole(self) -> float:
@@ -79,8 +80,10 @@ class Tolerances:
 
     @property
     def screw_pilot(self) -> float:
-        """Self-tapping pilot hole for the M2 screws in printed material."""
-        return self.screw - self.interference
+        """Pilot hole of a thread-forming (self-tapping) screw in printed material:
+        ``print.screw_pilot_ratio`` of its diameter (0.8 by default: 1.6 mm for M2, a thread
+        flank of 0.2 mm each side; a pilot of d - press_fit_interference left 0.02 mm)."""
+        return self.pilot_ratio * self.screw
 
     @property
     def screw_engagement(self) -> float:
