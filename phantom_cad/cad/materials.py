@@ -34,7 +34,7 @@ def _cords(params) -> list[dict]:
         if t.kind == "drive" and t.digit in split:
             cp = split[t.digit]
             ch = params.digit(t.digit).chain
-            palm, finger = routing.split_lengths(params, cp)
+            palm, finger = cp.palm_strand, cp.finger_strand
             servo = SERVOS[ch.spec.servo]
             # the palm strand winds r u_max on its pulley; the finger strand's loop is doubled round
             # the cord behind the stop: its two legs run from the bight to the knot ahead of the stop

@@ -168,10 +168,9 @@ def params_opposition(params: Optional[Path] = ParamsOpt,
     typer.echo("\n".join(opposition_lines(hand, sol.reach)))
     verdict = ("the pads of index, middle and ring all meet" if math.isfinite(sol.margin) and sol.margin >= 0.0
                else "index, middle and ring are not all met pad to pad")
-    typer.echo(f"margin {deg(sol.margin):+.1f} deg ({verdict}); the thumb's links stay "
-               f"{mm(-sol.intrusion):.1f} mm outside the palm envelope" if sol.intrusion <= 0.0 else
-               f"margin {deg(sol.margin):+.1f} deg ({verdict}); the thumb's links reach {mm(sol.intrusion):.1f} mm "
-               "into the palm envelope")
+    palm = (f"stay {mm(-sol.intrusion):.1f} mm outside" if sol.intrusion <= 0.0
+            else f"reach {mm(sol.intrusion):.1f} mm into")
+    typer.echo(f"margin {deg(sol.margin):+.1f} deg ({verdict}); the thumb's links {palm} the palm envelope")
     typer.echo("")
     typer.echo("[palm]")
     typer.echo(f"thumb_cmc_offset_mm = [{', '.join(f'{mm(v):.2f}' for v in sol.offset)}]"

@@ -108,15 +108,10 @@ def finger_direction(params, i: int) -> np.ndarray:
     return np.array([math.sin(phi), math.cos(phi), 0.0])
 
 
-def knuckle_step(params, i: int) -> float:
-    """How far (m) finger i's MCP sits beyond the palm arc along its column: its metacarpal's
-    length less the index's (the stepped metacarpal heads; 0 for the index)."""
-    return params.fingers[FINGERS[i]].metacarpal - params.fingers[FINGERS[0]].metacarpal
-
-
 def mcp_position(params, i: int) -> np.ndarray:
     """MCP axis centre of finger i in the palm frame (index at the origin): on the palm arc,
-    stepped along its column by :func:`knuckle_step` (``params.rules.finger_columns``)."""
+    stepped along its column by its metacarpal's length less the index's
+    (``params.rules.finger_columns``)."""
     x, y, _ = finger_columns(params.palm.finger_pitch, params.palm.arc_offset,
                              [params.fingers[f].metacarpal for f in FINGERS])[i]
     return np.array([x, y, 0.0])

@@ -61,17 +61,12 @@ def _servo(digit: str) -> int:
     return chain(digit).servo
 
 
-def _planar(params, digit: str, q: np.ndarray, origin_y: float):
+def _chain(params, digit: str, q: np.ndarray, origin_y: float):
     """The distal link of ``digit`` in its chain's root frame (the finger base; the thumb's CMC
     base), for joint angles q (n, 15): flexion turns about -x, so every link of the chain stays in
-    the root's y-z plane. Returns the tip segment's ends (n, 3) x2 and the pad normal (n, 3)."""
-    a, b, n, r, _ = _chain(params, digit, q, origin_y)
-    return a, b, n, r
-
-
-def _chain(params, digit, q, origin_y):
-    """:func:`_planar`, and the joint centres (n, 3) in chain order (the reference joint first),
-    then the tip's centre."""
+    the root's y-z plane. Returns the tip segment's ends (n, 3) x2, the pad normal (n, 3), the tip
+    radius, and the joint centres (n, 3) in chain order (the reference joint first), then the
+    tip's centre."""
     ch = chain(digit)
     d = params.digit(digit)
     lengths = [getattr(d, seg) for seg in ch.segments[1:]]     # the links after each joint
@@ -111,7 +106,7 @@ def finger_tips(hand, finger: str, n: int = 41) -> Tips:
     u = np.zeros((n, N_SERVOS))
     u[:, s] = _travel(hand, s, n)
     q = hand.forward(u, compensated=True)
-    a, b, nrm, r = _planar(hand.params, finger, q, 0.0)
+    a, b, nrm, r, _ = _chain(hand.params, finger, q, 0.0)
     T = F.T_palm_finger_base(hand.params, finger)
     return Tips(_apply(T, a), _apply(T, b), _apply(T, nrm, 0.0), r, u[:, [s]])
 

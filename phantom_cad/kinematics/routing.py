@@ -726,6 +726,8 @@ class Coupler:
     service_angle: float     # rad (< 0): the servo command that pays the palm strand out
     payout: float            # how much it pays out
     bearing: float           # s of the stop's proximal face at rest (where the loop's bight bears)
+    palm_strand: float       # working length: from the clamp on the servo pulley to the stop's proximal face
+    finger_strand: float     # working length: from the loop's bight to the knot at G2 (the two add up to the drive)
 
     @property
     def emergence(self) -> float:
@@ -777,6 +779,8 @@ def _couplers(params) -> dict[str, Coupler]:
         nodes = _nodes(strand, Ts)
         k = next(i for i, e in enumerate(strand.elements) if isinstance(e, Point) and e.role == "interface")
         tangent, face = nodes[k - 1][1], nodes[k][0]
+        to_face, _ = strand_path(params, Strand(strand.name, strand.elements[:k + 1]), Ts)
+        from_face, _ = strand_path(params, Strand(strand.name, strand.elements[k:]), Ts)
         run = float(np.linalg.norm(face - tangent))
         cavity = math.sqrt((r + F.pulley_cavity_margin(params)) ** 2 - r ** 2)
         channel = run - cavity
@@ -794,8 +798,9 @@ def _couplers(params) -> dict[str, Coupler]:
         # smallest (WRAP_MARGIN) pays the palm strand out
         service = WRAP_MARGIN - servo_clamp_wrap(params, servo.index)
         payout = -r * service
+        bearing = s0 + 3.0 * d + hw.stop_length
         cp = Coupler(digit, D, Lc, D + 2.0 * c, run, channel, (s0, s0 + Lc), full, service, payout,
-                     s0 + 3.0 * d + hw.stop_length)
+                     bearing, to_face - bearing, from_face + bearing)
         if cp.emergence < hw.stop_diameter - 1e-12:
             raise ParamError(field, value, f"at the service angle ({math.degrees(cp.service_angle):.1f} deg) servo "
                              f"{servo.index + 1} pays out {payout * 1e3:.2f} mm: the {digit} coupler "
@@ -806,22 +811,8 @@ def _couplers(params) -> dict[str, Coupler]:
     return out
 
 
-def split_lengths(params, cp: Coupler) -> tuple[float, float]:
-    """Working lengths (m) of a split drive's two strands at rest: the palm strand from its clamp
-    on the servo pulley to the stop's proximal face (where the loop's bight bears), the finger
-    strand from that bight to its knot at G2. They add up to the drive's rest length."""
-    strand = _drive_strand(params, cp.digit)
-    Ts = pose(params)
-    els = strand.elements
-    k = next(i for i, e in enumerate(els) if isinstance(e, Point) and e.role == "interface")
-    to_face, _ = strand_path(params, Strand(strand.name, els[:k + 1]), Ts)
-    from_face, _ = strand_path(params, Strand(strand.name, els[k:]), Ts)
-    return to_face - cp.bearing, from_face + cp.bearing
-
-
 def coupler_document(params, cp: Coupler) -> dict:
     """A split drive in ``routing.json`` (millimetres, degrees; s from the socket face into the palm)."""
-    palm, finger = split_lengths(params, cp)
     mm = lambda v: round(v * 1e3, 6)  # noqa: E731
     return {"at": "socket face", "coupler": {"stop_diameter_mm": mm(params.hardware.stop_diameter),
                                               "stop_length_mm": mm(params.hardware.stop_length),
@@ -830,6 +821,6 @@ def coupler_document(params, cp: Coupler) -> dict:
                                               "bore_mm": mm(cp.bore)},
             "s_rest_mm": [mm(v) for v in cp.rest], "s_full_travel_mm": [mm(v) for v in cp.full],
             "channel_mm": mm(cp.channel), "run_mm": mm(cp.run),
-            "palm_strand_mm": mm(palm), "finger_strand_mm": mm(finger),
+            "palm_strand_mm": mm(cp.palm_strand), "finger_strand_mm": mm(cp.finger_strand),
             "service_angle_deg": round(math.degrees(cp.service_angle), 6), "service_payout_mm": mm(cp.payout),
             "service_emergence_mm": mm(cp.emergence)}
