@@ -209,3 +209,27 @@ def test_a_coupler_without_room_is_refused(monkeypatch):
     assert e.value.field == "hardware.tendon_stop.length_mm"
     assert "the ring drive's coupler (stop, loop and knot: 6.60 mm) travels 11.12 mm" in str(e.value)
     assert "needs 18.32 mm of channel, the palm has 18.07 mm" in str(e.value)
+
+
+def test_servo_boxes_and_wrist_by_hand():
+    """The servo's body and flange-ear boxes (the one description the palm's pockets and the coming
+    forearm layout use) and the wrist crease, from the file's numbers."""
+    from phantom_cad.kinematics import frames as F
+
+    path = ROOT / "params" / "phantom.toml"
+    doc = tomllib.loads(path.read_text())
+    p = load_params(path)
+    L, W, H = doc["servo"]["body_mm"]
+    cad, c = doc["cad"], doc["print"]["hole_clearance_mm"]
+    top = -(cad["servo_pulley_width_mm"] / 2 + c)                  # the output face under the pulley
+    off = cad["servo_shaft_offset_mm"]
+    boxes = {k: (np.array(lo) * 1e3, np.array(hi) * 1e3) for k, (lo, hi) in F.servo_boxes(p).items()}
+    np.testing.assert_allclose(boxes["body"][0], [-W / 2, -off - L / 2, top - H], atol=1e-9)
+    np.testing.assert_allclose(boxes["body"][1], [W / 2, -off + L / 2, top], atol=1e-9)
+    ear_top = top - cad["servo_ear_offset_mm"]
+    span = doc["servo"]["flange_span_mm"]
+    np.testing.assert_allclose(boxes["ears"][0], [-W / 2, -off - span / 2, ear_top - cad["servo_ear_thickness_mm"]],
+                               atol=1e-9)
+    np.testing.assert_allclose(boxes["ears"][1], [W / 2, -off + span / 2, ear_top], atol=1e-9)
+    hl = doc["hand"]["hand_length_mm"]
+    assert F.wrist_y(p) * 1e3 == pytest.approx(-doc["fingers"]["index"]["length_fraction"]["metacarpal"] * hl)

@@ -214,6 +214,28 @@ def T_palm_servo(params, servo: int) -> np.ndarray:
     return T
 
 
+def wrist_y(params) -> float:
+    """y (m, palm frame) of the wrist crease: the index metacarpal's length behind the index MCP.
+    The palm (in the anthropometric sense) lies between it and the knuckles."""
+    return -params.fingers[FINGERS[0]].metacarpal
+
+
+def servo_boxes(params) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """(lo, hi) corners (m, servo frame) of a servo's body and of its flange ears (both ears as
+    one slab across the body): the body's output face one hole clearance below the pulley's
+    lower flange, the body toward -y of the shaft by cad.servo_shaft_offset, the ears'
+    top face cad.servo_ear_offset below the output face."""
+    sv, cad = params.servo, params.cad
+    L, W, H = sv.body
+    z_top = -(cad.servo_pulley_width / 2.0 + params.print.hole_clearance)
+    z1 = z_top - cad.servo_ear_offset
+    z0 = z1 - cad.servo_ear_thickness
+    y0 = -cad.servo_shaft_offset
+    return {"body": (np.array([-W / 2.0, y0 - L / 2.0, z_top - H]), np.array([W / 2.0, y0 + L / 2.0, z_top])),
+            "ears": (np.array([-W / 2.0, y0 - sv.flange_span / 2.0, z0]),
+                     np.array([W / 2.0, y0 + sv.flange_span / 2.0, z1]))}
+
+
 def socket_tendon_point(params, finger: str) -> np.ndarray:
     """Where the finger's tendon crosses the magnet face (palm frame, metres)."""
     return (T_palm_socket(params, finger) @ np.array([0.0, 0.0, tendon_height(params), 1.0]))[:3]

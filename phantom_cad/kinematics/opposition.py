@@ -281,7 +281,7 @@ def palm_envelope(params) -> tuple[np.ndarray, np.ndarray]:
     x0 = F.mcp_position(params, 0)[0] - params.fingers[first].width / 2.0 - w
     x1 = F.mcp_position(params, len(FINGERS) - 1)[0] + params.fingers[last].width / 2.0 + w
     y1 = max(F.T_palm_socket(params, f)[1, 3] for f in FINGERS)
-    y0 = -params.fingers[first].metacarpal
+    y0 = F.wrist_y(params)
     T = params.palm.thickness / 2.0
     return np.array([x0, y0, -T]), np.array([x1, y1, T])
 

@@ -119,24 +119,18 @@ class Palm(Part):
         """The finger drives' couplers (``routing.couplers``: metres, s from the socket face)."""
         return routing.couplers(self.params)
 
+    def _servo_box(self, what: str, grow: float):
+        lo, hi = F.servo_boxes(self.params)[what]
+        return np.array([mm(v) for v in lo]) - grow, np.array([mm(v) for v in hi]) + grow
+
     def body_box(self, servo: int, grow: float = 0.0):
-        """The servo's body as (lo, hi) corners in its servo frame, grown by ``grow``."""
-        L, W, H = self.servo_body
-        c = self.tol.clearance
-        z_top = -(self.pulley_width / 2.0 + c)
-        lo = np.array([-W / 2.0, -self.shaft_offset - L / 2.0, z_top - H]) - grow
-        hi = np.array([W / 2.0, -self.shaft_offset + L / 2.0, z_top]) + grow
-        return lo, hi
+        """The servo's body as (lo, hi) corners in its servo frame, grown by ``grow``
+        (``frames.servo_boxes``)."""
+        return self._servo_box("body", grow)
 
     def ear_box(self, servo: int, grow: float = 0.0):
         """The servo's flange ears (both, as one slab across the body) in its servo frame."""
-        L, W, H = self.servo_body
-        z_top = -(self.pulley_width / 2.0 + self.tol.clearance)
-        z1 = z_top - mm(self.params.cad.servo_ear_offset)
-        z0 = z1 - mm(self.params.cad.servo_ear_thickness)
-        lo = np.array([-W / 2.0, -self.shaft_offset - self.flange_span / 2.0, z0]) - grow
-        hi = np.array([W / 2.0, -self.shaft_offset + self.flange_span / 2.0, z1]) + grow
-        return lo, hi
+        return self._servo_box("ears", grow)
 
     def cavity_radius(self, servo: int) -> float:
         return self.pulley_radius(servo) + mm(F.pulley_cavity_margin(self.params))
