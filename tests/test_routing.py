@@ -189,9 +189,12 @@ def test_a_coupler_without_room_is_refused(monkeypatch):
     """Two rules, by hand for the default hand. A 4 mm stop makes the coupler 0.6 + 4 + 1.8 =
     6.4 mm long: at the service angle (164 - 93 = 71 deg of unwinding, 7 mm x 1.239 rad = 8.67 mm)
     the index's comes 8.67 - 0.4 - 6.4 = 1.87 mm out, less than the stop's 2 mm diameter. That rule
-    binds first on the default hand; with a 2 deg wrap margin instead of 8 (more payout) a 4.2 mm
-    stop comes out far enough, but the ring's coupler then needs 0.4 + 6.6 + 11.12 + 0.2 =
-    18.32 mm of its 18.07 mm channel (7 mm x 91 deg = 11.12 mm): the ring is named."""
+    binds first on the default hand: with the servos in the forearm module every drive runs more
+    than 50 mm from its socket to its pulley. The channel rule is checked with a pulley cavity made
+    to fill the run: the channel is the run (the tangent length from the socket's tendon exit to
+    the pulley circle, both at the tendon height: sqrt(|E - C|^2 - r^2)) less the cavity's
+    sqrt((r + m)^2 - r^2)."""
+    from phantom_cad.kinematics import frames as F
     from phantom_cad.params import ParamError, load_document, parse
 
     doc = load_document(FILES[0])
@@ -202,13 +205,21 @@ def test_a_coupler_without_room_is_refused(monkeypatch):
     assert "the index coupler (6.40 mm) comes 1.87 mm out of the socket" in str(e.value)
     for memo in ("_ROUTES", "_RUNS", "_COUPLERS"):
         monkeypatch.setattr(routing, memo, {})
-    monkeypatch.setattr(routing, "WRAP_MARGIN", math.radians(2.0))
-    doc["hardware"]["tendon_stop"] = {"diameter_mm": 2.0, "length_mm": 4.2}
+    p = parse(load_document(FILES[0]))
+    E = F.socket_tendon_point(p, "index") * 1e3
+    C = F.T_palm_servo(p, 1)[:3, 3] * 1e3
+    r = 7.0
+    run = math.sqrt(float((E - C) @ (E - C)) - r * r)
+    m = run                                      # a cavity margin as long as the run
+    monkeypatch.setattr(routing.F, "pulley_cavity_margin", lambda params: m * 1e-3)
+    channel = run - math.sqrt((r + m) ** 2 - r * r)
     with pytest.raises(ParamError) as e:
-        routing.couplers(parse(doc))
+        routing.couplers(p)
     assert e.value.field == "hardware.tendon_stop.length_mm"
-    assert "the ring drive's coupler (stop, loop and knot: 6.60 mm) travels 11.12 mm" in str(e.value)
-    assert "needs 18.32 mm of channel, the palm has 18.07 mm" in str(e.value)
+    travel = 7.0 * math.radians(93.0)
+    need = 0.4 + (0.6 + 3.0 + 1.8) + travel + 0.2
+    assert (f"the index drive's coupler (stop, loop and knot: 5.40 mm) travels {travel:.2f} mm" in str(e.value))
+    assert f"needs {need:.2f} mm of channel, it has {channel:.2f} mm" in str(e.value)
 
 
 def test_servo_boxes_and_wrist_by_hand():

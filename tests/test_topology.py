@@ -53,7 +53,9 @@ def test_link_tree():
     assert parent["index_base"] == "palm" and parent["index_distal"] == "index_middle"
     assert parent["thumb_cmc_base"] == "palm" and parent["thumb_distal"] == "thumb_proximal"
     assert parent["servo_pulley_6"] == "palm"
-    assert len(T.LINKS) == 1 + 4 * 4 + 3 + 6
+    # the tendon servos sit in the forearm module, fixed to the palm behind the wrist
+    assert parent["forearm"] == "palm" and parent["servo_pulley_1"] == parent["servo_pulley_5"] == "forearm"
+    assert len(T.LINKS) == 1 + 1 + 4 * 4 + 3 + 6
     # parents come before their children: a writer can walk the tuple in order
     seen = set()
     for ln in T.LINKS:

@@ -43,7 +43,8 @@ def _cords(params) -> list[dict]:
             rows.append({"item": "tendon", "spec": f"{g(hw.tendon_diameter)} mm braided UHMWPE, {cut_palm:.0f} mm",
                          "quantity": 1, "used_in": (
                              f"{t.name}, palm strand (drive, split at the {t.digit} socket): knotted in "
-                             f"{servo.link}'s anchor hole, wound on it, through the palm to the socket; the crimp "
+                             f"{servo.link}'s anchor hole, wound on it, across the wrist and through the palm to the "
+                             "socket; the crimp "
                              f"stop crimped on its end {units.mm(palm):.1f} mm from the anchor (working length), "
                              "with the servo at u = 0")})
             rows.append({"item": "tendon", "spec": f"{g(hw.tendon_diameter)} mm braided UHMWPE, {cut_finger:.0f} mm",
@@ -57,7 +58,7 @@ def _cords(params) -> list[dict]:
         if t.kind == "drive":
             ch = params.digit(t.digit).chain
             cut = units.mm(run + ch.servo_radius * ch.travel[1]) + 2 * KNOT_ALLOWANCE_MM
-            how = ("knotted in the servo pulley's anchor hole, wound on it, through the palm (and, for the thumb, "
+            how = ("knotted in the servo pulley's anchor hole, wound on it, across the wrist (and, for the thumb, "
                    "up the CMC post and down the CMC axis) to G1 and G2, knotted behind G2; tensioned by "
                    "setting the servo horn's zero")
             spec = f"{g(hw.tendon_diameter)} mm braided UHMWPE, {cut:.0f} mm"
@@ -118,7 +119,13 @@ def bill_of_materials(params) -> list[dict]:
     engage = units.m(Tolerances(params).screw_engagement)
     bom.append({"item": "screw",
                 "spec": f"M{g(hw.screw_diameter)} self-tapping, {g(engage)} mm thread engagement + servo flange",
-                "quantity": 2 * N_SERVOS, "used_in": "servo flanges into the palm's pilot holes"})
+                "quantity": 2 * N_SERVOS,
+                "used_in": "servo flanges: servos 1-5 into the forearm module's pilot holes, servo 6 into the palm's"})
+    from .parts import wrist
+    tab = params.palm.wall + engage
+    bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} x {units.mm(tab):.0f} self-tapping",
+                "quantity": len(wrist.tab_screws(params)),
+                "used_in": "the forearm module's tab into the palm's dorsal face at the wrist"})
     bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} horn screw (servo accessory)",
                 "quantity": 2 * N_SERVOS, "used_in": "servo pulleys 1-6 to their horns"})
     cmc = params.thumb.thickness + params.print.hole_clearance + engage
@@ -140,5 +147,6 @@ def bill_of_materials(params) -> list[dict]:
     sv = params.servo
     bom.append({"item": "servo",
                 "spec": "micro servo, body " + " x ".join(g(v) for v in sv.body) + " mm (SCS0009 class)",
-                "quantity": N_SERVOS, "used_in": "palm: u1 thumb flexion, u2-u5 fingers, u6 thumb CMC"})
+                "quantity": N_SERVOS,
+                "used_in": "forearm module: u1 thumb flexion, u2-u5 fingers; palm (thenar housing): u6 thumb CMC"})
     return bom

@@ -1,6 +1,6 @@
 """Rules of the palm's layout, checked when a parameter file loads (before any solid is built).
 
-The palm places the servo bay, the thenar housing and the finger sockets from the frames
+The palm places the thenar housing and the finger sockets from the frames
 (phantom_cad.kinematics.frames); whether they fit together is a question of the parts'
 own dimension classes, so these rules live here, numpy only (no OpenCascade), and raise the
 same :class:`ParamError` as the schema. ``check`` is called by every command that loads a
@@ -17,7 +17,7 @@ from ..kinematics.topology import FINGERS, SERVOS
 from ..params import ParamError
 from ..params.rules import MIN_WALL
 from .parts.common import mm
-from .parts.palm import BAY_SERVOS, Palm
+from .parts.palm import PALM_SERVOS, Palm
 
 
 def _obb(T: np.ndarray, lo, hi):
@@ -48,15 +48,10 @@ def overlap(a, b) -> float:
 
 
 def servo_tools(palm: Palm, k: int) -> list:
-    """The boxes the palm cuts for servo ``k`` (pocket, ear slots; a bay servo's pulley cavity by
-    its bounding box), as oriented boxes in the palm frame."""
+    """The boxes the palm cuts for servo ``k`` (pocket, ear slots), as oriented boxes in the palm
+    frame."""
     T = palm.T_servo(k)
-    boxes = [_obb(T, lo, hi) for lo, hi in palm.pocket_boxes(k)]
-    if k in BAY_SERVOS:
-        rc = palm.cavity_radius(k)
-        zc0, zc1 = palm.cavity_span(k)
-        boxes.append(_obb(T, (-rc, -rc, zc0), (palm.thickness, rc, zc1)))
-    return boxes
+    return [_obb(T, lo, hi) for lo, hi in palm.pocket_boxes(k)]
 
 
 def magnet_pockets(palm: Palm, finger: str) -> list:
@@ -86,7 +81,7 @@ def check(params) -> None:
     palm = Palm(params)
     src = params.source
     pockets = {f: magnet_pockets(palm, f) for f in FINGERS}
-    for servo in SERVOS:
+    for servo in (SERVOS[k] for k in PALM_SERVOS):
         for tool in servo_tools(palm, servo.index):
             for f, boxes in pockets.items():
                 if any(overlap(tool, b) > 1e-9 for b in boxes):
@@ -95,13 +90,17 @@ def check(params) -> None:
                         f"the palm's pocket for servo {servo.label} (body servo.body_mm, ears "
                         f"flange_span_mm, pulley cavity) leaves less than {mm(MIN_WALL):g} mm (two perimeters) to the "
                         f"{f} socket's magnet pockets: the servo does not fit behind the finger sockets", src)
-    # the thenar housing (around the CMC servo) must join the palm slab by at least a wall
+    # the thenar housing (around the CMC servo) must join the palm (its metacarpal block or the web
+    # between them) by at least a wall
     x0, x1, y0, y1 = palm.extents()
-    slab = _obb(np.eye(4), (x0, y0, -palm.thickness / 2.0), (x1, y1, palm.thickness / 2.0))
-    k = next(s.index for s in SERVOS if s.index not in BAY_SERVOS)
+    slabs = [_obb(np.eye(4), (x0, y0, -palm.thickness / 2.0), (x1, y1, palm.thickness / 2.0))]
+    lo, hi = palm.thenar_web()
+    if np.all(hi > lo):
+        slabs.append(_obb(np.eye(4), lo, hi))
+    (k,) = PALM_SERVOS
     w = palm.tol.wall
     housing = _obb(palm.T_servo(k), *palm.housing_box(k))
-    depth = overlap(housing, slab)
+    depth = max(overlap(housing, slab) for slab in slabs)
     if depth < w - 1e-9:
         raise ParamError(
             "palm.thumb_cmc_offset_mm", [round(mm(v), 6) for v in params.palm.thumb_cmc_offset],
@@ -122,7 +121,7 @@ def check(params) -> None:
              _obb(palm.T_servo(k), (-r, -r, -h), (r, r, h))),
             ("tendon post (on its housing's end wall)",
              _obb(palm.T_cmc(), (-rp, a["y_post"] - rp, a["z_floor"] - w), (rp, a["y_post"] + rp, a["z_hi"])))):
-        depth = overlap(box, slab) + c
+        depth = max(overlap(box, slab) for slab in slabs) + c
         if depth > 1e-9:
             raise ParamError(
                 "palm.thumb_cmc_offset_mm", [round(mm(v), 6) for v in params.palm.thumb_cmc_offset],

@@ -10,13 +10,14 @@ from __future__ import annotations
 from ..kinematics.topology import LINKS, link
 from .parts.base import Part
 from .parts.finger_base import FingerBase
+from .parts.forearm import Forearm
 from .parts.palm import Palm
 from .parts.phalanx import Phalanx
 from .parts.pulley import ServoPulley
 from .parts.thumb import ThumbCMCBase
 
 #: the part families
-FAMILIES: tuple[type[Part], ...] = (Palm, FingerBase, Phalanx, ThumbCMCBase, ServoPulley)
+FAMILIES: tuple[type[Part], ...] = (Palm, Forearm, FingerBase, Phalanx, ThumbCMCBase, ServoPulley)
 
 #: link name -> the family that makes it, in topology order
 FAMILY: dict[str, type[Part]] = {ln.name: fam for ln in LINKS for fam in FAMILIES if ln in fam.links()}

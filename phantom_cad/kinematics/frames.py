@@ -27,6 +27,8 @@ Units: metres (SI, like the parameter object). The CAD layer converts to millime
 * Servo frames: origin on the output shaft at the pulley mid-plane, z along the shaft
   from the servo body toward the pulley, y along the body length (the body lies toward
   -y of the shaft by cad.servo_shaft_offset).
+* Forearm module: behind the wrist crease (the index metacarpal's length behind the index
+  MCP), palm axes; it carries the five tendon servos in one row, shafts dorsal.
 * Left hand: every transform is conjugated by the mirror S = diag(-1, 1, 1): the left
   hand is the mirror image of the right in the palm's y-z plane, and each link's shape is
   mirrored in its own y-z plane, so T stays a proper rigid transform.
@@ -40,6 +42,7 @@ import numpy as np
 
 from .. import units
 from ..params.rules import finger_columns, slot_back
+from .memo import memoised
 from .topology import CMC_Q, FINGERS, JOINTS, LINKS, N_JOINTS, SERVOS, chain, joint, link, servo_joints
 
 MIRROR = np.diag([-1.0, 1.0, 1.0, 1.0])
@@ -159,24 +162,6 @@ def pulley_cavity_margin(params) -> float:
     return servo_pulley_lip(params) + params.hardware.tendon_diameter + params.print.hole_clearance
 
 
-def servo_row_depths(params) -> tuple[float, float]:
-    """Depth (behind the socket face, along the column) of the two staggered servo rows' shafts:
-    one palm wall between a socket's magnet pockets and the pulley cavity behind it."""
-    hw, pr, cad, sv = params.hardware, params.print, params.cad, params.servo
-    cavity = max(c.servo_radius for c in params.chains) + pulley_cavity_margin(params)
-    d_a = hw.magnet_thickness + pr.magnet_clearance + params.palm.wall + cavity
-    d_b = d_a + cad.servo_shaft_offset + sv.flange_span / 2.0 + params.palm.wall + cavity
-    return d_a, d_b
-
-
-def servo_column(params, servo: int) -> int:
-    """Palm column of a tendon servo (0-based index): its finger's column on the arc; the thumb
-    flexion servo uses a virtual column -1 radial of the index. Even columns use row A, odd
-    ones row B."""
-    digit = SERVOS[servo].digit
-    return FINGERS.index(digit) if digit in FINGERS else -1
-
-
 def servo_radius(params, servo: int) -> float:
     """Radius (m) of a servo's output: the chain's pulley radius r_j for a tendon servo, the
     CMC hub radius for the direct drive."""
@@ -188,43 +173,46 @@ def servo_radius(params, servo: int) -> float:
 
 def T_palm_servo(params, servo: int) -> np.ndarray:
     """Servo output frame (see module doc) of servo ``servo`` (0-based index, topology.SERVOS):
-    a tendon servo in the palm's servo bay, or the direct-drive CMC servo under the CMC base."""
+    a tendon servo in the forearm module (:func:`forearm_servos`), or the direct-drive CMC servo
+    under the CMC base."""
     if SERVOS[servo].drive == "direct":
         th = params.thumb
         pw = params.cad.servo_pulley_width
         c = params.print.hole_clearance
         # the CMC hub (servo pulley 6) sits under the CMC base, coaxial with the CMC axis
         return T_palm_thumb_cmc_base(params) @ trans(0.0, 0.0, -(th.thickness / 2.0 + c + pw / 2.0))
-    col = servo_column(params, servo)
-    d_a, d_b = servo_row_depths(params)
-    depth = d_a if col % 2 == 0 else d_b
-    r = servo_radius(params, servo)
-    # servos lie along the palm's y axis, in two staggered rows, each pulley straight behind
-    # its finger's socket centre (the virtual column -1 of the thumb-flexion servo one
-    # finger_pitch radial of the index socket)
-    if col >= 0:
-        sock = T_palm_socket(params, FINGERS[col])[:3, 3]
-    else:
-        sock = T_palm_socket(params, FINGERS[0])[:3, 3] - np.array([params.palm.finger_pitch, 0.0, 0.0])
-    y_front = min(T_palm_socket(params, f)[1, 3] for f in FINGERS)
-    # servo frame: z = -palm x (shaft toward the radial side, body on the ulnar side of its
-    # pulley, above the next column's tendon), y = palm y, x = y cross z = palm z
-    T = np.array([[0, 0, -1, 0], [0, 1, 0, 0], [1, 0, 0, 0], [0, 0, 0, 1]], float)
-    T[:3, 3] = (sock[0], y_front - depth, tendon_height(params) + r)
-    return T
+    return forearm_servos(params)[servo].copy()
+
+
+def thumb_arch(params) -> dict[str, float]:
+    """The post and arch on the palm that carry the thumb's drive onto the CMC axis above the CMC
+    base (CMC base frame at rest, metres), so that turning the CMC leaves its length alone. The
+    post stands on the end wall of servo 6's housing, on the side the thumb never sweeps (q15
+    turns the thumb from +y toward -x); the arch clears the CMC base by one clearance."""
+    c, w = params.print.hole_clearance, params.palm.wall
+    relief = 2.0 * (params.hardware.tendon_diameter + 2.0 * c)
+    T = params.thumb.thickness
+    r_hub = params.thumb.cmc_horn_radius
+    r_post = w
+    y_post = -max(params.cad.servo_shaft_offset + params.servo.flange_span / 2.0 + 2.0 * c + r_post,
+                  r_hub + c + r_post)
+    z_floor = -(T / 2.0 + 2.0 * c + params.cad.servo_pulley_width)   # servo 6 housing top
+    z_lo = T / 2.0 + c                                               # arch underside
+    z_hi = z_lo + 2.0 * w
+    return {"r_post": r_post, "y_post": y_post, "z_floor": z_floor, "z_lo": z_lo, "z_hi": z_hi,
+            "z_mid": (z_lo + z_hi) / 2.0, "z_entry": z_floor + relief + w}
 
 
 def wrist_y(params) -> float:
     """y (m, palm frame) of the wrist crease: the index metacarpal's length behind the index MCP.
-    The palm (in the anthropometric sense) lies between it and the knuckles."""
+    The palm lies between it and the knuckles, the forearm module behind it."""
     return -params.fingers[FINGERS[0]].metacarpal
 
 
 def servo_boxes(params) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """(lo, hi) corners (m, servo frame) of a servo's body and of its flange ears (both ears as
     one slab across the body): the body's output face one hole clearance below the pulley's
-    lower flange, the body toward -y of the shaft by cad.servo_shaft_offset, the ears'
-    top face cad.servo_ear_offset below the output face."""
+    lower flange, the body toward -y of the shaft by cad.servo_shaft_offset."""
     sv, cad = params.servo, params.cad
     L, W, H = sv.body
     z_top = -(cad.servo_pulley_width / 2.0 + params.print.hole_clearance)
@@ -234,6 +222,129 @@ def servo_boxes(params) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     return {"body": (np.array([-W / 2.0, y0 - L / 2.0, z_top - H]), np.array([W / 2.0, y0 + L / 2.0, z_top])),
             "ears": (np.array([-W / 2.0, y0 - sv.flange_span / 2.0, z0]),
                      np.array([W / 2.0, y0 + sv.flange_span / 2.0, z1]))}
+
+
+def servo_envelope(params, servo: int) -> np.ndarray:
+    """Points (m, servo frame) whose hull holds a servo with its clearance: the corners of its body
+    and ears and the rim of its pulley's cavity, grown by a hole clearance."""
+    c = params.print.hole_clearance
+    pts = []
+    for lo, hi in servo_boxes(params).values():
+        lo, hi = lo - c, hi + c
+        pts += [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+    rc = servo_radius(params, servo) + pulley_cavity_margin(params)
+    h = params.cad.servo_pulley_width / 2.0 + c
+    for a in np.linspace(0.0, 2.0 * math.pi, 48, endpoint=False):
+        pts += [[rc * math.cos(a), rc * math.sin(a), z] for z in (-h, h)]
+    return np.array(pts, float)
+
+
+def forearm_pitch(params) -> float:
+    """x spacing (m) of the forearm module's servos: two pulley cavities and a palm wall apart."""
+    rc = max(c.servo_radius for c in params.chains) + pulley_cavity_margin(params)
+    return 2.0 * rc + params.palm.wall
+
+
+def servo_target(params, servo: int) -> np.ndarray:
+    """The palm-frame point (m, right hand) a tendon servo's drive heads for as it leaves its
+    pulley: the finger's tendon exit at its socket; for the thumb, the CMC centre (the drive climbs
+    the CMC post from there, kinematics.routing)."""
+    digit = SERVOS[servo].digit
+    if digit in FINGERS:
+        return socket_tendon_point(params, digit)
+    return T_palm_thumb_cmc_base(params)[:3, 3].copy()
+
+
+def aimed_servo(C: np.ndarray, E: np.ndarray, r: float) -> np.ndarray:
+    """Servo frame at pulley centre C with its shaft along +z, turned about it so that the drive,
+    leaving the pulley (radius r) at (-r, 0, 0) along +y, passes over E's (x, y)."""
+    d = E[:2] - C[:2]
+    n2 = float(d @ d)
+    t = math.sqrt(n2 - r * r)
+    # E - C = -r x_s + t y_s with x_s = y_s cross z = (y_s.y, -y_s.x): solved for y_s = (a, b)
+    a, b = (t * d[0] + r * d[1]) / n2, (-r * d[0] + t * d[1]) / n2
+    T = np.eye(4)
+    T[:3, 0], T[:3, 1], T[:3, 2] = (b, -a, 0.0), (a, b, 0.0), (0.0, 0.0, 1.0)
+    T[:3, 3] = C
+    return T
+
+
+def spaced(want, pitch: float) -> list[float]:
+    """The x_k nearest ``want`` in least squares with x_k+1 - x_k >= pitch: with z_k = x_k - k
+    pitch it is the isotonic regression of want_k - k pitch (pool adjacent violators)."""
+    blocks: list[list[float]] = []          # [mean, count]
+    for k, w in enumerate(want):
+        blocks.append([w - k * pitch, 1.0])
+        while len(blocks) > 1 and blocks[-2][0] > blocks[-1][0]:
+            (m1, n1), (m2, n2) = blocks[-2], blocks.pop()
+            blocks[-1] = [(m1 * n1 + m2 * n2) / (n1 + n2), n1 + n2]
+    z = [m for m, n in blocks for _ in range(int(n))]
+    return [zk + k * pitch for k, zk in enumerate(z)]
+
+
+_FOREARM: dict = {}
+
+
+def forearm_servos(params) -> dict[int, np.ndarray]:
+    """T_palm_servo (m, right hand) of every tendon servo in the forearm module: one row across the
+    forearm, thumb servo radial to pinky servo ulnar (the order of their targets, so no two drives
+    cross), forearm_pitch apart and centred on the targets; shafts dorsal, every pulley's mid-plane
+    at the fingers' tendon height, so that a finger drive runs level from its pulley to its socket;
+    each servo turned about its shaft so that its drive leaves straight toward its target
+    (:func:`servo_target`); the row as far forward as the servos' envelopes
+    (:func:`servo_envelope`) allow, one palm wall behind the wrist crease. Memoised (read-only)."""
+    return memoised(_FOREARM, params.digest, lambda: _forearm_servos(params), cap=16)
+
+
+def _forearm_servos(params) -> dict[int, np.ndarray]:
+    tendon = [s.index for s in SERVOS if s.drive == "tendon"]
+    targets = {k: servo_target(params, k) for k in tendon}
+    # each pulley as near as the pitch allows to where its drive leaves straight ahead toward its
+    # target (its centre r ulnar of the target's x): least squares with x_k+1 - x_k >= pitch
+    want = [targets[k][0] + servo_radius(params, k) for k in tendon]
+    xs = spaced(want, forearm_pitch(params))
+    z = tendon_height(params)
+    front = forearm_front(params) - params.palm.wall
+    y, out = front, {}
+    for _ in range(6):          # a servo's turn depends (weakly) on the row's depth: settle it
+        out = {k: aimed_servo(np.array([xs[i], y, z]), targets[k], servo_radius(params, k))
+               for i, k in enumerate(tendon)}
+        reach = max(float((out[k][:3, :3] @ servo_envelope(params, k).T)[1].max()) for k in tendon)
+        y = front - reach
+    return out
+
+
+def thenar_points(params) -> np.ndarray:
+    """Points (m, palm frame, right hand) whose hull holds what the palm carries at the thumb's
+    CMC: servo 6's envelope (:func:`servo_envelope`) grown by a palm wall (its housing) and the
+    post and arch of :func:`thumb_arch`."""
+    k = next(s.index for s in SERVOS if s.drive == "direct")
+    w = params.palm.wall
+    env = servo_envelope(params, k)
+    env = env + w * np.sign(env)                 # the housing's walls (the envelope is about 0)
+    Ts = T_palm_servo(params, k)
+    pts = [(Ts[:3, :3] @ env.T).T + Ts[:3, 3]]
+    a = thumb_arch(params)
+    r = a["r_post"]
+    post = np.array([[x, y, z] for x in (-r, r) for y in (a["y_post"] - r, a["y_post"] + r)
+                     for z in (a["z_floor"] - w, a["z_hi"])])
+    Tc = T_palm_thumb_cmc_base(params)
+    pts.append((Tc[:3, :3] @ post.T).T + Tc[:3, 3])
+    return np.vstack(pts)
+
+
+def forearm_front(params) -> float:
+    """y (m, palm frame) of the forearm module's front face: a hole clearance behind the wrist
+    crease, or behind the thenar (:func:`thenar_points`) where that reaches further back."""
+    c = params.print.hole_clearance
+    return min(wrist_y(params), float(thenar_points(params)[:, 1].min())) - c
+
+
+def T_palm_forearm(params) -> np.ndarray:
+    """The forearm module's frame: the palm's axes, origin on the wrist crease at the middle of the
+    servo row, in the palm's mid-plane."""
+    xs = [T[0, 3] for T in forearm_servos(params).values()]
+    return trans((min(xs) + max(xs)) / 2.0, wrist_y(params), 0.0)
 
 
 def socket_tendon_point(params, finger: str) -> np.ndarray:
@@ -311,8 +422,12 @@ def _joint_transform(params, ln, q) -> np.ndarray:
     servo pulley), the CMC (about the CMC base's z) or a flexion joint behind the parent's
     segment."""
     if ln.parent_joint is None:
+        if ln.segment == "forearm":
+            return T_palm_forearm(params)
         if ln.segment == "servo_pulley":
             T = T_palm_servo(params, ln.servo)
+            if ln.parent != "palm":          # mounted on the forearm module
+                T = np.linalg.inv(_joint_transform(params, link(ln.parent), q)) @ T
             if SERVOS[ln.servo].drive == "direct":   # the hub turns with its joint about its z
                 (qi,) = servo_joints(ln.servo)
                 T = T @ rot_z(float(q[qi]))

@@ -263,25 +263,6 @@ def _return(params, digit: str, lay: Layout, rest) -> Strand:
     return Strand(f"{digit}_return", tuple(els))
 
 
-def thumb_arch(params) -> dict[str, float]:
-    """The post and arch on the palm that carry the thumb's drive onto the CMC axis above the CMC
-    base (CMC base frame at rest, metres), so that turning the CMC leaves its length alone. The
-    post stands on the end wall of servo 6's housing, on the side the thumb never sweeps (q15
-    turns the thumb from +y toward -x); the arch clears the CMC base by one clearance."""
-    c, w = params.print.hole_clearance, params.palm.wall
-    relief = 2.0 * (params.hardware.tendon_diameter + 2.0 * c)
-    T = params.thumb.thickness
-    r_hub = params.thumb.cmc_horn_radius
-    r_post = w
-    y_post = -max(params.cad.servo_shaft_offset + params.servo.flange_span / 2.0 + 2.0 * c + r_post,
-                  r_hub + c + r_post)
-    z_floor = -(T / 2.0 + 2.0 * c + params.cad.servo_pulley_width)   # servo 6 housing top
-    z_lo = T / 2.0 + c                                               # arch underside
-    z_hi = z_lo + 2.0 * w
-    return {"r_post": r_post, "y_post": y_post, "z_floor": z_floor, "z_lo": z_lo, "z_hi": z_hi,
-            "z_mid": (z_lo + z_hi) / 2.0, "z_entry": z_floor + relief + w}
-
-
 def servo_clamp_wrap(params, servo: int) -> float:
     """Wrap (rad) of a drive on its servo pulley at u = 0: the largest that keeps the wrap inside
     (margin, 180 deg - margin) over the servo's travel, so that unwinding below the travel to the
@@ -314,7 +295,7 @@ def _drive(params, digit: str) -> Strand:
     first = spec.joint_names[0]
     base = joint(first).parent
     if digit == "thumb":
-        a = thumb_arch(params)
+        a = F.thumb_arch(params)
         # on the palm (CMC base frame at rest = its pose in the palm with q15 = 0)
         T = F.T_palm_thumb_cmc_base(params)
         P = lambda *v: tuple(float(t) for t in (T @ np.array([*v, 1.0]))[:3])  # noqa: E731
@@ -792,7 +773,7 @@ def _couplers(params) -> dict[str, Coupler]:
             raise ParamError(field, value, f"the {digit} drive's coupler (stop, loop and knot: {Lc * 1e3:.2f} mm) "
                              f"travels {travel * 1e3:.2f} mm into the palm from {s0 * 1e3:.2f} mm behind the socket "
                              "face; "
-                             f"with a clearance it needs {(full[1] + c) * 1e3:.2f} mm of channel, the palm has "
+                             f"with a clearance it needs {(full[1] + c) * 1e3:.2f} mm of channel, it has "
                              f"{channel * 1e3:.2f} mm before servo {servo.index + 1}'s pulley cavity", params.source)
         # the clamp sits for the largest wrap the travel allows (servo_clamp_wrap): unwinding to the
         # smallest (WRAP_MARGIN) pays the palm strand out

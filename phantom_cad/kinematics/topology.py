@@ -45,7 +45,8 @@ class Servo:
 
     @property
     def link(self) -> str:
-        """The servo's pulley (or hub) link, fixed to the palm."""
+        """The servo's pulley (or hub) link: on the forearm module for a tendon servo, on the palm
+        (under the CMC base) for the direct drive (:data:`SERVO_MOUNT`)."""
         return f"servo_pulley_{self.index + 1}"
 
     @property
@@ -87,7 +88,7 @@ class Link:
     parent: str | None       # None for the root (palm)
     parent_joint: str | None
     digit: str | None
-    segment: str             # "palm", "base", "cmc_base", "proximal", "middle", "distal", "servo_pulley"
+    segment: str             # "palm", "forearm", "base", "cmc_base", "proximal", "middle", "distal", "servo_pulley"
     servo: int | None = None
 
     @property
@@ -146,6 +147,11 @@ _THUMB_LINKS = ("cmc_base", "proximal", "distal")
 SERVOS = tuple(Servo(i, d, "tendon") for i, d in enumerate(DIGITS)) + (Servo(len(DIGITS), "thumb", "direct"),)
 N_SERVOS = len(SERVOS)
 CMC_SERVO = SERVOS[-1].index
+#: the forearm module: the link (fixed to the palm behind the wrist crease) that carries the tendon servos
+FOREARM = "forearm"
+#: the link a servo of each drive is mounted on: the tendon servos in the forearm module (their drives
+#: cross the wrist), the direct drive at the CMC, coaxial with it [paper]
+SERVO_MOUNT = {"tendon": FOREARM, "direct": "palm"}
 #: the tendon servos' slice of u (servos 0..4)
 TENDON_SERVOS = slice(0, len(DIGITS))
 
@@ -160,11 +166,11 @@ def _digit_links(digit: str, segments: tuple[str, ...], keys: tuple[str, ...], r
 
 
 def _build():
-    links = [Link("palm", None, None, None, "palm")]
+    links = [Link("palm", None, None, None, "palm"), Link(FOREARM, "palm", None, None, "forearm")]
     for f in FINGERS:
         links += _digit_links(f, _FINGER_LINKS, _FINGER_KEYS, None)
     links += _digit_links("thumb", _THUMB_LINKS, _THUMB_KEYS, "thumb_cmc")
-    links += [Link(s.link, "palm", None, None, "servo_pulley", s.index) for s in SERVOS]
+    links += [Link(s.link, SERVO_MOUNT[s.drive], None, None, "servo_pulley", s.index) for s in SERVOS]
     by_child = {ln.parent_joint: ln for ln in links if ln.parent_joint}
 
     chains, joints = [], []
@@ -188,7 +194,7 @@ def _build():
         ln = [f"{ch.digit}_{s}" for s in (_THUMB_LINKS if ch.digit == "thumb" else _FINGER_LINKS)]
         names = ch.joint_names
         tendons.append(Tendon(f"{ch.digit}_drive", "drive", ch.digit,
-                              (SERVOS[ch.servo].link, "palm", ln[0], ln[1]), names[:1], ch.servo))
+                              (SERVOS[ch.servo].link, FOREARM, "palm", ln[0], ln[1]), names[:1], ch.servo))
         for k, (a, b) in enumerate(zip(ch.keys, ch.keys[1:])):
             tendons.append(Tendon(f"{ch.digit}_{a}_{b}", "coupling", ch.digit, tuple(ln[k:k + 3]),
                                   (names[k], names[k + 1])))

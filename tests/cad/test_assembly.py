@@ -20,7 +20,7 @@ FINGERS = ("index", "middle", "ring", "pinky")
 def test_part_names_stable_unique_file_safe(params):
     names = assembly.part_names(params)
     assert names == assembly.part_names(params)
-    assert len(names) == len(set(names)) == 1 + 4 * 4 + 3 + 6
+    assert len(names) == len(set(names)) == 1 + 1 + 4 * 4 + 3 + 6
     assert names[0] == "palm"
     assert all(re.fullmatch(r"[a-z0-9_]+", n) for n in names)
     assert {f"servo_pulley_{k}" for k in range(1, 7)} <= set(names)
@@ -52,7 +52,8 @@ def test_part_inputs_follow_the_digit(params, variant):
     p = variant(lambda d: d["fingers"]["ring"].__setitem__("width_mm", 16.5))
     after = {n: assembly.part_inputs(p, n) for n in names}
     changed = {n for n in names if before[n] != after[n]}
-    assert changed == {"palm", "ring_base", "ring_proximal", "ring_middle", "ring_distal"}
+    # the palm carries every socket, the forearm module aims every servo at its socket
+    assert changed == {"palm", "forearm", "ring_base", "ring_proximal", "ring_middle", "ring_distal"}
     p = variant(lambda d: d["print"].__setitem__("hole_clearance_mm", 0.15))
     after = {n: assembly.part_inputs(p, n) for n in names}
     assert all(before[n] != after[n] for n in names)

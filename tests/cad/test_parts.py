@@ -37,7 +37,7 @@ def tendon_hole(doc):
 # ---------------------------------------------------------------------------
 
 def test_every_part_is_one_valid_solid(built):
-    assert len(built) == 26
+    assert len(built) == 27
     for name, b in built.items():
         rep = check.solid_report(b.shape)
         assert rep["n_solids"] == 1, name
@@ -74,19 +74,27 @@ def test_phalanx_bounding_boxes_match_the_segment_lengths(built, document):
             assert T / 2 <= -lo[2] <= T / 2 + 3.0
 
 
-def test_palm_spans_the_four_sockets_and_the_servos(built, document):
+def test_palm_spans_the_four_sockets_from_the_wrist(built, document):
     rep = check.solid_report(built["palm"].shape)
     lo, hi = rep["bbox_min"], rep["bbox_max"]
     pitch = document["palm"]["finger_pitch_mm"]
     # at least three pitches plus the outer half widths across, and the dorsal face at +T/2
     assert hi[0] - lo[0] > 3 * pitch + 18.0
     assert hi[2] == pytest.approx(document["palm"]["thickness_mm"] / 2, abs=1e-6)
-    # five servo bodies in two rows behind the sockets: longer than two servo lengths
-    assert hi[1] - lo[1] > 2 * document["servo"]["body_mm"][0]
+    # the metacarpal block starts at the wrist crease: the index metacarpal's length behind the
+    # index MCP (the thenar housing and its post may reach further back)
+    wrist = -document["fingers"]["index"]["length_fraction"]["metacarpal"] * document["hand"]["hand_length_mm"]
+    assert lo[1] <= wrist + 1e-6
+    assert _is_inside(built["palm"].shape, (20.0, wrist + 0.5, 0.0))
+
+
+def _is_inside(shape, p) -> bool:
+    from build123d import Vector
+    return shape.is_inside(Vector(*p))
 
 
 @pytest.mark.parametrize("k", [1, 2, 3, 4, 5])
-def test_palm_servo_cavity_leaves_one_wall_behind_the_magnets(built, params, document, k):
+def test_forearm_servo_cavity_and_its_front_wall(built, params, document, k):
     from phantom_cad.kinematics import frames
 
     hw, pr = document["hardware"], document["print"]
@@ -94,18 +102,46 @@ def test_palm_servo_cavity_leaves_one_wall_behind_the_magnets(built, params, doc
     # by hand: the pulley's flanges stand two tendon diameters above its groove, plus one tendon
     # diameter of running room and a hole clearance: 7 + 2 * 0.6 + 0.6 + 0.2 = 9.0 mm by default
     cavity = src["servo_pulley_radius_mm"] + 3 * hw["tendon_diameter_mm"] + pr["hole_clearance_mm"]
-    T = frames.T_palm_servo(params, k - 1)
+    T = np.linalg.inv(frames.T_palm_forearm(params)) @ frames.T_palm_servo(params, k - 1)   # forearm frame
     shaft, axis = T[:3, 3] * 1e3, T[:3, 2]
-    measured = [c["radius"] for c in check.cylinders(built["palm"].shape) if check.coaxial(c, shaft, axis)]
+    shape = built["forearm"].shape
+    measured = [c["radius"] for c in check.cylinders(shape) if check.coaxial(c, shaft, axis)]
     assert measured and max(measured) == pytest.approx(cavity, abs=1e-6)
-    # the first servo row sits one palm wall behind the magnet pockets of the largest cavity
-    # (the placement must use the cavity the palm actually cuts)
-    largest = max([document["thumb"]["servo_pulley_radius_mm"]] +
-                  [f["servo_pulley_radius_mm"] for f in document["fingers"].values()])
-    largest += 3 * hw["tendon_diameter_mm"] + pr["hole_clearance_mm"]
-    d_a = frames.servo_row_depths(params)[0] * 1e3
-    pocket = hw["magnet"]["thickness_mm"] + pr["magnet_clearance_mm"]
-    assert d_a - pocket - largest == pytest.approx(document["palm"]["wall_mm"], abs=1e-9)
+    # the shaft is dorsal (palm z) and the pulley's mid-plane at the tendon height, one wall above
+    # the thinnest finger's palmar face
+    assert axis == pytest.approx([0.0, 0.0, 1.0])
+    thinnest = min(f["thickness_mm"] for f in document["fingers"].values())
+    assert shaft[2] == pytest.approx(-thinnest / 2 + document["palm"]["wall_mm"], abs=1e-9)
+    # ahead of the shaft (toward the wrist, along the servo's y in the pulley's plane) the ear slot
+    # is open to the dorsal side (the servo drops in) as far as the ears reach with a clearance,
+    # flange_span / 2 - shaft_offset + clearance (farther than the cavity by default); beyond it
+    # at least a palm wall of material stands before the module's front face
+    w = document["palm"]["wall_mm"]
+    y = T[:3, 1]
+    ears = document["servo"]["flange_span_mm"] / 2 - document["cad"]["servo_shaft_offset_mm"] + pr["hole_clearance_mm"]
+    front = max(ears, cavity)
+    assert not _is_inside(shape, shaft + y * (front - 0.1))
+    assert _is_inside(shape, shaft + y * (front + 0.1))
+    assert _is_inside(shape, shaft + y * (front + w - 0.1))
+
+
+def test_forearm_drives_leave_straight_for_their_sockets(built, params):
+    """Each finger's drive leaves its pulley along the servo's y at the tangent point (-r, 0, 0):
+    the line from there along y passes the socket's tendon exit (both at the tendon height), so
+    the distance from the pulley centre to that line is r, and the exit lies ahead."""
+    from phantom_cad.kinematics import frames
+
+    for k, f in enumerate(FINGERS, start=1):
+        T = frames.T_palm_servo(params, k)
+        C, y = T[:3, 3] * 1e3, T[:3, 1]
+        E = frames.socket_tendon_point(params, f) * 1e3
+        r = params.fingers[f].chain.servo_radius * 1e3
+        d = E - C
+        assert d[2] == pytest.approx(0.0, abs=1e-9)
+        perp = d - (d @ y) * y
+        assert np.linalg.norm(perp) == pytest.approx(r, abs=1e-9) and d @ y > 0
+        # and on the side the tendon leaves: the servo's -x
+        assert perp @ T[:3, 0] == pytest.approx(-r, abs=1e-9)
 
 
 # ---------------------------------------------------------------------------
@@ -628,11 +664,10 @@ def test_thumb_tendon_reaches_the_cmc_base_on_its_axis(built, document):
                for c in check.cylinders(base.shape))
 
 
-def test_palm_has_two_flange_screw_pilots_per_servo(built, document):
+def _pilots_and_pairs(shape, document):
     hw, sv = document["hardware"], document["servo"]
     pilot = 0.8 * hw["screw_diameter_mm"] / 2           # print.screw_pilot_ratio's default: 1.6 mm for M2
-    holes = [c for c in check.cylinders(built["palm"].shape) if abs(c["radius"] - pilot) < 1e-6]
-    assert len(holes) == 12
+    holes = [c for c in check.cylinders(shape) if abs(c["radius"] - pilot) < 1e-6]
     # mid-ear on both ends: (body length / 2 + flange span / 2) apart, along the body length
     spacing = sv["body_mm"][0] / 2 + sv["flange_span_mm"] / 2
     pairs = 0
@@ -642,9 +677,27 @@ def test_palm_has_two_flange_screw_pilots_per_servo(built, document):
             v_perp = v - (v @ a["direction"]) * a["direction"]
             if abs(v @ a["direction"]) < 1e-6 and abs(np.linalg.norm(v_perp) - spacing) < 1e-6:
                 pairs += 1   # the same servo: side by side at the same depth
-    assert pairs == 6
-    # each hole is 3 screw diameters deep below the ear slot (plus one clearance)
+    return holes, pairs
+
+
+def test_two_flange_screw_pilots_per_servo(built, document, placed):
+    """Ten pilots in the forearm module (servos 1-5), two in the palm's thenar housing (servo 6),
+    and the palm's two under the forearm tab's clearance holes (coaxial, measured in the hand)."""
+    hw = document["hardware"]
+    holes, pairs = _pilots_and_pairs(built["forearm"].shape, document)
+    assert len(holes) == 10 and pairs == 5
+    # each servo pilot is 3 screw diameters deep below the ear slot (plus one clearance)
     assert all(c["length"] >= 3 * hw["screw_diameter_mm"] for c in holes)
+    holes, pairs = _pilots_and_pairs(built["palm"].shape, document)
+    assert len(holes) == 4 and pairs == 1
+    # the tab's clearance holes (screw + 2 clearances) over the palm's two other pilots
+    clear = hw["screw_diameter_mm"] / 2 + document["print"]["hole_clearance_mm"]
+    tab = [c for c in check.cylinders(placed["forearm"]) if abs(c["radius"] - clear) < 1e-6]
+    pil = [c for c in check.cylinders(placed["palm"]) if abs(c["radius"] - 0.8 * hw["screw_diameter_mm"] / 2) < 1e-6
+           and abs(abs(c["direction"][2]) - 1) < 1e-9]
+    assert len(tab) == 2 and len(pil) == 2
+    for c in tab:
+        assert any(check.coaxial(c, p["point"], p["direction"]) for p in pil)
 
 
 # ---------------------------------------------------------------------------

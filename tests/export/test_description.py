@@ -41,7 +41,7 @@ def test_package_layout_and_uris_resolve(pkg):
     for name, resolve in (("phantom.urdf", lambda u: pkg / u.removeprefix("package://phantom_description/")),
                           ("phantom.local.urdf", lambda u: pkg / "urdf" / u)):
         root = ET.parse(pkg / "urdf" / name).getroot()
-        assert [len(ln.findall("visual")) for ln in root.iter("link") if ln.find("visual") is not None] == [1] * 26
+        assert [len(ln.findall("visual")) for ln in root.iter("link") if ln.find("visual") is not None] == [1] * 27
         pieces = {ln.get("name"): len(ln.findall("collision")) for ln in root.iter("link")
                   if ln.find("visual") is not None}
         # one convex hull per link, a convex decomposition of the palm
@@ -140,7 +140,7 @@ def test_inertials_match_the_written_meshes(urdf, pkg):
         assert np.allclose(I, mesh.moment_inertia, rtol=0, atol=5e-3 * np.abs(I).max())
         ev = np.linalg.eigvalsh(I)
         assert ev.min() > 0 and ev[0] + ev[1] >= ev[2] * (1 - 1e-9)
-    assert n == 26
+    assert n == 27
 
 
 def test_collision_meshes_are_light_convex_and_cover_the_visual(pkg):
@@ -152,7 +152,7 @@ def test_collision_meshes_are_light_convex_and_cover_the_visual(pkg):
     from scipy.spatial import ConvexHull
 
     collision = sorted((pkg / "meshes" / "collision").glob("*.stl"))
-    assert len(collision) > 26
+    assert len(collision) > 27
     palm_volume = 0.0
     for path in collision:
         piece = trimesh.load(path)

@@ -7,14 +7,14 @@ y distal, z dorsal. Built from:
   sits at rest, turned by palm.arc_offset from finger to finger (the socket face normal is
   the finger column's y), each with two magnet pockets facing the finger base's pockets
   and the tendon exit at the palm's tendon height;
-* the servo bay: a slab around the tendon servos (two staggered rows, shafts along the
-  palm's x, each pulley straight behind its finger's socket) with their pockets (open on
-  the dorsal side for assembly), pulley cavities and M2 pilot holes at the flange ears;
-* the thenar housing of the direct-drive CMC servo, coaxial with the thumb CMC axis (open on the shaft side);
-* tendon channels from each socket's tendon exit straight back to its servo pulley's
-  tangent point, each with the bore its drive's coupler (the crimp stop and the finger strand's
-  loop, ``routing.couplers``) travels in, and the thumb tendon's channel from servo 1 out of the
-  palm's radial side;
+* the metacarpal block: from the wrist crease to the sockets, across the four fingers (the
+  tendon servos sit in the forearm module behind the wrist, ``forearm.py``);
+* the thenar housing of the direct-drive CMC servo, coaxial with the thumb CMC axis (open on the
+  shaft side), joined to the block;
+* tendon channels from each socket's tendon exit straight back toward its servo pulley in the
+  forearm, each with the bore its drive's coupler (the crimp stop and the finger strand's
+  loop, ``routing.couplers``) travels in, and the thumb tendon's channel up to the CMC post;
+* two pilot holes on the dorsal face at the wrist for the forearm module's tab;
 * the CMC post and arch: the thumb tendon climbs a post on servo 6's housing and reaches the
   CMC axis above the CMC base, so turning the thumb about the CMC does not change its length;
 * the flexion-limiting housing (rails under each finger base, at the Table I MCP limit).
@@ -29,20 +29,22 @@ import numpy as np
 from ... import canon, units
 from ...kinematics import frames as F
 from ...kinematics import routing
-from ...kinematics.topology import FINGERS, LINKS, SERVOS, THUMB_CHAIN, chain
+from ...kinematics.topology import FINGERS, LINKS, SERVO_MOUNT, SERVOS, chain
 from ..measure import circular_pockets
 from .base import Part
 from .common import DigitSection, Tolerances, box, build, cylinder, mm, prism_x, sphere, transform
+from . import wrist
+from .servos import ServoMount
 
-#: the servos in the palm's servo bay (the direct-drive CMC servo sits in the thenar housing)
-BAY_SERVOS = tuple(s.index for s in SERVOS if s.drive == "tendon")
+#: the servos the palm holds (in its thenar housing: the direct-drive CMC servo)
+PALM_SERVOS = tuple(s.index for s in SERVOS if SERVO_MOUNT[s.drive] == "palm")
 
 
 def _mm(T):
     return F.to_mm(T)
 
 
-class Palm(Part):
+class Palm(ServoMount, Part):
     """The palm housing: the root link."""
 
     SEGMENTS = ("palm",)
@@ -53,10 +55,6 @@ class Palm(Part):
         self.link = next(ln for ln in LINKS if ln.parent is None)
         self.tol = Tolerances(params)
         self.thickness = mm(params.palm.thickness)
-        sv = params.servo
-        self.servo_body = tuple(mm(v) for v in sv.body)           # length, width, height
-        self.flange_span = mm(sv.flange_span)
-        self.shaft_offset = mm(params.cad.servo_shaft_offset)
         self.pulley_width = mm(params.cad.servo_pulley_width)
         self.tendon_z = mm(F.tendon_height(params))
 
@@ -100,10 +98,6 @@ class Palm(Part):
     def T_socket(self, finger: str) -> np.ndarray:
         return _mm(F.T_palm_socket(self.params, finger))
 
-    def T_servo(self, servo: int) -> np.ndarray:
-        """Servo frame of servo ``servo`` (0-based index, topology.SERVOS)."""
-        return _mm(F.T_palm_servo(self.params, servo))
-
     def magnet_centres(self, finger: str) -> list[np.ndarray]:
         """Opening centres of the socket's magnet pockets, palm frame (mm)."""
         from .finger_base import FingerBase
@@ -111,46 +105,15 @@ class Palm(Part):
         T = self.T_socket(finger)
         return [(T @ np.array([sx, 0.0, 0.0, 1.0]))[:3] for sx in (-s, s)]
 
-    def pulley_radius(self, servo: int) -> float:
-        return mm(F.servo_radius(self.params, servo))
-
     @property
     def couplers(self) -> dict:
         """The finger drives' couplers (``routing.couplers``: metres, s from the socket face)."""
         return routing.couplers(self.params)
 
-    def _servo_box(self, what: str, grow: float):
-        lo, hi = F.servo_boxes(self.params)[what]
-        return np.array([mm(v) for v in lo]) - grow, np.array([mm(v) for v in hi]) + grow
-
-    def body_box(self, servo: int, grow: float = 0.0):
-        """The servo's body as (lo, hi) corners in its servo frame, grown by ``grow``
-        (``frames.servo_boxes``)."""
-        return self._servo_box("body", grow)
-
-    def ear_box(self, servo: int, grow: float = 0.0):
-        """The servo's flange ears (both, as one slab across the body) in its servo frame."""
-        return self._servo_box("ears", grow)
-
-    def cavity_radius(self, servo: int) -> float:
-        return self.pulley_radius(servo) + mm(F.pulley_cavity_margin(self.params))
-
     def pocket_boxes(self, servo: int) -> list:
-        """(lo, hi) corners, servo frame, of the boxes the palm cuts for the servo's body and its
-        flange ears: open toward the dorsal face in the bay (drop-in from the back, ears in slots),
-        open on the shaft side in the thenar housing (the servo drops in before the hub goes on)."""
-        c = self.tol.clearance
-        lo, hi = self.body_box(servo, grow=c)
-        elo, ehi = self.ear_box(servo, grow=c)
-        if servo in BAY_SERVOS:
-            Tp = self.thickness
-            return [(lo, np.array([Tp, hi[1], hi[2]])), (elo, np.array([Tp, ehi[1], ehi[2]]))]
-        return [(lo, np.array([hi[0], hi[1], hi[2] + 1.0])), (elo, np.array([ehi[0], ehi[1], hi[2] + 1.0]))]
-
-    def cavity_span(self, servo: int) -> tuple[float, float]:
-        """z extent (servo frame) of a bay servo's pulley cavity: from the body's top to past the pulley."""
-        c = self.tol.clearance
-        return self.body_box(servo, grow=c)[1][2] - c, self.pulley_width / 2.0 + c
+        """(lo, hi) corners, servo frame, of the boxes the thenar housing cuts for the servo's body
+        and its flange ears: open on the shaft side (the servo drops in before the hub goes on)."""
+        return self.open_pockets(servo, self.body_box(servo)[1][2] + self.tol.clearance + 1.0)
 
     def housing_box(self, servo: int):
         """(lo, hi) corners, servo frame, of the thenar housing around a servo outside the bay: a
@@ -162,33 +125,42 @@ class Palm(Part):
         return (np.array([hlo[0], min(hlo[1], glo[1]), hlo[2]]),
                 np.array([hhi[0], max(hhi[1], ghi[1]), top]))
 
-    def screw_points(self, servo: int) -> list[np.ndarray]:
-        """Flange screw centres (servo frame) on the ears' underside, mid-ear, one each end."""
-        L, W, H = self.servo_body
-        e = (L / 2.0 + self.flange_span / 2.0) / 2.0
-        z_under = self.ear_box(servo)[0][2]
-        return [np.array([0.0, -self.shaft_offset + s * e, z_under]) for s in (-1.0, 1.0)]
+    def metacarpal_x(self) -> tuple[float, float]:
+        """x extent (mm) of the metacarpal block (``wrist.metacarpal_x``)."""
+        return wrist.metacarpal_x(self.params)
 
-    def _corners(self, T, lo, hi):
+    def extents(self):
+        """x0, x1, y0, y1 (mm) of the metacarpal block: across the sockets, from the wrist crease
+        to behind the socket faces."""
+        x0, x1 = self.metacarpal_x()
+        return x0, x1, mm(F.wrist_y(self.params)), self.slab_front()
+
+    def _placed_box(self, T, lo, hi) -> np.ndarray:
         pts = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
         return (T @ pts.T).T[:, :3]
 
-    def extents(self):
-        """Slab x/y extents (mm) enclosing the socket roots and the bay's servos, one wall around."""
-        w, c = self.tol.wall, self.tol.clearance
-        pts = []
-        for k in BAY_SERVOS:
-            T = self.T_servo(k)
-            lo, hi = self.body_box(k, grow=c + w)
-            pts.append(self._corners(T, lo, hi))
-            lo, hi = self.ear_box(k, grow=c + w)
-            pts.append(self._corners(T, lo, hi))
-            rc = self.cavity_radius(k) + w
-            pts.append(self._corners(T, np.array([-rc, -rc, -self.pulley_width / 2.0 - c - w]),
-                                     np.array([rc, rc, self.pulley_width / 2.0 + c + w])))
-        pts = np.vstack(pts)
-        y_front = self.slab_front()
-        return pts[:, 0].min(), pts[:, 0].max(), pts[:, 1].min(), y_front
+    def thenar_web(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lo, hi) palm frame (mm) of the web that joins the CMC servo's housing to the metacarpal
+        block: radial of the block over the housing's length, the palm's thickness, as far radial
+        as the CMC hub (which turns with the thumb) and the tendon post leave a clearance. Empty
+        (lo not below hi) when the housing lies beyond the block's length or the hub or post reaches
+        the block."""
+        from .pulley import ServoPulley
+        (k,) = PALM_SERVOS
+        c = self.tol.clearance
+        T = self.T_servo(k)
+        hub = ServoPulley(self.params, k)
+        r, h = hub.outer_radius, hub.width / 2.0
+        a = self.cmc_arch()
+        rp, w = a["r_post"], self.tol.wall
+        stops = np.vstack([self._placed_box(T, (-r, -r, -h), (r, r, h)),
+                           self._placed_box(self.T_cmc(), (-rp, a["y_post"] - rp, a["z_floor"] - w),
+                                            (rp, a["y_post"] + rp, a["z_hi"]))])
+        housing = self._placed_box(T, *self.housing_box(k))
+        x0, _, y0, y1 = self.extents()
+        Tp = self.thickness
+        return (np.array([stops[:, 0].max() + c, max(y0, housing[:, 1].min()), -Tp / 2.0]),
+                np.array([x0 + w, min(y1, housing[:, 1].max()), Tp / 2.0]))
 
     def slab_front(self) -> float:
         """The slab stops behind every socket face (its trailing corner), one clearance back."""
@@ -206,21 +178,12 @@ class Palm(Part):
 
     def cmc_arch(self) -> dict:
         """Dimensions (CMC frame, mm) of the post and arch that carry the thumb tendon onto the
-        CMC axis (``kinematics.routing.thumb_arch``: the routing model places them)."""
-        return {k: mm(v) for k, v in routing.thumb_arch(self.params).items()}
+        CMC axis (``kinematics.frames.thumb_arch``: the routing model runs the drive over them)."""
+        return {k: mm(v) for k, v in F.thumb_arch(self.params).items()}
 
     def thumb_tendon_path(self) -> list[np.ndarray]:
-        """Palm-frame points (mm) of the thumb drive where the routing model runs it on the palm:
-        where it leaves servo 1's pulley (tangent), the turn just outside the pulley's cavity, the
-        post entry, the post top, the point above the CMC axis, the CMC axis at the arch's
-        underside (``kinematics.routing``, right hand)."""
-        st = next(s for r in routing.routes(self.params, right_handed=True)
-                  if r.tendon.kind == "drive" and r.tendon.digit == THUMB_CHAIN.digit for s in r.strands)
-        run = next(r for r in routing.runs(self.params, right_handed=True) if r.strand == st.name and "palm" in r.links)
-        tangent = np.asarray(units.mm(np.array(run.ends["palm"][0])), float)
-        pts = [np.asarray(units.mm(np.array(e.pos)), float) for e in st.elements
-               if isinstance(e, routing.Point) and e.link == "palm"]
-        return [tangent] + pts
+        """Palm-frame points (mm) of the thumb drive on the palm (``wrist.thumb_drive_path``)."""
+        return wrist.thumb_drive_path(self.params)
 
     def cmc_arch_body(self):
         a = self.cmc_arch()
@@ -270,15 +233,19 @@ class Palm(Part):
     # -- geometry ----------------------------------------------------------
     def build(self):
         t, Tp = self.tol, self.thickness
-        c, w = t.clearance, t.wall
         x0, x1, y0, y1 = self.extents()
         body = [box(x0, x1, y0, y1, -Tp / 2.0, Tp / 2.0)]
+        lo, hi = self.thenar_web()
+        if np.all(hi > lo):
+            body.append(box(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]))
         tools = []
         # finger sockets
         for f in FINGERS:
             T = self.T_socket(f)
             W = mm(self.params.fingers[f].width)
-            depth = T[1, 3] - y0
+            # back to the wrist crease, the block's turned back corners no further (the metacarpal
+            # block fills the rest)
+            depth = (T[1, 3] - y0 - W / 2.0 * abs(T[1, 0])) / T[1, 1]
             body.append(transform(box(-W / 2.0, W / 2.0, -depth, 0.0, -Tp / 2.0, Tp / 2.0), T))
             for m in self.magnet_centres(f):
                 n = T[:3, 1]
@@ -312,21 +279,16 @@ class Palm(Part):
             tools.append(transform(tool, Tc))
         for part in self.cmc_arch_body():
             body.append(transform(part, Tc))
-        # servo pockets, pulley cavities, flange screws
-        for servo in SERVOS:
-            k = servo.index
+        # the CMC servo's housing (pocket open on the shaft side, ear slots, flange pilots)
+        for k in PALM_SERVOS:
             Ts = self.T_servo(k)
             for lo, hi in self.pocket_boxes(k):      # body pocket and ear slots
                 tools.append(transform(box(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]), Ts))
-            if k in BAY_SERVOS:
-                rc = self.cavity_radius(k)
-                zc0, zc1 = self.cavity_span(k)
-                tools.append(transform(cylinder((0, 0, zc0), (0, 0, zc1), rc), Ts))
-                tools.append(transform(box(0.0, Tp, -rc, rc, zc0, zc1), Ts))
-            else:
-                lo, hi = self.housing_box(k)
-                body.append(transform(box(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]), Ts))
-            for p in self.screw_points(k):
-                tools.append(transform(cylinder(p + np.array([0, 0, 1.0]), p - np.array([0, 0, c + t.screw_engagement]),
-                                                t.screw_pilot / 2.0), Ts))
+            lo, hi = self.housing_box(k)
+            body.append(transform(box(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]), Ts))
+            tools += [transform(p, Ts) for p in self.pilot_tools(k)]
+        # pilot holes for the forearm module's tab screws, down from the dorsal face
+        for p in wrist.tab_screws(self.params):
+            tools.append(cylinder(p + np.array([0, 0, 1.0]), p - np.array([0, 0, t.screw_engagement]),
+                                  t.screw_pilot / 2.0))
         return build(body, tools)

@@ -1,0 +1,128 @@
+"""Forearm module: the tendon servos behind the wrist.
+
+Frame: the forearm link frame (``kinematics.frames.T_palm_forearm``: palm axes, origin on the
+wrist crease at the middle of the servo row); the part is built in the palm frame and placed
+back into its own. Why the servos are here and not in the palm: docs/parts.md.
+
+* one row of the five tendon servos (thumb flexion radial, pinky ulnar), shafts dorsal, each
+  turned about its shaft so that its drive leaves the pulley straight toward its finger's socket
+  (the thumb's toward its CMC post): pockets and ear slots open on the dorsal side (the servos
+  drop in, then their pulleys go on), pulley cavities, M2 pilot holes under the flange ears;
+* each drive's channel from its pulley through the front wall, on to the palm (the thumb's turns
+  just outside its pulley's cavity toward the CMC post);
+* a tab over the palm's dorsal face at the wrist with two M2 clearance holes: the module screws
+  onto the palm there.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ... import canon
+from ...kinematics import frames as F
+from ...kinematics.topology import FOREARM, SERVO_MOUNT, SERVOS, link
+from ..measure import circular_pockets
+from .base import Part
+from .common import Tolerances, box, build, cylinder, mm, transform
+from . import wrist
+from .servos import ServoMount
+
+#: the servos the module holds
+FOREARM_SERVOS = tuple(s.index for s in SERVOS if SERVO_MOUNT[s.drive] == FOREARM)
+
+
+class Forearm(ServoMount, Part):
+    """The forearm module holding the tendon servos."""
+
+    SEGMENTS = ("forearm",)
+    COLOR = (0.45, 0.47, 0.52)
+    SCREWS = 2
+
+    def __init__(self, params):
+        self.params = params
+        self.link = link(FOREARM)
+        self.tol = Tolerances(params)
+        self.pulley_width = mm(params.cad.servo_pulley_width)
+
+    @classmethod
+    def for_link(cls, params, link):
+        return cls(params)
+
+    @property
+    def print_rotation(self) -> np.ndarray:
+        return F.rot_x(math.pi)[:3, :3]            # on its dorsal face (the tab flat on the bed)
+
+    def inputs(self) -> dict:
+        """Everything but the model's mechanics and effects: the servos aim at every socket."""
+        doc = self.params.document
+        out = {k: canon.plain(v) for k, v in doc.items() if k not in ("mechanics", "effects", "hand")}
+        out["side"] = doc["hand"]["side"]
+        out["hand_length_mm"] = doc["hand"]["hand_length_mm"]
+        return out
+
+    def verify(self, shape) -> list[str]:
+        """Two flange pilot holes per servo and the tab's two screw holes."""
+        out: list[str] = []
+        n = len(self.pilot_points())
+        got = len(circular_pockets(shape, self.tol.screw_pilot / 2.0))
+        if got != n:
+            out.append(f"{self.name}: {got} servo pilot holes, expected {n}")
+        return out
+
+    # -- placements (palm frame, mm) -------------------------------------------
+    def T_palm_part(self) -> np.ndarray:
+        return F.to_mm(F.T_palm_forearm(self.params))
+
+    def pilot_points(self) -> list[np.ndarray]:
+        return [(self.T_servo(k) @ np.array([*p, 1.0]))[:3] for k in FOREARM_SERVOS for p in self.screw_points(k)]
+
+    def drive_line(self, servo: int) -> tuple[np.ndarray, np.ndarray]:
+        """Where the drive leaves the pulley (tangent point) and its unit direction, palm frame."""
+        T = self.T_servo(servo)
+        r = self.pulley_radius(servo)
+        return (T @ np.array([-r, 0.0, 0.0, 1.0]))[:3], T[:3, 1].copy()
+
+    def extents(self) -> tuple[float, float, float, float, float, float]:
+        """x0, x1, y0, y1, z0, z1 (palm frame, mm) of the module's block (``wrist.forearm_block``)."""
+        return wrist.forearm_block(self.params)
+
+    def tab(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lo, hi) palm frame of the fastening tab over the palm (``wrist.tab``)."""
+        return wrist.tab(self.params)
+
+    def tab_screws(self) -> list[np.ndarray]:
+        """Centres (palm frame) of the tab's two screws on the palm's dorsal face."""
+        return wrist.tab_screws(self.params)
+
+    # -- geometry ----------------------------------------------------------------
+    def build(self):
+        t = self.tol
+        x0, x1, y0, y1, z0, z1 = self.extents()
+        body = [box(x0, x1, y0, y1, z0, z1)]
+        lo, hi = self.tab()
+        body.append(box(lo[0], hi[0], lo[1] - t.wall, hi[1], lo[2], hi[2]))      # into the block
+        tools = []
+        for k in FOREARM_SERVOS:
+            Ts = self.T_servo(k)
+            top = z1 - Ts[2, 3] + 1.0                     # shaft dorsal: servo z = palm z
+            for blo, bhi in self.open_pockets(k, top):
+                tools.append(transform(box(blo[0], bhi[0], blo[1], bhi[1], blo[2], bhi[2]), Ts))
+            rc = self.cavity_radius(k)
+            zc0, _ = self.cavity_span(k)
+            tools.append(transform(cylinder((0, 0, zc0), (0, 0, top), rc), Ts))
+            tools += [transform(p, Ts) for p in self.pilot_tools(k)]
+            p, u = self.drive_line(k)
+            tools.append(cylinder(p - u, p + u * (y1 - y0 + 2.0 * wrist.TAB_LENGTH), t.tendon_hole / 2.0))
+        # the thumb drive turns just outside its pulley's cavity toward the CMC post (beside the
+        # ear slot, open on the dorsal side: no relief sphere, whose faces there did not survive a
+        # STEP round trip)
+        pts = wrist.thumb_drive_path(self.params)
+        u = (pts[1] - pts[0]) / np.linalg.norm(pts[1] - pts[0])
+        tools += [cylinder(pts[0] - u, pts[1], t.tendon_hole / 2.0), cylinder(pts[1], pts[2], t.tendon_hole / 2.0)]
+        for s in self.tab_screws():
+            tools.append(cylinder(s - np.array([0, 0, 1.0]), s + np.array([0, 0, 2.0 * t.wall + 1.0]),
+                                  t.screw / 2.0 + t.clearance))
+        shape = build(body, tools)
+        return transform(shape, np.linalg.inv(self.T_palm_part()))

@@ -1,0 +1,68 @@
+"""The servo mount: what a part that holds servos cuts for them (numpy only).
+
+A servo's pocket, flange-ear slots, pulley cavity and flange pilot holes, in its servo frame
+(``kinematics.frames``: origin on the shaft at the pulley's mid-plane, z along the shaft toward
+the pulley, the body toward -y), in mm. The forearm module holds the tendon servos, the palm's
+thenar housing the direct-drive CMC servo; both use this one description.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...kinematics import frames as F
+from .common import mm
+
+
+class ServoMount:
+    """Mixin of a part that holds servos: needs ``params``, ``tol`` and ``pulley_width``."""
+
+    def T_servo(self, servo: int) -> np.ndarray:
+        """Servo frame of servo ``servo`` (0-based index, topology.SERVOS), palm frame (mm)."""
+        return F.to_mm(F.T_palm_servo(self.params, servo))
+
+    def pulley_radius(self, servo: int) -> float:
+        return mm(F.servo_radius(self.params, servo))
+
+    def cavity_radius(self, servo: int) -> float:
+        return self.pulley_radius(servo) + mm(F.pulley_cavity_margin(self.params))
+
+    def _box(self, what: str, grow: float):
+        lo, hi = F.servo_boxes(self.params)[what]
+        return np.array([mm(v) for v in lo]) - grow, np.array([mm(v) for v in hi]) + grow
+
+    def body_box(self, servo: int, grow: float = 0.0):
+        """The servo's body as (lo, hi) corners in its servo frame, grown by ``grow``."""
+        return self._box("body", grow)
+
+    def ear_box(self, servo: int, grow: float = 0.0):
+        """The servo's flange ears (both, as one slab across the body) in its servo frame."""
+        return self._box("ears", grow)
+
+    def cavity_span(self, servo: int) -> tuple[float, float]:
+        """z extent (servo frame) of a servo's pulley cavity: from the body's top to past the pulley."""
+        c = self.tol.clearance
+        return self.body_box(servo, grow=c)[1][2] - c, self.pulley_width / 2.0 + c
+
+    def screw_points(self, servo: int) -> list[np.ndarray]:
+        """Flange screw centres (servo frame) on the ears' underside, mid-ear, one each end."""
+        L = mm(self.params.servo.body[0])
+        e = (L / 2.0 + mm(self.params.servo.flange_span) / 2.0) / 2.0
+        z_under = self.ear_box(servo)[0][2]
+        y0 = -mm(self.params.cad.servo_shaft_offset)
+        return [np.array([0.0, y0 + s * e, z_under]) for s in (-1.0, 1.0)]
+
+    def open_pockets(self, servo: int, top: float) -> list:
+        """(lo, hi) corners, servo frame, of the body pocket and ear slots, open along the shaft
+        up to z = ``top`` (the servo drops in before its pulley goes on)."""
+        c = self.tol.clearance
+        lo, hi = self.body_box(servo, grow=c)
+        elo, ehi = self.ear_box(servo, grow=c)
+        return [(lo, np.array([hi[0], hi[1], top])), (elo, np.array([ehi[0], ehi[1], top]))]
+
+    def pilot_tools(self, servo: int) -> list:
+        """The flange screws' pilot holes (servo frame), down from the ears' underside."""
+        from .common import cylinder
+        t = self.tol
+        return [cylinder(p + np.array([0, 0, 1.0]), p - np.array([0, 0, t.clearance + t.screw_engagement]),
+                         t.screw_pilot / 2.0) for p in self.screw_points(servo)]

@@ -1,0 +1,79 @@
+"""The wrist joint between the palm and the forearm module (numpy only, palm frame, mm).
+
+The palm's metacarpal block ends at the wrist crease; the forearm module's front face stands a
+clearance behind it (or behind the thenar, ``frames.forearm_front``). A tab of the module lies
+on the palm's dorsal face there and two M2 screws hold it: the palm drills their pilots, the
+module their clearance holes. Both parts read this one description.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ... import units
+from ...kinematics import frames as F
+from ...kinematics import routing
+from ...kinematics.topology import FINGERS, THUMB_CHAIN
+from .common import mm
+
+#: the fastening tab's length over the palm (mm, along y) [choice]
+TAB_LENGTH = 10.0
+
+
+def metacarpal_x(params) -> tuple[float, float]:
+    """x extent (mm) of the palm's metacarpal block: flush with the outer sides of the index's and
+    the pinky's sockets (the columns converge toward the wrist, so their faces are widest)."""
+    xs = []
+    for f in FINGERS:
+        T = F.to_mm(F.T_palm_socket(params, f))
+        W = mm(params.fingers[f].width)
+        xs += [(T @ np.array([sx, 0.0, 0.0, 1.0]))[0] for sx in (-W / 2.0, W / 2.0)]
+    return min(xs), max(xs)
+
+
+def forearm_block(params) -> tuple[float, float, float, float, float, float]:
+    """x0, x1, y0, y1, z0, z1 (palm frame, mm) of the forearm module's block: one palm wall around
+    every one of its servos' envelopes (``frames.servo_envelope``), its front face
+    ``frames.forearm_front``, its top a wall above the palm's dorsal face (flush with the tab)."""
+    w = mm(params.palm.wall)
+    pts = []
+    for k, T in F.forearm_servos(params).items():
+        env = F.servo_envelope(params, k)
+        pts.append(np.array([mm(v) for v in ((T[:3, :3] @ env.T).T + T[:3, 3]).ravel()]).reshape(-1, 3))
+    pts = np.vstack(pts)
+    return (pts[:, 0].min() - w, pts[:, 0].max() + w, pts[:, 1].min() - w, mm(F.forearm_front(params)),
+            pts[:, 2].min() - w, mm(params.palm.thickness) / 2.0 + w)
+
+
+def tab(params) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) of the forearm module's tab on the palm: across the metacarpal block where the
+    module covers it, from the module's front face to TAB_LENGTH ahead of the wrist crease, one
+    palm wall thick on the palm's dorsal face."""
+    forearm_x = forearm_block(params)[:2]
+    px0, px1 = metacarpal_x(params)
+    top = mm(params.palm.thickness) / 2.0
+    return (np.array([max(forearm_x[0], px0), mm(F.forearm_front(params)), top]),
+            np.array([min(forearm_x[1], px1), mm(F.wrist_y(params)) + TAB_LENGTH, top + mm(params.palm.wall)]))
+
+
+def tab_screws(params) -> list[np.ndarray]:
+    """Centres of the tab's two screws on the palm's dorsal face, half a tab length in from its
+    ends, halfway along its length over the palm."""
+    lo, hi = tab(params)
+    y = (mm(F.wrist_y(params)) + hi[1]) / 2.0
+    inset = TAB_LENGTH / 2.0
+    return [np.array([lo[0] + inset, y, lo[2]]), np.array([hi[0] - inset, y, lo[2]])]
+
+
+def thumb_drive_path(params) -> list[np.ndarray]:
+    """Palm-frame points (mm, right hand) of the thumb drive where the routing model runs it on the
+    forearm module and the palm: where it leaves servo 1's pulley (tangent), the turn just outside
+    the pulley's cavity, the post entry, the post top, the point above the CMC axis, the CMC axis at
+    the arch's underside (``kinematics.routing``). Both parts cut its channel."""
+    st = next(s for r in routing.routes(params, right_handed=True)
+              if r.tendon.kind == "drive" and r.tendon.digit == THUMB_CHAIN.digit for s in r.strands)
+    run = next(r for r in routing.runs(params, right_handed=True) if r.strand == st.name and "palm" in r.links)
+    tangent = np.asarray(units.mm(np.array(run.ends["palm"][0])), float)
+    pts = [np.asarray(units.mm(np.array(e.pos)), float) for e in st.elements
+           if isinstance(e, routing.Point) and e.link == "palm"]
+    return [tangent] + pts
