@@ -240,9 +240,12 @@ def servo_envelope(params, servo: int) -> np.ndarray:
 
 
 def forearm_pitch(params) -> float:
-    """x spacing (m) of the forearm module's servos: two pulley cavities and a palm wall apart."""
+    """Least x spacing (m) of the forearm module's servos: the wider of two pulley cavities' radii
+    and a servo body with its clearances, and a palm wall (:func:`forearm_servos` widens it where
+    the servos, each turned toward its target, would come closer than a wall)."""
     rc = max(c.servo_radius for c in params.chains) + pulley_cavity_margin(params)
-    return 2.0 * rc + params.palm.wall
+    body = params.servo.body[1] + 2.0 * params.print.hole_clearance
+    return max(2.0 * rc, body) + params.palm.wall
 
 
 def servo_target(params, servo: int) -> np.ndarray:
@@ -302,28 +305,79 @@ def _forearm_servos(params) -> dict[int, np.ndarray]:
     # each pulley as near as the pitch allows to where its drive leaves straight ahead toward its
     # target (its centre r ulnar of the target's x): least squares with x_k+1 - x_k >= pitch
     want = [targets[k][0] + servo_radius(params, k) for k in tendon]
-    xs = spaced(want, forearm_pitch(params))
     z = tendon_height(params)
     front = forearm_front(params) - params.palm.wall
-    y, out = front, {}
-    for _ in range(6):          # a servo's turn depends (weakly) on the row's depth: settle it
-        out = {k: aimed_servo(np.array([xs[i], y, z]), targets[k], servo_radius(params, k))
-               for i, k in enumerate(tendon)}
-        reach = max(float((out[k][:3, :3] @ servo_envelope(params, k).T)[1].max()) for k in tendon)
-        y = front - reach
+    pitch, w = forearm_pitch(params), params.palm.wall
+    out: dict[int, np.ndarray] = {}
+    for _ in range(12):         # widen the pitch until the turned servos stand a wall apart
+        xs = spaced(want, pitch)
+        y = front
+        for _ in range(6):      # a servo's turn depends (weakly) on the row's depth: settle it
+            out = {k: aimed_servo(np.array([xs[i], y, z]), targets[k], servo_radius(params, k))
+                   for i, k in enumerate(tendon)}
+            reach = max(float((out[k][:3, :3] @ servo_envelope(params, k).T)[1].max()) for k in tendon)
+            y = front - reach
+        short = w - min(servo_gaps(params, out))
+        if short <= 1e-9:
+            break
+        pitch += short + 1e-6
     return out
+
+
+def _rectangles(params, T: np.ndarray) -> list[np.ndarray]:
+    """The xy corners (palm frame) of a servo's body and ears, grown by a clearance, placed by T."""
+    c = params.print.hole_clearance
+    out = []
+    for lo, hi in servo_boxes(params).values():
+        pts = np.array([[x, y, 0.0] for x, y in ((lo[0] - c, lo[1] - c), (hi[0] + c, lo[1] - c),
+                                                  (hi[0] + c, hi[1] + c), (lo[0] - c, hi[1] + c))])
+        out.append((T[:3, :3] @ pts.T).T[:, :2] + T[:2, 3])
+    return out
+
+
+def servo_gaps(params, servos: dict[int, np.ndarray]) -> list[float]:
+    """Between each pair of neighbouring servos of a row (T_palm_servo, shafts along z), a lower
+    bound (m) of the distance between their bodies and ears with clearance: the largest gap
+    between their projections on an edge normal of either (separating axes)."""
+    row = sorted(servos.values(), key=lambda T: T[0, 3])
+    gaps = []
+    for Ta, Tb in zip(row, row[1:]):
+        g = np.inf
+        for P in _rectangles(params, Ta):
+            for Q in _rectangles(params, Tb):
+                axes = [np.array([-(R[(i + 1) % 4] - R[i])[1], (R[(i + 1) % 4] - R[i])[0]]) for R in (P, Q)
+                        for i in range(2)]
+                best = -np.inf
+                for n in axes:
+                    n = n / np.linalg.norm(n)
+                    p, q = P @ n, Q @ n
+                    best = max(best, q.min() - p.max(), p.min() - q.max())
+                g = min(g, best)
+        gaps.append(float(g))
+    return gaps
+
+
+def thenar_housing_box(params) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) corners (m, servo frame) of the palm's housing around the direct-drive CMC servo:
+    one box around its body and flange ears grown by a hole clearance and a palm wall, up to its
+    output face."""
+    boxes = servo_boxes(params)
+    g = params.print.hole_clearance + params.palm.wall
+    (blo, bhi), (elo, ehi) = boxes["body"], boxes["ears"]
+    return (np.array([blo[0] - g, min(blo[1], elo[1]) - g, blo[2] - g]),
+            np.array([bhi[0] + g, max(bhi[1], ehi[1]) + g, bhi[2]]))
 
 
 def thenar_points(params) -> np.ndarray:
     """Points (m, palm frame, right hand) whose hull holds what the palm carries at the thumb's
-    CMC: servo 6's envelope (:func:`servo_envelope`) grown by a palm wall (its housing) and the
-    post and arch of :func:`thumb_arch`."""
+    CMC: the corners of servo 6's housing (:func:`thenar_housing_box`) and of the post and arch of
+    :func:`thumb_arch`."""
     k = next(s.index for s in SERVOS if s.drive == "direct")
     w = params.palm.wall
-    env = servo_envelope(params, k)
-    env = env + w * np.sign(env)                 # the housing's walls (the envelope is about 0)
+    lo, hi = thenar_housing_box(params)
+    box = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
     Ts = T_palm_servo(params, k)
-    pts = [(Ts[:3, :3] @ env.T).T + Ts[:3, 3]]
+    pts = [(Ts[:3, :3] @ box.T).T + Ts[:3, 3]]
     a = thumb_arch(params)
     r = a["r_post"]
     post = np.array([[x, y, z] for x in (-r, r) for y in (a["y_post"] - r, a["y_post"] + r)

@@ -282,13 +282,6 @@ def _servos(c, fingers, thumb, servo, hardware, printing, cad) -> None:
             raise c.error("horn_hole_radius_mm", cad.horn_hole_radius / MM,
                           f"must be <= {limit / MM:.3f} mm so the horn screws stay inside the "
                           f"{name} pulley radius {r / MM:g} mm")
-    # each tendon runs under the neighbouring servo's body on its way to its own pulley
-    for name, r in pulleys:
-        need = servo.body[1] / 2.0 + 2.0 * printing.hole_clearance + hardware.tendon_diameter / 2.0
-        if r <= need + 1e-12:
-            raise ParamError(f"{name}.servo_pulley_radius_mm", round(r / MM, 6),
-                             f"must exceed {need / MM:.3f} mm (half the servo body width servo.body_mm[1] "
-                             "+ tendon + clearances): the next finger's tendon passes under the servo", c.source)
     if cad.servo_ear_offset + cad.servo_ear_thickness >= servo.body[2] - 1e-12:
         raise c.error("servo_ear_offset_mm", cad.servo_ear_offset / MM,
                       f"with servo_ear_thickness_mm = {cad.servo_ear_thickness / MM:g} the ears must lie on the "

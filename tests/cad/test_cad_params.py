@@ -7,6 +7,7 @@ from __future__ import annotations
 import copy
 import math
 
+import numpy as np
 import pytest
 
 from phantom_cad import ParamError
@@ -107,12 +108,43 @@ def test_spring_channel_wider_than_the_cheek(document):
     assert e.rule == "its channel (2.4 mm with clearance) must fit inside a clevis cheek (cheek_mm = 2.4)"
 
 
-def test_servo_pulley_too_small_for_the_tendon_under_the_next_servo(document):
-    # 14/2 + 2*0.2 + 0.6/2 = 7.7 mm > r = 7 mm
-    e = _fails(document, lambda d: d["servo"].__setitem__("body_mm", [23.2, 14.0, 25.3]))
-    assert (e.field, e.value) == ("fingers.index.servo_pulley_radius_mm", 7.0)
-    assert e.rule == ("must exceed 7.700 mm (half the servo body width servo.body_mm[1] + tendon + clearances): "
-                      "the next finger's tendon passes under the servo")
+def test_a_wide_servo_widens_the_forearm_row(document):
+    """No tendon passes under a neighbouring servo any more (they sit in one row in the forearm
+    module): a 14 mm wide body validates (it used to be refused: 14/2 + 2 x 0.2 + 0.3 > 7 mm). The
+    row's least pitch is the wider of two pulley cavities (2 x 9.0 mm) and the body with its
+    clearances, plus a palm wall: 20.4 mm for 12.1 or 14 mm, 24.8 mm for a 22 mm body; there the
+    servos, turned toward their sockets by different angles, would come closer than a wall, so the
+    row widens. Measured by hand: every pair of neighbours' body and ear rectangles (grown by the
+    clearance) at least a wall apart, sampled densely on their outlines."""
+    from phantom_cad.cad import preflight
+    from phantom_cad.kinematics import frames as F
+    from phantom_cad.params import parse
+
+    def outline(T, lo, hi):
+        t = np.linspace(0.0, 1.0, 60)
+        pts = [np.c_[lo[0] + (hi[0] - lo[0]) * t, np.full_like(t, y)] for y in (lo[1], hi[1])]
+        pts += [np.c_[np.full_like(t, x), lo[1] + (hi[1] - lo[1]) * t] for x in (lo[0], hi[0])]
+        P = np.vstack(pts)
+        return P @ T[:2, :2].T + T[:2, 3]
+
+    for width, pitch in ((14.0, 20.4), (22.0, 22.0 + 0.4 + 2.4)):
+        doc = copy.deepcopy(document)
+        doc["servo"]["body_mm"] = [23.2, width, 25.3]
+        p = parse(doc)
+        preflight.check(p)
+        row = sorted(F.forearm_servos(p).values(), key=lambda T: T[0, 3])
+        xs = [T[0, 3] * 1e3 for T in row]
+        assert min(b - a for a, b in zip(xs, xs[1:])) >= pitch - 1e-9
+        assert F.forearm_pitch(p) * 1e3 == pytest.approx(pitch)
+        c, L, span, off = 0.2, 23.2, doc["servo"]["flange_span_mm"], doc["cad"]["servo_shaft_offset_mm"]
+        boxes = [((-width / 2 - c, -off - L / 2 - c), (width / 2 + c, -off + L / 2 + c)),
+                 ((-width / 2 - c, -off - span / 2 - c), (width / 2 + c, -off + span / 2 + c))]
+        for Ta, Tb in zip(row, row[1:]):
+            Ta, Tb = F.to_mm(Ta), F.to_mm(Tb)
+            A = np.vstack([outline(Ta, lo, hi) for lo, hi in boxes])
+            B = np.vstack([outline(Tb, lo, hi) for lo, hi in boxes])
+            d = np.sqrt(((A[:, None, :] - B[None, :, :]) ** 2).sum(-1)).min()
+            assert d >= doc["palm"]["wall_mm"] - 1e-6, (width, d)
 
 
 def test_shaft_offset_beyond_the_body(document):

@@ -117,13 +117,9 @@ class Palm(ServoMount, Part):
 
     def housing_box(self, servo: int):
         """(lo, hi) corners, servo frame, of the thenar housing around a servo outside the bay: a
-        wall around its body and ears, up to its output face."""
-        c, w = self.tol.clearance, self.tol.wall
-        hlo, hhi = self.body_box(servo, grow=c + w)
-        glo, ghi = self.ear_box(servo, grow=c + w)
-        top = self.body_box(servo, grow=c)[1][2] - c
-        return (np.array([hlo[0], min(hlo[1], glo[1]), hlo[2]]),
-                np.array([hhi[0], max(hhi[1], ghi[1]), top]))
+        wall around its body and ears, up to its output face (``frames.thenar_housing_box``)."""
+        lo, hi = F.thenar_housing_box(self.params)
+        return np.array([mm(v) for v in lo]), np.array([mm(v) for v in hi])
 
     def metacarpal_x(self) -> tuple[float, float]:
         """x extent (mm) of the metacarpal block (``wrist.metacarpal_x``)."""
