@@ -117,6 +117,15 @@ class Part:
             "palm_wall_mm": doc["palm"]["wall_mm"],
         }
 
+    def whole_hand_inputs(self) -> dict:
+        """Every parameter but the model's mechanics and effects: for a part placed by every
+        socket and servo (the palm, the forearm module)."""
+        doc = self.params.document
+        out = {k: canon.plain(v) for k, v in doc.items() if k not in ("mechanics", "effects", "hand")}
+        out["side"] = doc["hand"]["side"]
+        out["hand_length_mm"] = doc["hand"]["hand_length_mm"]
+        return out
+
     def expect(self, problems: list[str], what: str, measured: float | None, wanted: float,
                eps: float = 1e-3) -> None:
         """Append a problem when ``measured`` (mm) is missing or off ``wanted`` by more than eps."""

@@ -20,7 +20,6 @@ import math
 
 import numpy as np
 
-from ... import canon
 from ...kinematics import frames as F
 from ...kinematics.topology import FOREARM, SERVO_MOUNT, SERVOS, link
 from ..measure import circular_pockets
@@ -56,14 +55,10 @@ class Forearm(ServoMount, Part):
 
     def inputs(self) -> dict:
         """Everything but the model's mechanics and effects: the servos aim at every socket."""
-        doc = self.params.document
-        out = {k: canon.plain(v) for k, v in doc.items() if k not in ("mechanics", "effects", "hand")}
-        out["side"] = doc["hand"]["side"]
-        out["hand_length_mm"] = doc["hand"]["hand_length_mm"]
-        return out
+        return self.whole_hand_inputs()
 
     def verify(self, shape) -> list[str]:
-        """Two flange pilot holes per servo and the tab's two screw holes."""
+        """Two flange pilot holes per servo."""
         out: list[str] = []
         n = len(self.pilot_points())
         got = len(circular_pockets(shape, self.tol.screw_pilot / 2.0))

@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from ... import canon, units
+from ... import units
 from ...kinematics import frames as F
 from ...kinematics import routing
 from ...kinematics.topology import FINGERS, LINKS, SERVO_MOUNT, SERVOS, chain
@@ -68,11 +68,7 @@ class Palm(ServoMount, Part):
 
     def inputs(self) -> dict:
         """Everything but the model's mechanics and effects: the palm carries every socket and servo."""
-        doc = self.params.document
-        out = {k: canon.plain(v) for k, v in doc.items() if k not in ("mechanics", "effects", "hand")}
-        out["side"] = doc["hand"]["side"]
-        out["hand_length_mm"] = doc["hand"]["hand_length_mm"]
-        return out
+        return self.whole_hand_inputs()
 
     def verify(self, shape) -> list[str]:
         """Two magnet pockets per finger socket; adjacent socket normals arc_offset apart."""
