@@ -224,19 +224,22 @@ def servo_boxes(params) -> dict[str, tuple[np.ndarray, np.ndarray]]:
                      np.array([W / 2.0, y0 + sv.flange_span / 2.0, z1]))}
 
 
+def box_corners(lo, hi) -> np.ndarray:
+    """The eight corners (8, 3) of the axis-aligned box [lo, hi]."""
+    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])], float)
+
+
 def servo_envelope(params, servo: int) -> np.ndarray:
     """Points (m, servo frame) whose hull holds a servo with its clearance: the corners of its body
     and ears and the rim of its pulley's cavity, grown by a hole clearance."""
     c = params.print.hole_clearance
-    pts = []
-    for lo, hi in servo_boxes(params).values():
-        lo, hi = lo - c, hi + c
-        pts += [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+    pts = [box_corners(lo - c, hi + c) for lo, hi in servo_boxes(params).values()]
     rc = servo_radius(params, servo) + pulley_cavity_margin(params)
     h = params.cad.servo_pulley_width / 2.0 + c
-    for a in np.linspace(0.0, 2.0 * math.pi, 48, endpoint=False):
-        pts += [[rc * math.cos(a), rc * math.sin(a), z] for z in (-h, h)]
-    return np.array(pts, float)
+    a = np.linspace(0.0, 2.0 * math.pi, 48, endpoint=False)
+    for z in (-h, h):
+        pts.append(np.c_[rc * np.cos(a), rc * np.sin(a), np.full_like(a, z)])
+    return np.vstack(pts)
 
 
 def forearm_pitch(params) -> float:
@@ -291,11 +294,13 @@ _FOREARM: dict = {}
 def forearm_servos(params) -> dict[int, np.ndarray]:
     """T_palm_servo (m, right hand) of every tendon servo in the forearm module: one row across the
     forearm, thumb servo radial to pinky servo ulnar (the order of their targets, so no two drives
-    cross), forearm_pitch apart and centred on the targets; shafts dorsal, every pulley's mid-plane
-    at the fingers' tendon height, so that a finger drive runs level from its pulley to its socket;
-    each servo turned about its shaft so that its drive leaves straight toward its target
-    (:func:`servo_target`); the row as far forward as the servos' envelopes
-    (:func:`servo_envelope`) allow, one palm wall behind the wrist crease. Memoised (read-only)."""
+    cross), each as near (least squares, :func:`spaced`) to where its drive leaves straight ahead
+    as at least forearm_pitch apart allows, widened until the turned servos stand a palm wall apart
+    (:func:`servo_gaps`); shafts dorsal, every pulley's mid-plane at the fingers' tendon height, so
+    that a finger drive runs level from its pulley to its socket; each servo turned about its shaft
+    so that its drive leaves straight toward its target (:func:`servo_target`); the row as far
+    forward as the servos' envelopes (:func:`servo_envelope`) allow, one palm wall behind the
+    module's front face (:func:`forearm_front`). Memoised (read-only)."""
     return memoised(_FOREARM, params.digest, lambda: _forearm_servos(params), cap=16)
 
 
@@ -304,7 +309,9 @@ def _forearm_servos(params) -> dict[int, np.ndarray]:
     targets = {k: servo_target(params, k) for k in tendon}
     # each pulley as near as the pitch allows to where its drive leaves straight ahead toward its
     # target (its centre r ulnar of the target's x): least squares with x_k+1 - x_k >= pitch
-    want = [targets[k][0] + servo_radius(params, k) for k in tendon]
+    radius = {k: servo_radius(params, k) for k in tendon}
+    envelope = {k: servo_envelope(params, k) for k in tendon}
+    want = [targets[k][0] + radius[k] for k in tendon]
     z = tendon_height(params)
     front = forearm_front(params) - params.palm.wall
     pitch, w = forearm_pitch(params), params.palm.wall
@@ -313,9 +320,8 @@ def _forearm_servos(params) -> dict[int, np.ndarray]:
         xs = spaced(want, pitch)
         y = front
         for _ in range(6):      # a servo's turn depends (weakly) on the row's depth: settle it
-            out = {k: aimed_servo(np.array([xs[i], y, z]), targets[k], servo_radius(params, k))
-                   for i, k in enumerate(tendon)}
-            reach = max(float((out[k][:3, :3] @ servo_envelope(params, k).T)[1].max()) for k in tendon)
+            out = {k: aimed_servo(np.array([xs[i], y, z]), targets[k], radius[k]) for i, k in enumerate(tendon)}
+            reach = max(float((out[k][:3, :3] @ envelope[k].T)[1].max()) for k in tendon)
             y = front - reach
         short = w - min(servo_gaps(params, out))
         if short <= 1e-9:
@@ -375,13 +381,12 @@ def thenar_points(params) -> np.ndarray:
     k = next(s.index for s in SERVOS if s.drive == "direct")
     w = params.palm.wall
     lo, hi = thenar_housing_box(params)
-    box = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+    box = box_corners(lo, hi)
     Ts = T_palm_servo(params, k)
     pts = [(Ts[:3, :3] @ box.T).T + Ts[:3, 3]]
     a = thumb_arch(params)
     r = a["r_post"]
-    post = np.array([[x, y, z] for x in (-r, r) for y in (a["y_post"] - r, a["y_post"] + r)
-                     for z in (a["z_floor"] - w, a["z_hi"])])
+    post = box_corners((-r, a["y_post"] - r, a["z_floor"] - w), (r, a["y_post"] + r, a["z_hi"]))
     Tc = T_palm_thumb_cmc_base(params)
     pts.append((Tc[:3, :3] @ post.T).T + Tc[:3, 3])
     return np.vstack(pts)

@@ -128,8 +128,7 @@ class Palm(ServoMount, Part):
         return x0, x1, mm(F.wrist_y(self.params)), self.slab_front()
 
     def _placed_box(self, T, lo, hi) -> np.ndarray:
-        pts = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
-        return (T @ pts.T).T[:, :3]
+        return F.box_corners(lo, hi) @ T[:3, :3].T + T[:3, 3]
 
     def thenar_web(self) -> tuple[np.ndarray, np.ndarray]:
         """(lo, hi) palm frame (mm) of the web that joins the CMC servo's housing to the metacarpal
