@@ -41,7 +41,7 @@ import math
 import numpy as np
 
 from .. import units
-from ..params.rules import finger_columns, slot_back
+from .dimensions import finger_columns, slot_back
 from .memo import memoised
 from .topology import CMC_Q, FINGERS, JOINTS, LINKS, N_JOINTS, SERVOS, chain, joint, link, servo_joints
 
@@ -114,7 +114,7 @@ def finger_direction(params, i: int) -> np.ndarray:
 def mcp_position(params, i: int) -> np.ndarray:
     """MCP axis centre of finger i in the palm frame (index at the origin): on the palm arc,
     stepped along its column by its metacarpal's length less the index's
-    (``params.rules.finger_columns``)."""
+    (``dimensions.finger_columns``)."""
     x, y, _ = finger_columns(params.palm.finger_pitch, params.palm.arc_offset,
                              [params.fingers[f].metacarpal for f in FINGERS])[i]
     return np.array([x, y, 0.0])

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..params import ParamError
-from ..params.rules import FLANK, digit_field, slot_back
+from .dimensions import FLANK, digit_field, slot_back
 from . import frames as F
 from .memo import memoised
 from .topology import CHAINS, JOINTS, N_JOINTS, SERVOS, TENDONS, Tendon, chain, digit_links, joint, link
@@ -243,7 +243,7 @@ def _return(params, digit: str, lay: Layout, rest) -> Strand:
     x = lay.return_x
     first = links[0]
     # anchored on the first link, half way between its start and the first joint's clevis slot
-    # (the slot's back wall, rules.slot_back: the knot's well must be cut in material)
+    # (the slot's back wall, dimensions.slot_back: the knot's well must be cut in material)
     ja0 = _child_origin(rest, spec.joint_names[0])
     start = _segment(params, first) if _segment(params, first) > 0 else params.cad.finger_base_length
     y0 = ja0[1] - (start + slot_back(d.thickness, params.print.hole_clearance)) / 2.0

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 
+from ..kinematics.dimensions import FLANK, digit_field, finger_columns, slot_back
 from ..units import DEG, MM
 from .errors import ParamError
 
@@ -27,11 +28,6 @@ MAX_FLEXION = 120.0 * DEG
 MAX_FINGER_PITCH = 21.0 * MM
 
 
-def digit_field(digit: str) -> str:
-    """The parameter file's table of a digit: ``thumb`` or ``fingers.<name>``."""
-    return "thumb" if digit == "thumb" else f"fingers.{digit}"
-
-
 def _digits(fingers, thumb):
     """(field prefix, digit) of the four fingers and the thumb."""
     return [(digit_field(n), f) for n, f in fingers.items()] + [(digit_field("thumb"), thumb)]
@@ -44,11 +40,6 @@ def check_parts(c, hand_length, fingers, thumb, palm, servo, hardware, printing,
     _magnets(c, fingers, palm, hardware, printing, cad)
     _guides(c, fingers, thumb, palm, hardware, printing, cad)
     _servos(c, fingers, thumb, servo, hardware, printing, cad)
-
-
-#: two perimeters of a 0.4 mm nozzle: the thinnest flank beside a tendon groove (m); the routing
-#: model (``kinematics.routing.layout``) spaces the grooves by it
-FLANK = 0.8e-3
 
 
 def _joints(c, fingers, thumb, hardware, printing, cad) -> None:
@@ -80,12 +71,6 @@ def _joints(c, fingers, thumb, hardware, printing, cad) -> None:
         raise c.error("spring_diameter_mm", cad.spring_diameter / MM,
                       f"its channel ({(cad.spring_diameter + 2.0 * printing.hole_clearance) / MM:g} mm with "
                       f"clearance) must fit inside a clevis cheek (cheek_mm = {cad.cheek / MM:g})")
-
-
-def slot_back(thickness: float, hole_clearance: float) -> float:
-    """Distance from a joint's axis back to its clevis slot's back wall (the extension stop): the
-    tongue's boss (half the digit's thickness) and a clearance. SI units."""
-    return thickness / 2.0 + hole_clearance
 
 
 def _segments(c, fingers, thumb, printing, hand_length) -> None:
@@ -154,26 +139,6 @@ def _magnets(c, fingers, palm, hardware, printing, cad) -> None:
         raise ParamError("palm.thickness_mm", round(palm.thickness / MM, 6),
                          f"must exceed the thickest finger ({thickest / MM:g} mm) + 2 hole_clearance: the palm's "
                          "flexion limiter sits under each finger base", c.source)
-
-
-def finger_columns(pitch: float, arc_offset: float, metacarpals) -> list[tuple[float, float, float]]:
-    """(x, y, phi) of each finger column's MCP (palm frame, SI, index at the origin) and its turn
-    phi about -z: the columns fan out by arc_offset, phi_i = (i - (n - 1) / 2) arc_offset;
-    adjacent columns meet the palm arc finger_pitch apart along the chord between them,
-    perpendicular to the mean of their directions; each MCP then steps along its column by its
-    metacarpal's length less the first's (the stepped metacarpal heads). One implementation:
-    ``kinematics.frames`` places the fingers with it."""
-    n = len(metacarpals)
-    phis = [(i - (n - 1) / 2.0) * arc_offset for i in range(n)]
-    x = y = 0.0
-    out = []
-    for i, phi in enumerate(phis):
-        if i:
-            m = (phis[i - 1] + phi) / 2.0
-            x, y = x + pitch * math.cos(m), y - pitch * math.sin(m)
-        step = metacarpals[i] - metacarpals[0]
-        out.append((x + step * math.sin(phi), y + step * math.cos(phi), phi))
-    return out
 
 
 def _base_room(a: tuple[float, float, float], b: tuple[float, float, float], base_length: float) -> float:

@@ -144,6 +144,27 @@ def test_forearm_drives_leave_straight_for_their_sockets(built, params):
         assert perp @ T[:3, 0] == pytest.approx(-r, abs=1e-9)
 
 
+def test_forearm_front_wall_holes_only_where_a_drive_runs(built, params, document):
+    """Straight on from each pulley's tangent point along the servo's y, mid-way through the module's
+    front wall: a finger's drive channel is open there; the thumb's drive turns toward its CMC post
+    before the wall, so the wall is solid on its straight line (no hole that carries no tendon)."""
+    from phantom_cad.kinematics import frames
+    from phantom_cad.kinematics.topology import SERVO_MOUNT, SERVOS, THUMB_CHAIN
+
+    T_fp = np.linalg.inv(frames.T_palm_forearm(params))
+    mid_wall = frames.forearm_front(params) * 1e3 - document["palm"]["wall_mm"] / 2     # palm y (mm)
+    shape = built["forearm"].shape
+    held = [s.index for s in SERVOS if SERVO_MOUNT[s.drive] == "forearm"]
+    assert len(held) == 5
+    for k in held:
+        T = frames.T_palm_servo(params, k)
+        tangent = T[:3, 3] * 1e3 - frames.servo_radius(params, k) * 1e3 * T[:3, 0]
+        y = T[:3, 1]
+        p = tangent + y * (mid_wall - tangent[1]) / y[1]
+        inside = _is_inside(shape, (T_fp @ np.array([*(p / 1e3), 1.0]))[:3] * 1e3)
+        assert inside == (k == THUMB_CHAIN.servo), (k, p)
+
+
 # ---------------------------------------------------------------------------
 # pulley grooves at their radii
 # ---------------------------------------------------------------------------

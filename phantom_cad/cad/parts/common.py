@@ -20,7 +20,7 @@ import numpy as np
 from ... import units
 from ...kinematics import frames as F
 from ...kinematics import topology
-from ...params.rules import slot_back
+from ...kinematics.dimensions import slot_back
 
 
 def mm(x: float) -> float:

@@ -21,7 +21,7 @@ import math
 import numpy as np
 
 from ...kinematics import frames as F
-from ...kinematics.topology import FOREARM, SERVO_MOUNT, SERVOS, link
+from ...kinematics.topology import FOREARM, SERVO_MOUNT, SERVOS, THUMB_CHAIN, link
 from ..measure import circular_pockets
 from .base import Part
 from .common import Tolerances, box, build, cylinder, mm, transform
@@ -73,12 +73,6 @@ class Forearm(ServoMount, Part):
     def pilot_points(self) -> list[np.ndarray]:
         return [(self.T_servo(k) @ np.array([*p, 1.0]))[:3] for k in FOREARM_SERVOS for p in self.screw_points(k)]
 
-    def drive_line(self, servo: int) -> tuple[np.ndarray, np.ndarray]:
-        """Where the drive leaves the pulley (tangent point) and its unit direction, palm frame."""
-        T = self.T_servo(servo)
-        r = self.pulley_radius(servo)
-        return (T @ np.array([-r, 0.0, 0.0, 1.0]))[:3], T[:3, 1].copy()
-
     def extents(self) -> tuple[float, float, float, float, float, float]:
         """x0, x1, y0, y1, z0, z1 (palm frame, mm) of the module's block (``wrist.forearm_block``)."""
         return wrist.forearm_block(self.params)
@@ -108,11 +102,12 @@ class Forearm(ServoMount, Part):
             zc0, _ = self.cavity_span(k)
             tools.append(transform(cylinder((0, 0, zc0), (0, 0, top), rc), Ts))
             tools += [transform(p, Ts) for p in self.pilot_tools(k)]
-            p, u = self.drive_line(k)
-            tools.append(cylinder(p - u, p + u * (y1 - y0 + 2.0 * wrist.TAB_LENGTH), t.tendon_hole / 2.0))
+            if k != THUMB_CHAIN.servo:                     # a finger's drive runs straight on to its socket
+                p, u = self.drive_line(k)
+                tools.append(cylinder(p - u, p + u * (y1 - y0 + 2.0 * wrist.TAB_LENGTH), t.tendon_hole / 2.0))
         # the thumb drive turns just outside its pulley's cavity toward the CMC post (beside the
         # ear slot, open on the dorsal side: no relief sphere, whose faces there did not survive a
-        # STEP round trip)
+        # STEP round trip); its channel stops at the turn
         pts = wrist.thumb_drive_path(self.params)
         u = (pts[1] - pts[0]) / np.linalg.norm(pts[1] - pts[0])
         tools += [cylinder(pts[0] - u, pts[1], t.tendon_hole / 2.0), cylinder(pts[1], pts[2], t.tendon_hole / 2.0)]

@@ -242,10 +242,7 @@ class Palm(ServoMount, Part):
                 n = T[:3, 1]
                 tools.append(cylinder(m + n, m - n * t.magnet_pocket_depth, t.magnet_pocket_d / 2.0))
             # tendon: socket exit straight back to the servo pulley's tangent point
-            k = chain(f).servo
-            Ts = self.T_servo(k)
-            r = self.pulley_radius(k)
-            tangent = (Ts @ np.array([-r, 0.0, 0.0, 1.0]))[:3]   # servo x = palm z: bottom of the pulley
+            tangent, _ = self.drive_line(chain(f).servo)
             exit_ = (T @ np.array([0.0, 0.0, self.tendon_z, 1.0]))[:3]
             u = (tangent - exit_) / np.linalg.norm(tangent - exit_)
             tools.append(cylinder(exit_ - u, tangent + u, t.tendon_hole / 2.0))

@@ -24,6 +24,13 @@ class ServoMount:
     def pulley_radius(self, servo: int) -> float:
         return mm(F.servo_radius(self.params, servo))
 
+    def drive_line(self, servo: int) -> tuple[np.ndarray, np.ndarray]:
+        """Where a servo's drive leaves its pulley, the tangent point (servo frame (-r, 0, 0): the
+        servo's x is across the drive), and the drive's unit direction there (the servo's y), palm
+        frame (mm)."""
+        T = self.T_servo(servo)
+        return (T @ np.array([-self.pulley_radius(servo), 0.0, 0.0, 1.0]))[:3], T[:3, 1].copy()
+
     def cavity_radius(self, servo: int) -> float:
         return self.pulley_radius(servo) + mm(F.pulley_cavity_margin(self.params))
 

@@ -1,0 +1,44 @@
+"""Derived dimensions that the parameter rules and the models both compute: pure arithmetic on
+numbers (SI), no parameter objects, so ``params.rules`` validates with exactly the laws
+``kinematics.frames``, ``kinematics.routing`` and the parts build with. A foundation module
+(docs/architecture.md): it imports nothing of the package.
+"""
+
+from __future__ import annotations
+
+import math
+
+#: two perimeters of a 0.4 mm nozzle: the thinnest flank beside a tendon groove (m); the routing
+#: model (``kinematics.routing.layout``) spaces the grooves by it
+FLANK = 0.8e-3
+
+
+def digit_field(digit: str) -> str:
+    """The parameter file's table of a digit: ``thumb`` or ``fingers.<name>``."""
+    return "thumb" if digit == "thumb" else f"fingers.{digit}"
+
+
+def slot_back(thickness: float, hole_clearance: float) -> float:
+    """Distance from a joint's axis back to its clevis slot's back wall (the extension stop): the
+    tongue's boss (half the digit's thickness) and a clearance. SI units."""
+    return thickness / 2.0 + hole_clearance
+
+
+def finger_columns(pitch: float, arc_offset: float, metacarpals) -> list[tuple[float, float, float]]:
+    """(x, y, phi) of each finger column's MCP (palm frame, SI, index at the origin) and its turn
+    phi about -z: the columns fan out by arc_offset, phi_i = (i - (n - 1) / 2) arc_offset;
+    adjacent columns meet the palm arc finger_pitch apart along the chord between them,
+    perpendicular to the mean of their directions; each MCP then steps along its column by its
+    metacarpal's length less the first's (the stepped metacarpal heads). One implementation:
+    ``kinematics.frames`` places the fingers with it, ``params.rules`` checks their bases' room."""
+    n = len(metacarpals)
+    phis = [(i - (n - 1) / 2.0) * arc_offset for i in range(n)]
+    x = y = 0.0
+    out = []
+    for i, phi in enumerate(phis):
+        if i:
+            m = (phis[i - 1] + phi) / 2.0
+            x, y = x + pitch * math.cos(m), y - pitch * math.sin(m)
+        step = metacarpals[i] - metacarpals[0]
+        out.append((x + step * math.sin(phi), y + step * math.cos(phi), phi))
+    return out
