@@ -5,7 +5,8 @@ names the module the pipeline uses; its tests install a stand-in with the same f
 
 * ``part_names(params) -> list[str]``: unique, file-name safe, in build order;
 * ``part_inputs(params, name) -> dict``: the plain values the part depends on (its cache key);
-* ``build_part(params, name) -> Built``: the solid and what the exports need to know of it;
+* ``build_part(params, name) -> Built``: the solid and what the exports need to know of it
+  (optionally the convex solids of its collision shape);
 * ``pose_transforms(params, q=None) -> {name: 4x4}``: T_hand_link (mm) at joint angles q;
 * ``designed_contacts(params) -> [(a, b, why)]``: pairs that touch by design;
 * ``bill_of_materials(params) -> [row]``: rows with item, spec, quantity, used_in;
@@ -40,6 +41,8 @@ class Built:
     color: tuple[float, float, float]
     print_rotation: np.ndarray   # 3x3: lays the part on its best face for printing (z up)
     digit: str | None
+    #: convex solids (link frame, mm) whose union is the collision shape; empty: the shape's hull
+    collision: tuple = ()
 
 
 def part_names(params) -> list[str]:
@@ -81,11 +84,13 @@ def tip_frames(params) -> dict[str, tuple[str, np.ndarray]]:
 def build_part(params, name: str) -> Built:
     part = registry.part(params, name)
     shape = part.build()
+    collision = tuple(part.collision_solids())
     if params.side == "left":
         import build123d as bd
         shape = shape.mirror(bd.Plane.YZ)
+        collision = tuple(s.mirror(bd.Plane.YZ) for s in collision)
     return Built(name=name, shape=shape, T_hand_link=pose_transforms(params)[name], color=part.color,
-                 print_rotation=part.print_rotation, digit=part.digit)
+                 print_rotation=part.print_rotation, digit=part.digit, collision=collision)
 
 
 def verify_part(params, name: str, shape) -> list[str]:

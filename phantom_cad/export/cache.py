@@ -88,7 +88,6 @@ def cad_versions() -> dict[str, str | None]:
         "manifold3d": package_version("manifold3d"),
         "matplotlib": package_version("matplotlib"),
         "mujoco": package_version("mujoco"),
-        "coacd": package_version("coacd"),
     }
 
 

@@ -9,7 +9,7 @@ A ROS 2 package named ``<hand>_description`` that is also usable without ROS::
     urdf/<hand>.urdf            package:// mesh URIs (ROS, RViz)
     urdf/<hand>.local.urdf      the same with paths relative to the file (yourdfpy, PyBullet, MuJoCo, Pinocchio)
     meshes/visual/<link>.stl    metres, in the link frame (the solid's tessellation, not the print pose)
-    meshes/collision/<link>.stl its convex hull
+    meshes/collision/<link>.stl its convex hull (<link>_<k>.stl: the convex solids it is fused from)
 
 The model comes from :mod:`phantom_cad.export.robot`; docs/descriptions.md gives the conventions.
 """
@@ -24,7 +24,6 @@ from pathlib import Path
 import numpy as np
 
 from .. import units
-from ..kinematics.topology import link
 from . import step_stl
 from .mjcf import mjcf_bytes, scene_bytes
 from .robot import RobotModel, collision_stems
@@ -45,16 +44,6 @@ def package_name(hand: str) -> str:
 #: the description's meshes of a part, as its part-cache entry holds them: the visual STL and
 #: the convex collision pieces (``c<k>_vertices`` / ``c<k>_faces``, metres)
 MESH_FILES = {"visual": "visual.stl", "collision": "collision.npz"}
-#: link segments whose collision shape is a convex decomposition (CoACD) rather than one hull:
-#: the palm, whose hull would fill the servo bay and reach the fingers' proximal phalanges
-DECOMPOSED_SEGMENTS = ("palm",)
-#: CoACD's settings (deterministic for a fixed seed; about 20 s for the default palm). A concavity
-#: threshold of 0.05 keeps the notch between two stepped socket faces open (at 0.08 a piece of
-#: the middle socket's block spanned it and reached the ring's proximal phalanx at rest)
-COACD = {"threshold": 0.05, "preprocess_mode": "off", "mcts_iterations": 60, "mcts_max_depth": 2,
-         "seed": 1}
-
-
 #: how far a vertex of the exact hull may lie outside the light collision hull (metres): qhull's
 #: ``W`` option drops the hull vertices within it of a facet, which takes a finger's hull from
 #: about 1,000 faces to at most about 150 (docs/descriptions.md)
@@ -80,25 +69,21 @@ def collision_hull(vertices: np.ndarray, tolerance: float = HULL_TOLERANCE) -> t
     return np.asarray(hull.vertices, float), np.asarray(hull.faces, np.int64)
 
 
-def convex_pieces(vertices: np.ndarray, faces: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-    """A convex decomposition of a mesh (CoACD), each piece its convex hull, in a fixed order."""
-    import coacd
-
-    coacd.set_log_level("error")
-    parts = coacd.run_coacd(coacd.Mesh(np.asarray(vertices, float), np.asarray(faces, np.int64)), **COACD)
-    pieces = [collision_hull(np.asarray(v, float)) for v, _ in parts]
-    return sorted(pieces, key=lambda p: tuple(np.round(p[0].mean(axis=0), 9)))
-
-
-def part_meshes(vertices_mm: np.ndarray, faces: np.ndarray, name: str) -> dict[str, bytes]:
+def part_meshes(vertices_mm: np.ndarray, faces: np.ndarray, name: str,
+                pieces_mm: list[np.ndarray] = ()) -> dict[str, bytes]:
     """The description's meshes of one part (metres, link frame), by MESH_FILES kind: made once
-    per part by the build worker and kept in its cache entry. The collision shape is the convex
-    hull (light: collision_hull), or a convex decomposition for the links of DECOMPOSED_SEGMENTS."""
+    per part by the build worker and kept in its cache entry. The collision shape is one light
+    convex hull (collision_hull) of the part, or, for a part that names the convex solids it is
+    fused from (``Part.collision_solids``: the palm, the forearm module), one of each solid's
+    tessellation (``pieces_mm``, vertices in mm), in a fixed order."""
     import io
 
     v = np.asarray(vertices_mm, float) * units.MM
-    pieces = (convex_pieces(v, faces) if link(name).segment in DECOMPOSED_SEGMENTS
-              else [collision_hull(v)])
+    if len(pieces_mm):
+        pieces = sorted((collision_hull(np.asarray(p, float) * units.MM) for p in pieces_mm),
+                        key=lambda p: tuple(np.round(p[0].mean(axis=0), 9)))
+    else:
+        pieces = [collision_hull(v)]
     arrays = {}
     for k, (pv, pf) in enumerate(pieces):
         arrays[f"c{k}_vertices"], arrays[f"c{k}_faces"] = pv, pf.astype(np.int32)

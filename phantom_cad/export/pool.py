@@ -105,7 +105,10 @@ def part_worker(task: dict) -> dict:
         mesh_checks = step_stl.check_mesh(name, sv, sf, volume, STL_VOLUME_RTOL)
         (tmp / "part.stl").write_bytes(stl)
         np.savez(tmp / "mesh.npz", vertices=v, faces=f.astype(np.int32))
-        meshes = description.part_meshes(v, f, name)          # the robot description's
+        # the robot description's; a part's convex collision solids (if it names them) each give
+        # one collision piece
+        pieces = [step_stl.tessellate(c, tol_mm)[0] for c in getattr(built, "collision", ())]
+        meshes = description.part_meshes(v, f, name, pieces)
         for kind, data in meshes.items():
             (tmp / description.MESH_FILES[kind]).write_bytes(data)
         n_collision = len(description.collision_pieces(meshes["collision"]))

@@ -44,8 +44,11 @@ def test_package_layout_and_uris_resolve(pkg):
         assert [len(ln.findall("visual")) for ln in root.iter("link") if ln.find("visual") is not None] == [1] * 27
         pieces = {ln.get("name"): len(ln.findall("collision")) for ln in root.iter("link")
                   if ln.find("visual") is not None}
-        # one convex hull per link, a convex decomposition of the palm
-        assert pieces.pop("palm") > 4 and set(pieces.values()) == {1}
+        # one convex hull per link; the palm's convex solids: its block, the web to the thenar,
+        # 4 socket blocks, 2 limiter rails per finger, the CMC post and arch, servo 6's housing;
+        # the forearm module's block and tab
+        assert pieces.pop("palm") == 1 + 1 + 4 + 2 * 4 + 2 + 1
+        assert pieces.pop("forearm") == 2 and set(pieces.values()) == {1}
         uris = [m.get("filename") for m in root.iter("mesh")]
         for u in uris:
             path = resolve(u).resolve()
@@ -146,30 +149,44 @@ def test_inertials_match_the_written_meshes(urdf, pkg):
 def test_collision_meshes_are_light_convex_and_cover_the_visual(pkg):
     """Every collision piece is convex, closed and light (a few hundred faces at most); a link
     with one hull covers its visual mesh: no visual vertex lies more than 0.1 mm outside it
-    (scipy's qhull planes of the written collision vertices). The palm's pieces together hold
-    most of the palm's volume (CoACD approximates; measured with trimesh)."""
+    (scipy's qhull planes of the written collision vertices). A link of several pieces (the palm,
+    the forearm module) is covered by their union: every visual vertex lies within 0.1 mm inside
+    one of them; the union (manifold3d) holds the part and more only by its filled cuts (channels,
+    pockets: the palm's largest is servo 6's pocket, 23.2 x 12.1 x 25.3 mm = 7.1 cm^3)."""
     trimesh = pytest.importorskip("trimesh")
+    manifold3d = pytest.importorskip("manifold3d")
     from scipy.spatial import ConvexHull
 
     collision = sorted((pkg / "meshes" / "collision").glob("*.stl"))
     assert len(collision) > 27
-    palm_volume = 0.0
+    split: dict[str, list] = {}
     for path in collision:
         piece = trimesh.load(path)
         assert piece.is_watertight and piece.is_convex and piece.volume > 0, path.name
         assert len(piece.faces) <= 300, (path.name, len(piece.faces))
         visual = pkg / "meshes" / "visual" / path.name
         if not visual.exists():
-            assert path.stem.startswith("palm_")
-            palm_volume += piece.volume
+            split.setdefault(path.stem.rsplit("_", 1)[0], []).append(piece)
             continue
         mesh = trimesh.load(visual)
         planes = ConvexHull(piece.vertices).equations
         outside = (mesh.vertices @ planes[:, :3].T + planes[:, 3]).max()
         assert outside <= 1e-4 + 1e-9, (path.name, outside)
         assert piece.volume >= mesh.convex_hull.volume * 0.98, path.name
-    palm = trimesh.load(pkg / "meshes" / "visual" / "palm.stl")
-    assert palm_volume >= 0.9 * palm.volume
+    assert sorted(split) == ["forearm", "palm"]
+    for name, pieces in split.items():
+        mesh = trimesh.load(pkg / "meshes" / "visual" / f"{name}.stl")
+        worst = np.full(len(mesh.vertices), np.inf)
+        union = None
+        for piece in pieces:
+            planes = ConvexHull(piece.vertices).equations
+            worst = np.minimum(worst, (mesh.vertices @ planes[:, :3].T + planes[:, 3]).max(axis=1))
+            m = manifold3d.Manifold.hull_points(np.asarray(piece.vertices))
+            union = m if union is None else union + m
+        assert worst.max() <= 1e-4 + 1e-9, (name, worst.max())
+        assert union.volume() >= mesh.volume * (1 - 1e-3), name
+        if name == "palm":
+            assert union.volume() - mesh.volume < 2 * 7.1e-6, union.volume() - mesh.volume
 
 
 def test_tip_frames_sit_on_the_fingertip_pads(urdf, pkg):

@@ -10,6 +10,8 @@ imports build123d lazily. A family declares:
 * ``for_link(params, link)``: the part of one of those links;
 * ``link`` (the topology ``Link`` record), ``name``, ``digit``, ``color``, ``print_rotation``;
 * ``build()``: the right-hand solid in its link frame (mm);
+* optionally ``collision_solids()``: the convex solids whose union is its collision shape in the
+  robot description (default: none, the hull of the built solid);
 * ``inputs()``: the plain parameter values the solid depends on (a superset, never a
   subset): the part cache's key;
 * ``verify(shape)``: what a built solid must measure (groove radius, guides, pockets...),
@@ -97,6 +99,13 @@ class Part:
 
     def build(self):
         raise NotImplementedError
+
+    def collision_solids(self) -> list:
+        """Convex solids (link frame, mm) whose union is the part's collision shape in the robot
+        description: a part with concavities that matter for contact (the palm's stepped sockets and
+        thenar) names the convex solids it is fused from, before its cuts. Empty: the convex hull
+        of the built part."""
+        return []
 
     def inputs(self) -> dict:
         raise NotImplementedError

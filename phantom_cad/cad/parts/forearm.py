@@ -86,12 +86,22 @@ class Forearm(ServoMount, Part):
         return wrist.tab_screws(self.params)
 
     # -- geometry ----------------------------------------------------------------
+    def body(self) -> list:
+        """The module's block and its tab (palm frame): two boxes."""
+        x0, x1, y0, y1, z0, z1 = self.extents()
+        lo, hi = self.tab()
+        return [box(x0, x1, y0, y1, z0, z1),
+                box(lo[0], hi[0], lo[1] - self.tol.wall, hi[1], lo[2], hi[2])]   # into the block
+
+    def collision_solids(self) -> list:
+        """The block and the tab, unfused (their hull would reach down into the palm)."""
+        T = np.linalg.inv(self.T_palm_part())
+        return [transform(b, T) for b in self.body()]
+
     def build(self):
         t = self.tol
         x0, x1, y0, y1, z0, z1 = self.extents()
-        body = [box(x0, x1, y0, y1, z0, z1)]
-        lo, hi = self.tab()
-        body.append(box(lo[0], hi[0], lo[1] - t.wall, hi[1], lo[2], hi[2]))      # into the block
+        body = self.body()
         tools = []
         for k in FOREARM_SERVOS:
             Ts = self.T_servo(k)

@@ -223,6 +223,16 @@ class Palm(ServoMount, Part):
 
     # -- geometry ----------------------------------------------------------
     def build(self):
+        return build(*self.solids())
+
+    def collision_solids(self) -> list:
+        """The convex solids the palm is fused from (boxes, the limiter rails' convex prisms, the
+        CMC post and arch, servo 6's housing), before its cuts: the stepped sockets' notches and
+        the thenar's outline stay open, the channels and pockets are filled."""
+        return self.solids()[0]
+
+    def solids(self) -> tuple[list, list]:
+        """(body, tools): the convex solids fused into the palm and the tools cut from it."""
         t, Tp = self.tol, self.thickness
         x0, x1, y0, y1 = self.extents()
         body = [box(x0, x1, y0, y1, -Tp / 2.0, Tp / 2.0)]
@@ -279,4 +289,4 @@ class Palm(ServoMount, Part):
         for p in wrist.tab_screws(self.params):
             tools.append(cylinder(p + np.array([0, 0, 1.0]), p - np.array([0, 0, t.screw_engagement]),
                                   t.screw_pilot / 2.0))
-        return build(body, tools)
+        return body, tools
