@@ -81,7 +81,7 @@ def cylinders(shape):
     for f in shape.faces():
         if f.geom_type != bd.GeomType.CYLINDER:
             continue
-        from OCP.BRepAdaptor import BRepAdaptor_Surface
+        from OCP.BRepAdaptor import BRepAdaptor_Curve, BRepAdaptor_Surface
         cyl = BRepAdaptor_Surface(f.wrapped).Cylinder()
         ax = cyl.Axis()
         loc, dr = ax.Location(), ax.Direction()
@@ -90,11 +90,14 @@ def cylinders(shape):
         d /= np.linalg.norm(d)
         radius = cyl.Radius()
         verts = np.array([_vec(v) for v in f.vertices()]) if f.vertices() else np.zeros((0, 3))
-        # axial extent from the face's edges (sampled), robust to seams
+        # axial extent from the face's edges (9 points each, evenly in the curve's parameter),
+        # robust to seams
         pts = []
         for e in f.edges():
-            for t in np.linspace(0.0, 1.0, 9):
-                pts.append(_vec(e.position_at(t)))
+            c = BRepAdaptor_Curve(e.wrapped)
+            for t in np.linspace(c.FirstParameter(), c.LastParameter(), 9):
+                q = c.Value(t)
+                pts.append((q.X(), q.Y(), q.Z()))
         pts = np.array(pts) if pts else verts
         s = (pts - p) @ d
         out.append({

@@ -150,8 +150,12 @@ def canonicalize_step(data: bytes) -> bytes:
 
     head = entities[:first]
     out = [prefix, b"\n"]
+    # the geometry before the block refers to none of it, as a rule: then it is written unchanged
+    # (renumbering its 10^5 entities one by one took most of this function's time)
+    head_refs = [int(r) for _, body in head for r in _REF.findall(body)]
+    keep = not head_refs or max(head_refs) < base
     for eid, body in head:
-        out.append(b"#%d = %s;\n" % (eid, renum(body)))
+        out.append(b"#%d = %s;\n" % (eid, body if keep else renum(body)))
     for old in order:
         out.append(b"#%d = %s;\n" % (new_id[old], renum(body_of[old])))
     out.append(suffix)
@@ -234,9 +238,16 @@ def merge_vertices(vertices: np.ndarray, faces: np.ndarray, tol: float = 1e-9
     Deterministic: vertices come out sorted lexicographically."""
     from scipy.spatial import cKDTree
 
-    vertices = np.asarray(vertices, dtype=np.float64) + 0.0  # -0.0 -> 0.0 before the bytewise compare
-    uniq, inverse = np.unique(vertices, axis=0, return_inverse=True)
-    faces = inverse.reshape(-1)[faces]
+    vertices = np.asarray(vertices, dtype=np.float64) + 0.0  # -0.0 -> 0.0
+    # the distinct rows in lexicographic order (np.unique(axis=0), without its structured sort)
+    order = np.lexsort(vertices.T[::-1])
+    ordered = vertices[order]
+    first = np.ones(len(ordered), bool)
+    first[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
+    inverse = np.empty(len(vertices), np.int64)
+    inverse[order] = np.cumsum(first) - 1
+    uniq = ordered[first]
+    faces = inverse[faces]
     pairs = cKDTree(uniq).query_pairs(tol, output_type="ndarray")
     if len(pairs):
         parent = np.arange(len(uniq))
