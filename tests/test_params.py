@@ -36,7 +36,7 @@ def test_derived_quantities_from_parameters():
     assert tuple(p.thumb.chain.ideal_coupling) == pytest.approx((1.0, 0.8))  # not 1.25 (erratum)
     assert tuple(p.fingers["ring"].chain.ideal_coupling) == pytest.approx((1.0, 1.25, 1.0))
     # palm arc: adjacent MCPs finger_pitch apart turning by 5 deg lie on radius pitch / (2 sin 2.5 deg)
-    assert p.palm.arc_radius == pytest.approx(0.0195 / (2 * math.sin(math.radians(2.5))))
+    assert p.palm.arc_radius == pytest.approx(0.0205 / (2 * math.sin(math.radians(2.5))))
 
 
 def test_digest_is_stable_and_sensitive(document):
@@ -213,7 +213,7 @@ def test_thumb_path_length_shorter_than_its_proximal(document):
 
 def test_finger_wider_than_pitch(document):
     document["fingers"]["middle"]["width_mm"] = 25.0
-    refuse(document, "fingers.middle.width_mm = 25.0: must be < palm.finger_pitch_mm = 19.5 "
+    refuse(document, "fingers.middle.width_mm = 25.0: must be < palm.finger_pitch_mm = 20.5 "
                      "(adjacent fingers would overlap)")
 
 
@@ -394,12 +394,12 @@ def test_parallel_fingers(document):
     hl = document["hand"]["hand_length_mm"]
     meta = [document["fingers"][f]["length_fraction"]["metacarpal"] * hl for f in ("index", "middle", "ring", "pinky")]
     for i in range(4):
-        want = [19.5 * i, meta[i] - meta[0], 0.0]
+        want = [20.5 * i, meta[i] - meta[0], 0.0]
         assert np.allclose(frames.mcp_position(p, i) * 1e3, want, atol=1e-12)
 
 
 def test_stepped_metacarpal_heads(document):
-    """The default hand's knuckle line by hand: on the 5 degree arc (chords 19.5 mm at -5, 0, +5
+    """The default hand's knuckle line by hand: on the 5 degree arc (chords 20.5 mm at -5, 0, +5
     degrees), each MCP then steps along its own column (turned by -7.5, -2.5, 2.5, 7.5 degrees) by
     its metacarpal less the index's (0.374, 0.373, 0.336, 0.295 of 189 mm)."""
     import numpy as np
@@ -411,11 +411,11 @@ def test_stepped_metacarpal_heads(document):
     arc = [(0.0, 0.0)]
     for m in (-5.0, 0.0, 5.0):
         x, y = arc[-1]
-        arc.append((x + 19.5 * math.cos(d(m)), y - 19.5 * math.sin(d(m))))
+        arc.append((x + 20.5 * math.cos(d(m)), y - 20.5 * math.sin(d(m))))
     steps = [(f - 0.374) * 189.0 for f in (0.374, 0.373, 0.336, 0.295)]
     for i, ((x, y), s, phi) in enumerate(zip(arc, steps, (-7.5, -2.5, 2.5, 7.5))):
         want = [x + s * math.sin(d(phi)), y + s * math.cos(d(phi)), 0.0]
         assert np.allclose(frames.mcp_position(p, i) * 1e3, want, atol=1e-9)
-    # the knuckle line: middle 1.5 mm ahead of the index, ring 5.5 and pinky 14.8 mm behind it
+    # the knuckle line: middle 1.6 mm ahead of the index, ring 5.4 and pinky 14.8 mm behind it
     ys = [frames.mcp_position(p, i)[1] * 1e3 for i in range(4)]
-    assert [round(v, 1) for v in ys] == [0.0, 1.5, -5.5, -14.8]
+    assert [round(v, 1) for v in ys] == [0.0, 1.6, -5.4, -14.8]

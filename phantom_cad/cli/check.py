@@ -23,13 +23,17 @@ def check(
     seed: int = typer.Option(0, "--seed", help="Seed of the random servo commands."),
     cache_dir: Optional[Path] = typer.Option(None, "--cache-dir",
                                              help="Part cache for a build (default $PHANTOM_CAD_CACHE or .cache)."),
+    sweep: bool = typer.Option(True, "--sweep/--no-sweep",
+                               help="Pose the parts over a grid of servo commands and measure that no two "
+                                    "collide (about 15 s)."),
 ) -> None:
     """Check that the export's parts, URDF, MJCF and the kinematic model describe one mechanism.
 
     Prints one table (check, worst item, expected, measured, tolerance, ok): URDF and MJCF poses
     against the posed CAD assembly at random servo commands, joint angles against hand.forward,
     joint axes against the bearing bores measured in the STEP solids, inertials against the
-    solids, meshes, URIs, check_urdf, MuJoCo's model test. Exit 0 when every row is ok, 1 on any
+    solids, meshes, URIs, check_urdf, MuJoCo's model test, and no two parts colliding over a grid of
+    servo commands (the pinch contacts of the thumb with a finger are listed). Exit 0 when every row is ok, 1 on any
     mismatch, 2 on an error. See docs/descriptions.md.
     """
     from ..errors import one_line
@@ -44,7 +48,7 @@ def check(
     except BuildError as exc:
         typer.echo(f"error: {one_line(exc)}", err=True)
         raise typer.Exit(1)
-    rows = check_export(folder, hand_params, samples=samples, settle=settle, seed=seed, log=log)
+    rows = check_export(folder, hand_params, samples=samples, settle=settle, seed=seed, log=log, sweep=sweep)
     typer.echo(f"{hand_params.name} ({hand_params.side}), params digest {hand_params.digest[:12]}, {folder}")
     typer.echo(table(rows))
     failed = [r for r in rows if r.ok is False]

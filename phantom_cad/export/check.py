@@ -430,8 +430,38 @@ def mesh_rows(export: Export, props: dict) -> list[Row]:
             _row("visual meshes: centre = the solid's", centre, TOL_MESH_CENTRE, "mm")]
 
 
+def collision_rows(export: Export, params, hand: Hand, log=lambda msg: None) -> list[Row]:
+    """No two parts interpenetrate over the grid of servo commands of
+    ``interference.command_sweep`` (the description's visual meshes, posed by the assembly
+    interface): a joint's parent and child and the designed contacts may touch; the pinch
+    contacts (a thumb part with a finger part) are logged with the commands where they begin."""
+    from . import interface
+    from .interference import SWEEP_FRACTIONS, SWEEP_TOL_MM3, command_sweep
+    from .step_stl import read_stl
+
+    asm = interface.assembly()
+    pkg = export.urdf.parent.parent
+    meshes = {}
+    for name in LINK_NAMES:
+        path = pkg / "meshes" / "visual" / f"{name}.stl"
+        if path.is_file():
+            v, f = read_stl(path.read_bytes())
+            meshes[name] = (v / units.MM, f)
+    allowed = ({frozenset((j.parent, j.child)) for j in JOINTS}
+               | {frozenset(c[:2]) for c in asm.designed_contacts(params)})
+    r = command_sweep(meshes, hand, lambda q: asm.pose_transforms(params, q), allowed)
+    grid = ", ".join(f"{f:.0%}" for f in SWEEP_FRACTIONS)
+    for e in r["pinch"]:
+        at = " ".join(f"{k} {v:.0%}" for k, v in e["commands"].items())
+        log(f"check: pinch contact {e['parts'][0]} x {e['parts'][1]}: from thumb flexion "
+            f"{e['from_thumb_flexion']:.0%}, largest {e['volume_mm3']:.2f} mm^3 at {at}")
+    errors = {" x ".join(e["parts"]): e["volume_mm3"] for e in r["collisions"]} or {"-": 0.0}
+    return [_row(f"parts apart over the command grid ({grid} of each travel; {r['poses']} poses, manifold3d)",
+                 errors, SWEEP_TOL_MM3, "mm^3")]
+
+
 def check_export(export_dir: Path, params, samples: int = 8, settle: int = 3, seed: int = 0,
-                 log=lambda msg: None) -> list[Row]:
+                 log=lambda msg: None, sweep: bool = True) -> list[Row]:
     """Every row of the check of the export in ``export_dir`` built from ``params``."""
     export = Export.open(Path(export_dir))
     problem = export_problem(export.folder, params.digest, params.side)
@@ -452,6 +482,9 @@ def check_export(export_dir: Path, params, samples: int = 8, settle: int = 3, se
     rows += axis_rows(robot, params, solids)
     rows += inertial_rows(export, robot, params, props, mj_inertials)
     rows += mesh_rows(export, props)
+    if sweep:
+        log("check: collisions over the command grid (manifold3d)")
+        rows += collision_rows(export, params, hand, log)
     return rows
 
 

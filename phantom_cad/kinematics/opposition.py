@@ -339,7 +339,8 @@ class Solution:
 def solve(hand, bounds: Bounds | None = None, seed: int = 0, coarse=(11, 11, 21), generations: int = 60,
           population: int = 8, iterations: int = 300) -> Solution:
     """Maximize the opposition margin over the CMC placement within ``bounds``, with the thumb's
-    links kept out of the palm envelope (a penalty of ``INTRUSION_WEIGHT`` per metre inside):
+    links kept out of the palm envelope (a penalty of ``INTRUSION_WEIGHT`` per metre inside, on the
+    fine thumb grid; if the optimum still reaches inside, the best placement seen that does not):
     differential evolution (scipy, seeded: deterministic) on a coarse command grid (``coarse``: n1,
     n6, n_finger), the file's placement in its first population, then Nelder-Mead from the best.
     The result is judged on :func:`reach`'s fine grid (21 x 21 x 41), which contains the coarse
@@ -352,13 +353,21 @@ def solve(hand, bounds: Bounds | None = None, seed: int = 0, coarse=(11, 11, 21)
     lo, hi = box[:, 0], box[:, 1]
     env = palm_envelope(p)
     thumb = thumb_tips(hand, coarse[0], coarse[1])
+    fine_thumb = thumb_tips(hand)
     fingers = {f: finger_tips(hand, f, coarse[2]) for f in OPPOSED}
     count = [0]
+    clear: list = [math.inf, None]      # the best placement seen whose thumb stays out of the palm
 
     def cost(z):
         count[0] += 1
         x = np.clip(z, lo, hi)
-        return -margin(thumb, fingers, x) + INTRUSION_WEIGHT * max(palm_intrusion(thumb, _placement(x), env), 0.0)
+        m = margin(thumb, fingers, x)
+        # the palm envelope on the fine grid: between the coarse grid's commands the thumb can
+        # pass through it
+        inside = palm_intrusion(fine_thumb, _placement(x), env)
+        if inside <= 0.0 and -m < clear[0]:
+            clear[:] = [-m, x.copy()]
+        return -m + INTRUSION_WEIGHT * max(inside, 0.0)
 
     rng = np.random.default_rng(seed)
     n = population * len(lo)
@@ -369,7 +378,8 @@ def solve(hand, bounds: Bounds | None = None, seed: int = 0, coarse=(11, 11, 21)
     res = minimize(cost, de.x, method="Nelder-Mead",
                    options={"maxiter": iterations, "xatol": 1e-6, "fatol": 1e-7})
     x = np.clip(res.x if res.fun <= de.fun else de.x, lo, hi)
-    fine_thumb = thumb_tips(hand)
+    if palm_intrusion(fine_thumb, _placement(x), env) > 0.0 and clear[1] is not None:
+        x = clear[1]                    # the penalty was not enough: the best clear placement
     fine = reach(hand, thumb=fine_thumb, T0=_placement(x))
     return Solution(tuple(float(v) for v in x[:3]), tuple(float(v) for v in x[3:]),
                     min(fine[f].margin for f in OPPOSED), fine, count[0],

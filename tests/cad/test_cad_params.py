@@ -60,27 +60,27 @@ def test_finger_base_too_short_for_the_magnets(document):
 
 def test_finger_bases_too_long_collide(document):
     """By hand: the index column turns by -7.5 deg from its MCP at the origin, the middle by -2.5 deg
-    from its MCP 19.5 mm along the -5 deg chord, stepped back along its column by its shorter
-    metacarpal (0.373 vs 0.374 of 189 mm). A 20 mm base puts each magnet face 20 mm behind its
+    from its MCP 20.5 mm along the -5 deg chord, stepped back along its column by its shorter
+    metacarpal (0.373 vs 0.374 of 189 mm). A 30 mm base puts each magnet face 30 mm behind its
     MCP; the nearer face to the other column's centreline sets the room."""
     d = math.radians
     mcp_i = (0.0, 0.0)
     step = (0.373 - 0.374) * 189.0
-    mcp_m = (19.5 * math.cos(d(-5)) + step * math.sin(d(-2.5)), -19.5 * math.sin(d(-5)) + step * math.cos(d(-2.5)))
+    mcp_m = (20.5 * math.cos(d(-5)) + step * math.sin(d(-2.5)), -20.5 * math.sin(d(-5)) + step * math.cos(d(-2.5)))
 
     def face(mcp, phi):
-        return (mcp[0] - 20.0 * math.sin(d(phi)), mcp[1] - 20.0 * math.cos(d(phi)))
+        return (mcp[0] - 30.0 * math.sin(d(phi)), mcp[1] - 30.0 * math.cos(d(phi)))
 
     def to_line(pt, mcp, phi):
         ux, uy = math.sin(d(phi)), math.cos(d(phi))
         return abs((pt[0] - mcp[0]) * uy - (pt[1] - mcp[1]) * ux)
 
     room = min(to_line(face(mcp_i, -7.5), mcp_m, -2.5), to_line(face(mcp_m, -2.5), mcp_i, -7.5))
-    e = _fails(document, lambda d: d["cad"].__setitem__("finger_base_length_mm", 20.0))
+    e = _fails(document, lambda d: d["cad"].__setitem__("finger_base_length_mm", 30.0))
     assert e.field == "cad.finger_base_length_mm"
     assert e.rule == (f"the index and middle bases are {room:.3f} mm apart at their magnet faces "
                       f"(palm.arc_offset_deg = 5), they need 18.200 mm (half widths + hole_clearance)")
-    assert f"{room:.3f}" == "17.722"
+    assert f"{room:.3f}" == "17.849"
 
 
 def test_guide_eyelet_inside_the_boss(document):

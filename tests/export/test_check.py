@@ -68,7 +68,7 @@ def test_the_default_hand_is_all_green(export):
     checks = " | ".join(r.check for r in rows)
     for what in ("URDF link positions", "MJCF body positions", "URDF joint angles", "MJCF twin settled",
                  "bores measured in the solids", "URDF masses", "MJCF inertia tensors", "visual meshes",
-                 "mesh references", "MuJoCo model test"):
+                 "mesh references", "MuJoCo model test", "parts apart over the command grid"):
         assert what in checks
 
 
@@ -81,7 +81,7 @@ def test_a_shifted_joint_origin_is_named(export, tmp_path):
         o.set("xyz", " ".join(repr(float(v)) for v in xyz))
 
     _edit_urdfs(ex, shift)
-    failed = _failed(_check(ex, samples=3, settle=0))
+    failed = _failed(_check(ex, samples=3, settle=0, sweep=False))
     assert failed["URDF link positions (yourdfpy) = posed CAD assembly"] in ("index_middle", "index_distal")
     assert failed["joint axes (URDF) on the bores measured in the solids: offset"].startswith("index_pip /")
     assert not any(c.startswith("MJCF") for c in failed)           # the MJCF was left alone
@@ -90,7 +90,7 @@ def test_a_shifted_joint_origin_is_named(export, tmp_path):
 def test_a_changed_multiplier_is_named(export, tmp_path):
     ex = _copy(export, tmp_path / "x")
     _edit_urdfs(ex, lambda root: _joint(root, "middle_dip").find("mimic").set("multiplier", "1.1"))
-    failed = _failed(_check(ex, samples=3, settle=0))
+    failed = _failed(_check(ex, samples=3, settle=0, sweep=False))
     assert failed["URDF joint angles (mimic applied) = hand.forward(u)"] == "middle_dip"
     assert failed["URDF link rotations (yourdfpy) = posed CAD assembly"] == "middle_distal"
 
@@ -104,7 +104,7 @@ def test_a_scaled_mass_is_named(export, tmp_path):
         m.set("value", repr(1.5 * float(m.get("value"))))
 
     _edit_urdfs(ex, scale)
-    failed = _failed(_check(ex, samples=2, settle=0))
+    failed = _failed(_check(ex, samples=2, settle=0, sweep=False))
     assert failed == {"URDF masses = the solids' (relative)": "ring_distal"}
 
 
@@ -115,7 +115,7 @@ def test_a_moved_mesh_is_named(export, tmp_path):
     path = ex / "description" / "meshes" / "visual" / "pinky_middle.stl"
     v, f = read_stl(path.read_bytes())
     path.write_bytes(stl_bytes(v + [3e-4, 0.0, 0.0], f, "pinky_middle", "m"))        # 0.3 mm
-    failed = _failed(_check(ex, samples=2, settle=0))
+    failed = _failed(_check(ex, samples=2, settle=0, sweep=False))
     assert failed == {"visual meshes: centre = the solid's": "pinky_middle"}
 
 
@@ -129,7 +129,7 @@ def test_a_changed_mjcf_coupling_is_named(export, tmp_path):
     r, half = (float(v) for v in geom.get("size").split()[:2])
     geom.set("size", f"{1.1 * r!r} {half!r}")
     tree.write(path, encoding="utf-8")
-    failed = _failed(_check(ex, samples=2, settle=1))
+    failed = _failed(_check(ex, samples=2, settle=1, sweep=False))
     assert failed == {"MJCF twin settled (near-rigid tendons) = hand.forward(u) (1 commands)": "ring_dip"}
 
 
@@ -152,7 +152,7 @@ def test_check_builds_and_passes_the_left_hand_and_a_second_file(tmp_path, args)
 def test_check_exits_1_on_a_mismatch_and_2_on_an_error(export, tmp_path):
     ex = _copy(export, tmp_path / "export")
     _edit_urdfs(ex, lambda root: _joint(root, "thumb_ip").find("mimic").set("multiplier", "0.5"))
-    proc = subprocess.run([sys.executable, "-m", "phantom_cad", "check", "--samples", "2", "--settle", "0",
+    proc = subprocess.run([sys.executable, "-m", "phantom_cad", "check", "--samples", "2", "--settle", "0", "--no-sweep",
                            "--out", str(ex)], capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 1 and "FAIL" in proc.stdout and "thumb_ip" in proc.stdout
     proc = subprocess.run([sys.executable, "-m", "phantom_cad", "check", "--params", str(tmp_path / "none.toml")],

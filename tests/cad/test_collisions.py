@@ -1,0 +1,113 @@
+"""Issue 12, no collisions: the hand posed over a grid of servo commands (0, 25, 50, 75, 90 and
+100 % of each servo's travel; the fingers independently, the thumb's flexion across its CMC
+range), every pair of parts measured with manifold3d on the parts' meshes
+(``export.interference.command_sweep``). A joint's parent and child, and the designed contacts,
+may touch; a thumb part against a finger part is a pinch contact (reported, with the commands).
+
+The reported overlaps are confirmed by OpenCascade's boolean on the solids themselves, and a hand
+with the old 19.5 mm finger pitch must show the flexed index and middle fingers running into
+each other (the check can fail).
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pytest
+
+from phantom_cad import make_hand
+from phantom_cad.cad import assembly
+from phantom_cad.cad import measure as check
+from phantom_cad.export import step_stl
+from phantom_cad.export.interference import command_sweep
+from phantom_cad.kinematics.topology import JOINTS, SERVOS, link
+from phantom_cad.params import parse
+
+HANDS = ("default", "left", "hand_length_170")
+FRACTIONS = (0.0, 0.25, 0.5, 0.75, 0.9, 1.0)
+
+
+def _allowed(p) -> set[frozenset]:
+    return ({frozenset((j.parent, j.child)) for j in JOINTS}
+            | {frozenset(c[:2]) for c in assembly.designed_contacts(p)})
+
+
+def _sweep(p, shapes: dict):
+    tol = p.print.stl_tolerance * 1e3
+    meshes = {n: step_stl.tessellate(s, tol) for n, s in shapes.items()}
+    return command_sweep(meshes, make_hand(p), lambda q: assembly.pose_transforms(p, q), _allowed(p))
+
+
+def _occ_overlap(p, shapes: dict, pair, commands: dict) -> float:
+    """The overlap (mm^3) of a pair at servo commands (label -> fraction of the travel), by
+    OpenCascade on the solids: the commands mapped to joint angles by the model's forward map."""
+    hand = make_hand(p)
+    u = np.array(hand.u_min, float)
+    for s in SERVOS:
+        if s.label in commands:
+            u[s.index] += commands[s.label] * (hand.u_max[s.index] - hand.u_min[s.index])
+    T = assembly.pose_transforms(p, hand.forward(u))
+    a, b = pair
+    return check.intersection_volume(check.placed(shapes[a], T[a]), check.placed(shapes[b], T[b]))
+
+
+@pytest.fixture(scope="module", params=HANDS)
+def hand(request, document, built):
+    if request.param == "default":
+        p = parse(document)
+        shapes = {n: b.shape for n, b in built.items()}
+    else:
+        doc = copy.deepcopy(document)
+        if request.param == "left":
+            doc["hand"]["side"] = "left"
+        else:
+            doc["hand"]["hand_length_mm"] = 170.0
+        p = parse(doc)
+        shapes = {n: assembly.build_part(p, n).shape for n in assembly.part_names(p)}
+    return request.param, p, shapes, _sweep(p, shapes)
+
+
+def test_no_two_parts_collide_over_the_command_grid(hand):
+    name, p, shapes, r = hand
+    # every digit alone (the thumb over flexion x CMC: 6 x 6; each finger 6), every two digits
+    # together (the thumb with a finger: 36 x 6; two fingers: 6 x 6)
+    n = len(FRACTIONS)
+    assert r["fractions"] == list(FRACTIONS)
+    assert r["poses"] == n * n + 4 * n + 4 * n ** 3 + 6 * n ** 2
+    assert r["collisions"] == [], r["collisions"]
+
+
+def test_pinch_contacts_are_reported_and_real(hand):
+    """The thumb closes onto the index: the sweep reports thumb-finger overlaps (pinch contacts a
+    controller must respect), each with the least thumb flexion where it occurs; the largest is
+    confirmed by OpenCascade on the solids at its commands."""
+    name, p, shapes, r = hand
+    if name == "hand_length_170":
+        # measured: the smaller hand's thumb touches no finger at the grid's commands (its
+        # opposition needs commands between them: tests/test_opposition.py)
+        assert r["pinch"] == []
+        return
+    assert r["pinch"], "the thumb never reaches a finger"
+    for e in r["pinch"]:
+        digits = {link(n).digit for n in e["parts"]}
+        assert "thumb" in digits and len(digits) == 2
+        assert 0.0 <= e["from_thumb_flexion"] <= e["commands"]["u1"]
+    big = r["pinch"][0]
+    occ = _occ_overlap(p, shapes, big["parts"], big["commands"])
+    assert occ == pytest.approx(big["volume_mm3"], rel=0.05, abs=0.05)
+
+
+def test_the_old_finger_pitch_collides(document, variant):
+    """At a 19.5 mm finger pitch the columns fan out by 5 deg and the fully flexed index and middle
+    fingers, which point back toward the wrist, converge into each other: the sweep finds it, and
+    OpenCascade measures the same overlap on the solids."""
+    p = variant(lambda d: d["palm"].__setitem__("finger_pitch_mm", 19.5))
+    names = [n for n in assembly.part_names(p) if link(n).digit in ("index", "middle")]
+    shapes = {n: assembly.build_part(p, n).shape for n in names}
+    r = _sweep(p, shapes)
+    pairs = {tuple(e["parts"]): e for e in r["collisions"]}
+    e = pairs[("index_distal", "middle_distal")]
+    assert e["volume_mm3"] > 5.0 and e["commands"] == {"u2": 1.0, "u3": 1.0}
+    occ = _occ_overlap(p, shapes, e["parts"], e["commands"])
+    assert occ == pytest.approx(e["volume_mm3"], rel=0.05)
