@@ -1,0 +1,79 @@
+"""Issue 12, printable walls: every wall at least two perimeters of the nozzle (0.8 mm), measured by
+ray casting on the parts' meshes (``export.walls``).
+
+The measurement is checked first on shapes whose walls are known by hand: a plate, a tube, a
+plate with a channel under its face. The hand's parts then carry the strict xfail of the walls
+still thinner than that, with the measured numbers.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from phantom_cad.export import step_stl
+from phantom_cad.export.walls import thin_walls, wall_thickness
+
+MIN_WALL = 0.8
+
+
+def _mesh(m):
+    return np.asarray(m.vertices, float), np.asarray(m.faces, np.int64)
+
+
+def test_a_plate_is_as_thick_as_it_is():
+    """A 40 x 30 x 2 mm plate: every measured point on its faces (the edges' bands left out) is
+    2 mm thick; on its 2 mm high sides the tilted rays leave through the faces: a side reads
+    more than the plate's thickness but near its corners, where two edges cut the cone, down to
+    1.6 mm (within 0.4 mm of a corner: the method's limit, docs/parts.md)."""
+    v, f = _mesh(trimesh.creation.box((40.0, 30.0, 2.0)))
+    pts, walls = wall_thickness(v, f, samples=4000)
+    faces = np.abs(np.abs(pts[:, 2]) - 1.0) < 1e-9
+    assert faces.sum() > 0.9 * len(pts) and np.all(walls[faces] == pytest.approx(2.0, rel=1e-3))
+    assert np.all(walls[~faces] > 1.5)
+
+
+def test_a_tube_wall_is_found():
+    """A tube of radii 5 and 5.6 mm (a 0.6 mm wall, thinner than two perimeters), 20 mm long: the
+    thinnest wall is the tube's, within the facets' chord error, and it covers most of the surface."""
+    outer = trimesh.creation.cylinder(radius=5.6, height=20.0, sections=256)
+    inner = trimesh.creation.cylinder(radius=5.0, height=22.0, sections=256)
+    v, f = _mesh(outer.difference(inner))
+    r = thin_walls(v, f, MIN_WALL, samples=4000)
+    assert r["thinnest"] == pytest.approx(0.6, abs=0.02)
+    assert r["fraction"] > 0.8
+
+
+def test_a_channel_under_a_face_leaves_its_roof():
+    """A 1 mm square channel 0.3 mm under the top face of a 10 x 20 x 4 mm block: a 0.3 mm roof,
+    found on the top face or the channel's ceiling above it."""
+    block = trimesh.creation.box((10.0, 20.0, 4.0))
+    channel = trimesh.creation.box((1.0, 30.0, 1.0))
+    channel.apply_translation((0.0, 0.0, 2.0 - 0.3 - 0.5))
+    v, f = _mesh(block.difference(channel))
+    r = thin_walls(v, f, MIN_WALL, samples=8000)
+    assert r["thinnest"] == pytest.approx(0.3, abs=0.01)
+    assert abs(r["at"][0]) < 0.5 and min(abs(r["at"][2] - 2.0), abs(r["at"][2] - 1.7)) < 1e-6
+
+
+@pytest.fixture(scope="module")
+def walls(built, params):
+    tol = params.print.stl_tolerance * 1e3
+    return {n: thin_walls(*step_stl.tessellate(b.shape, tol), MIN_WALL) for n, b in built.items()}
+
+
+def test_the_servo_pulleys_print(walls):
+    """Parts that already meet the rule stay so: the servo pulleys (1.2 mm and more)."""
+    pulleys = {n: r for n, r in walls.items() if n.startswith("servo_pulley")}
+    assert len(pulleys) == 6
+    for n, r in pulleys.items():
+        assert r["thinnest"] >= MIN_WALL, (n, r)
+
+
+@pytest.mark.xfail(strict=True, reason="walls thinner than 0.8 mm remain on every part but the servo pulleys: spring "
+                   "channels and magnet pockets of the finger parts, slivers where the drive channels leave the "
+                   "pulley cavities (docs/parts.md lists the measured numbers); issue 12 goes on")
+def test_every_wall_is_two_perimeters(walls):
+    thin = {n: round(r["thinnest"], 3) for n, r in walls.items() if r["thinnest"] < MIN_WALL}
+    assert thin == {}
