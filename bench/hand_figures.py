@@ -1,6 +1,7 @@
-"""Pictures of the assembled hand (docs/parts.md, README): the default hand's built solids placed by
-``assembly.pose_transforms`` at rest (two views) and at 60 % of every joint limit. Run from the repository's
-root: .venv/bin/python bench/hand_figures.py [OUT_DIR]   (default docs/img; about 40 s)
+"""Pictures of the assembled hand (docs/parts.md, README, docs/assembly.md): the default hand's built solids
+placed by ``assembly.pose_transforms`` at rest (two views), at 60 % of every joint limit, and exploded (each
+part moved off the one it mounts on, along the way it goes on). Run from the repository's root:
+.venv/bin/python bench/hand_figures.py [OUT_DIR]   (default docs/img; about 40 s)
 """
 
 from __future__ import annotations
@@ -13,8 +14,37 @@ import numpy as np
 from phantom_cad.cad import assembly, registry
 from phantom_cad.export import render, step_stl
 from phantom_cad.kinematics import frames
-from phantom_cad.kinematics.topology import JOINTS
+from phantom_cad.kinematics.topology import FOREARM, JOINTS, link
 from phantom_cad.params.io import DEFAULT_PARAMS, load_params
+
+
+#: how far (mm) each level of an exploded digit moves along the digit, the forearm module back from the
+#: wrist, the servo pulleys up off their servos
+EXPLODE_DIGIT, EXPLODE_FOREARM, EXPLODE_PULLEY = 28.0, 45.0, 28.0
+
+
+def exploded(p, T: dict) -> dict:
+    """{link: offset (mm, palm frame)}: a digit's links move out along its first link's y (the finger
+    base off its socket, each phalanx off the one before), one step per level; the forearm module back
+    from the wrist; a servo pulley off its servo along the shaft, with the part that holds the servo."""
+    out = {}
+    for name in T:
+        ln = link(name)
+        if ln.parent is None:
+            out[name] = np.zeros(3)
+        elif ln.segment == "servo_pulley":
+            out[name] = (out.get(ln.parent, np.zeros(3)) if ln.parent in out else
+                         (np.array([0.0, -EXPLODE_FOREARM, 0.0]) if ln.parent == FOREARM else np.zeros(3))) \
+                + EXPLODE_PULLEY * T[name][:3, 2]
+        elif ln.digit is None:
+            out[name] = np.array([0.0, -EXPLODE_FOREARM, 0.0])
+        else:
+            chain = [ln]
+            while chain[-1].parent is not None and link(chain[-1].parent).digit == ln.digit:
+                chain.append(link(chain[-1].parent))
+            first = chain[-1].name
+            out[name] = EXPLODE_DIGIT * len(chain) * T[first][:3, 1]
+    return out
 
 
 def main(out: Path) -> None:
@@ -42,6 +72,17 @@ def main(out: Path) -> None:
                           subtitle="tendon servos in the forearm module; stepped metacarpal heads; default parameters", elev=elev, azim=azim,
                           size_px=1000, max_faces=150000)
         print(f"wrote {out / fname}")
+    T = assembly.pose_transforms(p)
+    shift = exploded(p, T)
+    items, labelled = [], set()
+    for name, (v, f, color, digit) in meshes.items():
+        label = name if (digit is None and not name.startswith("servo_pulley_")) or name.endswith("_base") else None
+        items.append(render.MeshItem(name, v @ T[name][:3, :3].T + T[name][:3, 3] + shift[name], f, tuple(color),
+                                     label))
+    render.render_png(items, out / "hand_exploded.png", title=f"{p.name} hand ({p.side}), exploded",
+                      subtitle="each part moved off the one it mounts on, along the way it goes on (docs/assembly.md)",
+                      elev=62.0, azim=-75.0, size_px=1100, max_faces=150000)
+    print(f"wrote {out / 'hand_exploded.png'}")
 
 
 if __name__ == "__main__":

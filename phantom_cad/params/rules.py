@@ -110,7 +110,6 @@ def _magnets(c, fingers, palm, hardware, printing, cad) -> None:
                          f"must be >= {MIN_WALL / MM:g} mm, two perimeters of a 0.4 mm nozzle "
                          "(the thinnest wall an FDM printer makes)", c.source)
     pocket = hardware.magnet_diameter + 2.0 * printing.magnet_clearance
-    depth = hardware.magnet_thickness + printing.magnet_clearance
     span = 2.0 * pocket + palm.wall          # both pockets and the wall between them
     tendon_z = -min(f.thickness for f in fingers.values()) / 2.0 + palm.wall
     relief = 2.0 * (hardware.tendon_diameter + 2.0 * printing.hole_clearance)
