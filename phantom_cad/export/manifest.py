@@ -8,7 +8,7 @@ the same tool versions) give the same manifest. Fields (see docs/exports.md):
 ``settings`` {stl_tolerance_mm, angular_tolerance_rad, density_g_per_cm3, infill,
 step_timestamp, mass_model}, ``parts`` [per part: name, digit, color, cache_key,
 volume_mm3, area_mm2, mass_g, bbox_mm (link frame), print_bbox_mm, print_rotation,
-print_transform,
+overhang_mm2, print_transform,
 T_hand_link (rest pose, from assembly.pose_transforms), stl_triangles, checks, print
 (PrusaSlicer estimate or null)], ``assembly`` {bbox_mm, volume_mm3, mass_g,
 interference}, ``totals`` {mass_g, print_time_s, filament_g, filament_mm}, ``slicer``,
@@ -75,6 +75,8 @@ def build_manifest(*, stage: Path, params, params_path: Path, names, keys, metas
             "bbox_mm": m["bbox_mm"],
             "print_bbox_mm": m["print_bbox_mm"],
             "print_rotation": [[_r(x, 9) for x in row] for row in m["print_rotation"]],
+            # area (mm^2) facing down more steeply than 45 deg off the bed (export/orient.py)
+            "overhang_mm2": m.get("overhang_mm2"),
             # STL vertex = print_transform @ link-frame vertex (rotation, then resting on z = 0)
             "print_transform": [[_r(x, 9) for x in row] for row in m["print_transform"]],
             "T_hand_link": [[_r(x, 9) for x in row] for row in T.tolist()],

@@ -21,7 +21,7 @@ from .. import units
 from ..atomic import write_atomic
 from ..canon import jsonable, sha256
 from ..params import parse
-from . import interface
+from . import interface, orient
 from .cache import Cache
 from .manifest import mass_g
 from .results import failure_from
@@ -98,6 +98,8 @@ def part_worker(task: dict) -> dict:
         R = np.asarray(built.print_rotation, dtype=float)
         if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9) or np.linalg.det(R) < 0:
             raise step_stl.CheckError(name, "print_rotation", f"not a proper rotation: {R.tolist()}")
+        # the declared orientation or an axis-aligned one with less overhang (export/orient.py)
+        R, overhang_mm2 = orient.print_rotation(v, f, R)
         vp, T_print = step_stl.to_print_pose(v, R)
         stl = step_stl.stl_bytes(vp, f, name)
         # check what is written: the float32 mesh read back from the STL bytes
@@ -121,6 +123,7 @@ def part_worker(task: dict) -> dict:
             "color": [float(c) for c in built.color],
             "collision_pieces": n_collision,
             "print_rotation": R.tolist(),
+            "overhang_mm2": round(overhang_mm2, 3),
             "print_transform": T_print.tolist(),
             "T_hand_link": np.asarray(built.T_hand_link, dtype=float).tolist(),
             "volume_mm3": volume,

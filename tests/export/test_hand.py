@@ -56,6 +56,46 @@ def test_stls_watertight_manifold_on_the_bed(hand):
         assert mesh.volume == pytest.approx(p["volume_mm3"], rel=1e-2), p["name"]
 
 
+def _support_area(mesh, R):
+    """(area facing down more steeply than 45 deg from vertical and off the bed, area on the bed,
+    footprint) of an STL mesh rotated by R, resting on z = 0: trimesh's face normals and areas."""
+    v = np.asarray(mesh.vertices) @ R.T
+    v[:, 2] -= v[:, 2].min()
+    normals = np.asarray(mesh.face_normals) @ R.T
+    areas = np.asarray(mesh.area_faces)
+    top = v[np.asarray(mesh.faces)][:, :, 2].max(axis=1)
+    down = normals[:, 2] < -np.sqrt(0.5)
+    bed = top <= 1e-3
+    ext = np.ptp(v, axis=0)
+    return areas[down & ~bed].sum(), areas[down & bed].sum(), ext[0] * ext[1]
+
+
+def test_each_part_prints_in_the_orientation_of_least_overhang(hand):
+    """The exported STL (in its print orientation) needs no more support than the same mesh turned
+    onto any of its 24 axis-aligned orientations that rest it on a flat face (on-bed faces at
+    least a quarter of the footprint); measured on the written file, within 1 mm^2."""
+    import itertools
+
+    result, man = hand
+    turns = []
+    for perm in itertools.permutations(range(3)):
+        for signs in itertools.product((1.0, -1.0), repeat=3):
+            R = np.zeros((3, 3))
+            R[np.arange(3), perm] = signs
+            if np.linalg.det(R) > 0:
+                turns.append(R)
+    worse = {}
+    for p in man["parts"]:
+        mesh = _stl(result.out_dir, p["name"])
+        mine, bed, footprint = _support_area(mesh, np.eye(3))
+        assert bed >= 0.25 * footprint, p["name"]
+        best = min(a for a, b, fp in (_support_area(mesh, R) for R in turns) if b >= 0.25 * fp)
+        assert p["overhang_mm2"] == pytest.approx(mine, abs=1.0), p["name"]
+        if mine > best + 1.0:
+            worse[p["name"]] = (round(mine, 1), round(best, 1))
+    assert worse == {}
+
+
 def test_step_reimports_to_the_same_volume(hand):
     from build123d import import_step
 

@@ -94,7 +94,8 @@ class Part:
 
     @property
     def print_rotation(self) -> np.ndarray:
-        """3x3: lays the part on its best face for printing (z up)."""
+        """3x3: lays the part on its preferred face for printing (z up); the export keeps it unless
+        an axis-aligned orientation has less overhang (``export.orient``)."""
         return SIDE_DOWN
 
     def build(self):
