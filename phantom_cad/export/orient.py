@@ -37,32 +37,44 @@ def axis_rotations() -> list[np.ndarray]:
     return out
 
 
+def _faces(vertices: np.ndarray, faces: np.ndarray):
+    """(vertices, unit normals, areas, face vertex indices) of the mesh, once per mesh."""
+    v = np.asarray(vertices, float)
+    f = np.asarray(faces)
+    tri = v[f]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    area = np.linalg.norm(n, axis=1) / 2.0
+    return v, n / np.maximum(2.0 * area, 1e-300)[:, None], area, f
+
+
+def _overhang(mesh, R: np.ndarray) -> tuple[float, float, float]:
+    v, n, area, f = mesh
+    z = v @ R[2]
+    z -= z.min()
+    on_bed = z[f].max(axis=1) <= BED_MM
+    down = n @ R[2] < -np.cos(np.radians(OVERHANG_DEG))
+    x, y = v @ R[0], v @ R[1]
+    return (float(area[down & ~on_bed].sum()), float(area[down & on_bed].sum()),
+            float(np.ptp(x) * np.ptp(y)))
+
+
 def overhang(vertices: np.ndarray, faces: np.ndarray, R: np.ndarray) -> tuple[float, float, float]:
     """(overhang area, area on the bed, footprint) in mm^2 of the mesh rotated by ``R`` and
     resting on z = 0."""
-    w = np.asarray(vertices, float) @ np.asarray(R, float).T
-    w[:, 2] -= w[:, 2].min()
-    tri = w[np.asarray(faces)]
-    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    area = np.linalg.norm(n, axis=1) / 2.0
-    nz = n[:, 2] / np.maximum(2.0 * area, 1e-300)
-    on_bed = tri[:, :, 2].max(axis=1) <= BED_MM
-    down = nz < -np.cos(np.radians(OVERHANG_DEG))
-    lo, hi = w.min(axis=0), w.max(axis=0)
-    return (float(area[down & ~on_bed].sum()), float(area[down & on_bed].sum()),
-            float((hi[0] - lo[0]) * (hi[1] - lo[1])))
+    return _overhang(_faces(vertices, faces), np.asarray(R, float))
 
 
 def print_rotation(vertices: np.ndarray, faces: np.ndarray, declared: np.ndarray) -> tuple[np.ndarray, float]:
     """(rotation, its overhang area in mm^2): the candidate of least overhang (module doc)."""
     declared = np.asarray(declared, float)
+    mesh = _faces(vertices, faces)
     best, best_area = None, np.inf
     for R in [declared] + axis_rotations():
-        area, bed, footprint = overhang(vertices, faces, R)
+        area, bed, footprint = _overhang(mesh, R)
         if bed < MIN_BED * footprint:
             continue
         if area < best_area - TIE_MM2:
             best, best_area = R, area
     if best is None:            # no flat face: the declared one
-        return declared, overhang(vertices, faces, declared)[0]
+        return declared, _overhang(mesh, declared)[0]
     return best, best_area
