@@ -41,7 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..params import ParamError
+from ..errors import ParamError
 from .dimensions import FLANK, digit_field, slot_back
 from . import frames as F
 from .memo import memoised
