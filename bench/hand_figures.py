@@ -14,7 +14,7 @@ import numpy as np
 from phantom_cad.cad import assembly, registry
 from phantom_cad.export import render, step_stl
 from phantom_cad.kinematics import frames
-from phantom_cad.kinematics.topology import FOREARM, JOINTS, link
+from phantom_cad.kinematics.topology import JOINTS, digit_links, link
 from phantom_cad.params.io import DEFAULT_PARAMS, load_params
 
 
@@ -23,27 +23,22 @@ from phantom_cad.params.io import DEFAULT_PARAMS, load_params
 EXPLODE_DIGIT, EXPLODE_FOREARM, EXPLODE_PULLEY = 28.0, 45.0, 28.0
 
 
-def exploded(p, T: dict) -> dict:
-    """{link: offset (mm, palm frame)}: a digit's links move out along its first link's y (the finger
-    base off its socket, each phalanx off the one before), one step per level; the forearm module back
-    from the wrist; a servo pulley off its servo along the shaft, with the part that holds the servo."""
+def exploded(T: dict) -> dict:
+    """{link: offset (mm, palm frame)}: each part moves with the one it mounts on, and further off it
+    along the way it goes on: a digit's links along its first link's y (the finger base off its socket,
+    each phalanx off the one before), the forearm module back from the wrist, a servo pulley up its
+    shaft. ``T`` in topology order (parents first)."""
     out = {}
     for name in T:
         ln = link(name)
         if ln.parent is None:
             out[name] = np.zeros(3)
         elif ln.segment == "servo_pulley":
-            out[name] = (out.get(ln.parent, np.zeros(3)) if ln.parent in out else
-                         (np.array([0.0, -EXPLODE_FOREARM, 0.0]) if ln.parent == FOREARM else np.zeros(3))) \
-                + EXPLODE_PULLEY * T[name][:3, 2]
+            out[name] = out[ln.parent] + EXPLODE_PULLEY * T[name][:3, 2]
         elif ln.digit is None:
-            out[name] = np.array([0.0, -EXPLODE_FOREARM, 0.0])
+            out[name] = out[ln.parent] + np.array([0.0, -EXPLODE_FOREARM, 0.0])
         else:
-            chain = [ln]
-            while chain[-1].parent is not None and link(chain[-1].parent).digit == ln.digit:
-                chain.append(link(chain[-1].parent))
-            first = chain[-1].name
-            out[name] = EXPLODE_DIGIT * len(chain) * T[first][:3, 1]
+            out[name] = out[ln.parent] + EXPLODE_DIGIT * T[digit_links(ln.digit)[0].name][:3, 1]
     return out
 
 
@@ -73,7 +68,7 @@ def main(out: Path) -> None:
                           size_px=1000, max_faces=150000)
         print(f"wrote {out / fname}")
     T = assembly.pose_transforms(p)
-    shift = exploded(p, T)
+    shift = exploded(T)
     items, labelled = [], set()
     for name, (v, f, color, digit) in meshes.items():
         label = name if (digit is None and not name.startswith("servo_pulley_")) or name.endswith("_base") else None

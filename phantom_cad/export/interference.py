@@ -24,8 +24,6 @@ def interference(meshes: dict[str, tuple[np.ndarray, np.ndarray]], poses: dict[s
     do not overlap are skipped. Returns {"checked_pairs", "collisions": [...],
     "designed_contacts": [...]} where a collision is a non-designed pair overlapping by more
     than ``tol_mm3``."""
-    import manifold3d
-
     names = sorted(meshes)
     placed, boxes = {}, {}
     for n in names:
@@ -38,9 +36,7 @@ def interference(meshes: dict[str, tuple[np.ndarray, np.ndarray]], poses: dict[s
 
     def solid(n):
         if n not in solids:
-            w, f = placed[n]
-            solids[n] = manifold3d.Manifold(manifold3d.Mesh(
-                vert_properties=w.astype(np.float32), tri_verts=f.astype(np.uint32)))
+            solids[n] = _manifold(*placed[n])
         return solids[n]
 
     checked, collisions, contacts, largest = 0, [], [], None
@@ -107,7 +103,7 @@ def command_sweep(meshes: dict[str, tuple[np.ndarray, np.ndarray]], hand, transf
     worst: dict[tuple[str, str], dict] = {}
     poses = checked = 0
 
-    def run(digits: tuple[str, ...], pairs_of) -> None:
+    def run(digits: tuple[str, ...], pairs: list[tuple[str, str]]) -> None:
         nonlocal poses, checked
         ss = [s for d in digits for s in servos[d]]
         for fs in itertools.product(fractions, repeat=len(ss)):
@@ -122,9 +118,7 @@ def command_sweep(meshes: dict[str, tuple[np.ndarray, np.ndarray]], hand, transf
                 return placed[n]
 
             poses += 1
-            for a, b in pairs_of():
-                if frozenset((a, b)) in allowed:
-                    continue
+            for a, b in pairs:
                 A, B = get(a), get(b)
                 ba, bb = A.bounding_box(), B.bounding_box()
                 if any(ba[i] > bb[i + 3] or bb[i] > ba[i + 3] for i in range(3)):
@@ -142,13 +136,16 @@ def command_sweep(meshes: dict[str, tuple[np.ndarray, np.ndarray]], hand, transf
                     f = float(fs[ss.index(THUMB_CHAIN.servo)])
                     entry["from_thumb_flexion"] = min(entry.get("from_thumb_flexion", f), f)
 
+    def apart(pairs) -> list[tuple[str, str]]:       # the pairs that may not touch
+        return [(a, b) for a, b in pairs if frozenset((a, b)) not in allowed]
+
     for d in DIGITS:
-        run((d,), lambda d=d: [(a, b) for i, a in enumerate(moving[d])
-                               for b in fixed + moving[d][i + 1:]])
+        run((d,), apart((a, b) for i, a in enumerate(moving[d]) for b in fixed + moving[d][i + 1:]))
     for d1, d2 in itertools.combinations(DIGITS, 2):
-        run((d1, d2), lambda d1=d1, d2=d2: [(a, b) for a in moving[d1] for b in moving[d2]])
+        run((d1, d2), apart((a, b) for a in moving[d1] for b in moving[d2]))
     digits_of = lambda e: {link(n).digit for n in e["parts"]}  # noqa: E731
-    pinch = [e for e in worst.values() if "thumb" in digits_of(e) and len(digits_of(e) - {None}) == 2]
+    pinch = [e for e in worst.values()
+             if THUMB_CHAIN.digit in digits_of(e) and len(digits_of(e) - {None}) == 2]
     collisions = [e for e in worst.values() if e not in pinch]
     for e in collisions:
         e.pop("from_thumb_flexion", None)

@@ -48,6 +48,8 @@ def _faces(vertices: np.ndarray, faces: np.ndarray):
 
 
 def _overhang(mesh, R: np.ndarray) -> tuple[float, float, float]:
+    """(overhang area, area on the bed, footprint) in mm^2 of the mesh (:func:`_faces`) rotated by
+    ``R`` and resting on z = 0."""
     v, n, area, f = mesh
     z = v @ R[2]
     z -= z.min()
@@ -56,12 +58,6 @@ def _overhang(mesh, R: np.ndarray) -> tuple[float, float, float]:
     x, y = v @ R[0], v @ R[1]
     return (float(area[down & ~on_bed].sum()), float(area[down & on_bed].sum()),
             float(np.ptp(x) * np.ptp(y)))
-
-
-def overhang(vertices: np.ndarray, faces: np.ndarray, R: np.ndarray) -> tuple[float, float, float]:
-    """(overhang area, area on the bed, footprint) in mm^2 of the mesh rotated by ``R`` and
-    resting on z = 0."""
-    return _overhang(_faces(vertices, faces), np.asarray(R, float))
 
 
 def print_rotation(vertices: np.ndarray, faces: np.ndarray, declared: np.ndarray) -> tuple[np.ndarray, float]:
