@@ -296,13 +296,14 @@ def _field(document, path, value):
 
 
 @pytest.mark.parametrize("path, value, field, words", [
-    # 2 x (17 + 0.2) + 2.4 = 36.8 mm across an 18 mm index face
-    ("hardware.magnet.diameter_mm", 17.0, "hardware.magnet.diameter_mm", "36.800 mm) must fit across"),
+    # pockets of 17 + 2 x 0.1 (magnet clearance) + 0.2 (hole compensation) = 17.4 mm:
+    # 2 x 17.4 + 2.4 + 2 x 0.8 = 38.8 mm across an 18 mm index face
+    ("hardware.magnet.diameter_mm", 17.0, "hardware.magnet.diameter_mm", "38.800 mm) must fit across"),
     ("palm.wall_mm", 0.001, "palm.wall_mm", "must be >= 0.8 mm"),
-    # 2 x 6.2 + 30 = 42.4 mm
+    # 2 x 5.4 + 30 + 2 x 0.8 = 42.4 mm
     ("palm.wall_mm", 30.0, "hardware.magnet.diameter_mm", "(42.400 mm) must fit across"),
-    # 6.2 + 2 x 2.4 = 11 mm
-    ("palm.thickness_mm", 1.0, "palm.thickness_mm", "must be >= 11.000 mm"),
+    # 5.4 + 2 x 2.4 = 10.2 mm
+    ("palm.thickness_mm", 1.0, "palm.thickness_mm", "must be >= 10.200 mm"),
     # the thickest finger (16) + 2 x 0.2
     ("palm.thickness_mm", 16.2, "palm.thickness_mm", "must exceed the thickest finger (16 mm)"),
     ("print.stl_tolerance_mm", 1e-9, "print.stl_tolerance_mm", "must be >= 0.001"),

@@ -6,6 +6,7 @@ Layout (default root ``.cache`` in the working directory, or ``$PHANTOM_CAD_CACH
                               mesh.npz (link frame), view.npz (coarse, for pictures),
                               visual.stl, collision.npz (the robot description's, metres),
                               render.png, meta.json
+    .cache/coupon/<key>/      the fit-test coupon: fit_coupon.step, .stl, .md, render.png, meta.json
     .cache/assembly/<key>/    hand_assembly.step, render.png, interference.json, meta.json
     .cache/slice/<key>.json   PrusaSlicer estimates of one STL with one config, and their SHA-256
     .cache/mjcf/<key>.json    a compiled MJCF (export/mjcf.py) of one robot model and its meshes,
@@ -35,7 +36,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from ..atomic import write_json_atomic
-from ..canon import canonical, sha256
+from ..canon import canonical, plain, sha256
 
 #: bump when the cached files' format or the export pipeline changes their bytes
 PIPELINE_VERSION = 1
@@ -91,6 +92,18 @@ def cad_versions() -> dict[str, str | None]:
     }
 
 
+def coupon_key(params) -> str:
+    """The fit-test coupon's key: the print settings, the hardware and the wall it is made of."""
+    doc = params.document
+    return sha256(canonical({
+        "pipeline": PIPELINE_VERSION,
+        "coupon": {"print": plain(doc["print"]), "hardware": plain(doc["hardware"]),
+                   "palm_wall_mm": doc["palm"]["wall_mm"], "name": params.name},
+        "code": code_digest(),
+        "versions": cad_versions(),
+    }))
+
+
 def part_key(params, name: str, part_inputs: Mapping[str, Any]) -> str:
     return sha256(canonical({
         "pipeline": PIPELINE_VERSION,
@@ -105,6 +118,8 @@ def part_key(params, name: str, part_inputs: Mapping[str, Any]) -> str:
 
 #: the files of every part entry (render.png too unless the build was --no-render)
 PART_FILES = ("part.brep", "part.step", "part.stl", "mesh.npz", "view.npz", "visual.stl", "collision.npz")
+#: the files of the fit-test coupon's entry (render.png too unless the build was --no-render)
+COUPON_FILES = ("fit_coupon.step", "fit_coupon.stl", "fit_coupon.md")
 #: the files of every assembly entry (render.png too unless the build was --no-render)
 ASSEMBLY_FILES = ("hand_assembly.step", "interference.json")
 
@@ -192,6 +207,14 @@ class Cache:
 
     def part_meta(self, key: str) -> dict:
         return json.loads((self.part_dir(key) / "meta.json").read_text())
+
+    # fit-test coupon ----------------------------------------------------------
+    def coupon_dir(self, key: str) -> Path:
+        return self.root / "coupon" / key
+
+    def coupon_problem(self, key: str, render: bool = True) -> str | None:
+        """Why the coupon entry ``key`` cannot be served (None: it can): see :func:`entry_problem`."""
+        return entry_problem(self.coupon_dir(key), COUPON_FILES + (("render.png",) if render else ()))
 
     # assembly ---------------------------------------------------------------
     def assembly_dir(self, key: str) -> Path:

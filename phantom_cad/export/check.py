@@ -321,11 +321,10 @@ def axis_rows(robot, params, solids: dict) -> list[Row]:
     servo hub's round."""
     from ..cad.assembly import pose_transforms
     from ..cad.measure import cylinders
+    from ..cad.parts.common import Tolerances
 
-    hw, pr = params.hardware, params.print
-    press = (hw.axle_diameter - pr.press_fit_interference) / 2 / units.MM
-    seat = (hw.bearing_outer - pr.press_fit_interference) / 2 / units.MM
-    clear = (hw.axle_diameter + 2.0 * pr.hole_clearance) / 2 / units.MM   # the tongue's axle bore
+    tol = Tolerances(params)        # the modelled (compensated) bores, mm
+    press, seat, clear = tol.axle_press / 2.0, tol.bearing_seat / 2.0, tol.axle_clear / 2.0
     hub = params.thumb.cmc_horn_radius / units.MM
     robot.update_cfg(np.zeros(len(robot.actuated_joint_names)))
     names = {j.name: j for j in robot.robot.joints}

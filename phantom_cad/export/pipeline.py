@@ -4,7 +4,8 @@
     result = build_hand("params/phantom.toml", "exports/phantom")
 
 Writes ``exports/<hand>/`` (see docs/exports.md): ``step/<part>.step``,
-``step/hand_assembly.step``, ``stl/<part>.stl`` (print orientation), ``bom.csv``,
+``step/hand_assembly.step``, ``stl/<part>.stl`` (print orientation), ``coupon/`` (the fit-test
+coupon: ``fit_coupon.step``, ``.stl``, ``.md``, ``.png``; :mod:`phantom_cad.cad.coupon`), ``bom.csv``,
 ``routing.json`` (every tendon's path, ``kinematics.routing``; docs/transmission.md),
 ``manifest.json``, ``renders/*.png`` and ``slicer/config.ini``.
 
@@ -119,6 +120,13 @@ class _Build:
                 self.log(f"cache: {n} entry {self.keys[n][:12]} not served ({problem}); rebuilding it")
                 cache.discard(cache.part_dir(self.keys[n]))
             self.missing.append(n)
+        # the fit-test coupon (cad.coupon), cached like a part
+        self.coupon_key = cache_mod.coupon_key(params)
+        problem = cache.coupon_problem(self.coupon_key, render)
+        if problem not in (None, "missing"):
+            self.log(f"cache: fit coupon entry {self.coupon_key[:12]} not served ({problem}); rebuilding it")
+            cache.discard(cache.coupon_dir(self.coupon_key))
+        self.coupon_missing = problem is not None
 
     def get_pool(self) -> ProcessPoolExecutor:
         if self.pool is None:
@@ -137,18 +145,27 @@ class _Build:
         """Build the missing parts into the cache; return {name: timings} of those built."""
         part_timings: dict[str, dict] = {}
         missing = self.missing
+        doc = plain(self.document)
+        coupon_task = {"key": self.coupon_key, "document": doc, "source": str(self.path),
+                       "cache_root": str(self.cache.root), "render": self.render}
         if not missing:
+            if self.coupon_missing:
+                self._coupon_done(pool_mod.coupon_worker(coupon_task))
             return part_timings
         self.log(f"building {len(missing)} of {len(self.names)} parts with {self.jobs} worker(s)")
-        doc = plain(self.document)
         tasks = [{"name": n, "key": self.keys[n], "document": doc, "source": str(self.path),
                   "assembly_module": self.asm.__name__,
                   "cache_root": str(self.cache.root), "render": self.render} for n in missing]
         if self.jobs == 1 or len(missing) == 1:
             results = [pool_mod.part_worker(task) for task in tasks]
+            if self.coupon_missing:
+                self._coupon_done(pool_mod.coupon_worker(coupon_task))
         else:
             try:
+                coupon = self.get_pool().submit(pool_mod.coupon_worker, coupon_task) if self.coupon_missing else None
                 results = list(self.get_pool().map(pool_mod.part_worker, tasks))
+                if coupon is not None:
+                    self._coupon_done(coupon.result())
             except BrokenProcessPool as exc:
                 raise BuildError(f"a worker process died while building {missing} "
                                  f"(crash in OCP?): {exc}; {self.out} was left untouched") from exc
@@ -161,6 +178,11 @@ class _Build:
         if failures:
             raise BuildError(f"{len(failures)} part(s) failed; {self.out} was left untouched", failures)
         return part_timings
+
+    def _coupon_done(self, r: dict) -> None:
+        if not r["ok"]:
+            raise BuildError(f"the fit-test coupon failed; {self.out} was left untouched",
+                             [PartFailure(**r["failure"])])
 
     # 2. assembly: poses, STEP, render, interference -------------------------------------
     def assembly(self, metas, check_interference: bool):
@@ -295,6 +317,13 @@ class _Build:
                 shutil.copyfile(pdir / "part.stl", stage / "stl" / f"{n}.stl")
                 if render and (pdir / "render.png").is_file():
                     shutil.copyfile(pdir / "render.png", stage / "renders" / f"{n}.png")
+            cdir = cache.coupon_dir(self.coupon_key)
+            (stage / "coupon").mkdir()
+            for f in ("fit_coupon.step", "fit_coupon.stl", "fit_coupon.md"):
+                shutil.copyfile(cdir / f, stage / "coupon" / f)
+            if render and (cdir / "render.png").is_file():
+                shutil.copyfile(cdir / "render.png", stage / "coupon" / "fit_coupon.png")
+            coupon = json.loads((cdir / "meta.json").read_text(encoding="utf-8"))
             shutil.copyfile(adir / "hand_assembly.step", stage / "step" / "hand_assembly.step")
             if render and (adir / "render.png").is_file():
                 shutil.copyfile(adir / "render.png", stage / "renders" / "hand_assembly.png")
@@ -308,6 +337,9 @@ class _Build:
                 stage=stage, params=self.params, params_path=self.path, names=names, keys=keys, metas=metas,
                 poses=poses, estimates=estimates, slicer_info=slicer_info, interference=inter,
                 contacts=contacts, bom=bom)
+            man["coupon"] = {"step": "coupon/fit_coupon.step", "stl": "coupon/fit_coupon.stl",
+                             "sheet": "coupon/fit_coupon.md",
+                             **{k: coupon[k] for k in ("volume_mm3", "mass_g", "bbox_mm", "features")}}
             if description is not None:
                 man["description"] = description
             (stage / "manifest.json").write_text(json.dumps(man, indent=1, sort_keys=False) + "\n")

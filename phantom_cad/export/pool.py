@@ -160,6 +160,56 @@ def part_worker(task: dict) -> dict:
         return {"name": name, "ok": False, "failure": failure.__dict__}
 
 
+def coupon_worker(task: dict) -> dict:
+    """Build, verify and export the fit-test coupon (``cad.coupon``) into its cache entry: STEP,
+    STL (as built: it prints flat side down), the maker's sheet and a picture."""
+    from ..cad import coupon as coupon_mod
+    from ..cad import verify
+
+    try:
+        params = parse(task["document"], source=task["source"])
+        from . import render, step_stl
+
+        c = coupon_mod.FitCoupon(params)
+        shape = c.build()
+        verify.check_solid(coupon_mod.NAME, shape)
+        problems = c.verify(shape)
+        volume = float(shape.volume)
+        if abs(volume - c.volume()) > 1e-6 * c.volume():
+            problems.append(f"{coupon_mod.NAME}: volume {volume:.4f} mm^3, closed form {c.volume():.4f}")
+        if problems:
+            raise verify.CheckError(coupon_mod.NAME, "verify", "; ".join(problems))
+        cache = Cache(task["cache_root"])
+        final = cache.coupon_dir(task["key"])
+        tmp = cache.staging(final)
+        step = step_stl.step_bytes(shape, label=coupon_mod.NAME, color=c.color)
+        (tmp / "fit_coupon.step").write_bytes(step)
+        v, f = step_stl.tessellate(shape, units.mm(params.print.stl_tolerance))
+        stl = step_stl.stl_bytes(v, f, coupon_mod.NAME)
+        sv, sf = step_stl.read_stl(stl)
+        mesh_checks = step_stl.check_mesh(coupon_mod.NAME, sv, sf, volume, STL_VOLUME_RTOL)
+        (tmp / "fit_coupon.stl").write_bytes(stl)
+        (tmp / "fit_coupon.md").write_text(c.table(), encoding="utf-8")
+        if task.get("render", True):
+            render.render_png([render.MeshItem(coupon_mod.NAME, v, f, tuple(c.color))], tmp / "render.png",
+                              title=f"{coupon_mod.NAME}  (print orientation)",
+                              subtitle=f"{len(c.features)} holes at the hand's tolerances; see fit_coupon.md",
+                              size_px=700, bed=True)
+        meta = {"name": coupon_mod.NAME, "volume_mm3": volume, "bbox_mm": _bbox(v),
+                "mass_g": mass_g(volume, params.print),
+                "stl": {"sha256": sha256(stl), "bytes": len(stl), **mesh_checks},
+                "features": [ft.as_dict() for ft in c.features]}
+        (tmp / "meta.json").write_text(json.dumps(jsonable(meta), indent=1, sort_keys=True))
+        from .cache import seal
+        seal(tmp)
+        Cache.commit(tmp, final)
+        return {"ok": True}
+    except BaseException as exc:  # report, never crash the pool
+        c = Cache(task["cache_root"])
+        shutil.rmtree(c.staging_path(c.coupon_dir(task["key"])), ignore_errors=True)
+        return {"ok": False, "failure": failure_from(task.get("name", "fit_coupon"), exc, None).__dict__}
+
+
 def assembly_step_worker(task: dict) -> dict:
     """hand_assembly.step from the cached BREPs placed at the rest pose."""
     try:

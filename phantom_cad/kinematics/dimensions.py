@@ -18,6 +18,13 @@ def digit_field(digit: str) -> str:
     return "thumb" if digit == "thumb" else f"fingers.{digit}"
 
 
+def printed_hole(fit: float, compensation: float) -> float:
+    """The diameter a round hole is modelled at so that it prints at ``fit``: FDM prints holes
+    small (the outline is polygonised and the perimeter squeezed inward), so every hole that takes
+    hardware grows by ``print.hole_compensation`` (diametral; docs/parts.md, the fit-test coupon)."""
+    return fit + compensation
+
+
 def slot_back(thickness: float, hole_clearance: float) -> float:
     """Distance from a joint's axis back to its clevis slot's back wall (the extension stop): the
     tongue's boss (half the digit's thickness) and a clearance. SI units."""

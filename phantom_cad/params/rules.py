@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 
-from ..kinematics.dimensions import FLANK, digit_field, finger_columns, slot_back
+from ..kinematics.dimensions import FLANK, digit_field, finger_columns, printed_hole, slot_back
 from ..units import DEG, MM
 from .errors import ParamError
 
@@ -58,15 +58,18 @@ def _joints(c, fingers, thumb, hardware, printing, cad) -> None:
             raise c.error("cheek_mm", cad.cheek / MM,
                           f"leaves a {slot / MM:.3f} mm clevis slot in {name}.width_mm = {width / MM:g}; "
                           f"a loop hub, the tongue and its return groove need {need / MM:.3f} mm")
-        # each joint's tendon groove of radius R lies in the tongue's boss (radius thickness / 2)
-        # and outside the axle's clearance bore
-        axle = hardware.axle_diameter / 2.0 + printing.hole_clearance
+        # each joint's grooves of radius R (the loop's and the return cord's, their floors half a
+        # cord inside R) lie in the tongue's boss (radius thickness / 2) and outside the axle's
+        # clearance bore
+        axle = printed_hole(hardware.axle_diameter + 2.0 * printing.hole_clearance, printing.hole_compensation) / 2.0
+        cord = max(hardware.tendon_diameter, cad.spring_diameter)
         for key, R in zip(d.chain.joints, d.chain.radii):
-            if not axle < R < thick / 2.0 - 1e-12:
+            if not axle < R - cord / 2.0 - 1e-12 or not R < thick / 2.0 - 1e-12:
                 raise ParamError(f"{name}.pulley_radius_mm.{key}", round(R / MM, 6),
-                                 f"the tendon groove must lie between the axle bore (radius {axle / MM:.3f} mm) "
-                                 f"and the joint boss's surface ({name}.thickness_mm / 2 = {thick / 2.0 / MM:g} mm)",
-                                 c.source)
+                                 f"the joint's grooves must lie between the axle bore (radius {axle / MM:.3f} mm, "
+                                 f"with hole_compensation) and the joint boss's surface ({name}.thickness_mm / 2 = "
+                                 f"{thick / 2.0 / MM:g} mm): their floors lie half a cord ({cord / 2.0 / MM:g} mm, "
+                                 f"the return cord's) inside the radius", c.source)
     if cad.spring_diameter + 2.0 * printing.hole_clearance >= cad.cheek - 1e-12:
         raise c.error("spring_diameter_mm", cad.spring_diameter / MM,
                       f"its channel ({(cad.spring_diameter + 2.0 * printing.hole_clearance) / MM:g} mm with "
@@ -109,16 +112,17 @@ def _magnets(c, fingers, palm, hardware, printing, cad) -> None:
         raise ParamError("palm.wall_mm", round(palm.wall / MM, 6),
                          f"must be >= {MIN_WALL / MM:g} mm, two perimeters of a 0.4 mm nozzle "
                          "(the thinnest wall an FDM printer makes)", c.source)
-    pocket = hardware.magnet_diameter + 2.0 * printing.magnet_clearance
+    pocket = printed_hole(hardware.magnet_diameter + 2.0 * printing.magnet_clearance, printing.hole_compensation)
     span = 2.0 * pocket + palm.wall          # both pockets and the wall between them
     tendon_z = -min(f.thickness for f in fingers.values()) / 2.0 + palm.wall
     relief = 2.0 * (hardware.tendon_diameter + 2.0 * printing.hole_clearance)
     for n, f in fingers.items():
-        if span >= f.width - 1e-12:
+        if span + 2.0 * MIN_WALL > f.width + 1e-12:
             raise ParamError("hardware.magnet.diameter_mm", round(hardware.magnet_diameter / MM, 6),
-                             f"two magnet pockets ({pocket / MM:.3f} mm with magnet_clearance) and the "
-                             f"palm.wall_mm between them ({span / MM:.3f} mm) must fit across the fingers.{n} "
-                             f"magnet face (width_mm = {f.width / MM:g})", c.source)
+                             f"two magnet pockets ({pocket / MM:.3f} mm each with magnet_clearance and "
+                             f"hole_compensation), the palm.wall_mm between them and a {MIN_WALL / MM:g} mm wall "
+                             f"outside each ({(span + 2.0 * MIN_WALL) / MM:.3f} mm) must fit across the "
+                             f"fingers.{n} magnet face (width_mm = {f.width / MM:g})", c.source)
         if pocket >= f.thickness - 1e-12:
             raise ParamError("hardware.magnet.diameter_mm", round(hardware.magnet_diameter / MM, 6),
                              f"a magnet pocket ({pocket / MM:.3f} mm) must fit in the fingers.{n} magnet face "
@@ -241,7 +245,8 @@ def _guides(c, fingers, thumb, palm, hardware, printing, cad) -> None:
 def _servos(c, fingers, thumb, servo, hardware, printing, cad) -> None:
     pulleys = [(name, d.chain.servo_radius) for name, d in _digits(fingers, thumb)]
     for name, r in pulleys + [("thumb.cmc_horn", thumb.cmc_horn_radius)]:
-        limit = r - hardware.screw_diameter / 2.0 - printing.hole_clearance - hardware.tendon_diameter
+        screw_hole = printed_hole(hardware.screw_diameter + 2.0 * printing.hole_clearance, printing.hole_compensation)
+        limit = r - screw_hole / 2.0 - hardware.tendon_diameter
         if cad.horn_hole_radius > limit + 1e-12:
             raise c.error("horn_hole_radius_mm", cad.horn_hole_radius / MM,
                           f"must be <= {limit / MM:.3f} mm so the horn screws stay inside the "

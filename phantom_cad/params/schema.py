@@ -196,6 +196,9 @@ class Print:
     infill: float
     #: a thread-forming screw's pilot hole, as a fraction of the screw's diameter
     screw_pilot_ratio: float = 0.8
+    #: added to the diameter of every round hole that takes hardware (bearing seats, axle bores,
+    #: screw holes, magnet pockets): FDM prints holes this much small (kinematics.dimensions.printed_hole)
+    hole_compensation: float = 0.2e-3
 
 
 @dataclass(frozen=True)
@@ -547,6 +550,7 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
         density=pr.number("density_g_per_cm3", gt=0, lt=25) * G_PER_CM3,
         infill=pr.number("infill", gt=0, le=1),
         screw_pilot_ratio=pr.number("screw_pilot_ratio", gt=0.6, lt=1.0, default=0.8),
+        hole_compensation=pr.number("hole_compensation_mm", ge=0, le=0.5, default=0.2) * MM,
     )
     pr.done()
 

@@ -20,10 +20,12 @@ def _build(p, name):
 
 
 def test_small_mcp_pulley_keeps_one_guide_eyelet(variant):
-    """R_MCP = 2.51 mm: the figure-eight channels leave 1.96 mm long tendon-hole faces near the
-    MCP, which the guide measurement took for eyelets (2 mm long); the eyelet is the one face of
-    exactly eyelet_length, at d2."""
-    p = variant(lambda d: d["fingers"]["pinky"]["pulley_radius_mm"].__setitem__("mcp", 2.51))
+    """A small MCP pulley (found at R_MCP = 2.51 mm): the figure-eight channels leave tendon-hole
+    faces near the MCP almost as long as an eyelet, which the guide measurement took for eyelets;
+    the eyelet is the one face of exactly eyelet_length, at d2. 2.56 mm is the smallest radius the
+    rule accepts today (the return groove's floor, R - 0.75 mm, outside the 3.6 mm compensated
+    axle bore)."""
+    p = variant(lambda d: d["fingers"]["pinky"]["pulley_radius_mm"].__setitem__("mcp", 2.56))
     pt, shape = _build(p, "pinky_proximal")
     assert pt.verify(shape) == []
 

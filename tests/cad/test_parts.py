@@ -28,6 +28,12 @@ def _dir(T, d):
     return np.asarray(T)[:3, :3] @ np.asarray(d, float)
 
 
+def _comp(doc):
+    """Half of print.hole_compensation_mm (default 0.2): every hole that takes hardware is modelled
+    that much wider in radius than the fit it should print at."""
+    return doc["print"].get("hole_compensation_mm", 0.2) / 2
+
+
 def tendon_hole(doc):
     return doc["hardware"]["tendon_diameter_mm"] + 2 * doc["print"]["hole_clearance_mm"]
 
@@ -256,7 +262,7 @@ def test_servo_pulley_anchor_at_the_clamp_and_clear_of_the_horn_screws(built, do
     travel = src["servo_travel_deg"][1]
     pr, hw = document["print"], document["hardware"]
     well_r = tendon_hole(document)
-    screw_r = hw["screw_diameter_mm"] / 2 + pr["hole_clearance_mm"]
+    screw_r = hw["screw_diameter_mm"] / 2 + pr["hole_clearance_mm"] + _comp(document)
     axial = [c for c in check.cylinders(built[f"servo_pulley_{k}"].shape)
              if abs(abs(c["direction"][2]) - 1.0) < 1e-9 and np.hypot(*c["point"][:2]) > 1.0]
     wells = [c for c in axial if abs(c["radius"] - well_r) < 1e-6]
@@ -282,7 +288,7 @@ def test_cmc_hub_radius_is_the_horn_radius(built, document):
 
 def _axle_axis(shape, T, doc):
     """The press-fit axle bore of a clevis, in the hand frame (measured)."""
-    r = (doc["hardware"]["axle_diameter_mm"] - doc["print"]["press_fit_interference_mm"]) / 2
+    r = (doc["hardware"]["axle_diameter_mm"] - doc["print"]["press_fit_interference_mm"]) / 2 + _comp(doc)
     cs = [c for c in check.cylinders(shape) if abs(c["radius"] - r) < 1e-6]
     assert cs
     near = min(cs, key=lambda c: np.linalg.norm(c["point"] - np.dot(c["point"], c["direction"]) * c["direction"]))
@@ -339,7 +345,7 @@ def test_thumb_mp_guides_at_d1_d2_alpha(built, document):
 # ---------------------------------------------------------------------------
 
 def _magnet_r(doc):
-    return doc["hardware"]["magnet"]["diameter_mm"] / 2 + doc["print"]["magnet_clearance_mm"]
+    return doc["hardware"]["magnet"]["diameter_mm"] / 2 + doc["print"]["magnet_clearance_mm"] + _comp(doc)
 
 
 def test_palm_sockets_are_arc_offset_apart(built, document):
@@ -419,9 +425,9 @@ JOINTS = [(f"{f}_{a}", f"{f}_{b}") for f in FINGERS for a, b in (("base", "proxi
 def test_axle_bore_and_bearing_seats_are_coaxial(built, document, parent, child):
     P, Cb = built[parent], built[child]
     hw, pr = document["hardware"], document["print"]
-    press = (hw["axle_diameter_mm"] - pr["press_fit_interference_mm"]) / 2
-    seat = (hw["bearing"]["outer_mm"] - pr["press_fit_interference_mm"]) / 2
-    clear = (hw["axle_diameter_mm"] + 2 * pr["hole_clearance_mm"]) / 2
+    press = (hw["axle_diameter_mm"] - pr["press_fit_interference_mm"]) / 2 + _comp(document)
+    seat = (hw["bearing"]["outer_mm"] - pr["press_fit_interference_mm"]) / 2 + _comp(document)
+    clear = (hw["axle_diameter_mm"] + 2 * pr["hole_clearance_mm"]) / 2 + _comp(document)
     # the child's bearing seat (one, where it fits beside the grooves) and clearance bore sit on
     # its own x axis
     seats = [c for c in check.cylinders(Cb.shape) if abs(c["radius"] - seat) < 1e-6]
@@ -439,8 +445,8 @@ def test_axle_bore_and_bearing_seats_are_coaxial(built, document, parent, child)
 
 def test_cmc_base_screws_meet_the_hub(built, document):
     hw, pr = document["hardware"], document["print"]
-    clear = hw["screw_diameter_mm"] / 2 + pr["hole_clearance_mm"]
-    pilot = 0.8 * hw["screw_diameter_mm"] / 2           # print.screw_pilot_ratio's default: 1.6 mm for M2
+    clear = hw["screw_diameter_mm"] / 2 + pr["hole_clearance_mm"] + _comp(document)
+    pilot = 0.8 * hw["screw_diameter_mm"] / 2 + _comp(document)    # the pilot ratio's default: 1.6 mm for M2
     base, hub = built["thumb_cmc_base"], built["servo_pulley_6"]
     base_axes = [(_hand(base.T_hand_link, c["point"]), _dir(base.T_hand_link, c["direction"]))
                  for c in check.cylinders(base.shape) if abs(c["radius"] - clear) < 1e-6]
@@ -680,14 +686,14 @@ def test_thumb_tendon_reaches_the_cmc_base_on_its_axis(built, document):
                and abs(abs(c["direction"] @ d) - 1) < 1e-9]
     assert len(on_axis) == 1
     # the CMC base's central bore is coaxial too
-    clear = document["hardware"]["screw_diameter_mm"] / 2 + document["print"]["hole_clearance_mm"]
+    clear = document["hardware"]["screw_diameter_mm"] / 2 + document["print"]["hole_clearance_mm"] + _comp(document)
     assert any(abs(c["radius"] - clear) < 1e-6 and check.coaxial(c, hub[0]["point"], hub[0]["direction"])
                for c in check.cylinders(base.shape))
 
 
 def _pilots_and_pairs(shape, document):
     hw, sv = document["hardware"], document["servo"]
-    pilot = 0.8 * hw["screw_diameter_mm"] / 2           # print.screw_pilot_ratio's default: 1.6 mm for M2
+    pilot = 0.8 * hw["screw_diameter_mm"] / 2 + _comp(document)    # the pilot ratio's default: 1.6 mm for M2
     holes = [c for c in check.cylinders(shape) if abs(c["radius"] - pilot) < 1e-6]
     # mid-ear on both ends: (body length / 2 + flange span / 2) apart, along the body length
     spacing = sv["body_mm"][0] / 2 + sv["flange_span_mm"] / 2
@@ -712,9 +718,9 @@ def test_two_flange_screw_pilots_per_servo(built, document, placed):
     holes, pairs = _pilots_and_pairs(built["palm"].shape, document)
     assert len(holes) == 4 and pairs == 1
     # the tab's clearance holes (screw + 2 clearances) over the palm's two other pilots
-    clear = hw["screw_diameter_mm"] / 2 + document["print"]["hole_clearance_mm"]
+    clear = hw["screw_diameter_mm"] / 2 + document["print"]["hole_clearance_mm"] + _comp(document)
     tab = [c for c in check.cylinders(placed["forearm"]) if abs(c["radius"] - clear) < 1e-6]
-    pil = [c for c in check.cylinders(placed["palm"]) if abs(c["radius"] - 0.8 * hw["screw_diameter_mm"] / 2) < 1e-6
+    pil = [c for c in check.cylinders(placed["palm"]) if abs(c["radius"] - 0.8 * hw["screw_diameter_mm"] / 2 - _comp(document)) < 1e-6
            and abs(abs(c["direction"][2]) - 1) < 1e-9]
     assert len(tab) == 2 and len(pil) == 2
     for c in tab:

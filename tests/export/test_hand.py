@@ -166,6 +166,32 @@ def test_mass_estimates(hand):
         assert man["files"][f"stl/{p['name']}.stl"]["sha256"]
 
 
+def test_exported_coupon(hand):
+    """The export's fit-test coupon, read back: the STL with trimesh (watertight, on the bed, the
+    STEP's volume), the STEP with build123d, the manifest's holes by hand, the maker's sheet."""
+    from build123d import import_step
+
+    result, man = hand
+    out, c = result.out_dir, man["coupon"]
+    for rel in (c["step"], c["stl"], c["sheet"], "coupon/fit_coupon.png"):
+        assert (out / rel).is_file() and man["files"][rel]["kind"] == "coupon", rel
+    step = import_step(str(out / c["step"]))
+    assert len(step.solids()) == 1 and step.volume == pytest.approx(c["volume_mm3"], rel=1e-6)
+    mesh = trimesh.load(out / c["stl"], force="mesh")
+    assert mesh.is_watertight and mesh.is_volume
+    assert mesh.bounds[0][2] == pytest.approx(0.0, abs=1e-4)
+    assert mesh.volume == pytest.approx(step.volume, rel=1e-2)
+    # by hand from params/phantom.toml: 7 mm bearing - 0.05 interference + 0.2 compensation; 0.6 mm
+    # tendon + 2 x 0.2 clearance, not compensated; 5 mm magnet + 2 x 0.1 + 0.2
+    holes = {f["key"]: f for f in c["features"]}
+    assert holes["bearing_seat"]["modelled_mm"] == pytest.approx(7.15)
+    assert holes["bearing_seat"]["fit_mm"] == pytest.approx(6.95)
+    assert holes["tendon_channel_h"]["modelled_mm"] == pytest.approx(1.0)
+    assert holes["magnet_pocket"]["modelled_mm"] == pytest.approx(5.4)
+    sheet = (out / c["sheet"]).read_text()
+    assert all(f"| {k} |" in sheet for k in holes)
+
+
 def test_verify_part_problem_refuses_the_part(hand_build, monkeypatch, tmp_path):
     """A problem reported by phantom_cad.cad.verify.verify_part fails the part with its text."""
     from phantom_cad.cad import verify as check

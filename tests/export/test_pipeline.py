@@ -53,7 +53,8 @@ def test_layout_and_manifest_checksums(standin_build):
     expected = {f"step/{n}.step" for n in names} | {f"stl/{n}.stl" for n in names} \
         | {f"renders/{n}.png" for n in names} \
         | {"step/hand_assembly.step", "renders/hand_assembly.png", "bom.csv", "routing.json", "manifest.json",
-           "slicer/config.ini"}
+           "slicer/config.ini"} \
+        | {f"coupon/fit_coupon.{ext}" for ext in ("step", "stl", "md", "png")}
     assert set(tree(out)) == expected
     man = json.loads((out / "manifest.json").read_text())
     assert set(man["files"]) == expected - {"manifest.json"}

@@ -8,6 +8,12 @@ carries its print tolerance from ``params.print`` (docs/parts.md lists which):
 * clearance hole (axle through a bearing's neighbour, screws, tendon):  d + 2 * hole_clearance
 * press fit (bearing outer ring in its seat, axle in the clevis cheeks): d - press_fit_interference
 * magnet pocket: (d + 2 * magnet_clearance) x (t + magnet_clearance)
+* screw pilot (thread-forming): screw_pilot_ratio * d
+
+Those are the fits the printed hole should measure. Every round hole that takes hardware is
+modelled ``print.hole_compensation`` wider in diameter (``kinematics.dimensions.printed_hole``),
+because FDM prints holes small; the tendon and spring channels are clearance channels and are
+not compensated (the fit-test coupon, ``parts.coupon``, shows both).
 """
 
 from __future__ import annotations
@@ -20,7 +26,7 @@ import numpy as np
 from ... import units
 from ...kinematics import frames as F
 from ...kinematics import topology
-from ...kinematics.dimensions import slot_back
+from ...kinematics.dimensions import printed_hole, slot_back
 
 
 def mm(x: float) -> float:
@@ -51,6 +57,7 @@ class Tolerances:
         self.spring = mm(params.cad.spring_diameter)
         self.eyelet_length = mm(params.cad.eyelet_length)
         self.pilot_ratio = params.print.screw_pilot_ratio
+        self.compensation = mm(pr.hole_compensation)
 
     @property
     def tendon_hole(self) -> float:
@@ -62,28 +69,36 @@ class Tolerances:
         """Diameter of the relief that ends each eyelet (twice the eyelet)."""
         return 2.0 * self.tendon_hole
 
+    def hole(self, fit: float) -> float:
+        """The modelled diameter of a round hole that should print at ``fit`` (mm)."""
+        return printed_hole(fit, self.compensation)
+
     @property
     def axle_clear(self) -> float:
-        return self.axle + 2.0 * self.clearance
+        """Axle clearance bore (a tongue turning on its axle): modelled diameter."""
+        return self.hole(self.axle + 2.0 * self.clearance)
 
     @property
     def axle_press(self) -> float:
-        return self.axle - self.interference
+        """Axle press bore (the clevis cheeks): modelled diameter."""
+        return self.hole(self.axle - self.interference)
 
     @property
     def bearing_seat(self) -> float:
-        return self.bearing_outer - self.interference
+        """Bearing outer ring press seat: modelled diameter."""
+        return self.hole(self.bearing_outer - self.interference)
 
     @property
     def screw_clear(self) -> float:
-        return self.screw + 2.0 * self.clearance
+        return self.hole(self.screw + 2.0 * self.clearance)
 
     @property
     def screw_pilot(self) -> float:
         """Pilot hole of a thread-forming (self-tapping) screw in printed material:
         ``print.screw_pilot_ratio`` of its diameter (0.8 by default: 1.6 mm for M2, a thread
-        flank of 0.2 mm each side; a pilot of d - press_fit_interference left 0.02 mm)."""
-        return self.pilot_ratio * self.screw
+        flank of 0.2 mm each side; a pilot of d - press_fit_interference left 0.02 mm), modelled
+        with the hole compensation."""
+        return self.hole(self.pilot_ratio * self.screw)
 
     @property
     def screw_engagement(self) -> float:
@@ -92,7 +107,7 @@ class Tolerances:
 
     @property
     def magnet_pocket_d(self) -> float:
-        return self.magnet_d + 2.0 * self.magnet_clearance
+        return self.hole(self.magnet_d + 2.0 * self.magnet_clearance)
 
     @property
     def magnet_pocket_depth(self) -> float:

@@ -123,6 +123,6 @@ class Forearm(ServoMount, Part):
         tools += [cylinder(pts[0] - u, pts[1], t.tendon_hole / 2.0), cylinder(pts[1], pts[2], t.tendon_hole / 2.0)]
         for s in self.tab_screws():
             tools.append(cylinder(s - np.array([0, 0, 1.0]), s + np.array([0, 0, 2.0 * t.wall + 1.0]),
-                                  t.screw / 2.0 + t.clearance))
+                                  t.screw_clear / 2.0))
         shape = build(body, tools)
         return transform(shape, np.linalg.inv(self.T_palm_part()))
