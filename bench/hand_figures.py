@@ -1,7 +1,10 @@
-"""Pictures of the assembled hand (docs/parts.md, README, docs/assembly.md): the default hand's built solids
-placed by ``assembly.pose_transforms`` at rest (two views), at 60 % of every joint limit, and exploded (each
-part moved off the one it mounts on, along the way it goes on). Run from the repository's root:
-.venv/bin/python bench/hand_figures.py [OUT_DIR]   (default docs/img; about 40 s)
+"""Pictures of the assembled hand (docs/parts.md, README, docs/assembly.md, docs/opposition.md): the default
+hand's built solids placed by ``assembly.pose_transforms`` at rest (two views), at 60 % of every joint limit,
+in the power grasp (every tendon servo at the end of its travel, the CMC at rest) with each fingertip's
+distance to the palm measured on the solids, at the thumb's closest approach to the index, middle and ring
+pads (``kinematics.opposition.reach`` of the file's thumb), and exploded (each part moved off the one it
+mounts on, along the way it goes on). Run from the repository's root:
+.venv/bin/python bench/hand_figures.py [OUT_DIR]   (default docs/img; about a minute)
 """
 
 from __future__ import annotations
@@ -11,10 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
-from phantom_cad.cad import assembly, registry
+from phantom_cad import make_hand
+from phantom_cad.cad import assembly, measure, registry
 from phantom_cad.export import render, step_stl
-from phantom_cad.kinematics import frames
-from phantom_cad.kinematics.topology import JOINTS, digit_links, link
+from phantom_cad.kinematics import frames, opposition
+from phantom_cad.kinematics.topology import FINGERS, JOINTS, N_SERVOS, SERVOS, chain, digit_links, link
 from phantom_cad.params.io import DEFAULT_PARAMS, load_params
 
 
@@ -67,6 +71,7 @@ def main(out: Path) -> None:
                           subtitle="tendon servos in the forearm module; stepped metacarpal heads; default parameters", elev=elev, azim=azim,
                           size_px=1000, max_faces=150000)
         print(f"wrote {out / fname}")
+    postures(p, meshes, out)
     T = assembly.pose_transforms(p)
     shift = exploded(T)
     items, labelled = [], set()
@@ -78,6 +83,57 @@ def main(out: Path) -> None:
                       subtitle="each part moved off the one it mounts on, along the way it goes on (docs/assembly.md)",
                       elev=62.0, azim=-75.0, size_px=1100, max_faces=150000)
     print(f"wrote {out / 'hand_exploded.png'}")
+
+
+def _items(meshes, T, label_digits=True):
+    items, labelled = [], set()
+    for name, (v, f, color, digit) in meshes.items():
+        key = digit or name
+        label = key if label_digits and key not in labelled and digit is not None else None
+        labelled.add(key)
+        items.append(render.MeshItem(name, v @ T[name][:3, :3].T + T[name][:3, 3], f, tuple(color), label))
+    return items
+
+
+def postures(p, meshes, out: Path) -> None:
+    """The power grasp and the thumb's closest approach to each opposed fingertip, on the solids."""
+    h = make_hand(p)
+    cmc = next(s.index for s in SERVOS if s.drive == "direct")
+    # power grasp: every tendon servo at the end of its travel, the CMC at rest
+    u = np.array(h.u_max, float)
+    u[cmc] = 0.0
+    T = assembly.pose_transforms(p, h.forward(u))
+    palm = registry.part(p, "palm").build()
+    gaps = []
+    for f in FINGERS:
+        tip = measure.placed(registry.part(p, f"{f}_distal").build(), T[f"{f}_distal"])
+        gaps.append(f"{f} {tip.distance_to(palm):.1f}")
+    render.render_png(_items(meshes, T), out / "hand_power.png",
+                      title=f"{p.name} hand ({p.side}), power grasp: every tendon servo at full travel, seen from the ulnar side",
+                      subtitle="fingertip to palm (mm, on the solids): " + ", ".join(gaps)
+                      + "; target 10 mm (docs/parts.md, known gaps)",
+                      elev=5.0, azim=0.0, size_px=1000, max_faces=150000)
+    print(f"wrote {out / 'hand_power.png'}")
+    # opposition: the file's thumb at its closest to each opposed fingertip, on any side (the capsules of
+    # kinematics.opposition over the thumb's (u1, u6) grid and the finger's travel)
+    thumb = opposition.thumb_tips(h).placed(frames.thumb_cmc_placement(p.palm.thumb_cmc_offset,
+                                                                        p.palm.thumb_cmc_axis))
+    for f in opposition.OPPOSED:
+        ft = opposition.finger_tips(h, f)
+        gap, _ = opposition.contacts(thumb, ft)
+        i, j = np.unravel_index(int(np.argmin(gap)), gap.shape)
+        u = np.zeros(N_SERVOS)
+        u[chain("thumb").servo], u[cmc], u[chain(f).servo] = thumb.u[i][0], thumb.u[i][1], ft.u[j, 0]
+        T = assembly.pose_transforms(p, h.forward(u, compensated=True))
+        a = measure.placed(registry.part(p, "thumb_distal").build(), T["thumb_distal"])
+        b = measure.placed(registry.part(p, f"{f}_distal").build(), T[f"{f}_distal"])
+        fname = f"hand_opposition_{f}.png"
+        render.render_png(_items(meshes, T), out / fname,
+                          title=f"{p.name} hand ({p.side}): the thumb at its closest to the {f} tip",
+                          subtitle=f"thumb and {f} distal phalanges {a.distance_to(b):.1f} mm apart on the solids "
+                          "(target: the pads meet); the file's CMC placement, not the solved one (docs/opposition.md)",
+                          elev=-30.0, azim=-150.0, size_px=1000, max_faces=150000)
+        print(f"wrote {out / fname}")
 
 
 if __name__ == "__main__":

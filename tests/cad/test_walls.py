@@ -59,8 +59,11 @@ def test_a_channel_under_a_face_leaves_its_roof():
 
 @pytest.fixture(scope="module")
 def walls(built, params):
+    """Each part's walls on its mesh at the export's STL tolerance. A mesh lies within that tolerance
+    of each face, so a wall of exactly 0.8 mm (the flanks beside the tendon grooves,
+    dimensions.FLANK) can read down to 0.8 - 2 x tolerance: that is the bar a wall must clear."""
     tol = params.print.stl_tolerance * 1e3
-    return {n: thin_walls(*step_stl.tessellate(b.shape, tol), MIN_WALL) for n, b in built.items()}
+    return {n: thin_walls(*step_stl.tessellate(b.shape, tol), MIN_WALL - 2.0 * tol) for n, b in built.items()}
 
 
 def test_the_servo_pulleys_print(walls):
@@ -71,9 +74,18 @@ def test_the_servo_pulleys_print(walls):
         assert r["thinnest"] >= MIN_WALL, (n, r)
 
 
-@pytest.mark.xfail(strict=True, reason="walls thinner than 0.8 mm remain on every part but the servo pulleys: spring "
-                   "channels and magnet pockets of the finger parts, slivers where the drive channels leave the "
-                   "pulley cavities (docs/parts.md lists the measured numbers); issue 12 goes on")
-def test_every_wall_is_two_perimeters(walls):
-    thin = {n: round(r["thinnest"], 3) for n, r in walls.items() if r["thinnest"] < MIN_WALL}
+def test_the_flanks_are_walls_of_two_perimeters(walls):
+    """Points under the bar are few: the groove flanks of 0.8 mm (a tenth of a finger base's
+    surface) are walls, not thin ones; what is left is local (under 1.2 % of any part)."""
+    for n, r in walls.items():
+        assert r["fraction"] < 0.012, (n, r)
+
+
+@pytest.mark.xfail(strict=True, reason="edges thinner than 0.8 mm remain on every part but the servo pulleys, on "
+                   "0.04-1.1 % of their surface: where a groove, channel or pocket leaves a face at a shallow angle "
+                   "(a wedge, not a wall between two faces) and slivers where a channel leaves a cavity "
+                   "(docs/parts.md lists the measured numbers); issue 12 goes on")
+def test_every_wall_is_two_perimeters(walls, params):
+    bar = MIN_WALL - 2.0 * params.print.stl_tolerance * 1e3
+    thin = {n: round(r["thinnest"], 3) for n, r in walls.items() if r["thinnest"] < bar}
     assert thin == {}

@@ -20,7 +20,7 @@ from ... import canon
 from ...kinematics.topology import CMC_Q, JOINTS, link
 from ..measure import eyelet_centres, point_line_distance
 from .base import Part, child_joint, digit_table
-from .common import DigitSection, box, build, cylinder, mm, sphere
+from .common import DigitSection, box, build, cylinder, mm, prism_x, sphere
 from .phalanx import channel, clevis, eyelet, hub_grooves
 from .tendons import link_tendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry, verify_grooves
 from .pulley import BASE_ANGLES, HORN_ANGLES
@@ -90,7 +90,13 @@ class ThumbCMCBase(Part):
         turn = np.array([0.0, 0.0, s_far[2]])
         guide.append(sphere(turn, max(t.tendon_relief / 2.0 + t.clearance,
                                       t.screw_clear / 2.0 + t.tendon_hole / 2.0)))
-        guide.append(cylinder(turn, guide_entry(turn, np.array([0.0, *(G1 + shift)]), s_far), t.tendon_hole / 2.0))
+        end = guide_entry(turn, np.array([0.0, *(G1 + shift)]), s_far)
+        guide.append(cylinder(turn, end, t.tendon_hole / 2.0))
+        # the arm channel runs half a tendon hole above the palmar face (the MP guide sits 0.4 mm
+        # inside it): a skin of 0.06 mm would stay under it, so the channel is a slot open to the face
+        r = t.tendon_hole / 2.0
+        guide.append(prism_x([(turn[1], turn[2]), (end[1], end[2]), (end[1], -T / 2.0 - 1.0),
+                              (turn[1], -T / 2.0 - 1.0)], -r, r))
         # hub: spline-screw bore and the four holes on the horn circle
         h = T / 2.0 + 1.0
         tools.append(cylinder((0, 0, -h), (0, 0, h), t.screw_clear / 2.0))
