@@ -67,7 +67,7 @@ def walls(built, params):
 
 
 def test_the_servo_pulleys_print(walls):
-    """Parts that already meet the rule stay so: the servo pulleys (1.2 mm and more)."""
+    """Parts that already meet the rule stay so: the servo pulleys (1.1 mm and more)."""
     pulleys = {n: r for n, r in walls.items() if n.startswith("servo_pulley")}
     assert len(pulleys) == 6
     for n, r in pulleys.items():
@@ -76,13 +76,14 @@ def test_the_servo_pulleys_print(walls):
 
 def test_the_flanks_are_walls_of_two_perimeters(walls):
     """Points under the bar are few: the groove flanks of 0.8 mm (a tenth of a finger base's
-    surface) are walls, not thin ones; what is left is local (under 1.2 % of any part)."""
+    surface) are walls, not thin ones; what is left is local (at most 0.4 % of any part on
+    2026-11-24: the bar keeps it under 0.6 %)."""
     for n, r in walls.items():
-        assert r["fraction"] < 0.012, (n, r)
+        assert r["fraction"] < 0.006, (n, r)
 
 
 @pytest.mark.xfail(strict=True, reason="edges thinner than 0.8 mm remain on every part but the servo pulleys, on "
-                   "0.04-1.1 % of their surface: where a groove, channel or pocket leaves a face at a shallow angle "
+                   "0.02-0.4 % of their surface: where a groove, channel or pocket leaves a face at a shallow angle "
                    "(a wedge, not a wall between two faces) and slivers where a channel leaves a cavity "
                    "(docs/parts.md lists the measured numbers); issue 12 goes on")
 def test_every_wall_is_two_perimeters(walls, params):

@@ -19,11 +19,13 @@ import numpy as np
 
 from ... import canon
 from ...kinematics import frames as F
+from ...kinematics.dimensions import FLANK
 from ...kinematics.topology import CMC_Q, LINKS, digit_links, joint
 from ..measure import eyelet_centres, point_line_distance
 from .base import Part, child_joint, digit_table, parent_joint
 from .common import DigitSection, box, build, cyl_x, cylinder, mm, prism_x, sphere
 from .tendons import (LinkTendons, link_tendons, anchor_tools, channel_tools, drive_fan_tools, groove_tool, knot_pocket_depth,
+                      sector_prism, _one,
                       parent_hub_x, verify_grooves)
 
 # ---------------------------------------------------------------------------
@@ -256,5 +258,22 @@ class Phalanx(Part):
 
 
 def hub_grooves(sec: DigitSection, lt: LinkTendons) -> list:
-    """The grooves of the loop hubs a link carries, cut out through the hub's rim."""
-    return [groove_tool(g, sec.boss_radius + 1.0) for g in lt.grooves if g.role == "hub"]
+    """The grooves of the loop hubs a link carries, cut out through the hub's rim. Where the rim (a
+    cylinder one millimetre past the boss) leaves the dorsal or palmar face it would meet it at a
+    shallow angle and leave a knife edge (0.07 mm at 27 deg); there the groove is opened square to
+    the face, out to where the rim lies a flank (0.8 mm) inside it."""
+    outer = sec.boss_radius + 1.0
+    wall = mm(FLANK)
+    tools = []
+    for g in (g for g in lt.grooves if g.role == "hub"):
+        tools.append(groove_tool(g, outer))
+        for side in (1.0, -1.0):
+            floor = sec.thickness / 2.0 - wall - side * g.z          # the slab's floor from the axis
+            if not 0.0 < floor < outer:
+                continue
+            yw = math.sqrt(outer * outer - floor * floor)
+            z0, z1 = sorted((side * (sec.thickness / 2.0 - wall), side * (sec.thickness / 2.0 + 1.0)))
+            slab = box(g.x - g.width / 2.0, g.x + g.width / 2.0, g.y - yw, g.y + yw, z0, z1)
+            wedge = sector_prism(g, outer + 2.0)
+            tools.append(slab if wedge is None else _one(slab.intersect(wedge)))
+    return tools

@@ -30,6 +30,7 @@ import numpy as np
 
 from ... import units
 from ...kinematics import routing
+from ...kinematics.dimensions import FLANK
 from ...kinematics.memo import memoised
 from ...kinematics.topology import TENDONS, joint
 
@@ -194,17 +195,30 @@ def parent_hub_x(params, joint_name: str) -> float | None:
 # geometry (build123d through common's helpers)
 # ---------------------------------------------------------------------------
 
-def groove_tool(g: Groove, outer: float):
-    """The cutter of a groove: from its floor out to ``outer`` (mm), over its sector."""
-    from .common import prism_x, ring_x
-    ring = ring_x(g.floor, outer, g.width, g.y, g.z).moved(_loc_x(g.x))
+def sector_prism(g: Groove, outer: float):
+    """The wedge of the groove's sector about its axis (out past ``outer``, two groove widths long
+    in x); None for a groove all round."""
+    from .common import prism_x
     if g.sector is None:
-        return ring
+        return None
     a0, a1 = g.sector
     n = max(2, int(math.ceil((a1 - a0) / math.radians(10.0))))
     big = outer / math.cos(math.pi / (2 * n)) + 1.0     # the polygon's chords stay outside the ring
     poly = [(g.y, g.z)] + [(g.y + big * math.cos(a), g.z + big * math.sin(a)) for a in np.linspace(a0, a1, n + 1)]
-    sector = ring.intersect(prism_x(poly, g.x - g.width, g.x + g.width))
+    return prism_x(poly, g.x - g.width, g.x + g.width)
+
+
+def groove_tool(g: Groove, outer: float):
+    """The cutter of a groove: from its floor out to ``outer`` (mm), over its sector."""
+    from .common import ring_x
+    ring = ring_x(g.floor, outer, g.width, g.y, g.z).moved(_loc_x(g.x))
+    if g.sector is None:
+        return ring
+    sector = ring.intersect(sector_prism(g, outer))
+    return _one(sector)
+
+
+def _one(sector):
     solids = sector.solids() if hasattr(sector, "solids") else [s for c in sector for s in c.solids()]
     if len(solids) == 1:
         return solids[0]
@@ -220,13 +234,49 @@ def _loc_x(x: float):
 
 def channel_tools(lt: LinkTendons, extend: float | None = None):
     """A channel along every loop and return run fixed to the link, a clearance diameter wide,
-    reaching half a diameter past each end (into the groove or well it meets)."""
+    reaching half a diameter past each end (into the groove or well it meets); and where two
+    strands cross (a figure-eight), the reliefs of :func:`crossing_tools`."""
     from .common import cylinder
     out = []
     for p0, p1, d in lt.channels:
         u = (p1 - p0) / np.linalg.norm(p1 - p0)
         e = d / 2.0 if extend is None else extend
         out.append(cylinder(p0 - e * u, p1 + e * u, d / 2.0))
+    return out + crossing_tools(lt)
+
+
+def crossing_tools(lt: LinkTendons) -> list:
+    """Where a figure-eight's two strands cross (four channel legs from one point, in one plane
+    x = const), the two channels meet at a shallow angle (22 deg on a finger's proximal phalanx) and
+    the web between them ends in a knife edge (0.04-0.07 mm). Between each pair of legs less than
+    90 deg apart the web is cut away, a channel wide, out to where the channels' walls lie a flank
+    (``dimensions.FLANK``) apart: the web then ends square and at least that thick."""
+    from .common import prism_x
+    wall = units.mm(FLANK)
+    legs: dict[tuple, list] = {}
+    for p0, p1, d in lt.channels:
+        a, b = np.asarray(p0, float), np.asarray(p1, float)
+        legs.setdefault(tuple(np.round(a, 6)), []).append((b - a, d))
+        legs.setdefault(tuple(np.round(b, 6)), []).append((a - b, d))
+    out = []
+    for key, ls in sorted(legs.items()):
+        if len(ls) < 4:
+            continue
+        c = np.asarray(key)
+        for i in range(len(ls)):
+            for j in range(i + 1, len(ls)):
+                (va, da), (vb, db) = ls[i], ls[j]
+                la, lb = float(np.linalg.norm(va)), float(np.linalg.norm(vb))
+                ua, ub = va / la, vb / lb
+                if abs(ua[0]) > 1e-9 or abs(ub[0]) > 1e-9:
+                    continue
+                theta = math.acos(max(-1.0, min(1.0, float(ua @ ub))))
+                if not 1e-6 < theta < math.pi / 2.0:
+                    continue
+                d = max(da, db)
+                reach = min((d + wall) / (2.0 * math.sin(theta / 2.0)), la, lb)
+                pa, pb = c + reach * ua, c + reach * ub
+                out.append(prism_x([(c[1], c[2]), (pa[1], pa[2]), (pb[1], pb[2])], c[0] - d / 2.0, c[0] + d / 2.0))
     return out
 
 
