@@ -18,7 +18,7 @@ from ...kinematics.topology import FINGERS, digit_links
 from ..measure import circular_pockets, eyelet_centres, point_line_distance
 from .base import Part, child_joint, digit_table
 from .common import DigitSection, box, build, cylinder, mm
-from .phalanx import channel, clevis, eyelet, hub_grooves
+from .phalanx import clevis, eyelet, hub_grooves
 from .tendons import link_tendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry, verify_grooves
 
 
