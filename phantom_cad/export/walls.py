@@ -10,6 +10,10 @@ on every ray). Points within :data:`EDGE_MM` of a sharp edge (faces meeting at m
 than :data:`SHARP_DEG`) are not measured: there the wall is the edge's own angle, not a wall
 (a box's corner is not thin). Units: those of the mesh (mm).
 
+A wall is two faces within :data:`WALL_DEG` of parallel; where the inward normal leaves through a
+face further off parallel the point is on an **edge** (a wedge of that apex angle, e.g. a hole
+that leaves a face obliquely): :func:`thin_walls` reports both, the walls apart.
+
 Limits: near the corner of a narrow strip (the 2 mm side of a plate) two edges cut the cone and
 the side reads down to 0.8 of the strip's width (1.6 mm for 2 mm, within 0.4 mm of the corner);
 a wall is found where points are sampled: at :data:`SAMPLES` points about every 0.5 mm on a
@@ -30,6 +34,9 @@ SHARP_DEG = 20.0
 EDGE_MM = 0.1
 #: surface samples per part
 SAMPLES = 20000
+#: a wall: the face a point lies on and the face its inward normal leaves through are within this
+#: angle of parallel (degrees); thinner points between faces further apart are edges (wedges)
+WALL_DEG = 30.0
 
 
 def _cone(n: np.ndarray) -> np.ndarray:
@@ -62,11 +69,12 @@ def _edge_distance(mesh, points: np.ndarray) -> np.ndarray:
     return d
 
 
-def wall_thickness(vertices: np.ndarray, faces: np.ndarray, samples: int = SAMPLES, seed: int = 0
-                   ) -> tuple[np.ndarray, np.ndarray]:
-    """(points, walls): surface points away from sharp edges and the wall measured at each (the
-    median of the cone's exit distances; inf where no ray leaves, which a closed mesh does not
-    allow)."""
+def wall_samples(vertices: np.ndarray, faces: np.ndarray, samples: int = SAMPLES, seed: int = 0
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(points, walls, off_parallel): surface points away from sharp edges, the wall measured at
+    each (the median of the cone's exit distances; inf where no ray leaves, which a closed mesh
+    does not allow) and the angle (degrees) between the face the point lies on and the face its
+    inward normal leaves through (0: two parallel faces; a wedge of apex angle a: a)."""
     import trimesh
 
     mesh = trimesh.Trimesh(np.asarray(vertices, float), np.asarray(faces, np.int64), process=False)
@@ -77,20 +85,42 @@ def wall_thickness(vertices: np.ndarray, faces: np.ndarray, samples: int = SAMPL
     m, k, _ = dirs.shape
     eps = 1e-4
     origins = np.repeat(points, k, axis=0) + dirs.reshape(-1, 3) * eps
-    hit, ray, _ = mesh.ray.intersects_location(origins, dirs.reshape(-1, 3), multiple_hits=False)
+    hit, ray, tri = mesh.ray.intersects_location(origins, dirs.reshape(-1, 3), multiple_hits=False)
     dist = np.full(m * k, np.inf)
     dist[ray] = np.linalg.norm(hit - origins[ray], axis=1) + eps
     # each exit distance along the normal: a flat wall measures its thickness on every ray
     along = dist.reshape(m, k) * np.r_[1.0, np.full(k - 1, np.cos(np.radians(CONE_DEG)))]
-    return points, np.median(along, axis=1)
+    exit_normal = np.full((m * k, 3), np.nan)
+    exit_normal[ray] = mesh.face_normals[tri]
+    cos = -np.einsum("ij,ij->i", normals, exit_normal.reshape(m, k, 3)[:, 0])
+    off = np.degrees(np.arccos(np.clip(np.nan_to_num(cos, nan=-1.0), -1.0, 1.0)))
+    return points, np.median(along, axis=1), off
+
+
+def wall_thickness(vertices: np.ndarray, faces: np.ndarray, samples: int = SAMPLES, seed: int = 0
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """(points, walls) of :func:`wall_samples`."""
+    points, walls, _ = wall_samples(vertices, faces, samples, seed)
+    return points, walls
 
 
 def thin_walls(vertices: np.ndarray, faces: np.ndarray, minimum: float, samples: int = SAMPLES,
                seed: int = 0) -> dict:
-    """What is thinner than ``minimum``: {"thinnest": the least wall measured, "at": its point,
-    "fraction": the share of measured points below ``minimum``, "points": how many were
-    measured}."""
-    points, walls = wall_thickness(vertices, faces, samples, seed)
+    """What is thinner than ``minimum``: {"thinnest": the least thickness measured, "at": its
+    point, "fraction": the share of measured points below ``minimum``, "points": how many were
+    measured}, and the same of the **walls** alone ("wall_thinnest", "wall_at", "wall_fraction":
+    points whose inward normal leaves through a face within :data:`WALL_DEG` of parallel to
+    theirs; inf / None / 0 without one). The rest are edges: two faces meeting at an angle (a
+    wedge, whose tip a slicer rounds by a perimeter), not a wall between two faces."""
+    points, walls, off = wall_samples(vertices, faces, samples, seed)
     i = int(np.argmin(walls))
-    return {"thinnest": float(walls[i]), "at": [round(float(v), 3) for v in points[i]],
-            "fraction": float(np.mean(walls < minimum)), "points": int(len(walls))}
+    wall = off <= WALL_DEG
+    thin = walls < minimum
+    out = {"thinnest": float(walls[i]), "at": [round(float(v), 3) for v in points[i]],
+           "fraction": float(np.mean(thin)), "points": int(len(walls)),
+           "wall_thinnest": float("inf"), "wall_at": None, "wall_fraction": float(np.mean(thin & wall))}
+    if wall.any():
+        j = int(np.argmin(np.where(wall, walls, np.inf)))
+        out["wall_thinnest"] = float(walls[j])
+        out["wall_at"] = [round(float(v), 3) for v in points[j]]
+    return out

@@ -54,7 +54,32 @@ def test_a_channel_under_a_face_leaves_its_roof():
     v, f = _mesh(block.difference(channel))
     r = thin_walls(v, f, MIN_WALL, samples=8000)
     assert r["thinnest"] == pytest.approx(0.3, abs=0.01)
+    assert r["wall_thinnest"] == pytest.approx(0.3, abs=0.01)      # two parallel faces: a wall
     assert abs(r["at"][0]) < 0.5 and min(abs(r["at"][2] - 2.0), abs(r["at"][2] - 1.7)) < 1e-6
+
+
+def _wedge(apex_deg):
+    """A prism 10 mm long (y) whose section is an isosceles triangle with its apex at the origin,
+    ``apex_deg`` wide, 10 mm deep along x."""
+    h = 10.0 * np.tan(np.radians(apex_deg / 2.0))
+    pts = [(x, y, z) for y in (-5.0, 5.0) for x, z in ((0.0, 0.0), (10.0, -h), (10.0, h))]
+    return trimesh.convex.convex_hull(np.array(pts))
+
+
+def test_a_wedge_is_an_edge_not_a_wall():
+    """A 40 deg wedge: thin near its apex (2 x tan 20 deg x the distance from it), but its faces
+    are 40 deg off parallel, more than WALL_DEG: an edge, no wall under 0.8 mm."""
+    v, f = _mesh(_wedge(40.0))
+    r = thin_walls(v, f, MIN_WALL, samples=8000)
+    assert r["thinnest"] < 0.3 and r["fraction"] > 0.0
+    assert r["wall_thinnest"] >= MIN_WALL and r["wall_fraction"] == 0.0
+
+
+def test_a_knife_edge_is_a_wall():
+    """A 20 deg wedge: its faces are within WALL_DEG of parallel, so its thin tip is a thin wall."""
+    v, f = _mesh(_wedge(20.0))
+    r = thin_walls(v, f, MIN_WALL, samples=8000)
+    assert r["wall_thinnest"] < 0.3 and r["wall_fraction"] > 0.0
 
 
 @pytest.fixture(scope="module")
@@ -82,11 +107,11 @@ def test_the_flanks_are_walls_of_two_perimeters(walls):
         assert r["fraction"] < 0.006, (n, r)
 
 
-@pytest.mark.xfail(strict=True, reason="edges thinner than 0.8 mm remain on every part but the servo pulleys, on "
-                   "0.02-0.4 % of their surface: where a groove, channel or pocket leaves a face at a shallow angle "
-                   "(a wedge, not a wall between two faces) and slivers where a channel leaves a cavity "
-                   "(docs/parts.md lists the measured numbers); issue 12 goes on")
+@pytest.mark.xfail(strict=True, reason="walls under the bar remain on nine parts, a few mm^2 each: the forearm module "
+                   "0.25 mm (a drive channel leaving its pulley cavity), the proximal phalanges 0.45-0.75 (the drive's "
+                   "knot well behind G2), the middle base 0.64, the pinky middle 0.61, the thumb CMC base 0.44 and "
+                   "proximal 0.53 (docs/parts.md); issue 12 goes on")
 def test_every_wall_is_two_perimeters(walls, params):
     bar = MIN_WALL - 2.0 * params.print.stl_tolerance * 1e3
-    thin = {n: round(r["thinnest"], 3) for n, r in walls.items() if r["thinnest"] < bar}
+    thin = {n: round(r["wall_thinnest"], 3) for n, r in walls.items() if r["wall_thinnest"] < bar}
     assert thin == {}

@@ -251,7 +251,10 @@ class Phalanx(Part):
             tools += t3
                     # the drive ends here: knotted behind G2, in a well from the far relief to the palmar face
             tools.append(cylinder(s_far, (0.0, s_far[1], -T / 2.0 - 1.0), t.tendon_relief / 2.0))
-            tools += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - np.array([0.0, *G2]))))
+            flanks = tuple(g.x + k * g.width / 2.0 for g in lt.tongue_grooves(parent_joint(self.link).name)
+                           for k in (-1.0, 1.0))
+            tools += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - np.array([0.0, *G2]))),
+                                     flanks=flanks, span=(-sec.slot_back - 1.0, sec.slot_back))
         tools += channel_tools(lt)
         tools += anchor_tools(lt, sec)
         return build(body, tools)

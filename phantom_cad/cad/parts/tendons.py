@@ -316,11 +316,14 @@ def knot_pocket_depth(sec, floor: float, cord: float) -> float:
     return max(0.0, min(2.0 * cord, floor - sec.tol.axle_clear / 2.0 - units.mm(routing.FLANK)))
 
 
-def drive_fan_tools(lt: LinkTendons, sec, start: float) -> list:
+def drive_fan_tools(lt: LinkTendons, sec, start: float, flanks: tuple = (), span: tuple | None = None) -> list:
     """The slot a drive chord sweeps through this link over the travel: a fan from the end fixed
     here (from ``start`` mm along the chord, past the eyelet) to the other end's positions, a
-    clearance diameter wide about the chord's plane."""
-    from .common import prism_x
+    clearance diameter wide about the chord's plane. ``flanks``: the x of the faces of grooves the
+    fan passes beside within ``span`` = (y0, y1) (a joint's tongue); where one lies less than a
+    flank (``dimensions.FLANK``) beside the fan, the fan is widened to it there (a 0.4 mm fin stood
+    between the drive's fan and the return cord's groove on the proximal phalanges)."""
+    from .common import box, prism_x
     out = []
     w = sec.tol.tendon_hole
     for fixed, moving in lt.drive_sweeps:
@@ -346,8 +349,15 @@ def drive_fan_tools(lt: LinkTendons, sec, start: float) -> list:
         c = fixed[1:]
         near = [c + start * np.array([math.cos(a), math.sin(a)]) for a in order]
         far = [c + rays[a] * np.array([math.cos(a), math.sin(a)]) for a in order]
-        poly = [tuple(p) for p in near] + [tuple(p) for p in reversed(far)]
-        out.append(prism_x(_simple(poly), fixed[0] - w / 2.0, fixed[0] + w / 2.0))
+        poly = _simple([tuple(p) for p in near] + [tuple(p) for p in reversed(far)])
+        out.append(prism_x(poly, fixed[0] - w / 2.0, fixed[0] + w / 2.0))
+        for face in flanks:
+            for edge, side in ((fixed[0] - w / 2.0, -1.0), (fixed[0] + w / 2.0, 1.0)):
+                if 0.0 < side * (face - edge) < units.mm(FLANK):
+                    # to the face and 0.05 mm into the groove beyond it (no coplanar faces)
+                    a, b = sorted((edge, face + side * 0.05))
+                    big = max(abs(v) for p in poly for v in p) + 1.0
+                    out.append(_one(prism_x(poly, a, b).intersect(box(a - 1.0, b + 1.0, *span, -big, big))))
     return out
 
 
