@@ -59,6 +59,12 @@ def build(
             h, rem = divmod(int(totals["print_time_s"]), 3600)
             typer.echo(f"estimated print: {h} h {rem // 60} min, {totals['filament_g']:.0f} g filament "
                        f"(PrusaSlicer defaults, infill from params)")
+        coupon = result.manifest.get("coupon", {})
+        if coupon:
+            est = coupon.get("print")
+            when = f" ({est['time_s'] / 60:.0f} min, {est['filament_g']:.1f} g)" if est else ""
+            typer.echo(f"print first: {result.out_dir / coupon['stl']}{when}, the fit-test coupon: tune [print] "
+                       f"with it ({result.out_dir / coupon['sheet']})")
 
 
 def main() -> None:  # pragma: no cover - convenience entry point: python -m phantom_cad.cli.build

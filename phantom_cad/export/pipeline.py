@@ -127,6 +127,8 @@ class _Build:
             self.log(f"cache: fit coupon entry {self.coupon_key[:12]} not served ({problem}); rebuilding it")
             cache.discard(cache.coupon_dir(self.coupon_key))
         self.coupon_missing = problem is not None
+        #: PrusaSlicer's estimate of the coupon (None unless sliced)
+        self.coupon_estimate: dict | None = None
 
     def get_pool(self) -> ProcessPoolExecutor:
         if self.pool is None:
@@ -264,7 +266,8 @@ class _Build:
                                 "config": "slicer/config.ini"}
 
         def one(n):
-            stl_path = cache.part_dir(keys[n]) / "part.stl"
+            stl_path = (cache.coupon_dir(self.coupon_key) / "fit_coupon.stl" if n is None
+                        else cache.part_dir(keys[n]) / "part.stl")
             skey = slicer.estimate_key(stl_path.read_bytes(), ini, version)
             est, problem = cache.read_slice(skey)
             if est is not None:
@@ -279,10 +282,13 @@ class _Build:
             return n, dict(sorted(est.items()))     # the same key order as a cache hit
 
         with ThreadPoolExecutor(max_workers=self.jobs) as tp:
-            for n, est in tp.map(one, names):
-                estimates[n] = est
+            for n, est in tp.map(one, [*names, None]):     # None: the fit-test coupon
+                if n is None:
+                    self.coupon_estimate = est
+                else:
+                    estimates[n] = est
         bad = [PartFailure(part=n, error=e["error"], check="slice")
-               for n, e in estimates.items() if e and "error" in e]
+               for n, e in [*estimates.items(), ("fit_coupon", self.coupon_estimate)] if e and "error" in e]
         if bad:
             raise BuildError(f"slicing failed; {self.out} was left untouched", bad)
         return estimates, info
@@ -339,7 +345,8 @@ class _Build:
                 contacts=contacts, bom=bom)
             man["coupon"] = {"step": "coupon/fit_coupon.step", "stl": "coupon/fit_coupon.stl",
                              "sheet": "coupon/fit_coupon.md",
-                             **{k: coupon[k] for k in ("volume_mm3", "mass_g", "bbox_mm", "features")}}
+                             **{k: coupon[k] for k in ("volume_mm3", "mass_g", "bbox_mm", "features")},
+                             "print": self.coupon_estimate}
             if description is not None:
                 man["description"] = description
             (stage / "manifest.json").write_text(json.dumps(man, indent=1, sort_keys=False) + "\n")

@@ -154,6 +154,10 @@ def test_every_part_slices(hand):
         # at least the infill fraction of the solid, at most the solid (no supports)
         assert infill * vol_cm3 * 0.9 < est["filament_cm3"] < vol_cm3 * 1.1, p["name"]
     assert man["totals"]["print_time_s"] == sum(p["print"]["time_s"] for p in man["parts"])
+    # the fit-test coupon is sliced too (not in the hand's totals)
+    est, vol_cm3 = man["coupon"]["print"], man["coupon"]["volume_mm3"] / 1000.0
+    assert est is not None and est["time_s"] > 0
+    assert infill * vol_cm3 * 0.9 < est["filament_cm3"] < vol_cm3 * 1.1
 
 
 def test_mass_estimates(hand):

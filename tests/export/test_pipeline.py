@@ -346,6 +346,9 @@ def test_cli_builds(standin, standin_build, tmp_path):
     man = json.loads((tmp_path / "o" / "manifest.json").read_text())
     assert man["slicer"] == {"used": False, "reason": "not requested (phantom-cad build --slice)"}
     assert all(p["print"] is None for p in man["parts"])
+    assert man["coupon"]["print"] is None
+    # the build says to print the fit-test coupon first, and where its sheet is
+    assert f"print first: {tmp_path / 'o' / 'coupon' / 'fit_coupon.stl'}, the fit-test coupon" in res.output
 
 
 def test_demo_without_prusa_slicer(hand_build, tmp_path, monkeypatch):
