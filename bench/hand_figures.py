@@ -48,10 +48,11 @@ def exploded(T: dict) -> dict:
 
 def main(out: Path) -> None:
     p = load_params(DEFAULT_PARAMS)
-    meshes = {}
+    meshes, solids = {}, {}
     for name in assembly.part_names(p):
         part = registry.part(p, name)
-        v, f = step_stl.tessellate(part.build(), 0.05)
+        solids[name] = part.build()
+        v, f = step_stl.tessellate(solids[name], 0.05)
         meshes[name] = (v, f, part.color, part.digit)
     limits = {j["name"]: j["limits"] for j in frames.joints(p)}
     q60 = np.array([0.6 * limits[j.name][1] for j in JOINTS])
@@ -61,20 +62,14 @@ def main(out: Path) -> None:
              ("hand_flexed.png", q60, "60 % of every joint limit, seen from the palm side", (-25.0, -125.0)))
     for fname, q, what, (elev, azim) in shots:
         T = assembly.pose_transforms(p, q)
-        items, labelled = [], set()
-        for name, (v, f, color, digit) in meshes.items():
-            key = digit or name
-            label = key if key not in labelled and (digit is not None or name in ("palm", "forearm")) else None
-            labelled.add(key)
-            items.append(render.MeshItem(name, v @ T[name][:3, :3].T + T[name][:3, 3], f, tuple(color), label))
-        render.render_png(items, out / fname, title=f"{p.name} hand ({p.side}), {what}",
+        render.render_png(_items(meshes, T, named=("palm", "forearm")), out / fname, title=f"{p.name} hand ({p.side}), {what}",
                           subtitle="tendon servos in the forearm module; stepped metacarpal heads; default parameters", elev=elev, azim=azim,
                           size_px=1000, max_faces=150000)
         print(f"wrote {out / fname}")
-    postures(p, meshes, out)
+    postures(p, meshes, solids, out)
     T = assembly.pose_transforms(p)
     shift = exploded(T)
-    items, labelled = [], set()
+    items = []
     for name, (v, f, color, digit) in meshes.items():
         label = name if (digit is None and not name.startswith("servo_pulley_")) or name.endswith("_base") else None
         items.append(render.MeshItem(name, v @ T[name][:3, :3].T + T[name][:3, 3] + shift[name], f, tuple(color),
@@ -85,17 +80,18 @@ def main(out: Path) -> None:
     print(f"wrote {out / 'hand_exploded.png'}")
 
 
-def _items(meshes, T, label_digits=True):
+def _items(meshes, T, named=()):
+    """The meshes placed by ``T``, each digit labelled once, and the parts in ``named``."""
     items, labelled = [], set()
     for name, (v, f, color, digit) in meshes.items():
         key = digit or name
-        label = key if label_digits and key not in labelled and digit is not None else None
+        label = key if key not in labelled and (digit is not None or name in named) else None
         labelled.add(key)
         items.append(render.MeshItem(name, v @ T[name][:3, :3].T + T[name][:3, 3], f, tuple(color), label))
     return items
 
 
-def postures(p, meshes, out: Path) -> None:
+def postures(p, meshes, solids, out: Path) -> None:
     """The power grasp and the thumb's closest approach to each opposed fingertip, on the solids."""
     h = make_hand(p)
     cmc = next(s.index for s in SERVOS if s.drive == "direct")
@@ -103,11 +99,10 @@ def postures(p, meshes, out: Path) -> None:
     u = np.array(h.u_max, float)
     u[cmc] = 0.0
     T = assembly.pose_transforms(p, h.forward(u))
-    palm = registry.part(p, "palm").build()
     gaps = []
     for f in FINGERS:
-        tip = measure.placed(registry.part(p, f"{f}_distal").build(), T[f"{f}_distal"])
-        gaps.append(f"{f} {tip.distance_to(palm):.1f}")
+        tip = measure.placed(solids[f"{f}_distal"], T[f"{f}_distal"])
+        gaps.append(f"{f} {tip.distance_to(solids['palm']):.1f}")
     render.render_png(_items(meshes, T), out / "hand_power.png",
                       title=f"{p.name} hand ({p.side}), power grasp: every tendon servo at full travel, seen from the ulnar side",
                       subtitle="fingertip to palm (mm, on the solids): " + ", ".join(gaps)
@@ -125,8 +120,8 @@ def postures(p, meshes, out: Path) -> None:
         u = np.zeros(N_SERVOS)
         u[chain("thumb").servo], u[cmc], u[chain(f).servo] = thumb.u[i][0], thumb.u[i][1], ft.u[j, 0]
         T = assembly.pose_transforms(p, h.forward(u, compensated=True))
-        a = measure.placed(registry.part(p, "thumb_distal").build(), T["thumb_distal"])
-        b = measure.placed(registry.part(p, f"{f}_distal").build(), T[f"{f}_distal"])
+        a = measure.placed(solids["thumb_distal"], T["thumb_distal"])
+        b = measure.placed(solids[f"{f}_distal"], T[f"{f}_distal"])
         fname = f"hand_opposition_{f}.png"
         render.render_png(_items(meshes, T), out / fname,
                           title=f"{p.name} hand ({p.side}): the thumb at its closest to the {f} tip",

@@ -138,8 +138,7 @@ class FitCoupon:
         ]
         out: list[Feature] = []
         # the plate: the bearing seat and its clearance bore share one column
-        cols = [t.bearing_seat, t.axle_press, t.magnet_pocket_d, t.screw_pilot, t.screw_clear, t.tendon_hole]
-        xs, _ = self._row(cols, 0.0)
+        xs, _ = self._plate_row
         col_of = {"bearing_seat": 0, "axle_clearance": 0, "axle_press": 1, "magnet_pocket": 2,
                   "screw_pilot": 3, "screw_clearance": 4, "tendon_channel": 5}
         for key, what, fit, dia, depth, through, check, tune in vertical:
@@ -147,8 +146,7 @@ class FitCoupon:
             out.append(Feature(key, what, fit, dia, depth, (xs[col_of[key]], 0.0, z0), down, "vertical",
                                through, check, tune))
         # the block: the same joint fits and a channel, horizontal, through the block along y
-        x_block = self.plate_length
-        bx, _ = self._row([t.bearing_seat, t.axle_press, t.tendon_hole], x_block)
+        bx, _ = self._block_row
         zc = self.block_height / 2.0
         y0 = -W / 2.0
         out += [
@@ -164,18 +162,27 @@ class FitCoupon:
         ]
         return out
 
+    @cached_property
+    def _plate_row(self) -> tuple[list[float], float]:
+        """The plate's hole columns, from x = 0: bearing seat (over its clearance bore), axle press
+        bore, magnet pocket, screw pilot, screw clearance hole, tendon channel."""
+        t = self.tol
+        return self._row([t.bearing_seat, t.axle_press, t.magnet_pocket_d, t.screw_pilot, t.screw_clear,
+                          t.tendon_hole], 0.0)
+
+    @cached_property
+    def _block_row(self) -> tuple[list[float], float]:
+        """The block's hole columns, after the plate: bearing seat, axle press bore, tendon channel."""
+        t = self.tol
+        return self._row([t.bearing_seat, t.axle_press, t.tendon_hole], self.plate_length)
+
     @property
     def plate_length(self) -> float:
-        t = self.tol
-        _, end = self._row([t.bearing_seat, t.axle_press, t.magnet_pocket_d, t.screw_pilot, t.screw_clear,
-                            t.tendon_hole], 0.0)
-        return end
+        return self._plate_row[1]
 
     @property
     def length(self) -> float:
-        t = self.tol
-        _, end = self._row([t.bearing_seat, t.axle_press, t.tendon_hole], self.plate_length)
-        return end
+        return self._block_row[1]
 
     def boxes(self) -> list[tuple[float, float, float, float, float, float]]:
         """The plate and the block, (x0, x1, y0, y1, z0, z1)."""

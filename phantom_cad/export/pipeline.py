@@ -144,33 +144,32 @@ class _Build:
 
     # 1. parts ------------------------------------------------------------------------
     def parts(self) -> dict[str, dict]:
-        """Build the missing parts into the cache; return {name: timings} of those built."""
+        """Build the missing parts, and the fit-test coupon when it is missing, into the cache;
+        return {name: timings} of the parts built."""
         part_timings: dict[str, dict] = {}
         missing = self.missing
         doc = plain(self.document)
-        coupon_task = {"key": self.coupon_key, "document": doc, "source": str(self.path),
-                       "cache_root": str(self.cache.root), "render": self.render}
-        if not missing:
-            if self.coupon_missing:
-                self._coupon_done(pool_mod.coupon_worker(coupon_task))
+        jobs = [(pool_mod.part_worker, {"name": n, "key": self.keys[n], "document": doc, "source": str(self.path),
+                                        "assembly_module": self.asm.__name__,
+                                        "cache_root": str(self.cache.root), "render": self.render})
+                for n in missing]
+        if self.coupon_missing:     # one more job, last: the smallest
+            jobs.append((pool_mod.coupon_worker, {"key": self.coupon_key, "document": doc, "source": str(self.path),
+                                                  "cache_root": str(self.cache.root), "render": self.render}))
+        if not jobs:
             return part_timings
-        self.log(f"building {len(missing)} of {len(self.names)} parts with {self.jobs} worker(s)")
-        tasks = [{"name": n, "key": self.keys[n], "document": doc, "source": str(self.path),
-                  "assembly_module": self.asm.__name__,
-                  "cache_root": str(self.cache.root), "render": self.render} for n in missing]
-        if self.jobs == 1 or len(missing) == 1:
-            results = [pool_mod.part_worker(task) for task in tasks]
-            if self.coupon_missing:
-                self._coupon_done(pool_mod.coupon_worker(coupon_task))
+        if missing:
+            self.log(f"building {len(missing)} of {len(self.names)} parts with {self.jobs} worker(s)")
+        if self.jobs == 1 or len(jobs) == 1:
+            results = [worker(task) for worker, task in jobs]
         else:
             try:
-                coupon = self.get_pool().submit(pool_mod.coupon_worker, coupon_task) if self.coupon_missing else None
-                results = list(self.get_pool().map(pool_mod.part_worker, tasks))
-                if coupon is not None:
-                    self._coupon_done(coupon.result())
+                futures = [self.get_pool().submit(worker, task) for worker, task in jobs]
+                results = [f.result() for f in futures]
             except BrokenProcessPool as exc:
                 raise BuildError(f"a worker process died while building {missing} "
                                  f"(crash in OCP?): {exc}; {self.out} was left untouched") from exc
+        coupon = results.pop() if self.coupon_missing else {"ok": True}
         failures = []
         for r in results:
             if r["ok"]:
@@ -179,12 +178,10 @@ class _Build:
                 failures.append(PartFailure(**r["failure"]))
         if failures:
             raise BuildError(f"{len(failures)} part(s) failed; {self.out} was left untouched", failures)
-        return part_timings
-
-    def _coupon_done(self, r: dict) -> None:
-        if not r["ok"]:
+        if not coupon["ok"]:
             raise BuildError(f"the fit-test coupon failed; {self.out} was left untouched",
-                             [PartFailure(**r["failure"])])
+                             [PartFailure(**coupon["failure"])])
+        return part_timings
 
     # 2. assembly: poses, STEP, render, interference -------------------------------------
     def assembly(self, metas, check_interference: bool):

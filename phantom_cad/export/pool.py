@@ -22,7 +22,7 @@ from ..atomic import write_atomic
 from ..canon import jsonable, sha256
 from ..params import parse
 from . import interface, orient
-from .cache import Cache
+from .cache import Cache, seal
 from .manifest import mass_g
 from .results import failure_from
 
@@ -200,7 +200,6 @@ def coupon_worker(task: dict) -> dict:
                 "stl": {"sha256": sha256(stl), "bytes": len(stl), **mesh_checks},
                 "features": [ft.as_dict() for ft in c.features]}
         (tmp / "meta.json").write_text(json.dumps(jsonable(meta), indent=1, sort_keys=True))
-        from .cache import seal
         seal(tmp)
         Cache.commit(tmp, final)
         return {"ok": True}

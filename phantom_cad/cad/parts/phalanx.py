@@ -25,7 +25,7 @@ from ..measure import eyelet_centres, point_line_distance
 from .base import Part, child_joint, digit_table, parent_joint
 from .common import DigitSection, box, build, cyl_x, cylinder, mm, prism_x, sphere
 from .tendons import (LinkTendons, link_tendons, anchor_tools, channel_tools, drive_fan_tools, groove_tool, knot_pocket_depth,
-                      sector_prism, _one,
+                      sector_prism, cutter,
                       parent_hub_x, verify_grooves)
 
 # ---------------------------------------------------------------------------
@@ -278,5 +278,5 @@ def hub_grooves(sec: DigitSection, lt: LinkTendons) -> list:
             z0, z1 = sorted((side * (sec.thickness / 2.0 - wall), side * (sec.thickness / 2.0 + 1.0)))
             slab = box(g.x - g.width / 2.0, g.x + g.width / 2.0, g.y - yw, g.y + yw, z0, z1)
             wedge = sector_prism(g, outer + 2.0)
-            tools.append(slab if wedge is None else _one(slab.intersect(wedge)))
+            tools.append(slab if wedge is None else cutter(slab.intersect(wedge)))
     return tools

@@ -215,10 +215,12 @@ def groove_tool(g: Groove, outer: float):
     if g.sector is None:
         return ring
     sector = ring.intersect(sector_prism(g, outer))
-    return _one(sector)
+    return cutter(sector)
 
 
-def _one(sector):
+def cutter(sector):
+    """A boolean's result (a shape or a list of them) as one cutting tool: its one solid, or a
+    compound of its solids."""
     solids = sector.solids() if hasattr(sector, "solids") else [s for c in sector for s in c.solids()]
     if len(solids) == 1:
         return solids[0]
@@ -357,7 +359,7 @@ def drive_fan_tools(lt: LinkTendons, sec, start: float, flanks: tuple = (), span
                     # to the face and 0.05 mm into the groove beyond it (no coplanar faces)
                     a, b = sorted((edge, face + side * 0.05))
                     big = max(abs(v) for p in poly for v in p) + 1.0
-                    out.append(_one(prism_x(poly, a, b).intersect(box(a - 1.0, b + 1.0, *span, -big, big))))
+                    out.append(cutter(prism_x(poly, a, b).intersect(box(a - 1.0, b + 1.0, *span, -big, big))))
     return out
 
 
