@@ -10,7 +10,7 @@ on every ray). Points within :data:`EDGE_MM` of a sharp edge (faces meeting at m
 than :data:`SHARP_DEG`) are not measured: there the wall is the edge's own angle, not a wall
 (a box's corner is not thin). Units: those of the mesh (mm).
 
-A wall is two faces within :data:`WALL_DEG` of parallel; where the inward normal leaves through a
+A wall is two faces within :data:`WALL_DEG` of parallel; where the median ray leaves through a
 face further off parallel the point is on an **edge** (a wedge of that apex angle, e.g. a hole
 that leaves a face obliquely): :func:`thin_walls` reports both, the walls apart.
 
@@ -34,7 +34,7 @@ SHARP_DEG = 20.0
 EDGE_MM = 0.1
 #: surface samples per part
 SAMPLES = 20000
-#: a wall: the face a point lies on and the face its inward normal leaves through are within this
+#: a wall: the face a point lies on and the face its median ray leaves through are within this
 #: angle of parallel (degrees); thinner points between faces further apart are edges (wedges)
 WALL_DEG = 30.0
 
@@ -74,7 +74,7 @@ def wall_samples(vertices: np.ndarray, faces: np.ndarray, samples: int = SAMPLES
     """(points, walls, off_parallel): surface points away from sharp edges, the wall measured at
     each (the median of the cone's exit distances; inf where no ray leaves, which a closed mesh
     does not allow) and the angle (degrees) between the face the point lies on and the face its
-    inward normal leaves through (0: two parallel faces; a wedge of apex angle a: a)."""
+    median ray (the one whose distance is the wall) leaves through (0: two parallel faces; a wedge of apex angle a: a)."""
     import trimesh
 
     mesh = trimesh.Trimesh(np.asarray(vertices, float), np.asarray(faces, np.int64), process=False)
@@ -92,9 +92,14 @@ def wall_samples(vertices: np.ndarray, faces: np.ndarray, samples: int = SAMPLES
     along = dist.reshape(m, k) * np.r_[1.0, np.full(k - 1, np.cos(np.radians(CONE_DEG)))]
     exit_normal = np.full((m * k, 3), np.nan)
     exit_normal[ray] = mesh.face_normals[tri]
-    cos = -np.einsum("ij,ij->i", normals, exit_normal.reshape(m, k, 3)[:, 0])
+    # the wall is the median ray's (k is odd): the face it leaves through says wall or edge (near
+    # a corner the normal's own ray can leave through a far parallel face while the median one
+    # leaves through the corner's side)
+    median = np.argsort(along, axis=1, kind="stable")[:, k // 2]
+    leaves = exit_normal.reshape(m, k, 3)[np.arange(m), median]
+    cos = -np.einsum("ij,ij->i", normals, leaves)
     off = np.degrees(np.arccos(np.clip(np.nan_to_num(cos, nan=-1.0), -1.0, 1.0)))
-    return points, np.median(along, axis=1), off
+    return points, along[np.arange(m), median], off
 
 
 def wall_thickness(vertices: np.ndarray, faces: np.ndarray, samples: int = SAMPLES, seed: int = 0

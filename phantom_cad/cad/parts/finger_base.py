@@ -21,6 +21,9 @@ from .common import DigitSection, box, build, cylinder, mm
 from .phalanx import clevis, eyelet, hub_grooves
 from .tendons import link_tendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry, verify_grooves
 
+#: how far (mm) the G1 eyelet's near relief runs on along the chord at rest (into the clevis slot)
+NEAR_RELIEF_RUN = 2.0
+
 
 class FingerBase(Part):
     """The metacarpal module of ``finger``: a link fixed to the palm by two magnets."""
@@ -96,6 +99,9 @@ class FingerBase(Part):
         u_in = (end - self.tendon_entry) / np.linalg.norm(end - self.tendon_entry)
         guide.append(cylinder(self.tendon_entry - u_in, end, t.tendon_hole / 2.0))
         guide += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - np.array([0.0, *G1]))))
+        # the near relief leaves through the clevis slot's back wall along the chord at rest: opened
+        # along it, a relief wide, it leaves square (as a sphere it left a 0.7 mm rim at 28 deg)
+        guide.append(cylinder(s_near, s_near + NEAR_RELIEF_RUN * u, t.tendon_relief / 2.0))
         # magnet pockets, opening on the magnet face
         for c in self.magnet_centres():
             tools.append(cylinder(c - np.array([0.0, 1.0, 0.0]),

@@ -9,7 +9,8 @@ back into its own. Why the servos are here and not in the palm: docs/parts.md.
   (the thumb's toward its CMC post): pockets and ear slots open on the dorsal side (the servos
   drop in, then their pulleys go on), pulley cavities, M2 pilot holes under the flange ears;
 * each drive's channel from its pulley through the front wall, on to the palm (the thumb's turns
-  just outside its pulley's cavity toward the CMC post);
+  just outside its pulley's cavity toward the CMC post), joined by a slot to its servo's drop-in
+  pocket where it runs beside it closer than a flank (``ServoMount.drive_slot``);
 * a tab over the palm's dorsal face at the wrist with two M2 clearance holes: the module screws
   onto the palm there.
 """
@@ -115,6 +116,13 @@ class Forearm(ServoMount, Part):
             if k != THUMB_CHAIN.servo:                     # a finger's drive runs straight on to its socket
                 p, u = self.drive_line(k)
                 tools.append(cylinder(p - u, p + u * (y1 - y0 + 2.0 * wrist.TAB_LENGTH), t.tendon_hole / 2.0))
+                run = None
+            else:                                         # the thumb's runs to its turn
+                pts = wrist.thumb_drive_path(self.params)
+                run = float(np.linalg.norm(pts[1] - pts[0]))
+            slot = self.drive_slot(k, t.tendon_hole, run)
+            if slot is not None:
+                tools.append(transform(box(slot[0][0], slot[1][0], slot[0][1], slot[1][1], slot[0][2], slot[1][2]), Ts))
         # the thumb drive turns just outside its pulley's cavity toward the CMC post (beside the
         # ear slot, open on the dorsal side: no relief sphere, whose faces there did not survive a
         # STEP round trip); its channel stops at the turn

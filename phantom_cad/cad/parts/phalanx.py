@@ -28,6 +28,10 @@ from .tendons import (LinkTendons, link_tendons, anchor_tools, channel_tools, dr
                       sector_prism, cutter,
                       parent_hub_x, verify_grooves)
 
+#: how far (rad) the drive's knot well behind G2 leans distally from the palmar normal (see
+#: Phalanx.build): straight down, it left a 0.45-0.75 mm web beside the eyelet's near relief
+KNOT_WELL_LEAN = math.radians(35.0)
+
 # ---------------------------------------------------------------------------
 # shared joint features: each returns (body_parts, cutting_tools), link frame, mm
 # ---------------------------------------------------------------------------
@@ -249,13 +253,17 @@ class Phalanx(Part):
             b3, t3, u, (s_near, s_far) = eyelet(sec, G2, lt.eyelet_toward(G2), clip_palmar=True)
             body += b3
             tools += t3
-                    # the drive ends here: knotted behind G2, in a well from the far relief to the palmar face
-            tools.append(cylinder(s_far, (0.0, s_far[1], -T / 2.0 - 1.0), t.tendon_relief / 2.0))
+            # the drive ends here: knotted behind G2, in a well from the far relief to the palmar
+            # face, leaning distally by KNOT_WELL_LEAN so that the web between it and the near relief
+            # (under the eyelet's hole) stays a wall thick where both reach the palmar face
+            drop = s_far[2] + T / 2.0 + 1.0
+            tools.append(cylinder(s_far, (0.0, s_far[1] + drop * math.tan(KNOT_WELL_LEAN), -T / 2.0 - 1.0),
+                                  t.tendon_relief / 2.0))
             flanks = tuple(g.x + k * g.width / 2.0 for g in lt.tongue_grooves(parent_joint(self.link).name)
                            for k in (-1.0, 1.0))
             tools += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - np.array([0.0, *G2]))),
                                      flanks=flanks, span=(-sec.slot_back - 1.0, sec.slot_back))
-        tools += channel_tools(lt)
+        tools += channel_tools(lt, faces=(sec.slot_back, L - sec.slot_back))   # its shoulders
         tools += anchor_tools(lt, sec)
         return build(body, tools)
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...kinematics import frames as F
+from ...kinematics.dimensions import FLANK
 from .common import mm
 
 
@@ -66,6 +67,20 @@ class ServoMount:
         lo, hi = self.body_box(servo, grow=c)
         elo, ehi = self.ear_box(servo, grow=c)
         return [(lo, np.array([hi[0], hi[1], top])), (elo, np.array([ehi[0], ehi[1], top]))]
+
+    def drive_slot(self, servo: int, channel: float, run: float | None = None):
+        """(lo, hi) corners, servo frame, of the slot that joins a drive's channel (diameter
+        ``channel``, leaving the pulley at (-r, 0, 0) along +y) to the servo's own drop-in pocket
+        where it runs beside it less than a flank (``dimensions.FLANK``) away (a pulley barely
+        wider than half the body: 0.25 mm was left), over ``run`` mm of the drive (default: the
+        pocket's length ahead of the shaft); None where the wall is a flank or more."""
+        lo = min(p[0][0] for p in self.open_pockets(servo, 0.0))
+        r = self.pulley_radius(servo)
+        if lo - (-r + channel / 2.0) >= mm(FLANK):
+            return None
+        ahead = max(p[1][1] for p in self.open_pockets(servo, 0.0))
+        y1 = ahead if run is None else min(ahead, run)
+        return (np.array([-r - channel / 2.0, 0.0, -channel / 2.0]), np.array([lo + 0.01, y1, channel / 2.0]))
 
     def pilot_tools(self, servo: int) -> list:
         """The flange screws' pilot holes (servo frame), down from the ears' underside."""

@@ -234,25 +234,27 @@ def _loc_x(x: float):
     return b.Location((float(x), 0.0, 0.0))
 
 
-def channel_tools(lt: LinkTendons, extend: float | None = None):
+def channel_tools(lt: LinkTendons, extend: float | None = None, faces=()):
     """A channel along every loop and return run fixed to the link, a clearance diameter wide,
     reaching half a diameter past each end (into the groove or well it meets); and where two
-    strands cross (a figure-eight), the reliefs of :func:`crossing_tools`."""
+    strands cross (a figure-eight), the reliefs of :func:`crossing_tools` (``faces`` passed on)."""
     from .common import cylinder
     out = []
     for p0, p1, d in lt.channels:
         u = (p1 - p0) / np.linalg.norm(p1 - p0)
         e = d / 2.0 if extend is None else extend
         out.append(cylinder(p0 - e * u, p1 + e * u, d / 2.0))
-    return out + crossing_tools(lt)
+    return out + crossing_tools(lt, faces)
 
 
-def crossing_tools(lt: LinkTendons) -> list:
+def crossing_tools(lt: LinkTendons, faces=()) -> list:
     """Where a figure-eight's two strands cross (four channel legs from one point, in one plane
     x = const), the two channels meet at a shallow angle (22 deg on a finger's proximal phalanx) and
     the web between them ends in a knife edge (0.04-0.07 mm). Between each pair of legs less than
     90 deg apart the web is cut away, a channel wide, out to where the channels' walls lie a flank
-    (``dimensions.FLANK``) apart: the web then ends square and at least that thick."""
+    (``dimensions.FLANK``) apart: the web then ends square and at least that thick. ``faces``: y
+    (mm) of the link's faces square to y (a phalanx's shoulders); a cut that would end less than a
+    flank short of one goes through it instead (0.61 mm was left on the pinky's middle phalanx)."""
     from .common import prism_x
     wall = units.mm(FLANK)
     legs: dict[tuple, list] = {}
@@ -276,7 +278,17 @@ def crossing_tools(lt: LinkTendons) -> list:
                 if not 1e-6 < theta < math.pi / 2.0:
                     continue
                 d = max(da, db)
-                reach = min((d + wall) / (2.0 * math.sin(theta / 2.0)), la, lb)
+                reach = (d + wall) / (2.0 * math.sin(theta / 2.0))
+                # a face square to y the relief would stop short of by less than a flank: through it
+                for yf in faces:
+                    toward = min(ua[1] * (yf - c[1]), ub[1] * (yf - c[1]))
+                    if toward <= 0.0:
+                        continue
+                    cos = min(abs(ua[1]), abs(ub[1]))
+                    short = abs(yf - c[1]) - reach * cos
+                    if 0.0 <= short < wall:
+                        reach = (abs(yf - c[1]) + d / 2.0) / cos
+                reach = min(reach, la, lb)
                 pa, pb = c + reach * ua, c + reach * ub
                 out.append(prism_x([(c[1], c[2]), (pa[1], pa[2]), (pb[1], pb[2])], c[0] - d / 2.0, c[0] + d / 2.0))
     return out

@@ -93,10 +93,11 @@ class ThumbCMCBase(Part):
         end = guide_entry(turn, np.array([0.0, *(G1 + shift)]), s_far)
         guide.append(cylinder(turn, end, t.tendon_hole / 2.0))
         # the arm channel runs half a tendon hole above the palmar face (the MP guide sits 0.4 mm
-        # inside it): a skin of 0.06 mm would stay under it, so the channel is a slot open to the face
+        # inside it): a skin of 0.06 mm would stay under it, so the channel is a slot open to the
+        # face, and on through the eyelet's boss where that hangs below the face (0.44 mm was left)
         r = t.tendon_hole / 2.0
-        guide.append(prism_x([(turn[1], turn[2]), (end[1], end[2]), (end[1], -T / 2.0 - 1.0),
-                              (turn[1], -T / 2.0 - 1.0)], -r, r))
+        floor = -T / 2.0 - 2.0 * sec.eyelet_boss_radius - 1.0
+        guide.append(prism_x([(turn[1], turn[2]), (end[1], end[2]), (end[1], floor), (turn[1], floor)], -r, r))
         # hub: spline-screw bore and the four holes on the horn circle
         h = T / 2.0 + 1.0
         tools.append(cylinder((0, 0, -h), (0, 0, h), t.screw_clear / 2.0))
