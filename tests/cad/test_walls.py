@@ -120,9 +120,25 @@ def test_the_flanks_are_walls_of_two_perimeters(walls):
 
 
 def test_every_wall_is_two_perimeters(walls, params):
-    """Issue 12's rule on every part of the default hand (its left twin is its mirror image). Met on
-    2026-11-24 after the last nine spots were cut open (docs/parts.md); a 170 mm hand still has one
-    on the thumb's CMC base (0.58 mm, docs/parts.md)."""
+    """Issue 12's rule on every part of the default hand; a left hand's parts are its mirror
+    images (``assembly.build_part``), with the same walls. Met on 2026-11-24 after the last spots
+    were cut open (docs/parts.md)."""
     bar = MIN_WALL - 2.0 * params.print.stl_tolerance * 1e3
     thin = {n: round(r["wall_thinnest"], 3) for n, r in walls.items() if r["wall_thinnest"] < bar}
     assert thin == {}
+
+
+def test_every_wall_of_a_170_mm_hand_is_two_perimeters(variant):
+    """The same rule on every part of a hand of hand_length 170 mm (issue 12's third hand): the
+    digits shorter, the same sections, the palm and forearm laid out again."""
+    from phantom_cad.cad import assembly
+
+    p = variant(lambda d: d["hand"].__setitem__("hand_length_mm", 170.0))
+    tol = p.print.stl_tolerance * 1e3
+    bar = MIN_WALL - 2.0 * tol
+    thin = {}
+    for n in assembly.part_names(p):
+        r = thin_walls(*step_stl.tessellate(assembly.build_part(p, n).shape, tol), bar)
+        if r["wall_thinnest"] < bar:
+            thin[n] = round(r["wall_thinnest"], 3)
+    assert len(assembly.part_names(p)) == 27 and thin == {}

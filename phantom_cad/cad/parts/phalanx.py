@@ -104,12 +104,14 @@ def clevis(sec: DigitSection, joint: str, y: float, hub_x: float | None = None):
             hi -= sec.layout.hub_width
         else:
             lo += sec.layout.hub_width
-    slot = box(lo, hi, y - sec.slot_back, y + rb + 1.0, -T / 2.0 - 1.0, T / 2.0 + 1.0)
+    # through the faces and through a guide's boss that hangs beyond one (a 0.6 mm sliver of the
+    # thumb CMC base's MP guide boss stayed in the slot of a 170 mm hand)
+    slot = box(lo, hi, y - sec.slot_back, y + rb + 1.0, -T, T)
     recess = sec.recess(sec.q_stop[joint])
     half = sw / 2.0
     if recess > 0.0:       # across the full width: the child's full-width body swings in here
         half = W / 2.0 + 1.0
-        quadrant = box(-half, half, y - sec.slot_back - recess, y, -T / 2.0 - 1.0, 0.0)
+        quadrant = box(-half, half, y - sec.slot_back - recess, y, -T, 0.0)
         slot = slot.fuse(quadrant.cut(cyl_x(rb, -half - 1.0, half + 1.0, y, 0.0)))
     poly = sec.stop_polygon(sec.q_stop[joint])
     if poly is not None:   # keep the flexion-stop wedge: the slot tool leaves it standing
