@@ -9,7 +9,6 @@ from __future__ import annotations
 import numpy as np
 
 from .. import units
-from ..kinematics import frames as F
 from ..kinematics.topology import (CMC_Q, CMC_SERVO, DIGITS, FINGER_CHAINS, FINGERS, JOINTS, N_SERVOS, SERVOS,
                                    THUMB_CHAIN, joint)
 

@@ -86,8 +86,6 @@ def params_show(params: Optional[Path] = ParamsOpt):
 
 
 def describe(hand) -> str:
-    import numpy as np
-
     from ..kinematics.topology import JOINTS, SERVOS
     from ..units import deg, mm
 

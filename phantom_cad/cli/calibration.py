@@ -98,7 +98,7 @@ def simulate(
     from ..calibration.simulate import SimulationError, parse_effect_params, simulate as run
 
     check_output(out, CSV_MARKER, "a CSV written by phantom-cad")
-    plugin_files = _load_plugins(plugin)
+    _load_plugins(plugin)
     hand = load_hand(params)
     names = _effect_names(effects)
     cols = None if joints is None else [c.strip() for c in joints.split(",") if c.strip()]
@@ -141,7 +141,7 @@ def compare(
     from ..calibration.fitting import fit_effects
     from ..calibration.report import metrics
 
-    plugin_files = _load_plugins(plugin)
+    _load_plugins(plugin)
     hand = load_hand(params)
     m = read_measurements(data, degrees=degrees).require_joints()
     q_before = run_pipeline(hand, [], m.u, None, 0.0)
@@ -244,7 +244,7 @@ def diagnose(
     from ..calibration.diagnose import diagnose as run
 
     check_output(json_out, JSON_MARKER, "a JSON written by phantom-cad diagnose")
-    plugin_files = _load_plugins(plugin)
+    _load_plugins(plugin)
     hand = load_hand(params)
     m = read_measurements(data, degrees=degrees).require_joints()
     names = _effect_names(candidates, "--candidates") if candidates else None

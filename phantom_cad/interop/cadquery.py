@@ -24,7 +24,12 @@ files, coloured, and located with ``assembly.pose_transforms(params, q)``.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+
+if TYPE_CHECKING:       # the annotations only: cadquery loads in the functions that use it
+    import cadquery
 
 
 def location(T) -> "cadquery.Location":

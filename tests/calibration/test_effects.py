@@ -9,7 +9,6 @@ import pytest
 
 from phantom_cad import ParamError, make_hand
 from phantom_cad.calibration.effects import get_effect, run_pipeline
-from phantom_cad.kinematics.model import Hand
 from phantom_cad.params import dump_params, load_params, parse
 from phantom_cad.canon import plain as _plain
 
