@@ -93,7 +93,7 @@ def part_worker(task: dict) -> dict:
 
         t = time.perf_counter()
         tol_mm = units.mm(params.print.stl_tolerance)
-        vv, fv = step_stl.tessellate(shape, VIEW_TOLERANCE_MM, VIEW_ANGULAR_TOLERANCE_RAD)
+        vv, fv = step_stl.tessellate(shape, VIEW_TOLERANCE_MM, VIEW_ANGULAR_TOLERANCE_RAD, close=True)
         v, f = step_stl.tessellate(shape, tol_mm)
         R = np.asarray(built.print_rotation, dtype=float)
         if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9) or np.linalg.det(R) < 0:

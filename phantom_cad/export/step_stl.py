@@ -183,22 +183,77 @@ def read_brep(path: str | os.PathLike):
     return import_brep(str(path))
 
 
-def tessellate(shape, tolerance: float, angular_tolerance: float = ANGULAR_TOLERANCE_RAD
-               ) -> tuple[np.ndarray, np.ndarray]:
+#: how many times :func:`tessellate` meshes finer (tolerance / 4, angle / 2 each) while a face has
+#: no triangles or the mesh of a closed shape is open
+MESH_RETRIES = 3
+
+
+def _untriangulated(wrapped) -> int:
+    """How many faces of a meshed shape have no triangulation."""
+    from OCP.BRep import BRep_Tool
+    from OCP.TopAbs import TopAbs_FACE
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.TopoDS import TopoDS
+
+    n = 0
+    explorer = TopExp_Explorer(wrapped, TopAbs_FACE)
+    while explorer.More():
+        if BRep_Tool.Triangulation_s(TopoDS.Face_s(explorer.Current()), TopLoc_Location()) is None:
+            n += 1
+        explorer.Next()
+    return n
+
+
+def tessellate(shape, tolerance: float, angular_tolerance: float = ANGULAR_TOLERANCE_RAD,
+               close: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """BRepMesh triangulation of ``shape`` as (vertices (n,3) float64, faces (m,3) int64),
     with the nodes shared by adjacent faces merged (so closed solids give closed meshes).
 
+    At a coarse tolerance a sliver face can get no triangles (OCCT's writer then skips it with a
+    warning, and the mesh has a hole), or two faces' nodes can miss each other along a short
+    edge (a crack): then the shape is meshed finer (tolerance / 4, angle / 2, up to
+    :data:`MESH_RETRIES` times) until every face has triangles and, with ``close``, until the
+    mesh is closed (a shape that is not closed keeps its first mesh). A face without triangles
+    even then is an error. (The STL's mesh is checked closed where it is written,
+    ``check_mesh``; ``close`` is for the pictures' coarser meshes.)
+
     The triangles are collected by OCCT's StlAPI_Writer (C++, per face, orientation
     handled) into a temporary binary STL, so the vertices are float32-exact values."""
+    first = None
+    for k in range(MESH_RETRIES + 1):
+        mesh = _mesh(shape.wrapped, tolerance / 4.0 ** k, angular_tolerance / 2.0 ** k)
+        if mesh is None:                    # a face without triangles: finer
+            continue
+        if not close or _closed(mesh[1]):
+            return mesh
+        first = mesh if first is None else first
+    if first is None:
+        raise RuntimeError(f"{_untriangulated(shape.wrapped)} face(s) get no triangles even at "
+                           f"{tolerance / 4.0 ** MESH_RETRIES:g} mm")
+    return first
+
+
+def _closed(faces: np.ndarray) -> bool:
+    """Whether every edge of a triangle mesh is shared by exactly two triangles."""
+    e = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    _, counts = np.unique(e[:, 0] * (int(faces.max()) + 1) + e[:, 1], return_counts=True)
+    return bool(np.all(counts == 2))
+
+
+def _mesh(wrapped, tolerance: float, angular_tolerance: float):
+    """One BRepMesh pass written out through StlAPI_Writer: (vertices, faces), or None where a
+    face got no triangles."""
     import tempfile
 
     from OCP.BRepMesh import BRepMesh_IncrementalMesh
     from OCP.BRepTools import BRepTools
     from OCP.StlAPI import StlAPI_Writer
 
-    wrapped = shape.wrapped
     BRepTools.Clean_s(wrapped)   # drop any coarser/finer mesh left by an earlier call
     BRepMesh_IncrementalMesh(wrapped, tolerance, False, angular_tolerance, False).Perform()
+    if _untriangulated(wrapped):
+        return None
     writer = StlAPI_Writer()
     writer.ASCIIMode = False
     fd, tmp = tempfile.mkstemp(suffix=".stl", prefix="phantom-tess-")
