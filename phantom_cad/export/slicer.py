@@ -14,6 +14,7 @@ reproduced by hand::
 from __future__ import annotations
 
 import hashlib
+import math
 import os
 import re
 import shutil
@@ -128,6 +129,81 @@ def slice_stl(stl_path: str | os.PathLike, ini_text: str, exe: str | None = None
             raise SlicerError(f"prusa-slicer failed on {stl_path} (exit {proc.returncode}): {tail}")
         text = out.read_text(encoding="utf-8", errors="replace")
         return parse_gcode(text)
+
+
+#: the spacing (mm) of :func:`support_points`' samples
+SUPPORT_SPACING = 0.25
+#: PrusaSlicer's extrusion roles that are support
+SUPPORT_ROLES = ("Support material", "Support material interface")
+#: where the support slice centres the object (``--center``), bed mm
+BED_CENTRE = (100.0, 100.0)
+
+
+def support_points(text: str, spacing: float = SUPPORT_SPACING):
+    """(n, 3) points (bed frame, mm) every ``spacing`` mm along the extrusions of a G-code file
+    whose role (``;TYPE:``) is support (:data:`SUPPORT_ROLES`); z the layer's top (``;Z:``). A move
+    extrudes when E grows (absolute E, ``M82``, with ``G92`` resets) or is positive (``M83``)."""
+    import numpy as np
+
+    pts: list = []
+    role, z, x, y = None, 0.0, None, None
+    relative, e = False, 0.0            # M82 (absolute E, PrusaSlicer's default) / M83; G92 E resets
+    for line in text.splitlines():
+        if line.startswith(";TYPE:"):
+            role = line[6:].strip()
+        elif line.startswith(";Z:"):
+            z = float(line[3:])
+        elif line.startswith(("M82", "M83")):
+            relative = line.startswith("M83")
+        elif line.startswith("G92"):
+            words = dict((w[0], w[1:]) for w in line.split(";")[0].split()[1:] if w[0] == "E")
+            e = float(words.get("E", e))
+        elif line.startswith("G1 "):
+            words = dict((w[0], w[1:]) for w in line.split(";")[0].split()[1:] if w[0] in "XYE")
+            nx = float(words["X"]) if "X" in words else x
+            ny = float(words["Y"]) if "Y" in words else y
+            extrudes = False
+            if "E" in words:
+                de = float(words["E"]) if relative else float(words["E"]) - e
+                e = e + de
+                extrudes = de > 0.0
+            if role in SUPPORT_ROLES and x is not None and nx is not None and extrudes and (nx, ny) != (x, y):
+                n = max(int(math.hypot(nx - x, ny - y) / spacing), 1)
+                t = np.linspace(0.0, 1.0, n + 1)
+                pts.append(np.c_[x + t * (nx - x), y + t * (ny - y), np.full(n + 1, z)])
+            x, y = nx, ny
+    return np.vstack(pts) if pts else np.zeros((0, 3))
+
+
+def slice_supports(stl_path: str | os.PathLike, ini_text: str, exe: str | None = None, timeout: float = 600):
+    """Where PrusaSlicer puts support under an STL as it lies (its automatic supports, the
+    config's other settings): :func:`support_points` moved into the STL's own frame (the object
+    is centred on :data:`BED_CENTRE` by its bounding box and stands on the bed at z = 0)."""
+    from .step_stl import read_stl
+
+    exe = exe or find_slicer()
+    if exe is None:
+        raise SlicerError(f"{EXECUTABLE} is not installed (Debian: apt-get install prusa-slicer; "
+                          "see .ci/sysdeps)")
+    stl_path = Path(stl_path).resolve()
+    v, _ = read_stl(stl_path.read_bytes())
+    centre = (v.min(axis=0) + v.max(axis=0)) / 2.0
+    with tempfile.TemporaryDirectory(prefix="phantom-slice-") as tmp:
+        ini = Path(tmp) / "config.ini"
+        ini.write_text(ini_text)
+        out = Path(tmp) / "part.gcode"
+        cmd = [exe, "--load", str(ini), "--support-material", "--support-material-auto",
+               "--center", f"{BED_CENTRE[0]:g},{BED_CENTRE[1]:g}", "--export-gcode", "--output", str(out),
+               str(stl_path)]
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=_env(), cwd=tmp)
+        if proc.returncode != 0 or not out.exists():
+            tail = "\n".join((proc.stderr + proc.stdout).strip().splitlines()[-5:])
+            raise SlicerError(f"prusa-slicer failed on {stl_path} (exit {proc.returncode}): {tail}")
+        pts = support_points(out.read_text(encoding="utf-8", errors="replace"))
+    pts[:, 0] += centre[0] - BED_CENTRE[0]
+    pts[:, 1] += centre[1] - BED_CENTRE[1]
+    pts[:, 2] += v[:, 2].min()
+    return pts
 
 
 def estimate_key(stl_bytes: bytes, ini_text: str, version: str | None) -> str:

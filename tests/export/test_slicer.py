@@ -68,3 +68,65 @@ def test_slice_cube_headless(tmp_path, monkeypatch):
     # 1.75 mm filament: length = volume / (pi d^2 / 4)
     assert est.filament_mm == pytest.approx(est.filament_cm3 * 1000 / (np.pi * 1.75 ** 2 / 4), rel=5e-3)
     assert 60 < est.time_s < 3 * 3600
+
+
+needs_slicer = pytest.mark.skipif(slicer.find_slicer() is None,
+                                  reason="prusa-slicer is not installed (bash .ci/sysdeps installs Debian's prusa-slicer)")
+
+
+@needs_slicer
+def test_support_goes_under_an_overhang_and_nowhere_else(tmp_path):
+    """A 10 mm pillar carrying a 30 x 10 x 2 mm shelf at z = 10 (10 mm overhanging on each side,
+    built with trimesh), and the pillar alone: PrusaSlicer's automatic supports stand under the
+    shelf's two overhangs (|x| > 5 mm, below z = 10), none on the pillar's footprint and none for
+    the pillar alone; the points come back in the STL's frame."""
+    trimesh = pytest.importorskip("trimesh")
+    pytest.importorskip("manifold3d")
+    pillar = trimesh.creation.box((10.0, 10.0, 10.0))
+    pillar.apply_translation((7.0, -3.0, 5.0))            # off the origin: the frame must come back
+    shelf = trimesh.creation.box((30.0, 10.0, 2.0))
+    shelf.apply_translation((7.0, -3.0, 11.0))
+    tee = pillar.union(shelf)
+    ini = slicer.config_ini(load_params().print)
+    for name, mesh in (("tee", tee), ("pillar", pillar)):
+        (tmp_path / f"{name}.stl").write_bytes(stl_bytes(np.asarray(mesh.vertices), np.asarray(mesh.faces), name))
+    pts = slicer.slice_supports(tmp_path / "tee.stl", ini)
+    assert len(pts) > 100
+    x, y, z = pts[:, 0] - 7.0, pts[:, 1] + 3.0, pts[:, 2]
+    assert np.all(z <= 10.0 + 1e-6)                                  # under the shelf
+    # above its first layer (which PrusaSlicer widens by about 5 mm) the support keeps to the
+    # shelf's outline within 2 mm, and keeps off the pillar
+    up = z > 0.4
+    assert np.all(np.abs(y[up]) <= 5.0 + 2.0) and np.all(np.abs(x[up]) <= 15.0 + 2.0)
+    assert not np.any((np.abs(x) < 5.0) & (np.abs(y) < 5.0))        # nothing inside the pillar
+    left, right = x < -5.0, x > 5.0
+    assert left.sum() > 0.4 * len(pts) and right.sum() > 0.4 * len(pts)
+    assert len(slicer.slice_supports(tmp_path / "pillar.stl", ini)) == 0
+
+
+def test_support_points_read_from_gcode():
+    """Known text: a support extrusion of 1 mm is sampled every 0.25 mm at its layer's z; travel
+    moves and other roles are not support."""
+    text = """M82
+;Z:0.6
+;TYPE:Perimeter
+G1 X0 Y0 E1
+G1 X5 Y0 E2
+;TYPE:Support material
+G1 X10 Y10
+G1 X11 Y10 E3.1 ; a comment
+G1 X11 Y12 E3.1
+G1 E2.3
+G1 X12 Y12
+G1 E3.1
+G92 E0
+G1 X13 Y12 E0.5
+;TYPE:External perimeter
+G1 X20 Y20 E4
+"""
+    pts = slicer.support_points(text)
+    # the X11 Y12 move holds E (a travel), E2.3 retracts, X12 travels, E3.1 un-retracts in place,
+    # the move after G92 E0 extrudes
+    assert pts.tolist() == [[10.0, 10.0, 0.6], [10.25, 10.0, 0.6], [10.5, 10.0, 0.6], [10.75, 10.0, 0.6],
+                            [11.0, 10.0, 0.6], [12.0, 12.0, 0.6], [12.25, 12.0, 0.6], [12.5, 12.0, 0.6],
+                            [12.75, 12.0, 0.6], [13.0, 12.0, 0.6]]
