@@ -116,22 +116,22 @@ class FitCoupon:
                    f"(not compensated)")
         channel_check = "the tendon pulls through with no felt drag; a burr or a sagging roof catches it"
         vertical = [
-            ("bearing_seat", bearing, t.bearing_outer - t.interference, t.bearing_seat, t.bearing_width,
+            ("bearing_seat", bearing, t.fit("bearing_seat"), t.bearing_seat, t.bearing_width,
              False, seat_check, tune_press),
             ("axle_clearance", f"{t.axle:g} mm axle, clearance bore ({t.clearance:g} mm a side) under the "
-             "bearing seat", t.axle + 2.0 * t.clearance, t.axle_clear, H - t.bearing_width, True,
+             "bearing seat", t.fit("axle_clear"), t.axle_clear, H - t.bearing_width, True,
              clear_check, tune_clear),
             ("axle_press", f"{t.axle:g} mm axle, press bore ({t.interference:g} mm interference)",
-             t.axle - t.interference, t.axle_press, H, True, press_check, tune_press),
+             t.fit("axle_press"), t.axle_press, H, True, press_check, tune_press),
             ("magnet_pocket", f"{t.magnet_d:g} x {t.magnet_t:g} mm magnet pocket ({t.magnet_clearance:g} mm "
-             "clearance)", t.magnet_d + 2.0 * t.magnet_clearance, t.magnet_pocket_d, t.magnet_pocket_depth,
+             "clearance)", t.fit("magnet_pocket_d"), t.magnet_pocket_d, t.magnet_pocket_depth,
              False, "the magnet drops in and seats flush or just below the face (it is glued)",
              "print.hole_compensation_mm, print.magnet_clearance_mm"),
             ("screw_pilot", f"M{t.screw:g} thread-forming pilot ({t.pilot_ratio:g} of the diameter)",
-             t.pilot_ratio * t.screw, t.screw_pilot, t.screw_engagement, False,
+             t.fit("screw_pilot"), t.screw_pilot, t.screw_engagement, False,
              f"an M{t.screw:g} screw cuts its thread with firm torque and holds; it must not strip or split the wall",
              "print.hole_compensation_mm, print.screw_pilot_ratio"),
-            ("screw_clearance", f"M{t.screw:g} clearance hole", t.screw + 2.0 * t.clearance, t.screw_clear, H,
+            ("screw_clearance", f"M{t.screw:g} clearance hole", t.fit("screw_clear"), t.screw_clear, H,
              True, "the screw drops through", tune_clear),
             ("tendon_channel", channel, t.tendon_hole, t.tendon_hole, H, True, channel_check,
              "print.hole_clearance_mm"),
@@ -150,12 +150,12 @@ class FitCoupon:
         zc = self.block_height / 2.0
         y0 = -W / 2.0
         out += [
-            Feature("bearing_seat_h", bearing, t.bearing_outer - t.interference, t.bearing_seat,
+            Feature("bearing_seat_h", bearing, t.fit("bearing_seat"), t.bearing_seat,
                     t.bearing_width, (bx[0], y0, zc), along, "horizontal", False, seat_check, tune_press),
             Feature("axle_clearance_h", f"{t.axle:g} mm axle, clearance bore under the bearing seat",
-                    t.axle + 2.0 * t.clearance, t.axle_clear, W - t.bearing_width,
+                    t.fit("axle_clear"), t.axle_clear, W - t.bearing_width,
                     (bx[0], y0 + t.bearing_width, zc), along, "horizontal", True, clear_check, tune_clear),
-            Feature("axle_press_h", f"{t.axle:g} mm axle, press bore", t.axle - t.interference, t.axle_press,
+            Feature("axle_press_h", f"{t.axle:g} mm axle, press bore", t.fit("axle_press"), t.axle_press,
                     W, (bx[1], y0, zc), along, "horizontal", True, press_check, tune_press),
             Feature("tendon_channel_h", channel, t.tendon_hole, t.tendon_hole, W, (bx[2], y0, zc), along,
                     "horizontal", True, channel_check, "print.hole_clearance_mm"),

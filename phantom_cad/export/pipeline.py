@@ -322,7 +322,7 @@ class _Build:
                     shutil.copyfile(pdir / "render.png", stage / "renders" / f"{n}.png")
             cdir = cache.coupon_dir(self.coupon_key)
             (stage / "coupon").mkdir()
-            for f in ("fit_coupon.step", "fit_coupon.stl", "fit_coupon.md"):
+            for f in cache_mod.COUPON_FILES:
                 shutil.copyfile(cdir / f, stage / "coupon" / f)
             if render and (cdir / "render.png").is_file():
                 shutil.copyfile(cdir / "render.png", stage / "coupon" / "fit_coupon.png")

@@ -55,6 +55,16 @@ def _check(asm, params, name: str, shape) -> str:
     return "ok"
 
 
+def _checked_stl(name: str, v, f, volume: float) -> tuple[bytes, dict]:
+    """The binary STL of a mesh and the checks of what is written: the float32 mesh read back from
+    the STL bytes (``step_stl.check_mesh``, against the solid's volume)."""
+    from . import step_stl
+
+    stl = step_stl.stl_bytes(v, f, name)
+    sv, sf = step_stl.read_stl(stl)
+    return stl, step_stl.check_mesh(name, sv, sf, volume, STL_VOLUME_RTOL)
+
+
 def part_worker(task: dict) -> dict:
     """Build, check and export one part into its cache entry. Runs in a worker process."""
     name = task["name"]
@@ -101,10 +111,7 @@ def part_worker(task: dict) -> dict:
         # the declared orientation or an axis-aligned one with less overhang (export/orient.py)
         R, overhang_mm2 = orient.print_rotation(v, f, R)
         vp, T_print = step_stl.to_print_pose(v, R)
-        stl = step_stl.stl_bytes(vp, f, name)
-        # check what is written: the float32 mesh read back from the STL bytes
-        sv, sf = step_stl.read_stl(stl)
-        mesh_checks = step_stl.check_mesh(name, sv, sf, volume, STL_VOLUME_RTOL)
+        stl, mesh_checks = _checked_stl(name, vp, f, volume)
         (tmp / "part.stl").write_bytes(stl)
         np.savez(tmp / "mesh.npz", vertices=v, faces=f.astype(np.int32))
         # the robot description's; a part's convex collision solids (if it names them) each give
@@ -185,9 +192,7 @@ def coupon_worker(task: dict) -> dict:
         step = step_stl.step_bytes(shape, label=coupon_mod.NAME, color=c.color)
         (tmp / "fit_coupon.step").write_bytes(step)
         v, f = step_stl.tessellate(shape, units.mm(params.print.stl_tolerance))
-        stl = step_stl.stl_bytes(v, f, coupon_mod.NAME)
-        sv, sf = step_stl.read_stl(stl)
-        mesh_checks = step_stl.check_mesh(coupon_mod.NAME, sv, sf, volume, STL_VOLUME_RTOL)
+        stl, mesh_checks = _checked_stl(coupon_mod.NAME, v, f, volume)
         (tmp / "fit_coupon.stl").write_bytes(stl)
         (tmp / "fit_coupon.md").write_text(c.table(), encoding="utf-8")
         if task.get("render", True):

@@ -108,27 +108,32 @@ def parse_gcode(text: str) -> PrintEstimate:
     return PrintEstimate(time_s=parse_duration(m.group(1)), time_text=m.group(1).strip(), **values)
 
 
-def slice_stl(stl_path: str | os.PathLike, ini_text: str, exe: str | None = None,
-              gcode_path: str | os.PathLike | None = None, timeout: float = 600) -> PrintEstimate:
-    """Slice one STL with the given config; return PrusaSlicer's estimates."""
+def _gcode(stl_path: Path, ini_text: str, exe: str | None, timeout: float, options: tuple = (),
+           gcode_path: str | os.PathLike | None = None) -> str:
+    """Slice one STL with the given config and extra command-line ``options``; the G-code text
+    (also kept at ``gcode_path`` when given)."""
     exe = exe or find_slicer()
     if exe is None:
         raise SlicerError(f"{EXECUTABLE} is not installed (Debian: apt-get install prusa-slicer; "
                           "see .ci/sysdeps)")
-    # PrusaSlicer runs in a scratch folder: relative paths (the default cache is .cache/) must
-    # be made absolute first
-    stl_path = Path(stl_path).resolve()
     with tempfile.TemporaryDirectory(prefix="phantom-slice-") as tmp:
         ini = Path(tmp) / "config.ini"
         ini.write_text(ini_text)
         out = Path(gcode_path).resolve() if gcode_path else Path(tmp) / "part.gcode"
-        cmd = [exe, "--load", str(ini), "--export-gcode", "--output", str(out), str(stl_path)]
+        cmd = [exe, "--load", str(ini), *options, "--export-gcode", "--output", str(out), str(stl_path)]
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=_env(), cwd=tmp)
         if proc.returncode != 0 or not out.exists():
             tail = "\n".join((proc.stderr + proc.stdout).strip().splitlines()[-5:])
             raise SlicerError(f"prusa-slicer failed on {stl_path} (exit {proc.returncode}): {tail}")
-        text = out.read_text(encoding="utf-8", errors="replace")
-        return parse_gcode(text)
+        return out.read_text(encoding="utf-8", errors="replace")
+
+
+def slice_stl(stl_path: str | os.PathLike, ini_text: str, exe: str | None = None,
+              gcode_path: str | os.PathLike | None = None, timeout: float = 600) -> PrintEstimate:
+    """Slice one STL with the given config; return PrusaSlicer's estimates."""
+    # PrusaSlicer runs in a scratch folder: relative paths (the default cache is .cache/) must
+    # be made absolute first
+    return parse_gcode(_gcode(Path(stl_path).resolve(), ini_text, exe, timeout, gcode_path=gcode_path))
 
 
 #: the spacing (mm) of :func:`support_points`' samples
@@ -181,25 +186,11 @@ def slice_supports(stl_path: str | os.PathLike, ini_text: str, exe: str | None =
     is centred on :data:`BED_CENTRE` by its bounding box and stands on the bed at z = 0)."""
     from .step_stl import read_stl
 
-    exe = exe or find_slicer()
-    if exe is None:
-        raise SlicerError(f"{EXECUTABLE} is not installed (Debian: apt-get install prusa-slicer; "
-                          "see .ci/sysdeps)")
     stl_path = Path(stl_path).resolve()
     v, _ = read_stl(stl_path.read_bytes())
     centre = (v.min(axis=0) + v.max(axis=0)) / 2.0
-    with tempfile.TemporaryDirectory(prefix="phantom-slice-") as tmp:
-        ini = Path(tmp) / "config.ini"
-        ini.write_text(ini_text)
-        out = Path(tmp) / "part.gcode"
-        cmd = [exe, "--load", str(ini), "--support-material", "--support-material-auto",
-               "--center", f"{BED_CENTRE[0]:g},{BED_CENTRE[1]:g}", "--export-gcode", "--output", str(out),
-               str(stl_path)]
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=_env(), cwd=tmp)
-        if proc.returncode != 0 or not out.exists():
-            tail = "\n".join((proc.stderr + proc.stdout).strip().splitlines()[-5:])
-            raise SlicerError(f"prusa-slicer failed on {stl_path} (exit {proc.returncode}): {tail}")
-        pts = support_points(out.read_text(encoding="utf-8", errors="replace"))
+    pts = support_points(_gcode(stl_path, ini_text, exe, timeout, options=(
+        "--support-material", "--support-material-auto", "--center", f"{BED_CENTRE[0]:g},{BED_CENTRE[1]:g}")))
     pts[:, 0] += centre[0] - BED_CENTRE[0]
     pts[:, 1] += centre[1] - BED_CENTRE[1]
     pts[:, 2] += v[:, 2].min()

@@ -20,9 +20,6 @@ import numpy as np
 
 from . import slicer
 
-#: the spacing of the support samples (mm)
-SPACING = slicer.SUPPORT_SPACING
-
 
 def in_features(params, link: str, points: np.ndarray) -> dict[str, float]:
     """mm of support path inside each tendon groove and channel of ``link`` (``points``: link
@@ -36,14 +33,14 @@ def in_features(params, link: str, points: np.ndarray) -> dict[str, float]:
         r = np.hypot(P[:, 1] - g.y, P[:, 2] - g.z)
         inside = (np.abs(P[:, 0] - g.x) <= g.width / 2.0) & (r >= g.floor) & (r <= g.radius + g.width)
         key = f"groove {g.role} {g.joint}"
-        out[key] = out.get(key, 0.0) + float(inside.sum()) * SPACING
+        out[key] = out.get(key, 0.0) + float(inside.sum()) * slicer.SUPPORT_SPACING
     for k, (p0, p1, d) in enumerate(lt.channels):
         p0, p1 = np.asarray(p0, float), np.asarray(p1, float)
         L = float(np.linalg.norm(p1 - p0))
         u = (p1 - p0) / L
         t = (P - p0) @ u
         dist = np.linalg.norm(P - (p0 + np.clip(t, 0.0, L)[:, None] * u), axis=1)
-        out[f"channel {k}"] = float(((t >= 0.0) & (t <= L) & (dist <= d / 2.0)).sum()) * SPACING
+        out[f"channel {k}"] = float(((t >= 0.0) & (t <= L) & (dist <= d / 2.0)).sum()) * slicer.SUPPORT_SPACING
     return out
 
 
@@ -53,4 +50,4 @@ def part_support(params, stl_path, print_transform, link: str, ini_text: str) ->
     pts = slicer.slice_supports(stl_path, ini_text)
     T = np.linalg.inv(np.asarray(print_transform, float))
     link_pts = pts @ T[:3, :3].T + T[:3, 3] if len(pts) else pts
-    return {"total_mm": float(len(pts)) * SPACING, "features": in_features(params, link, link_pts)}
+    return {"total_mm": float(len(pts)) * slicer.SUPPORT_SPACING, "features": in_features(params, link, link_pts)}

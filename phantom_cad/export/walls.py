@@ -74,7 +74,8 @@ def wall_samples(vertices: np.ndarray, faces: np.ndarray, samples: int = SAMPLES
     """(points, walls, off_parallel): surface points away from sharp edges, the wall measured at
     each (the median of the cone's exit distances; inf where no ray leaves, which a closed mesh
     does not allow) and the angle (degrees) between the face the point lies on and the face its
-    median ray (the one whose distance is the wall) leaves through (0: two parallel faces; a wedge of apex angle a: a)."""
+    median ray (the one whose distance is the wall) leaves through (0: two parallel faces; a
+    wedge of apex angle a: a)."""
     import trimesh
 
     mesh = trimesh.Trimesh(np.asarray(vertices, float), np.asarray(faces, np.int64), process=False)
@@ -114,8 +115,8 @@ def thin_walls(vertices: np.ndarray, faces: np.ndarray, minimum: float, samples:
     """What is thinner than ``minimum``: {"thinnest": the least thickness measured, "at": its
     point, "fraction": the share of measured points below ``minimum``, "points": how many were
     measured}, and the same of the **walls** alone ("wall_thinnest", "wall_at", "wall_fraction":
-    points whose inward normal leaves through a face within :data:`WALL_DEG` of parallel to
-    theirs; inf / None / 0 without one). The rest are edges: two faces meeting at an angle (a
+    points whose median ray leaves through a face within :data:`WALL_DEG` of parallel to theirs;
+    inf / None / 0 without one). The rest are edges: two faces meeting at an angle (a
     wedge, whose tip a slicer rounds by a perimeter), not a wall between two faces."""
     points, walls, off = wall_samples(vertices, faces, samples, seed)
     i = int(np.argmin(walls))

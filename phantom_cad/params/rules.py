@@ -244,8 +244,8 @@ def _guides(c, fingers, thumb, palm, hardware, printing, cad) -> None:
 
 def _servos(c, fingers, thumb, servo, hardware, printing, cad) -> None:
     pulleys = [(name, d.chain.servo_radius) for name, d in _digits(fingers, thumb)]
+    screw_hole = printed_hole(hardware.screw_diameter + 2.0 * printing.hole_clearance, printing.hole_compensation)
     for name, r in pulleys + [("thumb.cmc_horn", thumb.cmc_horn_radius)]:
-        screw_hole = printed_hole(hardware.screw_diameter + 2.0 * printing.hole_clearance, printing.hole_compensation)
         limit = r - screw_hole / 2.0 - hardware.tendon_diameter
         if cad.horn_hole_radius > limit + 1e-12:
             raise c.error("horn_hole_radius_mm", cad.horn_hole_radius / MM,

@@ -73,24 +73,36 @@ class Tolerances:
         """The modelled diameter of a round hole that should print at ``fit`` (mm)."""
         return printed_hole(fit, self.compensation)
 
+    def fit(self, hole: str) -> float:
+        """The diameter (mm) the printed hole ``hole`` should measure: ``hole`` names one of the
+        modelled holes below (``axle_clear``, ``axle_press``, ``bearing_seat``, ``screw_clear``,
+        ``screw_pilot``, ``magnet_pocket_d``), each of which is this fit made wider by
+        :meth:`hole`."""
+        return {"axle_clear": self.axle + 2.0 * self.clearance,
+                "axle_press": self.axle - self.interference,
+                "bearing_seat": self.bearing_outer - self.interference,
+                "screw_clear": self.screw + 2.0 * self.clearance,
+                "screw_pilot": self.pilot_ratio * self.screw,
+                "magnet_pocket_d": self.magnet_d + 2.0 * self.magnet_clearance}[hole]
+
     @property
     def axle_clear(self) -> float:
         """Axle clearance bore (a tongue turning on its axle): modelled diameter."""
-        return self.hole(self.axle + 2.0 * self.clearance)
+        return self.hole(self.fit("axle_clear"))
 
     @property
     def axle_press(self) -> float:
         """Axle press bore (the clevis cheeks): modelled diameter."""
-        return self.hole(self.axle - self.interference)
+        return self.hole(self.fit("axle_press"))
 
     @property
     def bearing_seat(self) -> float:
         """Bearing outer ring press seat: modelled diameter."""
-        return self.hole(self.bearing_outer - self.interference)
+        return self.hole(self.fit("bearing_seat"))
 
     @property
     def screw_clear(self) -> float:
-        return self.hole(self.screw + 2.0 * self.clearance)
+        return self.hole(self.fit("screw_clear"))
 
     @property
     def screw_pilot(self) -> float:
@@ -98,7 +110,7 @@ class Tolerances:
         ``print.screw_pilot_ratio`` of its diameter (0.8 by default: 1.6 mm for M2, a thread
         flank of 0.2 mm each side; a pilot of d - press_fit_interference left 0.02 mm), modelled
         with the hole compensation."""
-        return self.hole(self.pilot_ratio * self.screw)
+        return self.hole(self.fit("screw_pilot"))
 
     @property
     def screw_engagement(self) -> float:
@@ -107,7 +119,7 @@ class Tolerances:
 
     @property
     def magnet_pocket_d(self) -> float:
-        return self.hole(self.magnet_d + 2.0 * self.magnet_clearance)
+        return self.hole(self.fit("magnet_pocket_d"))
 
     @property
     def magnet_pocket_depth(self) -> float:

@@ -218,10 +218,10 @@ def groove_tool(g: Groove, outer: float):
     return cutter(sector)
 
 
-def cutter(sector):
+def cutter(shape):
     """A boolean's result (a shape or a list of them) as one cutting tool: its one solid, or a
     compound of its solids."""
-    solids = sector.solids() if hasattr(sector, "solids") else [s for c in sector for s in c.solids()]
+    solids = shape.solids() if hasattr(shape, "solids") else [s for c in shape for s in c.solids()]
     if len(solids) == 1:
         return solids[0]
     from .common import bd
@@ -327,7 +327,7 @@ def anchor_tools(lt: LinkTendons, sec) -> list:
 def knot_pocket_depth(sec, floor: float, cord: float) -> float:
     """Depth (mm) of a loop's knot pocket below its groove floor: two cord diameters, less where
     the axle's clearance bore would come within a flank."""
-    return max(0.0, min(2.0 * cord, floor - sec.tol.axle_clear / 2.0 - units.mm(routing.FLANK)))
+    return max(0.0, min(2.0 * cord, floor - sec.tol.axle_clear / 2.0 - units.mm(FLANK)))
 
 
 def drive_fan_tools(lt: LinkTendons, sec, start: float, flanks: tuple = (), span: tuple | None = None) -> list:
