@@ -307,6 +307,9 @@ def _field(document, path, value):
     # the thickest finger (16) + 2 x 0.2
     ("palm.thickness_mm", 16.2, "palm.thickness_mm", "must exceed the thickest finger (16 mm)"),
     ("print.stl_tolerance_mm", 1e-9, "print.stl_tolerance_mm", "must be >= 0.001"),
+    # PrusaSlicer's limit for a 0.4 mm nozzle is 0.75 x 0.4 = 0.3 mm
+    ("print.layer_height_mm", 0.32, "print.layer_height_mm", "must be <= 0.3"),
+    ("print.layer_height_mm", 0.0, "print.layer_height_mm", "must be >= 0.05"),
     # 0.05 x 189 = 9.45 mm < 16 + 2 x 0.2
     ("fingers.index.length_fraction.distal", 0.05, "fingers.index.length_fraction.distal", "16.40 mm"),
     # thumb metacarpal 0.06 x 189 = 11.34 mm < 10 (hub) + 7.5 + 0.2

@@ -58,7 +58,7 @@ def build(
         if "print_time_s" in totals:
             h, rem = divmod(int(totals["print_time_s"]), 3600)
             typer.echo(f"estimated print: {h} h {rem // 60} min, {totals['filament_g']:.0f} g filament "
-                       f"(PrusaSlicer defaults, infill from params)")
+                       f"(PrusaSlicer defaults; layer height and infill from params)")
         coupon = result.manifest.get("coupon", {})
         if coupon:
             est = coupon.get("print")

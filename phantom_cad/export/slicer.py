@@ -2,8 +2,9 @@
 
 PrusaSlicer's command line (``prusa-slicer --export-gcode``) runs without a display.
 The configuration is PrusaSlicer's built-in defaults (its default printer: 0.4 mm
-nozzle, 200 x 200 mm bed, 0.3 mm layers, 1.75 mm filament) overridden only by what the
-parameter file says about printing: infill density (``print.infill``) and filament
+nozzle, 200 x 200 mm bed, 1.75 mm filament) overridden only by what the parameter file
+says about printing: the layer height (``print.layer_height_mm``, also the first layer's;
+PrusaSlicer's own default is 0.3 mm), infill density (``print.infill``) and filament
 density (``print.density_g_per_cm3``, so that PrusaSlicer reports grams). The .ini we
 load is written next to the exports (``slicer/config.ini``) so the estimate can be
 reproduced by hand::
@@ -66,6 +67,8 @@ def config_ini(print_params) -> str:
         "# PrusaSlicer config written by phantom_cad from params [print]; everything else\n"
         "# is PrusaSlicer's built-in default.\n"
         f"fill_density = {print_params.infill * 100:g}%\n"
+        f"layer_height = {units.mm(print_params.layer_height):g}\n"
+        f"first_layer_height = {units.mm(print_params.layer_height):g}\n"
         f"filament_density = {density_g_cm3:g}\n"
     )
 

@@ -199,6 +199,9 @@ class Print:
     #: added to the diameter of every round hole that takes hardware (bearing seats, axle bores,
     #: screw holes, magnet pockets): FDM prints holes this much small (kinematics.dimensions.printed_hole)
     hole_compensation: float = 0.2e-3
+    #: the slicer's layer height (m): the build's slicing, and the roofs of the tendon channels
+    #: (kinematics.dimensions.roof_angle)
+    layer_height: float = 0.2e-3
 
 
 @dataclass(frozen=True)
@@ -551,6 +554,7 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
         infill=pr.number("infill", gt=0, le=1),
         screw_pilot_ratio=pr.number("screw_pilot_ratio", gt=0.6, lt=1.0, default=0.8),
         hole_compensation=pr.number("hole_compensation_mm", ge=0, le=0.5, default=0.2) * MM,
+        layer_height=pr.number("layer_height_mm", ge=0.05, le=0.3, default=0.2) * MM,
     )
     pr.done()
 

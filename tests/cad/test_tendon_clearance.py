@@ -56,7 +56,7 @@ def test_a_part_without_its_channels_is_caught(params, monkeypatch):
     """Build the index proximal phalanx without the loop and return channels the routing model asks
     for: the check finds those strands inside it."""
     from phantom_cad.cad.parts import phalanx
-    monkeypatch.setattr(phalanx, "channel_tools", lambda lt, extend=None, faces=(): [])
+    monkeypatch.setattr(phalanx, "channel_tools", lambda lt, extend=None, faces=(), up=None: [])
     shape = registry.part(params, "index_proximal").build()
     hits = clearance.tendon_hits(params, {"index_proximal": shape}, fractions=(0.0,))
     assert {h.strand for h in hits} >= {"index_mcp_pip_a", "index_mcp_pip_b", "index_return"}

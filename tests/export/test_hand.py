@@ -161,9 +161,10 @@ def test_every_part_slices(hand):
 
 
 @pytest.mark.xfail(strict=True, reason="PrusaSlicer's automatic supports stand in every digit part's tendon grooves "
-                   "(47-380 mm of support path each) and channels (up to 654 mm) in the exported orientation "
-                   "(dorsal or magnet face down: the least overhang area), default hand 2026-11-24 (docs/parts.md); "
-                   "issue 12 goes on")
+                   "(57-364 mm of support path each, under the pulley floors the cord bears on, which face down "
+                   "with the joint axes flat) and, where the channels end in them, in the channels' mouths (up to "
+                   "80 mm; the teardrop channels' own roofs take none), exported orientation (dorsal or magnet "
+                   "face down), 0.2 mm layers, default hand 2026-11-24 (docs/parts.md); issue 12 goes on")
 def test_tendon_grooves_and_channels_print_without_support(hand):
     """Issue 12: sliced as exported with PrusaSlicer's automatic supports, no support path lies in
     a tendon groove or channel (``export.supports``) of the index finger's and the thumb's parts."""

@@ -37,7 +37,8 @@ def test_parse_gcode_days_and_missing_lines():
 def test_config_from_params():
     ini = slicer.config_ini(load_params().print)
     lines = [line for line in ini.splitlines() if not line.startswith("#")]
-    assert lines == ["fill_density = 40%", "filament_density = 1.24"]   # params/phantom.toml [print]
+    # params/phantom.toml [print]; the layer height is the default 0.2 mm (PrusaSlicer's own is 0.3)
+    assert lines == ["fill_density = 40%", "layer_height = 0.2", "first_layer_height = 0.2", "filament_density = 1.24"]
 
 
 def _cube(a):
@@ -95,9 +96,9 @@ def test_support_goes_under_an_overhang_and_nowhere_else(tmp_path):
     x, y, z = pts[:, 0] - 7.0, pts[:, 1] + 3.0, pts[:, 2]
     assert np.all(z <= 10.0 + 1e-6)                                  # under the shelf
     # above its first layer (which PrusaSlicer widens by about 5 mm) the support keeps to the
-    # shelf's outline within 2 mm, and keeps off the pillar
+    # shelf's outline within 2.5 mm (2.12 measured at 0.2 mm layers), and keeps off the pillar
     up = z > 0.4
-    assert np.all(np.abs(y[up]) <= 5.0 + 2.0) and np.all(np.abs(x[up]) <= 15.0 + 2.0)
+    assert np.all(np.abs(y[up]) <= 5.0 + 2.5) and np.all(np.abs(x[up]) <= 15.0 + 2.5)
     assert not np.any((np.abs(x) < 5.0) & (np.abs(y) < 5.0))        # nothing inside the pillar
     left, right = x < -5.0, x > 5.0
     assert left.sum() > 0.4 * len(pts) and right.sum() > 0.4 * len(pts)

@@ -40,8 +40,13 @@ DIGIT_COLORS = dict(zip(DIGITS, (
     (0.60, 0.45, 0.80),
 ), strict=True))
 
-#: digit links print lying on their flat +x side
+#: a part lying on its flat +x side (the default)
 SIDE_DOWN = F.rot_y(math.pi / 2.0)[:3, :3]
+#: a phalanx on its dorsal face (+z of the link down): its joint axes lie flat, its clevis slots
+#: and grooves stand in vertical planes
+DORSAL_DOWN = F.rot_x(math.pi)[:3, :3]
+#: a finger base on its magnet face (-y of the link down)
+MAGNET_DOWN = F.rot_x(math.pi / 2.0)[:3, :3]
 
 
 def parent_joint(ln: Link) -> Joint | None:
@@ -97,6 +102,12 @@ class Part:
         """3x3: lays the part on its preferred face for printing (z up); the export keeps it unless
         an axis-aligned orientation has less overhang (``export.orient``)."""
         return SIDE_DOWN
+
+    @property
+    def print_up(self) -> np.ndarray:
+        """The printer's +z in the link frame, for the declared ``print_rotation``: the way a hole's
+        roof must point to print without support (``common.teardrop``)."""
+        return np.asarray(self.print_rotation, float)[2].copy()
 
     def build(self):
         raise NotImplementedError

@@ -334,6 +334,33 @@ def cylinder(p0, p1, r: float):
     return b.Solid.make_cylinder(r, h, b.Plane(origin=tuple(p0), x_dir=tuple(xdir), z_dir=tuple(axis)))
 
 
+def teardrop(p0, p1, r: float, up=None, roof: float = math.radians(45.0)):
+    """A hole of radius r from p0 to p1 that prints without support when ``up`` (a unit vector in
+    the same frame: the printer's +z) is given: a cylinder whose top is a roof of two planes at
+    ``roof`` (rad, ``dimensions.roof_angle``) from the vertical, meeting r / sin(roof) above the
+    axis (a teardrop). A hole that stands steeper than that, or no ``up``: the plain cylinder."""
+    p0 = np.asarray(p0, float)
+    p1 = np.asarray(p1, float)
+    if up is None:
+        return cylinder(p0, p1, r)
+    axis = (p1 - p0) / np.linalg.norm(p1 - p0)
+    up = np.asarray(up, float)
+    across = up - (up @ axis) * axis            # the up direction in the hole's cross-section
+    a = roof
+    # the round wall's steepest face looks down acos(|across|) from the vertical: round is enough
+    # when that is at least 90 deg - roof (the roof's own faces look down no steeper)
+    if np.linalg.norm(across) <= math.sin(a) + 1e-9:
+        return cylinder(p0, p1, r)
+    b = bd()
+    e1 = across / np.linalg.norm(across)
+    plane = b.Plane(origin=tuple(p0), x_dir=tuple(e1), z_dir=tuple(axis))
+    t = math.degrees(math.pi / 2.0 - a)         # the roof touches the circle at +-(90 - a) deg
+    arc = b.Edge.make_circle(r, plane, start_angle=t, end_angle=360.0 - t)
+    apex = plane.from_local_coords((r / math.sin(a), 0.0, 0.0))
+    wire = b.Wire([arc, b.Edge.make_line(arc.position_at(1.0), apex), b.Edge.make_line(apex, arc.position_at(0.0))])
+    return b.Solid.extrude(b.Face(wire), b.Vector(*(p1 - p0)))
+
+
 def cyl_x(r: float, x0: float, x1: float, y: float, z: float):
     return cylinder((x0, y, z), (x1, y, z), r)
 

@@ -16,14 +16,10 @@ from ... import canon
 from ...kinematics.frames import tendon_height
 from ...kinematics.topology import FINGERS, digit_links
 from ..measure import circular_pockets, eyelet_centres, point_line_distance
-from .base import Part, child_joint, digit_table
+from .base import MAGNET_DOWN, Part, child_joint, digit_table
 from .common import DigitSection, box, build, cylinder, mm
-from .phalanx import clevis, eyelet, hub_grooves
+from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, hub_grooves
 from .tendons import link_tendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry, verify_grooves
-
-#: how far (mm) the G1 eyelet's near relief runs on along the chord at rest (into the clevis slot)
-NEAR_RELIEF_RUN = 2.0
-
 
 class FingerBase(Part):
     """The metacarpal module of ``finger``: a link fixed to the palm by two magnets."""
@@ -80,6 +76,12 @@ class FingerBase(Part):
     def tendon_entry(self) -> np.ndarray:
         return np.array([0.0, -self.length, self.tendon_z])
 
+    @property
+    def print_rotation(self) -> np.ndarray:
+        """On its magnet face: the least overhang of the axis-aligned ways (``export.orient``
+        measures it); its channels stand nearly upright."""
+        return MAGNET_DOWN
+
     def build(self):
         sec, t = self.sec, self.sec.tol
         W, T, Lb = sec.width, sec.thickness, self.length
@@ -107,4 +109,4 @@ class FingerBase(Part):
             tools.append(cylinder(c - np.array([0.0, 1.0, 0.0]),
                                   c + np.array([0.0, t.magnet_pocket_depth, 0.0]), t.magnet_pocket_d / 2.0))
         # the loop's hub clamp, the return cord's channel and knot well (routing model)
-        return build(body, tools, guide, channel_tools(lt) + anchor_tools(lt, sec))
+        return build(body, tools, guide, channel_tools(lt, up=self.print_up) + anchor_tools(lt, sec, self.print_up))

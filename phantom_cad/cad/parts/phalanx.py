@@ -22,7 +22,7 @@ from ...kinematics import frames as F
 from ...kinematics.dimensions import FLANK
 from ...kinematics.topology import CMC_Q, LINKS, digit_links, joint
 from ..measure import eyelet_centres, point_line_distance
-from .base import Part, child_joint, digit_table, parent_joint
+from .base import DORSAL_DOWN, Part, child_joint, digit_table, parent_joint
 from .common import DigitSection, box, build, cyl_x, cylinder, mm, prism_x, sphere
 from .tendons import (LinkTendons, link_tendons, anchor_tools, channel_tools, drive_fan_tools, groove_tool, knot_pocket_depth,
                       sector_prism, cutter,
@@ -119,6 +119,12 @@ def clevis(sec: DigitSection, joint: str, y: float, hub_x: float | None = None):
         slot = slot.cut(wedge)
     tools = [slot, cyl_x(t.axle_press / 2.0, -W / 2.0 - 1.0, W / 2.0 + 1.0, y, 0.0)]
     return body, tools
+
+
+#: how far (mm) a G1 eyelet's near relief runs on along the chord at rest (into the clevis slot:
+#: as a sphere it left a 0.7 mm rim at 28 deg on the finger bases, 0.47 mm on the 170 mm hand's
+#: thumb CMC base)
+NEAR_RELIEF_RUN = 2.0
 
 
 def eyelet(sec: DigitSection, centre_yz, toward_yz, clip_palmar: bool = False, clip_y: float | None = None):
@@ -232,6 +238,12 @@ class Phalanx(Part):
             self.expect(out, "guide d2", d, mm(self.sec.guide.d2), 0.02)
         return out
 
+    @property
+    def print_rotation(self) -> np.ndarray:
+        """On its dorsal face: the least overhang of the axis-aligned ways (``export.orient``
+        measures it); its tendon channels' roofs point up (``print_up``)."""
+        return DORSAL_DOWN
+
     def build(self):
         sec, t = self.sec, self.sec.tol
         W, T, L = sec.width, sec.thickness, self.length
@@ -265,8 +277,8 @@ class Phalanx(Part):
                            for k in (-1.0, 1.0))
             tools += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - np.array([0.0, *G2]))),
                                      flanks=flanks, span=(-sec.slot_back - 1.0, sec.slot_back))
-        tools += channel_tools(lt, faces=(sec.slot_back, L - sec.slot_back))   # its shoulders
-        tools += anchor_tools(lt, sec)
+        tools += channel_tools(lt, faces=(sec.slot_back, L - sec.slot_back), up=self.print_up)   # its shoulders
+        tools += anchor_tools(lt, sec, self.print_up)
         return build(body, tools)
 
 

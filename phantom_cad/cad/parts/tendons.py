@@ -30,7 +30,7 @@ import numpy as np
 
 from ... import units
 from ...kinematics import routing
-from ...kinematics.dimensions import FLANK
+from ...kinematics.dimensions import FLANK, roof_angle
 from ...kinematics.memo import memoised
 from ...kinematics.topology import TENDONS, joint
 
@@ -234,29 +234,37 @@ def _loc_x(x: float):
     return b.Location((float(x), 0.0, 0.0))
 
 
-def channel_tools(lt: LinkTendons, extend: float | None = None, faces=()):
+def channel_tools(lt: LinkTendons, extend: float | None = None, faces=(), up=None):
     """A channel along every loop and return run fixed to the link, a clearance diameter wide,
     reaching half a diameter past each end (into the groove or well it meets); and where two
-    strands cross (a figure-eight), the reliefs of :func:`crossing_tools` (``faces`` passed on)."""
-    from .common import cylinder
+    strands cross (a figure-eight), the reliefs of :func:`crossing_tools` (``faces`` passed on).
+    ``up``: the printer's +z in the link frame (the part's ``print_up``): a channel lying flatter
+    than 45 deg gets a teardrop's roof (``common.teardrop``), which prints without support; the
+    cord runs on its round floor, so its path does not change."""
+    from .common import teardrop
+    roof = roof_angle(lt.params.print.layer_height)
     out = []
     for p0, p1, d in lt.channels:
         u = (p1 - p0) / np.linalg.norm(p1 - p0)
         e = d / 2.0 if extend is None else extend
-        out.append(cylinder(p0 - e * u, p1 + e * u, d / 2.0))
-    return out + crossing_tools(lt, faces)
+        out.append(teardrop(p0 - e * u, p1 + e * u, d / 2.0, up, roof))
+    return out + crossing_tools(lt, faces, up)
 
 
-def crossing_tools(lt: LinkTendons, faces=()) -> list:
+def crossing_tools(lt: LinkTendons, faces=(), up=None) -> list:
     """Where a figure-eight's two strands cross (four channel legs from one point, in one plane
     x = const), the two channels meet at a shallow angle (22 deg on a finger's proximal phalanx) and
     the web between them ends in a knife edge (0.04-0.07 mm). Between each pair of legs less than
     90 deg apart the web is cut away, a channel wide, out to where the channels' walls lie a flank
     (``dimensions.FLANK``) apart: the web then ends square and at least that thick. ``faces``: y
     (mm) of the link's faces square to y (a phalanx's shoulders); a cut that would end less than a
-    flank short of one goes through it instead (0.61 mm was left on the pinky's middle phalanx)."""
+    flank short of one goes through it instead (0.61 mm was left on the pinky's middle phalanx).
+    With ``up`` (teardrop channels), the lower leg's roof reaches r / sin(roof) above its axis into
+    the web: the cut reaches that much further."""
     from .common import prism_x
     wall = units.mm(FLANK)
+    roof = roof_angle(lt.params.print.layer_height)
+    apex = 1.0 / math.sin(roof) - 1.0 if up is not None else 0.0
     legs: dict[tuple, list] = {}
     for p0, p1, d in lt.channels:
         a, b = np.asarray(p0, float), np.asarray(p1, float)
@@ -278,7 +286,7 @@ def crossing_tools(lt: LinkTendons, faces=()) -> list:
                 if not 1e-6 < theta < math.pi / 2.0:
                     continue
                 d = max(da, db)
-                reach = (d + wall) / (2.0 * math.sin(theta / 2.0))
+                reach = (d + apex * d / 2.0 + wall) / (2.0 * math.sin(theta / 2.0))
                 # a face square to y the relief would stop short of by less than a flank: through it
                 for yf in faces:
                     toward = min(ua[1] * (yf - c[1]), ub[1] * (yf - c[1]))
@@ -294,9 +302,10 @@ def crossing_tools(lt: LinkTendons, faces=()) -> list:
     return out
 
 
-def anchor_tools(lt: LinkTendons, sec) -> list:
-    """Clamps and knot wells (see the module doc)."""
-    from .common import cylinder
+def anchor_tools(lt: LinkTendons, sec, up=None) -> list:
+    """Clamps and knot wells (see the module doc). ``up`` as for :func:`channel_tools`: a knot well
+    that lies flat as printed (a finger base's, on its magnet face) gets a teardrop's roof."""
+    from .common import cylinder, teardrop
     t = sec.tol
     out = []
     for a in lt.anchors:
@@ -320,7 +329,8 @@ def anchor_tools(lt: LinkTendons, sec) -> list:
             out.append(cylinder(c0, c1, (sec.layout.groove - t.clearance) / 2.0))
         else:                                # a knot well up to the dorsal face, one clearance wider
             d = a.cord + 4.0 * t.clearance   # than the channel it meets (equal bores meet degenerately)
-            out.append(cylinder(p, (p[0], p[1], sec.thickness / 2.0 + 1.0), d / 2.0))
+            out.append(teardrop(p, (p[0], p[1], sec.thickness / 2.0 + 1.0), d / 2.0, up,
+                                roof_angle(lt.params.print.layer_height)))
     return out
 
 

@@ -19,9 +19,9 @@ import numpy as np
 from ... import canon
 from ...kinematics.topology import CMC_Q, JOINTS, link
 from ..measure import eyelet_centres, point_line_distance
-from .base import Part, child_joint, digit_table
+from .base import DORSAL_DOWN, Part, child_joint, digit_table
 from .common import DigitSection, box, build, cylinder, mm, prism_x, sphere
-from .phalanx import clevis, eyelet, hub_grooves
+from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, hub_grooves
 from .tendons import link_tendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry, verify_grooves
 from .pulley import BASE_ANGLES, HORN_ANGLES
 
@@ -68,6 +68,11 @@ class ThumbCMCBase(Part):
         G1, _ = self.sec.guide_points()
         return np.array([0.0, self.length + G1[0], G1[1]])
 
+    @property
+    def print_rotation(self) -> np.ndarray:
+        """On its dorsal face, as the phalanges (``export.orient`` measures it)."""
+        return DORSAL_DOWN
+
     def build(self):
         sec, t = self.sec, self.sec.tol
         W, T, L = sec.width, sec.thickness, self.length
@@ -82,6 +87,9 @@ class ThumbCMCBase(Part):
         b3, guide, u, (s_near, s_far) = eyelet(sec, G1 + shift, lt.eyelet_toward(G1 + shift))
         body += b3
         guide += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - np.array([0.0, *(G1 + shift)]))))
+        # the near relief leaves through the clevis slot's back along the chord at rest, as on the
+        # finger bases
+        guide.append(cylinder(s_near, s_near + NEAR_RELIEF_RUN * u, t.tendon_relief / 2.0))
         # the tendon comes down the CMC axis (through the hub's central bore, from the palm's
         # arch above) and turns along the arm to the eyelet: CMC rotation leaves its length alone.
         # The turn is rounded by a sphere one tendon radius wider than the bore (a sphere as wide
@@ -104,4 +112,4 @@ class ThumbCMCBase(Part):
         for a in HORN_ANGLES + BASE_ANGLES:
             c = self.horn_radius * np.array([math.cos(a), math.sin(a), 0.0])
             tools.append(cylinder(c - (0, 0, h), c + (0, 0, h), t.screw_clear / 2.0))
-        return build(body, tools, guide, channel_tools(lt) + anchor_tools(lt, sec))
+        return build(body, tools, guide, channel_tools(lt, up=self.print_up) + anchor_tools(lt, sec, self.print_up))
