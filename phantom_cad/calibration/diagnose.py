@@ -32,7 +32,7 @@ import numpy as np
 from ..kinematics.topology import Q_COLUMNS
 from .data import Measurements
 from .effects import MEASUREMENT, REGISTRY, get_effect
-from .identify import combinations
+from .identify import combinations, experiment_text, near_duplicate
 from .residual import (MAE_PER_SIGMA, NoiseFloor, made_worse, measured_features, noise_floor, signature,
                        signature_report, verdict)
 from .parallel import FitPool
@@ -472,25 +472,36 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
 
 def _duplicated(best: Candidate, dropped) -> dict[str, str]:
     """{hand effect dropped: the sentence that says so} for the hand effects a measurement effect
-    just added duplicates exactly on these data: their parameters and the measurement's form a
-    combination the fit with both cannot separate (calibration/identify.py). The backward step keeps
-    the simpler model, the measurement side; said so, because if the hand has the effect the
-    calibrated control law lacks it (a uniform tendon compliance scales each distal joint by a
-    constant: on a sweep it is a per-joint scale of the camera)."""
+    just added duplicates on these data: exactly (their parameters and the measurement's form a
+    combination the fit with both cannot separate, calibration/identify.py) or nearly (with the
+    measurement's parameters in the fit, one of the effect's parameters' variance grows
+    identify.NEAR_DUPLICATE-fold or more: a drive pulley's radius error scales its chain's angles
+    almost as a camera's per-joint scales do, the cosine law's curvature alone tells them apart).
+    The backward step keeps the simpler model, the measurement side; said so, because if the hand
+    has the effect the calibrated control law lacks it (a uniform tendon compliance scales each
+    distal joint by a constant: on a sweep it is a per-joint scale of the camera)."""
     if not dropped or get_effect(best.effect).stage != MEASUREMENT:
         return {}
     out = {}
     combos = combinations(best.result)
+    lacks = ("the measurement side is kept as the simpler model, so a calibrated control law lacks {name}; "
+             "if the hand has it, calibrate the measurement on known angles and fit with --effects {name}")
     for name, _ in dropped:
         for c in combos:
             keys = list(c.weights)
             if any(k.startswith(f"{name}.") for k in keys) and any(k.startswith(f"{best.effect}.") for k in keys):
                 shown = " ".join(f"{w:+.2f} {k}" for k, w in list(c.weights.items())[:4])
                 out[name] = (f"; but the data cannot tell {name} from {best.effect} (not identifiable together: "
-                             f"{shown}{' ...' if len(keys) > 4 else ''}): the measurement side is kept as the "
-                             f"simpler model, so a calibrated control law lacks {name}; if the hand has it, "
-                             f"calibrate the measurement on known angles and fit with --effects {name}")
+                             f"{shown}{' ...' if len(keys) > 4 else ''}): " + lacks.format(name=name))
                 break
+        else:
+            near = near_duplicate(best.result, name, best.effect)
+            if near is not None:
+                out[name] = (f"; but the data barely tell {name} from {best.effect} (nearly duplicated: with "
+                             f"{best.effect} in the fit the variance of {near.parameter} grows {near.inflation:,.0f}-fold, "
+                             f"its uncertainty {near.inflation ** 0.5:.0f}-fold): " + lacks.format(name=name)
+                             + ("; " + experiment_text(near.experiment) if near.experiment else
+                                "; no recording of one servo separates them better than these data do"))
     return out
 
 

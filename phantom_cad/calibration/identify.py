@@ -41,6 +41,9 @@ MIN_WEIGHT = 0.05
 MIN_GAIN = 10.0
 #: rows of a proposed recording
 ROWS = 21
+#: a parameter whose variance grows this many times when another effect's parameters join the fit
+#: is nearly duplicated by them (its uncertainty tenfold): separable in principle, not on these data
+NEAR_DUPLICATE = 100.0
 #: the thirds of a servo's travel a recording may cover
 RANGES = ((0.0, 1.0 / 3.0), (1.0 / 3.0, 2.0 / 3.0), (2.0 / 3.0, 1.0))
 
@@ -63,21 +66,71 @@ class Combination:
         if self.experiment is None:
             return (out + "; no recording of one servo separates them (the model predicts the same for "
                     "every command): fix one of them from another measurement")
-        e = self.experiment
-        if e["gain"] is None:
-            more = f"by {e['rms_deg_per_unit']:.3g} deg per unit, where these data do not move at all"
-        elif e["gain"] >= 1000:
-            more = "more than 1000 times more per unit than in these data"
-        else:
-            more = f"{e['gain']:.0f} times more per unit than in these data"
-        return (out + f"; to separate them, record servo {e['servo']} {e['direction']} over "
-                f"{e['from_deg']:.0f}-{e['to_deg']:.0f} deg and measure {e['joint']} ({e['joint_name']}): there the "
-                f"combination moves the prediction {more}")
+        return out + "; " + experiment_text(self.experiment)
 
     def to_json(self) -> dict:
         return {"parameters": {k: round(v, 4) for k, v in self.weights.items()},
                 "singular_ratio": float(f"{self.ratio:.3e}"), "rms_data_deg": float(f"{self.rms_data:.3e}"),
                 "experiment": self.experiment, "text": self.text()}
+
+
+def experiment_text(e: dict) -> str:
+    """The sentence that proposes a recording (:func:`_experiment`'s dict)."""
+    if e["gain"] is None:
+        more = f"by {e['rms_deg_per_unit']:.3g} deg per unit, where these data do not move at all"
+    elif e["gain"] >= 1000:
+        more = "more than 1000 times more per unit than in these data"
+    else:
+        more = f"{e['gain']:.0f} times more per unit than in these data"
+    return (f"to separate them, record servo {e['servo']} {e['direction']} over {e['from_deg']:.0f}-"
+            f"{e['to_deg']:.0f} deg and measure {e['joint']} ({e['joint_name']}): there the combination moves "
+            f"the prediction {more}")
+
+
+@dataclass
+class NearDuplicate:
+    """A parameter another effect's parameters nearly duplicate on the fitted data."""
+
+    parameter: str                   # "effect.key"
+    inflation: float                 # its variance with the other effect / without it
+    experiment: dict | None          # the recording that separates them best (:func:`_experiment`)
+
+
+def near_duplicate(fr, effect: str, other: str) -> NearDuplicate | None:
+    """The parameter of ``effect`` whose variance grows most when ``other``'s parameters join the
+    fit, if it grows at least :data:`NEAR_DUPLICATE`-fold: the ratio of its variance inflation
+    factors, the diagonal of the inverse scaled normal matrix C (module docstring) with all of
+    ``fr``'s free parameters and with ``other``'s left out. A combination the singular values call
+    not identifiable (:func:`combinations`) inflates without bound; this one is separable in
+    principle but not at these data's noise. The proposed recording moves the prediction most
+    along the direction the data confuse: C^-1 e_k, the parameter's error ellipsoid's axis."""
+    JTJ = getattr(fr, "jtj", None)
+    if JTJ is None:
+        return None
+    owner = [fr.model.names[k] for k, _, _ in fr.model.free]
+    d = np.sqrt(np.clip(np.diag(JTJ), 0.0, None))
+    live = np.flatnonzero(d > 0)
+    mine = [i for i in live if owner[i] == effect]
+    rest = [i for i in live if owner[i] != other]
+    if not mine or not any(owner[i] == other for i in live):
+        return None
+    C = JTJ / np.outer(np.where(d > 0, d, 1.0), np.where(d > 0, d, 1.0))
+    with_all = np.linalg.pinv(C[np.ix_(live, live)])
+    without = np.linalg.pinv(C[np.ix_(rest, rest)])
+    pos_all = {i: n for n, i in enumerate(live)}
+    pos_rest = {i: n for n, i in enumerate(rest)}
+    ratios = {i: with_all[pos_all[i], pos_all[i]] / without[pos_rest[i], pos_rest[i]] for i in mine}
+    worst = max(ratios, key=ratios.get)
+    if not ratios[worst] >= NEAR_DUPLICATE:
+        return None
+    v = np.zeros(fr.model.p)
+    v[live] = with_all[:, pos_all[worst]]
+    v /= np.linalg.norm(v)
+    s2 = float(v[live] @ C[np.ix_(live, live)] @ v[live])
+    delta = np.where(d > 0, v / np.where(d > 0, d, 1.0), 0.0)
+    experiment = _experiment(fr, delta, np.sqrt(max(s2, 0.0)) / np.sqrt(max(fr.m, 1)))
+    _, _, prm = fr.model.free[worst]
+    return NearDuplicate(f"{effect}.{prm.key}", float(ratios[worst]), experiment)
 
 
 def _null_directions(fr) -> list[tuple[np.ndarray, float, float]]:

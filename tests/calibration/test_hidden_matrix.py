@@ -276,17 +276,7 @@ NESTED = {("tendon_elasticity", "tendon_elasticity_per_finger"): ["tendon_elasti
 #: n_eff came from the best candidate's residual alone, which the other hidden effect kept near the
 #: clip of rho at 0.95 (900 cells counted as 23-43), and nothing passed in the three backlash pairs
 #: and friction + camera_scale (measured: selected [], MAE after 1.1-1.5 deg against a 0.085 floor)
-_CAMERA_PRUNE = ("the hand family selected {} (a per-joint scale's residual pulls in spurious hand effects), "
-                 "then camera_scale (15 per-joint scales) explained everything and the backward step dropped "
-                 "them all, the hidden {} included")
-PAIR_XFAIL: dict[tuple[str, str], str] = {
-    ("pulley_radius_error", "camera_scale"):
-        "selected ['camera_scale'] only: " + _CAMERA_PRUNE.format("pulley_radius_error, joint_offset",
-                                                                  "pulley_radius_error")
-        + "; MAE after 0.0766 vs floor 0.0782, model-vs-truth 0.0148 (the fit is fine, the attribution is not: "
-        "identifiable next to the scales by the singular values, but refitted with them the radius errors stand "
-        "at |z| <= 3.0, where spurious ones on camera-only data reach 2.4)",
-}
+PAIR_XFAIL: dict[tuple[str, str], str] = {}
 
 
 def pair_cases():
@@ -304,6 +294,14 @@ def pair_cases():
 #: MAE after 0.0816 / 0.0797 against floors 0.0809 / 0.0776, model-vs-truth 0.0068 / 0.0095 deg.
 #: (Strict xfails until the report named the ambiguity.)
 DUPLICATED_BY_CAMERA = {"tendon_elasticity", "tendon_elasticity_per_finger"}
+#: and one it duplicates nearly: a drive pulley's radius error scales its chain's angles as per-joint
+#: scales do but for the cosine law's curvature. Measured (seed 100 + k): selected ['camera_scale']
+#: only, the backward step dropped the hidden radius errors (dIC -15.6) and a spurious joint offset;
+#: with the scales in the fit the radius errors' variance grows 1,750-3,270-fold (the offset's 2-4);
+#: MAE after 0.0766 vs floor 0.0782, model-vs-truth 0.0148. (A strict xfail until the report named
+#: it: refitted with the scales the radius errors stood at |z| <= 3.0, where spurious ones on
+#: camera-only data reach 2.4, so no selection rule can attribute them.)
+NEARLY_DUPLICATED_BY_CAMERA = {"pulley_radius_error"}
 
 
 @pytest.mark.parametrize("a, b, k", list(pair_cases()))
@@ -313,11 +311,17 @@ def test_two_hidden_effects(hand, a, b, k):
     info = summary(out, floor, vs_truth)
     if (a, b) in NESTED:
         assert out["selected"] == NESTED[a, b], info
-    elif b == "camera_scale" and a in DUPLICATED_BY_CAMERA and a not in out["selected"]:
+    elif b == "camera_scale" and a in DUPLICATED_BY_CAMERA | NEARLY_DUPLICATED_BY_CAMERA and a not in out["selected"]:
         assert b in out["selected"], info
         named = [n for n in out["notes"] if n.startswith(f"{a} was dropped after camera_scale")]
-        assert named and f"the data cannot tell {a} from camera_scale" in named[0], (info, out["notes"])
+        words = "cannot tell" if a in DUPLICATED_BY_CAMERA else "barely tell"
+        assert named and f"the data {words} {a} from camera_scale" in named[0], (info, out["notes"])
         assert f"a calibrated control law lacks {a}" in named[0]
+        # an effect the scales do not duplicate (a joint offset: there at rest), dropped with it, is
+        # not said to be duplicated; a spurious one they do (a radius error) may be
+        others = [n for n in out["notes"] if " was dropped after camera_scale" in n
+                  and n.split(" ", 1)[0] not in DUPLICATED_BY_CAMERA | NEARLY_DUPLICATED_BY_CAMERA]
+        assert not any("cannot tell" in n or "barely tell" in n for n in others), out["notes"]
     else:
         assert a in out["selected"] and b in out["selected"], info
     check_fit(out, floor, vs_truth)
@@ -337,7 +341,7 @@ def test_a_hand_effect_the_camera_duplicates_is_named(hand):
     assert "the data cannot tell tendon_elasticity from camera_scale (not identifiable together: " in notes["tendon_elasticity"]
     assert "0.71 tendon_elasticity.compliance_per_m" in notes["tendon_elasticity"]    # measured: +-0.71
     assert "a calibrated control law lacks tendon_elasticity" in notes["tendon_elasticity"]
-    assert "cannot tell" not in notes["joint_offset"]
+    assert "cannot tell" not in notes["joint_offset"] and "barely tell" not in notes["joint_offset"]
 
 
 # -- physics outside the library -----------------------------------------------------------------

@@ -115,3 +115,37 @@ def test_two_offsets_on_one_joint_are_never_separable(hand, effects):
     assert c.experiment is None
     assert "no recording of one servo separates them" in c.text()
     assert np.all(np.isnan(fr.std))
+
+
+class _Fit:
+    """The parts of a FitResult near_duplicate reads: a normal matrix over free parameters owned
+    by named effects (a stand-in model: the recording search is stubbed out)."""
+
+    def __init__(self, jtj, owners):
+        from types import SimpleNamespace
+        self.jtj = np.asarray(jtj, float)
+        names = tuple(dict.fromkeys(owners))
+        free = [(names.index(o), i, SimpleNamespace(key=f"p{i}")) for i, o in enumerate(owners)]
+        self.model = SimpleNamespace(names=names, free=free, p=len(owners))
+        self.m = 100
+
+
+@pytest.mark.parametrize("rho, flagged", [(0.995, True), (0.99, False), (0.0, False)])
+def test_near_duplicate_by_hand(monkeypatch, rho, flagged):
+    """Two parameters whose Jacobian columns correlate by rho, and a third apart: with both in the
+    fit the first's variance is 1 / (1 - rho^2) of what it is alone (the variance inflation factor),
+    whatever the columns' norms: 100.25 at rho = 0.995 (flagged: at least NEAR_DUPLICATE), 50.25 at
+    0.99 (not)."""
+    from phantom_cad.calibration import identify
+
+    monkeypatch.setattr(identify, "_experiment", lambda fr, delta, rms: None)
+    D = np.diag([2.0, 30.0, 0.5])                       # column norms: the units do not matter
+    C = np.array([[1.0, rho, 0.0], [rho, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    fr = _Fit(D @ C @ D, ["hand_a", "camera", "hand_b"])
+    near = identify.near_duplicate(fr, "hand_a", "camera")
+    if flagged:
+        assert near.parameter == "hand_a.p0"
+        assert near.inflation == pytest.approx(1.0 / (1.0 - rho ** 2), rel=1e-9)
+    else:
+        assert near is None
+    assert identify.near_duplicate(fr, "hand_b", "camera") is None      # uncorrelated: inflation 1
