@@ -123,16 +123,17 @@ def test_a_registered_toy_effect_is_diagnosed(hand, cmc_gain_error):
 
 def test_large_files_select_on_a_subsample_and_fit_on_every_row(hand, monkeypatch):
     """Issue 8, defect 10: diagnose on 1,000,000 rows took 253 s and 2.3 GB. The selection now runs
-    on every k-th row (at most SELECTION_ROWS); the selected effects are fitted on all rows. Here
-    SELECTION_ROWS is lowered so a small file takes that path: the hidden effect is still found,
-    the final fit covers every measured cell, and the report says what was done."""
+    on every k-th row (at most SELECTION_CELLS measured cells); the selected effects are fitted on
+    all rows. Here SELECTION_CELLS is lowered so a small file takes that path: the hidden effect is
+    still found, the final fit covers every measured cell, and the report says what was done."""
     import numpy as np
 
     from phantom_cad.calibration import diagnose as dg
 
     sim = simulate(hand, ["friction_hysteresis"], noise_deg=NOISE, seed=4, points=60)
     m = sim.measurements
-    monkeypatch.setattr(dg, "SELECTION_ROWS", len(m) // 4)
+    cells = int(np.isfinite(m.q).sum())
+    monkeypatch.setattr(dg, "SELECTION_CELLS", -(-cells // 4))      # every 4th row
     d = diagnose(hand, m)
     assert d.selected == ["friction_hysteresis"]
     assert d.after.m == d.before.m == int(np.isfinite(m.q).sum())      # every measured cell
