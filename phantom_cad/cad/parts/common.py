@@ -346,17 +346,16 @@ def teardrop(p0, p1, r: float, up=None, roof: float = math.radians(45.0)):
     axis = (p1 - p0) / np.linalg.norm(p1 - p0)
     up = np.asarray(up, float)
     across = up - (up @ axis) * axis            # the up direction in the hole's cross-section
-    a = roof
     # the round wall's steepest face looks down acos(|across|) from the vertical: round is enough
     # when that is at least 90 deg - roof (the roof's own faces look down no steeper)
-    if np.linalg.norm(across) <= math.sin(a) + 1e-9:
+    if np.linalg.norm(across) <= math.sin(roof) + 1e-9:
         return cylinder(p0, p1, r)
     b = bd()
     e1 = across / np.linalg.norm(across)
     plane = b.Plane(origin=tuple(p0), x_dir=tuple(e1), z_dir=tuple(axis))
-    t = math.degrees(math.pi / 2.0 - a)         # the roof touches the circle at +-(90 - a) deg
+    t = math.degrees(math.pi / 2.0 - roof)      # the roof touches the circle at +-(90 deg - roof)
     arc = b.Edge.make_circle(r, plane, start_angle=t, end_angle=360.0 - t)
-    apex = plane.from_local_coords((r / math.sin(a), 0.0, 0.0))
+    apex = plane.from_local_coords((r / math.sin(roof), 0.0, 0.0))
     wire = b.Wire([arc, b.Edge.make_line(arc.position_at(1.0), apex), b.Edge.make_line(apex, arc.position_at(0.0))])
     return b.Solid.extrude(b.Face(wire), b.Vector(*(p1 - p0)))
 

@@ -238,9 +238,10 @@ def channel_tools(lt: LinkTendons, extend: float | None = None, faces=(), up=Non
     """A channel along every loop and return run fixed to the link, a clearance diameter wide,
     reaching half a diameter past each end (into the groove or well it meets); and where two
     strands cross (a figure-eight), the reliefs of :func:`crossing_tools` (``faces`` passed on).
-    ``up``: the printer's +z in the link frame (the part's ``print_up``): a channel lying flatter
-    than 45 deg gets a teardrop's roof (``common.teardrop``), which prints without support; the
-    cord runs on its round floor, so its path does not change."""
+    ``up``: the printer's +z in the link frame (the part's ``print_up``): a channel that lies
+    flatter than its round wall prints gets a teardrop's roof at ``dimensions.roof_angle`` of the
+    layer height (``common.teardrop``), which prints without support; the cord runs on its round
+    floor, so its path does not change."""
     from .common import teardrop
     roof = roof_angle(lt.params.print.layer_height)
     out = []
