@@ -97,3 +97,29 @@ def test_prusaslicer_supports_round_channels_not_teardrops(tmp_path, layer_mm):
                 inside |= np.hypot(pts[:, 1] - y, pts[:, 2] - zc) <= r / math.sin(a) + 0.3   # the whole teardrop
             found[kind] = float(inside.sum()) * slicer.SUPPORT_SPACING
         assert found["round"] > 100.0 and found["teardrop"] == 0.0, (climb, found)
+
+
+@needs_slicer
+def test_prusaslicer_bridges_a_flat_roof_across_a_slot_but_supports_a_round_floor(tmp_path):
+    """Why the tendon grooves still take support (docs/parts.md): in a 40 x 20 x 10 mm block, a
+    1.9 mm slot 6 mm high with a flat roof is bridged (no support); the same slot cut down from
+    the top around a 4.25 mm floor (a groove round a hub whose axis lies flat, its lowest point 4 mm
+    above the bed) takes support under the floor, though each layer of the floor spans the same
+    1.9 mm between the flanks."""
+    import trimesh
+
+    from phantom_cad.cad.parts.common import cyl_x
+    from phantom_cad.export import slicer, step_stl
+
+    ini = "layer_height = 0.2\nfirst_layer_height = 0.2\n"
+    block = box(0.0, 20.0, -10.0, 10.0, 0.0, 10.0)
+    flat = block.cut(box(9.05, 10.95, -10.0, 10.0, 0.0, 6.0))
+    groove = block.cut(box(9.05, 10.95, -10.0, 10.0, 0.0, 10.0).cut(cyl_x(4.25, 8.0, 12.0, 0.0, 8.25)))
+    found = {}
+    for name, shape in (("flat", flat), ("groove", groove)):
+        v, f = step_stl.tessellate(shape, 0.01)
+        trimesh.Trimesh(v, f).export(tmp_path / f"{name}.stl")
+        pts = slicer.slice_supports(tmp_path / f"{name}.stl", ini)
+        in_slot = (np.abs(pts[:, 0] - 10.0) <= 0.95) if len(pts) else np.zeros(0, bool)
+        found[name] = float(in_slot.sum()) * slicer.SUPPORT_SPACING
+    assert found["flat"] == 0.0 and found["groove"] > 100.0, found
