@@ -42,9 +42,7 @@ def sliced(p, round_channels: bool):
     with tempfile.TemporaryDirectory() as tmp:
         stl = Path(tmp) / f"{PART}.stl"
         trimesh.Trimesh(vp, f, process=False).export(stl)
-        pts = slicer.slice_supports(stl, slicer.config_ini(p.print))
-    Ti = np.linalg.inv(T)
-    link = pts @ Ti[:3, :3].T + Ti[:3, 3] if len(pts) else pts
+        link = supports.link_points(stl, T, slicer.config_ini(p.print))
     return trimesh.Trimesh(v, f, process=False), link, supports.in_features(p, PART, link)
 
 

@@ -332,8 +332,7 @@ def _diagnose(hand, m: Measurements, candidates, start, jobs: int | None) -> Dia
     for n in names:
         get_effect(n, "--effects")
     full = Problem(hand, m.require_joints())
-    cells = int(np.isfinite(m.q).sum())
-    step = max(1, -(-cells // SELECTION_CELLS))
+    step = max(1, -(-full.m // SELECTION_CELLS))
     problem = full if step == 1 else full.subset(np.arange(0, len(m), step))
     parts = folds(problem)
     with FitPool(hand, problem, parts, jobs) as pool:

@@ -44,10 +44,16 @@ def in_features(params, link: str, points: np.ndarray) -> dict[str, float]:
     return out
 
 
-def part_support(params, stl_path, print_transform, link: str, ini_text: str) -> dict:
-    """Slice an exported part with automatic supports: {"total_mm": the support path, "features":
-    :func:`in_features`} (``print_transform``: the manifest's 4x4 from link to print frame)."""
+def link_points(stl_path, print_transform, ini_text: str) -> np.ndarray:
+    """PrusaSlicer's support under an exported part (:func:`slicer.slice_supports`), moved into
+    its link frame (``print_transform``: the manifest's 4x4 from link to print frame), mm."""
     pts = slicer.slice_supports(stl_path, ini_text)
     T = np.linalg.inv(np.asarray(print_transform, float))
-    link_pts = pts @ T[:3, :3].T + T[:3, 3] if len(pts) else pts
-    return {"total_mm": float(len(pts)) * slicer.SUPPORT_SPACING, "features": in_features(params, link, link_pts)}
+    return pts @ T[:3, :3].T + T[:3, 3] if len(pts) else pts
+
+
+def part_support(params, stl_path, print_transform, link: str, ini_text: str) -> dict:
+    """Slice an exported part with automatic supports: {"total_mm": the support path, "features":
+    :func:`in_features`} (``print_transform`` as for :func:`link_points`)."""
+    pts = link_points(stl_path, print_transform, ini_text)
+    return {"total_mm": float(len(pts)) * slicer.SUPPORT_SPACING, "features": in_features(params, link, pts)}

@@ -138,6 +138,12 @@ class LinkTendons:
             k = ends.index(link_name)
             self.drive_sweeps.append((_mm(sweep[0][k]), [_mm(pr[1 - k]) for pr in sweep]))
 
+    @property
+    def roof(self) -> float:
+        """The roof angle (rad) of this hand's teardrop channels: ``dimensions.roof_angle`` of its
+        layer height."""
+        return roof_angle(self.params.print.layer_height)
+
     def eyelet_toward(self, centre_yz) -> np.ndarray:
         """A point (y, z) the drive's guide eyelet at ``centre_yz`` points toward: along the
         bisector of the directions its chord takes over the travel, so the chord swings least
@@ -243,12 +249,11 @@ def channel_tools(lt: LinkTendons, extend: float | None = None, faces=(), up=Non
     layer height (``common.teardrop``), which prints without support; the cord runs on its round
     floor, so its path does not change."""
     from .common import teardrop
-    roof = roof_angle(lt.params.print.layer_height)
     out = []
     for p0, p1, d in lt.channels:
         u = (p1 - p0) / np.linalg.norm(p1 - p0)
         e = d / 2.0 if extend is None else extend
-        out.append(teardrop(p0 - e * u, p1 + e * u, d / 2.0, up, roof))
+        out.append(teardrop(p0 - e * u, p1 + e * u, d / 2.0, up, lt.roof))
     return out + crossing_tools(lt, faces, up)
 
 
@@ -264,8 +269,7 @@ def crossing_tools(lt: LinkTendons, faces=(), up=None) -> list:
     the web: the cut reaches that much further."""
     from .common import prism_x
     wall = units.mm(FLANK)
-    roof = roof_angle(lt.params.print.layer_height)
-    apex = 1.0 / math.sin(roof) - 1.0 if up is not None else 0.0
+    apex = 1.0 / math.sin(lt.roof) - 1.0 if up is not None else 0.0
     legs: dict[tuple, list] = {}
     for p0, p1, d in lt.channels:
         a, b = np.asarray(p0, float), np.asarray(p1, float)
@@ -330,8 +334,7 @@ def anchor_tools(lt: LinkTendons, sec, up=None) -> list:
             out.append(cylinder(c0, c1, (sec.layout.groove - t.clearance) / 2.0))
         else:                                # a knot well up to the dorsal face, one clearance wider
             d = a.cord + 4.0 * t.clearance   # than the channel it meets (equal bores meet degenerately)
-            out.append(teardrop(p, (p[0], p[1], sec.thickness / 2.0 + 1.0), d / 2.0, up,
-                                roof_angle(lt.params.print.layer_height)))
+            out.append(teardrop(p, (p[0], p[1], sec.thickness / 2.0 + 1.0), d / 2.0, up, lt.roof))
     return out
 
 
