@@ -64,7 +64,7 @@ def main(out: Path) -> None:
         T = assembly.pose_transforms(p, q)
         render.render_png(_items(meshes, T, named=("palm", "forearm")), out / fname, title=f"{p.name} hand ({p.side}), {what}",
                           subtitle="tendon servos in the forearm module; stepped metacarpal heads; default parameters", elev=elev, azim=azim,
-                          size_px=1000, max_faces=150000)
+                          size_px=1000)
         print(f"wrote {out / fname}")
     postures(p, meshes, solids, out)
     T = assembly.pose_transforms(p)
@@ -76,7 +76,7 @@ def main(out: Path) -> None:
                                      label))
     render.render_png(items, out / "hand_exploded.png", title=f"{p.name} hand ({p.side}), exploded",
                       subtitle="each part moved off the one it mounts on, along the way it goes on (docs/assembly.md)",
-                      elev=62.0, azim=-75.0, size_px=1100, max_faces=150000)
+                      elev=62.0, azim=-75.0, size_px=1100)
     print(f"wrote {out / 'hand_exploded.png'}")
 
 
@@ -107,7 +107,7 @@ def postures(p, meshes, solids, out: Path) -> None:
                       title=f"{p.name} hand ({p.side}), power grasp: every tendon servo at full travel, seen from the ulnar side",
                       subtitle="fingertip to palm (mm, on the solids): " + ", ".join(gaps)
                       + "; target 10 mm (docs/parts.md, known gaps)",
-                      elev=5.0, azim=0.0, size_px=1000, max_faces=150000)
+                      elev=5.0, azim=0.0, size_px=1000)
     print(f"wrote {out / 'hand_power.png'}")
     # opposition: the file's thumb at its closest to each opposed fingertip, on any side (the capsules of
     # kinematics.opposition over the thumb's (u1, u6) grid and the finger's travel)
@@ -127,7 +127,7 @@ def postures(p, meshes, solids, out: Path) -> None:
                           title=f"{p.name} hand ({p.side}): the thumb at its closest to the {f} tip",
                           subtitle=f"thumb and {f} distal phalanges {a.distance_to(b):.1f} mm apart on the solids "
                           "(target: the pads meet); the file's CMC placement, not the solved one (docs/opposition.md)",
-                          elev=-30.0, azim=-150.0, size_px=1000, max_faces=150000)
+                          elev=-30.0, azim=-150.0, size_px=1000)
         print(f"wrote {out / fname}")
 
 

@@ -3,7 +3,7 @@
 Layout (default root ``.cache`` in the working directory, or ``$PHANTOM_CAD_CACHE``)::
 
     .cache/parts/<key>/       one built part: part.brep, part.step, part.stl,
-                              mesh.npz (link frame), view.npz (coarse, for pictures),
+                              mesh.npz (link frame; the pictures' too),
                               visual.stl, collision.npz (the robot description's, metres),
                               render.png, meta.json
     .cache/coupon/<key>/      the fit-test coupon: fit_coupon.step, .stl, .md, render.png, meta.json
@@ -87,7 +87,8 @@ def cad_versions() -> dict[str, str | None]:
         "cadquery": package_version("cadquery"),
         "trimesh": package_version("trimesh"),
         "manifold3d": package_version("manifold3d"),
-        "matplotlib": package_version("matplotlib"),
+        "matplotlib": package_version("matplotlib"),      # the pictures' font file
+        "pillow": package_version("pillow"),              # the pictures' text and PNG writer
         "mujoco": package_version("mujoco"),
     }
 
@@ -117,7 +118,7 @@ def part_key(params, name: str, part_inputs: Mapping[str, Any]) -> str:
 
 
 #: the files of every part entry (render.png too unless the build was --no-render)
-PART_FILES = ("part.brep", "part.step", "part.stl", "mesh.npz", "view.npz", "visual.stl", "collision.npz")
+PART_FILES = ("part.brep", "part.step", "part.stl", "mesh.npz", "visual.stl", "collision.npz")
 #: the files of the fit-test coupon's entry (render.png too unless the build was --no-render)
 COUPON_FILES = ("fit_coupon.step", "fit_coupon.stl", "fit_coupon.md")
 #: the files of every assembly entry (render.png too unless the build was --no-render)

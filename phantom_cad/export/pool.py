@@ -26,9 +26,6 @@ from .cache import Cache, seal
 from .manifest import mass_g
 from .results import failure_from
 
-#: coarse tessellation used only for pictures (mm, rad)
-VIEW_TOLERANCE_MM = 0.15
-VIEW_ANGULAR_TOLERANCE_RAD = 0.35
 #: STEP re-import must give the same volume to this relative tolerance
 STEP_VOLUME_RTOL = 1e-3
 #: STL volume vs solid volume (tessellation removes material on convex faces)
@@ -103,7 +100,7 @@ def part_worker(task: dict) -> dict:
 
         t = time.perf_counter()
         tol_mm = units.mm(params.print.stl_tolerance)
-        vv, fv = step_stl.tessellate(shape, VIEW_TOLERANCE_MM, VIEW_ANGULAR_TOLERANCE_RAD, close=True)
+        # one mesh for the STL, the descriptions, the checks and the pictures
         v, f = step_stl.tessellate(shape, tol_mm)
         R = np.asarray(built.print_rotation, dtype=float)
         if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9) or np.linalg.det(R) < 0:
@@ -121,7 +118,6 @@ def part_worker(task: dict) -> dict:
         for kind, data in meshes.items():
             (tmp / description.MESH_FILES[kind]).write_bytes(data)
         n_collision = len(description.collision_pieces(meshes["collision"]))
-        np.savez(tmp / "view.npz", vertices=vv, faces=fv.astype(np.int32))
         timings["stl"] = time.perf_counter() - t
 
         meta = {
@@ -145,10 +141,9 @@ def part_worker(task: dict) -> dict:
         }
         if task.get("render", True):
             t = time.perf_counter()
-            vpv = (vv @ R.T) + T_print[:3, 3]
             mass = mass_g(volume, params.print)
             render.render_png(
-                [render.MeshItem(name, vpv, fv, tuple(built.color))], tmp / "render.png",
+                [render.MeshItem(name, vp, f, tuple(built.color))], tmp / "render.png",
                 title=f"{name}  (print orientation)",
                 subtitle=(f"{units.cm3(volume):.2f} cm³, ~{mass:.1f} g at {params.print.infill:.0%} infill, "
                           f"bbox {np.ptp(vp[:, 0]):.1f} x {np.ptp(vp[:, 1]):.1f} x {np.ptp(vp[:, 2]):.1f} mm"),
@@ -245,7 +240,7 @@ def assembly_render_worker(task: dict) -> dict:
         items = []
         labelled = set()
         for name, part_dir, T, color, digit in task["parts"]:
-            d = np.load(Path(part_dir) / "view.npz")
+            d = np.load(Path(part_dir) / "mesh.npz")
             T = np.asarray(T)
             v = d["vertices"] @ T[:3, :3].T + T[:3, 3]
             label = None
@@ -255,7 +250,7 @@ def assembly_render_worker(task: dict) -> dict:
                 label = key
             items.append(render.MeshItem(name, v, d["faces"], tuple(color), label))
         render.render_png(items, task["out"], title=task["title"], subtitle=task["subtitle"],
-                          elev=28.0, azim=-62.0, size_px=1000, max_faces=150000)
+                          elev=28.0, azim=-62.0, size_px=1000)
         return {"ok": True}
     except BaseException as exc:
         return {"ok": False, "error": f"{type(exc).__name__}: {exc}",

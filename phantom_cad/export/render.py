@@ -1,22 +1,40 @@
-"""PNG renders of tessellated parts and of the assembly (matplotlib Agg, no display).
+"""PNG renders of tessellated parts and of the assembly: a z-buffer rasterizer in numpy, text
+by Pillow. No display, no matplotlib.
 
-Flat shading: each triangle's colour is its part colour scaled by a Lambert term for a
-fixed light; orthographic projection, equal axes, millimetre ticks. Matplotlib's
-painter's algorithm sorts triangles by depth, which is good enough for reading the shape.
-The PNG carries no timestamp, so the same mesh gives the same file.
+Orthographic view from (``elev``, ``azim``) degrees, as matplotlib's ``view_init``: the viewer
+looks from azimuth ``azim`` in the xy plane (from +x toward +y) and elevation ``elev`` above it,
+z up on the screen. Each triangle is flat shaded: its item's colour scaled by a two-sided
+Lambert term for a light fixed to the viewer. Every pixel shows the triangle nearest the viewer
+there (a z-buffer, so interpenetrating or badly ordered triangles are drawn as they lie), with
+``SUPERSAMPLE`` x ``SUPERSAMPLE`` samples a pixel averaged; depth steps (silhouettes, occluding
+contours) are drawn as dark lines. ``bed``: the items rest on z = 0 (print orientation) on a
+grey bed with a 10 mm grid. A scale bar gives millimetres.
+
+The PNG carries no timestamp and the sampling is fixed, so the same meshes give the same bytes.
 """
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-#: light direction (unit vector towards the light) in the view's world frame
-_LIGHT = np.array([0.35, -0.45, 0.82])
+#: light direction in the viewer's frame (right, up, toward the viewer), normalised below
+_LIGHT = np.array([-0.4, 0.6, 0.7])
 _AMBIENT = 0.35
+#: samples per pixel along each axis
+SUPERSAMPLE = 2
+#: the bed's grid pitch (mm)
+BED_GRID_MM = 10.0
+_BACKGROUND = np.array([1.0, 1.0, 1.0])
+_BED = np.array([0.88, 0.88, 0.88])
+_BED_LINE = np.array([0.72, 0.72, 0.72])
+_OUTLINE = np.array([0.12, 0.12, 0.14])
+#: a depth step larger than this fraction of the view's size is an outline
+_OUTLINE_STEP = 0.01
 
 
 @dataclass
@@ -25,93 +43,196 @@ class MeshItem:
     vertices: np.ndarray    # (n, 3) mm, already placed in the render frame
     faces: np.ndarray       # (m, 3)
     color: tuple[float, float, float]
-    label: str | None = None  # text drawn at the item's centroid (None = no label)
+    label: str | None = None  # text drawn above the item (None = no label)
 
 
-def _decimate_for_view(vertices, faces, max_faces):
-    """Keep a deterministic, evenly spaced subset of triangles beyond ``max_faces``.
-    (Only for pictures: with flat shading at PNG resolution missing slivers are invisible
-    on dense fillet strips; ``max_faces`` bounds the render time.)"""
-    if len(faces) <= max_faces:
-        return faces
-    idx = np.linspace(0, len(faces) - 1, max_faces).astype(int)
-    return faces[idx]
+def view_basis(elev: float, azim: float) -> np.ndarray:
+    """Rows (right, up, toward the viewer) of the orthographic view (world frame, unit)."""
+    e, a = math.radians(elev), math.radians(azim)
+    toward = np.array([math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e)])
+    right = np.array([-math.sin(a), math.cos(a), 0.0])
+    return np.vstack([right, np.cross(toward, right), toward])
 
 
-def _shade(tri: np.ndarray, color) -> np.ndarray:
-    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+def rasterize(tri: np.ndarray, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+    """Z-buffer of triangles given in pixel space: ``tri`` (m, 3, 3) as (x right, y down, depth
+    toward the viewer), pixel (i, j) covering [i, i+1) x [j, j+1). A pixel belongs to a triangle
+    when its centre lies inside (edges shared by two triangles are filled once: rows by the
+    half-open rule along y, columns along x). Returns (index, depth): (height, width) arrays of
+    the nearest triangle's index (-1 where none) and its depth there (-inf where none)."""
+    tri = np.asarray(tri, dtype=np.float64)
+    x, y, z = tri[:, :, 0], tri[:, :, 1], tri[:, :, 2]
+    # the depth's plane per triangle: z = z0 + gx (px - x0) + gy (py - y0)
+    e1x, e1y, e1z = x[:, 1] - x[:, 0], y[:, 1] - y[:, 0], z[:, 1] - z[:, 0]
+    e2x, e2y, e2z = x[:, 2] - x[:, 0], y[:, 2] - y[:, 0], z[:, 2] - z[:, 0]
+    det = e1x * e2y - e2x * e1y
+    ok = np.abs(det) > 1e-12
+    sd = np.where(ok, det, 1.0)
+    gx = (e1z * e2y - e2z * e1y) / sd
+    gy = (e2z * e1x - e1z * e2x) / sd
+    # rows whose centres (j + 0.5) lie in the triangle's y range
+    j0 = np.clip(np.ceil(y.min(axis=1) - 0.5), 0, height).astype(np.int64)
+    j1 = np.clip(np.ceil(y.max(axis=1) - 0.5), 0, height).astype(np.int64)     # exclusive
+    rows = np.where(ok, np.maximum(j1 - j0, 0), 0)
+    t = np.repeat(np.arange(len(tri)), rows)
+    start = np.cumsum(rows) - rows
+    j = j0[t] + (np.arange(len(t)) - start[t])
+    yc = j + 0.5
+    # the row's span: where it crosses the triangle's edges (each edge half-open in y)
+    xl = np.full(len(t), np.inf)
+    xr = np.full(len(t), -np.inf)
+    for a, b in ((0, 1), (1, 2), (2, 0)):
+        ya, yb, xa, xb = y[t, a], y[t, b], x[t, a], x[t, b]
+        cross = ((ya <= yc) & (yc < yb)) | ((yb <= yc) & (yc < ya))
+        dy = np.where(cross, yb - ya, 1.0)
+        xe = np.where(cross, xa + (yc - ya) * (xb - xa) / dy, np.nan)
+        xl = np.where(cross, np.minimum(xl, xe), xl)
+        xr = np.where(cross, np.maximum(xr, xe), xr)
+    valid = xr > xl
+    t, j, yc, xl, xr = t[valid], j[valid], yc[valid], xl[valid], xr[valid]
+    i0 = np.clip(np.ceil(xl - 0.5), 0, width).astype(np.int64)
+    i1 = np.clip(np.ceil(xr - 0.5), 0, width).astype(np.int64)                  # exclusive
+    n = np.maximum(i1 - i0, 0)
+    s = np.repeat(np.arange(len(t)), n)
+    first = np.cumsum(n) - n
+    i = i0[s] + (np.arange(len(s)) - first[s])
+    t, j, yc = t[s], j[s], yc[s]
+    depth = z[t, 0] + gx[t] * (i + 0.5 - x[t, 0]) + gy[t] * (yc - y[t, 0])
+    k = j * width + i
+    zbuf = np.full(width * height, -np.inf)
+    np.maximum.at(zbuf, k, depth)
+    win = depth >= zbuf[k]
+    index = np.full(width * height, -1, dtype=np.int64)
+    index[k[win]] = t[win]              # equal depths: the later triangle (deterministic)
+    return index.reshape(height, width), zbuf.reshape(height, width)
+
+
+def _shade(tri_view: np.ndarray, color: np.ndarray) -> np.ndarray:
+    """(m, 3) flat colours of triangles in the viewer's frame: two-sided Lambert."""
+    n = np.cross(tri_view[:, 1] - tri_view[:, 0], tri_view[:, 2] - tri_view[:, 0])
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
-    light = _LIGHT / np.linalg.norm(_LIGHT)
-    lam = np.abs(n @ light)  # two-sided
-    k = _AMBIENT + (1 - _AMBIENT) * lam
-    rgb = np.clip(np.asarray(color)[None, :] * k[:, None], 0, 1)
-    return np.concatenate([rgb, np.ones((len(rgb), 1))], axis=1)
+    lam = np.abs(n @ (_LIGHT / np.linalg.norm(_LIGHT)))
+    k = _AMBIENT + (1.0 - _AMBIENT) * lam
+    return np.clip(color[None, :] * k[:, None], 0.0, 1.0)
+
+
+def _rgb8(c) -> tuple[int, int, int]:
+    return tuple(int(round(float(v) * 255.0)) for v in c)
+
+
+def _font(size: int):
+    """DejaVu Sans (matplotlib ships it; found without importing matplotlib), else Pillow's own."""
+    import importlib.util
+
+    from PIL import ImageFont
+
+    spec = importlib.util.find_spec("matplotlib")
+    for root in (spec.submodule_search_locations or []) if spec else []:
+        path = Path(root) / "mpl-data" / "fonts" / "ttf" / "DejaVuSans.ttf"
+        if path.is_file():
+            return ImageFont.truetype(str(path), size)
+    try:
+        return ImageFont.load_default(size=size)
+    except (TypeError, OSError):       # Pillow without FreeType: the bitmap font
+        return ImageFont.load_default()
+
+
+def _nice(x: float) -> float:
+    """The largest 1, 2 or 5 x 10^n not above x."""
+    p = 10.0 ** math.floor(math.log10(x))
+    return max(m * p for m in (1.0, 2.0, 5.0) if m * p <= x)
 
 
 def render_png(items: list[MeshItem], path: str | os.PathLike, title: str, *,
                elev: float = 22.0, azim: float = -58.0, size_px: int = 900,
-               max_faces: int = 60000, subtitle: str | None = None, bed: bool = False) -> None:
-    """Render ``items`` into a PNG at ``path``. ``bed``: the items rest on z = 0 (print
-    orientation); the view starts at z = 0 and a grey bed square is drawn there."""
-    import matplotlib
+               subtitle: str | None = None, bed: bool = False) -> None:
+    """Render ``items`` into a ``size_px`` square PNG at ``path``. ``bed``: the items rest on
+    z = 0 (print orientation); a bed with a 10 mm grid is drawn under them."""
+    from PIL import Image, ImageDraw
 
-    matplotlib.use("Agg", force=True)
-    from matplotlib.figure import Figure
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
-
-    dpi = 100
-    fig = Figure(figsize=(size_px / dpi, size_px / dpi), dpi=dpi)
-    ax = fig.add_subplot(111, projection="3d", proj_type="ortho")
-    total = sum(len(it.faces) for it in items) or 1
-    polys, colors = [], []
-    lo = np.full(3, np.inf)
-    hi = np.full(3, -np.inf)
-    for it in items:
-        budget = max(200, int(max_faces * len(it.faces) / total))
-        faces = _decimate_for_view(it.vertices, it.faces, budget)
-        tri = it.vertices[faces]
-        polys.append(tri)
-        colors.append(_shade(tri, it.color))
-        lo = np.minimum(lo, it.vertices.min(axis=0))
-        hi = np.maximum(hi, it.vertices.max(axis=0))
-    tri = np.concatenate(polys)
-    fc = np.concatenate(colors)
-    # edges in the face colour hide the anti-aliasing seams between triangles
-    coll = Poly3DCollection(tri, facecolors=fc, edgecolors=fc, linewidths=0.25)
-    ax.add_collection3d(coll)
-    centre, half = (lo + hi) / 2, max((hi - lo).max() / 2, 1e-3) * 1.05
-    ax.set_xlim(centre[0] - half, centre[0] + half)
-    ax.set_ylim(centre[1] - half, centre[1] + half)
+    B = view_basis(elev, azim)
+    S = SUPERSAMPLE
+    W = H = size_px * S
+    top = int(0.12 * H)                      # the title's band
+    pts = np.vstack([it.vertices for it in items])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    corners = pts
+    bed_sq = None
     if bed:
-        # seen from above (elev > 0) the bed is always behind the part: draw it first
-        ax.computed_zorder = False
-        coll.set_zorder(2)
-        ax.set_zlim(0.0, 2 * half)
-        sq = np.array([[centre[0] - half, centre[1] - half, 0], [centre[0] + half, centre[1] - half, 0],
-                       [centre[0] + half, centre[1] + half, 0], [centre[0] - half, centre[1] + half, 0]])
-        ax.add_collection3d(Poly3DCollection([sq], facecolors=[(0.85, 0.85, 0.85, 0.6)], edgecolors="0.6",
-                                             linewidths=0.5, zorder=1))
-    else:
-        ax.set_zlim(centre[2] - half, centre[2] + half)
-    ax.set_box_aspect((1, 1, 1))
-    ax.view_init(elev=elev, azim=azim)
-    ax.set_xlabel("x [mm]")
-    ax.set_ylabel("y [mm]")
-    ax.set_zlabel("z [mm]")
-    ax.tick_params(labelsize=7)
-    # four or five ticks an axis: every 3D tick is an artist of its own (half a picture's time
-    # went into the default's dozen ticks an axis)
-    from matplotlib.ticker import MaxNLocator
-    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
-        axis.set_major_locator(MaxNLocator(4))
+        c = (lo + hi) / 2.0
+        # whole grid squares, at least half a square beyond the items
+        half = BED_GRID_MM * math.ceil((max(hi[0] - lo[0], hi[1] - lo[1]) / 2.0 + BED_GRID_MM / 2.0) / BED_GRID_MM)
+        bed_sq = (c[0] - half, c[0] + half, c[1] - half, c[1] + half)
+        corners = np.vstack([pts, [[bed_sq[a], bed_sq[b], 0.0] for a in (0, 1) for b in (2, 3)]])
+    v2 = corners @ B[:2].T
+    span = np.maximum(v2.max(axis=0) - v2.min(axis=0), 1e-6)
+    margin = 0.06 * W
+    scale = min((W - 2 * margin) / span[0], (H - top - 2 * margin) / span[1])     # pixels per mm
+    mid = (v2.max(axis=0) + v2.min(axis=0)) / 2.0
+    cx, cy = W / 2.0, top + (H - top) / 2.0
+
+    def to_px(p):
+        q = p @ B.T
+        return np.stack([cx + (q[..., 0] - mid[0]) * scale, cy - (q[..., 1] - mid[1]) * scale, q[..., 2] * scale],
+                        axis=-1)
+
+    tris, colors = [], []
+    for it in items:
+        tri = np.asarray(it.vertices, float)[np.asarray(it.faces)]
+        tris.append(to_px(tri))
+        colors.append(_shade(tri @ B.T, np.asarray(it.color, float)))
+    tri_px = np.concatenate(tris) if tris else np.zeros((0, 3, 3))
+    color = np.concatenate(colors) if colors else np.zeros((0, 3))
+    index, depth = rasterize(tri_px, W, H)
+    canvas = Image.new("RGB", (W, H), tuple(int(round(c * 255)) for c in _BACKGROUND))
+    if bed_sq is not None:
+        pen = ImageDraw.Draw(canvas)
+        x0, x1, y0, y1 = bed_sq
+        quad = to_px(np.array([[x0, y0, 0.0], [x1, y0, 0.0], [x1, y1, 0.0], [x0, y1, 0.0]]))
+        pen.polygon([tuple(p[:2]) for p in quad], fill=_rgb8(_BED))
+        n = int(round((x1 - x0) / BED_GRID_MM))
+        for k in range(n + 1):
+            g = k * BED_GRID_MM
+            for a, b in (((x0 + g, y0), (x0 + g, y1)), ((x0, y0 + g), (x1, y0 + g))):
+                ends = to_px(np.array([[*a, 0.0], [*b, 0.0]]))
+                pen.line([tuple(ends[0, :2]), tuple(ends[1, :2])], fill=_rgb8(_BED_LINE), width=S)
+    img = np.asarray(canvas).copy()
+    hit = index >= 0
+    img[hit] = np.round(color * 255.0).astype(np.uint8)[index[hit]]
+    # outlines: a depth step to a neighbour (or to the background) of more than a fraction of
+    # the view's size
+    d = np.where(hit, depth, -1e30).astype(np.float32)
+    step = _OUTLINE_STEP * max(W, H)
+    edge = np.zeros((H, W), bool)
+    for a, b in ((np.s_[1:, :], np.s_[:-1, :]), (np.s_[:, 1:], np.s_[:, :-1])):
+        diff = d[a] - d[b]
+        edge[a] |= diff > step            # the nearer side carries the line
+        edge[b] |= diff < -step
+    img[edge] = _rgb8(_OUTLINE)
+    # SUPERSAMPLE x SUPERSAMPLE samples per pixel
+    out = Image.fromarray(img, "RGB").resize((size_px, size_px), Image.Resampling.BOX)
+    draw = ImageDraw.Draw(out)
+    ink = (20, 20, 20)
+    f_title, f_sub, f_small = _font(max(12, size_px // 45)), _font(max(10, size_px // 70)), _font(max(10, size_px // 75))
+    draw.text((size_px / 2, 0.02 * size_px), title, fill=ink, font=f_title, anchor="mt")
+    if subtitle:
+        draw.text((size_px / 2, 0.065 * size_px), subtitle, fill=(80, 80, 80), font=f_sub, anchor="mt")
     for it in items:
         if it.label:
-            c = it.vertices.mean(axis=0)
-            ax.text(c[0], c[1], hi[2] + 0.04 * half if len(items) > 1 else c[2], it.label,
-                    fontsize=8, ha="center", color="black", zorder=10)
-    fig.suptitle(title, fontsize=12)
-    if subtitle:
-        fig.text(0.5, 0.915, subtitle, ha="center", fontsize=8, color="0.3")
-    fig.subplots_adjust(left=0, right=1, bottom=0.02, top=0.92)
+            c = np.asarray(it.vertices, float)
+            top_pt = c.mean(axis=0)
+            top_pt[2] = c[:, 2].max()
+            p = to_px(top_pt[None, :])[0] / S
+            draw.text((p[0], p[1] - 4), it.label, fill=ink, font=f_small, anchor="mb", stroke_width=2,
+                      stroke_fill=(255, 255, 255))
+    # scale bar, bottom left: a round length near a fifth of the picture
+    mm_px = scale / S
+    length = _nice(0.2 * size_px / mm_px)
+    x0, y0 = 0.04 * size_px, 0.96 * size_px
+    x1 = x0 + length * mm_px
+    draw.line([(x0, y0), (x1, y0)], fill=ink, width=max(2, size_px // 300))
+    for xe in (x0, x1):
+        draw.line([(xe, y0 - 4), (xe, y0 + 4)], fill=ink, width=1)
+    draw.text(((x0 + x1) / 2, y0 - 6), f"{length:g} mm", fill=ink, font=f_small, anchor="mb")
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi, metadata={"Software": None})
+    out.save(path, format="PNG", optimize=False)
