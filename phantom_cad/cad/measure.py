@@ -26,7 +26,8 @@ def _vec(v) -> np.ndarray:
 def solid_report(shape) -> dict:
     """Number of solids, validity, volume and bounding box of a shape."""
     bb = shape.bounding_box()
-    valid = shape.is_valid() if callable(shape.is_valid) else shape.is_valid
+    valid = shape.is_valid      # a property in build123d 0.12 (each read runs BRepCheck), a method before
+    valid = valid() if callable(valid) else valid
     return {
         "n_solids": len(shape.solids()),
         "valid": bool(valid),

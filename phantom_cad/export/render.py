@@ -18,6 +18,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
@@ -120,6 +121,7 @@ def _rgb8(c) -> tuple[int, int, int]:
     return tuple(int(round(float(v) * 255.0)) for v in c)
 
 
+@lru_cache(maxsize=None)
 def _font(size: int):
     """DejaVu Sans (matplotlib ships it; found without importing matplotlib), else Pillow's own."""
     import importlib.util
@@ -135,6 +137,15 @@ def _font(size: int):
         return ImageFont.load_default(size=size)
     except (TypeError, OSError):       # Pillow without FreeType: the bitmap font
         return ImageFont.load_default()
+
+
+def _fitting(text: str, size: int, width: float):
+    """The font at ``size`` points, or smaller (down to 6) until ``text`` fits in ``width`` pixels."""
+    font = _font(size)
+    while size > 6 and font.getlength(text) > width:
+        size -= 1
+        font = _font(size)
+    return font
 
 
 def _nice(x: float) -> float:
@@ -213,10 +224,12 @@ def render_png(items: list[MeshItem], path: str | os.PathLike, title: str, *,
     out = Image.fromarray(img, "RGB").resize((size_px, size_px), Image.Resampling.BOX)
     draw = ImageDraw.Draw(out)
     ink = (20, 20, 20)
-    f_title, f_sub, f_small = _font(max(12, size_px // 45)), _font(max(10, size_px // 70)), _font(max(10, size_px // 75))
-    draw.text((size_px / 2, 0.02 * size_px), title, fill=ink, font=f_title, anchor="mt")
+    f_small = _font(max(10, size_px // 75))
+    draw.text((size_px / 2, 0.02 * size_px), title, fill=ink, font=_fitting(title, max(12, size_px // 45), 0.96 * size_px),
+              anchor="mt")
     if subtitle:
-        draw.text((size_px / 2, 0.065 * size_px), subtitle, fill=(80, 80, 80), font=f_sub, anchor="mt")
+        draw.text((size_px / 2, 0.065 * size_px), subtitle, fill=(80, 80, 80),
+                  font=_fitting(subtitle, max(10, size_px // 70), 0.96 * size_px), anchor="mt")
     for it in items:
         if it.label:
             c = np.asarray(it.vertices, float)
