@@ -143,7 +143,7 @@ def part_worker(task: dict) -> dict:
             t = time.perf_counter()
             mass = mass_g(volume, params.print)
             render.render_png(
-                [render.MeshItem(name, vp, f, tuple(built.color))], tmp / "render.png",
+                [render.MeshItem(name, vp, f, tuple(built.color), closed=True)], tmp / "render.png",
                 title=f"{name}  (print orientation)",
                 subtitle=(f"{units.cm3(volume):.2f} cm³, ~{mass:.1f} g at {params.print.infill:.0%} infill, "
                           f"bbox {np.ptp(vp[:, 0]):.1f} x {np.ptp(vp[:, 1]):.1f} x {np.ptp(vp[:, 2]):.1f} mm"),
@@ -191,7 +191,7 @@ def coupon_worker(task: dict) -> dict:
         (tmp / "fit_coupon.stl").write_bytes(stl)
         (tmp / "fit_coupon.md").write_text(c.table(), encoding="utf-8")
         if task.get("render", True):
-            render.render_png([render.MeshItem(coupon_mod.NAME, v, f, tuple(c.color))], tmp / "render.png",
+            render.render_png([render.MeshItem(coupon_mod.NAME, v, f, tuple(c.color), closed=True)], tmp / "render.png",
                               title=f"{coupon_mod.NAME}  (print orientation)",
                               subtitle=f"{len(c.features)} holes at the hand's tolerances; see fit_coupon.md",
                               size_px=700, bed=True)
@@ -248,7 +248,7 @@ def assembly_render_worker(task: dict) -> dict:
             if key not in labelled and (digit is not None or name == "palm"):
                 labelled.add(key)
                 label = key
-            items.append(render.MeshItem(name, v, d["faces"], tuple(color), label))
+            items.append(render.MeshItem(name, v, d["faces"], tuple(color), label, closed=True))
         render.render_png(items, task["out"], title=task["title"], subtitle=task["subtitle"],
                           elev=28.0, azim=-62.0, size_px=1000)
         return {"ok": True}

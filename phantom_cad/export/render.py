@@ -45,6 +45,10 @@ class MeshItem:
     faces: np.ndarray       # (m, 3)
     color: tuple[float, float, float]
     label: str | None = None  # text drawn above the item (None = no label)
+    #: a closed mesh with outward triangles (counter-clockwise seen from outside, as the STLs
+    #: are, checked by ``step_stl.check_mesh``): the triangles facing away are never seen and
+    #: are skipped; False draws every triangle
+    closed: bool = False
 
 
 def view_basis(elev: float, azim: float) -> np.ndarray:
@@ -190,6 +194,9 @@ def render_png(items: list[MeshItem], path: str | os.PathLike, title: str, *,
     tris, colors = [], []
     for it in items:
         tri = np.asarray(it.vertices, float)[np.asarray(it.faces)]
+        if it.closed:
+            n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+            tri = tri[n @ B[2] > 0.0]
         tris.append(to_px(tri))
         colors.append(_shade(tri @ B.T, np.asarray(it.color, float)))
     tri_px = np.concatenate(tris) if tris else np.zeros((0, 3, 3))

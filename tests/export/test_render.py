@@ -104,3 +104,18 @@ def test_render_png_writes_a_deterministic_picture(tmp_path):
     grey = (np.abs(im[:, :, 0] - 224) <= 2) & (np.abs(im[:, :, 2] - 224) <= 2)
     assert blue.sum() > 0.05 * 400 * 400 and grey.sum() > 0.05 * 400 * 400
     assert np.all(im[0:5, 0:5] == 255)
+
+
+def test_a_closed_mesh_skips_its_far_side_unseen(tmp_path):
+    """A closed, outward-wound cube drawn with its far triangles skipped gives the same picture as
+    with every triangle; wound inside out and declared closed, only its inside would show, so the
+    picture differs (the skip is by winding, not by depth)."""
+    v, f = _cube(20.0, (0.0, 0.0, 10.0))
+    pics = {}
+    for name, faces, closed in (("all", f, False), ("front", f, True), ("inverted", f[:, ::-1], True)):
+        p = tmp_path / f"{name}.png"
+        render.render_png([render.MeshItem("cube", v, faces, (0.2, 0.4, 0.8), closed=closed)], p, "a cube",
+                          size_px=300, bed=True)
+        pics[name] = p.read_bytes()
+    assert pics["front"] == pics["all"]
+    assert pics["inverted"] != pics["all"]
