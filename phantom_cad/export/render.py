@@ -112,12 +112,11 @@ def rasterize(tri: np.ndarray, width: int, height: int) -> tuple[np.ndarray, np.
     return index.reshape(height, width), zbuf.reshape(height, width)
 
 
-def _shade(tri_view: np.ndarray, color: np.ndarray) -> np.ndarray:
-    """(m, 3) flat colours of triangles in the viewer's frame: two-sided Lambert."""
-    n = np.cross(tri_view[:, 1] - tri_view[:, 0], tri_view[:, 2] - tri_view[:, 0])
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
-    lam = np.abs(n @ (_LIGHT / np.linalg.norm(_LIGHT)))
-    k = _AMBIENT + (1.0 - _AMBIENT) * lam
+def _shade(normals: np.ndarray, light: np.ndarray, color: np.ndarray) -> np.ndarray:
+    """(m, 3) flat colours of triangles with these (unnormalised) normals under a unit ``light``
+    direction (same frame): two-sided Lambert."""
+    n = normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-12)
+    k = _AMBIENT + (1.0 - _AMBIENT) * np.abs(n @ light)
     return np.clip(color[None, :] * k[:, None], 0.0, 1.0)
 
 
@@ -191,18 +190,20 @@ def render_png(items: list[MeshItem], path: str | os.PathLike, title: str, *,
         return np.stack([cx + (q[..., 0] - mid[0]) * scale, cy - (q[..., 1] - mid[1]) * scale, q[..., 2] * scale],
                         axis=-1)
 
+    light = B.T @ (_LIGHT / np.linalg.norm(_LIGHT))     # the viewer's light in the world frame
     tris, colors = [], []
     for it in items:
         tri = np.asarray(it.vertices, float)[np.asarray(it.faces)]
+        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
         if it.closed:
-            n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-            tri = tri[n @ B[2] > 0.0]
+            front = n @ B[2] > 0.0
+            tri, n = tri[front], n[front]
         tris.append(to_px(tri))
-        colors.append(_shade(tri @ B.T, np.asarray(it.color, float)))
+        colors.append(_shade(n, light, np.asarray(it.color, float)))
     tri_px = np.concatenate(tris) if tris else np.zeros((0, 3, 3))
     color = np.concatenate(colors) if colors else np.zeros((0, 3))
     index, depth = rasterize(tri_px, W, H)
-    canvas = Image.new("RGB", (W, H), tuple(int(round(c * 255)) for c in _BACKGROUND))
+    canvas = Image.new("RGB", (W, H), _rgb8(_BACKGROUND))
     if bed_sq is not None:
         pen = ImageDraw.Draw(canvas)
         x0, x1, y0, y1 = bed_sq

@@ -184,7 +184,7 @@ def read_brep(path: str | os.PathLike):
 
 
 #: how many times :func:`tessellate` meshes finer (tolerance / 4, angle / 2 each) while a face has
-#: no triangles or the mesh of a closed shape is open
+#: no triangles
 MESH_RETRIES = 3
 
 
@@ -205,40 +205,24 @@ def _untriangulated(wrapped) -> int:
     return n
 
 
-def tessellate(shape, tolerance: float, angular_tolerance: float = ANGULAR_TOLERANCE_RAD,
-               close: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def tessellate(shape, tolerance: float, angular_tolerance: float = ANGULAR_TOLERANCE_RAD
+               ) -> tuple[np.ndarray, np.ndarray]:
     """BRepMesh triangulation of ``shape`` as (vertices (n,3) float64, faces (m,3) int64),
     with the nodes shared by adjacent faces merged (so closed solids give closed meshes).
 
     At a coarse tolerance a sliver face can get no triangles (OCCT's writer then skips it with a
-    warning, and the mesh has a hole), or two faces' nodes can miss each other along a short
-    edge (a crack): then the shape is meshed finer (tolerance / 4, angle / 2, up to
-    :data:`MESH_RETRIES` times) until every face has triangles and, with ``close``, until the
-    mesh is closed (a shape that is not closed keeps its first mesh). A face without triangles
-    even then is an error. (The STL's mesh is checked closed where it is written,
-    ``check_mesh``; ``close`` is for the pictures' coarser meshes.)
+    warning, and the mesh has a hole): then the shape is meshed finer (tolerance / 4, angle / 2,
+    up to :data:`MESH_RETRIES` times) until every face has triangles. A face without triangles
+    even then is an error. (The STL's mesh is checked closed where it is written, ``check_mesh``.)
 
     The triangles are collected by OCCT's StlAPI_Writer (C++, per face, orientation
     handled) into a temporary binary STL, so the vertices are float32-exact values."""
-    first = None
     for k in range(MESH_RETRIES + 1):
         mesh = _mesh(shape.wrapped, tolerance / 4.0 ** k, angular_tolerance / 2.0 ** k)
-        if mesh is None:                    # a face without triangles: finer
-            continue
-        if not close or _closed(mesh[1]):
+        if mesh is not None:                # else a face without triangles: finer
             return mesh
-        first = mesh if first is None else first
-    if first is None:
-        raise RuntimeError(f"{_untriangulated(shape.wrapped)} face(s) get no triangles even at "
-                           f"{tolerance / 4.0 ** MESH_RETRIES:g} mm")
-    return first
-
-
-def _closed(faces: np.ndarray) -> bool:
-    """Whether every edge of a triangle mesh is shared by exactly two triangles."""
-    e = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    _, counts = np.unique(e[:, 0] * (int(faces.max()) + 1) + e[:, 1], return_counts=True)
-    return bool(np.all(counts == 2))
+    raise RuntimeError(f"{_untriangulated(shape.wrapped)} face(s) get no triangles even at "
+                       f"{tolerance / 4.0 ** MESH_RETRIES:g} mm")
 
 
 def _mesh(wrapped, tolerance: float, angular_tolerance: float):
