@@ -236,3 +236,21 @@ def test_solve_improves_on_the_file(hand):
     assert coarse >= O.margin(thumb, fingers, start)
     assert sol.margin >= coarse - 1e-12 or coarse < -O.PAD_CONE
     assert sol.intrusion <= 0.0
+
+
+def test_solve_meets_a_callers_constraint(hand):
+    """A caller's requirement the file's placement breaks (the CMC centre at least 8 mm further
+    ulnar and 5 mm more palmar than the file puts it): the short search's placement meets it, and
+    the reported violation is the requirement measured again at that placement."""
+    p = hand.params
+    x0 = p.palm.thumb_cmc_offset[0] + 8e-3
+    z1 = p.palm.thumb_cmc_offset[2] - 5e-3
+
+    def need(T0):
+        return max(x0 - T0[0, 3], T0[2, 3] - z1)
+
+    assert need(F.T_palm_thumb_cmc_base(p)) > 0.0
+    sol = O.solve(hand, generations=4, population=3, iterations=40, constraint=need)
+    assert sol.offset[0] >= x0 - 1e-12 and sol.offset[2] <= z1 + 1e-12
+    assert sol.violation == pytest.approx(max(x0 - sol.offset[0], sol.offset[2] - z1), abs=1e-15)
+    assert sol.violation <= 0.0 and sol.intrusion <= 0.0

@@ -28,6 +28,7 @@ palmar face to the very tip). The joint angles are the model's at the commands
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -334,14 +335,19 @@ class Solution:
     reach: dict                            # finger -> Reach at the solution (fine grid)
     evaluations: int
     intrusion: float                       # m: the thumb's reach into the palm envelope (<= 0: clear)
+    violation: float = 0.0                 # m: ``constraint`` at the solution (<= 0: met; 0 without one)
 
 
 def solve(hand, bounds: Bounds | None = None, seed: int = 0, coarse=(11, 11, 21), generations: int = 60,
-          population: int = 8, iterations: int = 300) -> Solution:
+          population: int = 8, iterations: int = 300,
+          constraint: Callable[[np.ndarray], float] | None = None) -> Solution:
     """Maximize the opposition margin over the CMC placement within ``bounds``, with the thumb's
     links kept out of the palm envelope (a penalty of ``INTRUSION_WEIGHT`` per metre inside, on the
-    fine thumb grid; if the optimum still reaches inside, the best placement seen that does not):
-    differential evolution (scipy, seeded: deterministic) on a coarse command grid (``coarse``: n1,
+    fine thumb grid; if the optimum still reaches inside, the best placement seen that does not).
+    ``constraint``, if given, maps a placement (T_palm_cmc_base at rest, 4 x 4, metres) to how far
+    (m) it violates what the caller requires of it (<= 0: met); it is priced and fallen back on as
+    the intrusion is (a design's own reach, e.g. what holds the CMC fitting the palm).
+    Method: differential evolution (scipy, seeded: deterministic) on a coarse command grid (``coarse``: n1,
     n6, n_finger), the file's placement in its first population, then Nelder-Mead from the best.
     The result is judged on :func:`reach`'s fine grid (21 x 21 x 41), which contains the coarse
     one, so the fine margin is at least the searched one."""
@@ -356,7 +362,8 @@ def solve(hand, bounds: Bounds | None = None, seed: int = 0, coarse=(11, 11, 21)
     fine_thumb = thumb_tips(hand)
     fingers = {f: finger_tips(hand, f, coarse[2]) for f in OPPOSED}
     count = [0]
-    clear: list = [math.inf, None]      # the best placement seen whose thumb stays out of the palm
+    clear: list = [math.inf, None]      # the best placement seen that meets both
+    _violation = (lambda T0: 0.0) if constraint is None else (lambda T0: float(constraint(T0)))
 
     def cost(z):
         count[0] += 1
@@ -364,10 +371,11 @@ def solve(hand, bounds: Bounds | None = None, seed: int = 0, coarse=(11, 11, 21)
         m = margin(thumb, fingers, x)
         # the palm envelope on the fine grid: between the coarse grid's commands the thumb can
         # pass through it
-        inside = palm_intrusion(fine_thumb, _placement(x), env)
+        T0 = _placement(x)
+        inside = max(palm_intrusion(fine_thumb, T0, env), 0.0) + max(_violation(T0), 0.0)
         if inside <= 0.0 and -m < clear[0]:
             clear[:] = [-m, x.copy()]
-        return -m + INTRUSION_WEIGHT * max(inside, 0.0)
+        return -m + INTRUSION_WEIGHT * inside
 
     rng = np.random.default_rng(seed)
     n = population * len(lo)
@@ -378,9 +386,11 @@ def solve(hand, bounds: Bounds | None = None, seed: int = 0, coarse=(11, 11, 21)
     res = minimize(cost, de.x, method="Nelder-Mead",
                    options={"maxiter": iterations, "xatol": 1e-6, "fatol": 1e-7})
     x = np.clip(res.x if res.fun <= de.fun else de.x, lo, hi)
-    if palm_intrusion(fine_thumb, _placement(x), env) > 0.0 and clear[1] is not None:
+    if (palm_intrusion(fine_thumb, _placement(x), env) > 0.0 or _violation(_placement(x)) > 0.0) \
+            and clear[1] is not None:
         x = clear[1]                    # the penalty was not enough: the best clear placement
     fine = reach(hand, thumb=fine_thumb, T0=_placement(x))
     return Solution(tuple(float(v) for v in x[:3]), tuple(float(v) for v in x[3:]),
                     min(fine[f].margin for f in OPPOSED), fine, count[0],
-                    palm_intrusion(fine_thumb, _placement(x), env))
+                    palm_intrusion(fine_thumb, _placement(x), env),
+                    _violation(_placement(x)) if constraint is not None else 0.0)
