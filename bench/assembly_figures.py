@@ -20,8 +20,8 @@ routing model's strand ends, with their roles read from ``cad.parts.tendons.link
 clamp: M2 set screw; groove clamp: knot pocket; knot: knot well); the drive's are its servo
 pulley clamp and its knot behind G2 (``routing`` Point anchors). For the finger's drive the servo
 pulley (``servo_pulley_2``) is drawn too; the palm is not (its channel is the straight run from the
-pulley to the finger base's entry). The thumb's drive comes over the palm's arch and down the CMC
-axis into the CMC base; the panels show it from there (its palm path is in docs/transmission.md).
+pulley to the finger base's entry). The thumb's drive turns in the palm above the CMC pulley and comes down the CMC
+axis through the column into the CMC base; the panels show it from there (its palm path is in docs/transmission.md).
 """
 
 from __future__ import annotations
@@ -239,7 +239,7 @@ def marks(scene: Scene, tendon: str) -> list[tuple[np.ndarray, str | None, str]]
                 out.append((P + mid * u, "palm bore: the crimp stop, the finger\nstrand's loop hooked behind it", "D"))
                 out.append((P, f"{e.link}: entry channel\n(the split: docs/transmission.md)", "s"))
             elif isinstance(e, routing.Point) and e.role in ("interface", "guide G1"):
-                entry = ("down the CMC axis\n(from the palm's arch)" if scene.digit == "thumb"
+                entry = ("down the CMC axis\n(through the column)" if scene.digit == "thumb"
                          else "entry channel\n(from the palm channel)")
                 what = {"interface": entry, "guide G1": "through G1"}[e.role]
                 out.append((P, f"{e.link}: {what}", "s"))

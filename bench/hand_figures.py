@@ -63,7 +63,7 @@ def main(out: Path) -> None:
     for fname, q, what, (elev, azim) in shots:
         T = assembly.pose_transforms(p, q)
         render.render_png(_items(meshes, T, named=("palm", "forearm")), out / fname, title=f"{p.name} hand ({p.side}), {what}",
-                          subtitle="tendon servos in the forearm module; stepped metacarpal heads; default parameters", elev=elev, azim=azim,
+                          subtitle="six servos in the forearm module; the thenar holds the CMC's column; default parameters", elev=elev, azim=azim,
                           size_px=1000)
         print(f"wrote {out / fname}")
     postures(p, meshes, solids, out)
@@ -94,7 +94,7 @@ def _items(meshes, T, named=()):
 def postures(p, meshes, solids, out: Path) -> None:
     """The power grasp and the thumb's closest approach to each opposed fingertip, on the solids."""
     h = make_hand(p)
-    cmc = next(s.index for s in SERVOS if s.drive == "direct")
+    cmc = next(s.index for s in SERVOS if s.drive == "loop")
     # power grasp: every tendon servo at the end of its travel, the CMC at rest
     u = np.array(h.u_max, float)
     u[cmc] = 0.0
@@ -109,14 +109,17 @@ def postures(p, meshes, solids, out: Path) -> None:
                       + "; target 10 mm (docs/parts.md, known gaps)",
                       elev=5.0, azim=0.0, size_px=1000)
     print(f"wrote {out / 'hand_power.png'}")
-    # opposition: the file's thumb at its closest to each opposed fingertip, on any side (the capsules of
-    # kinematics.opposition over the thumb's (u1, u6) grid and the finger's travel)
+    # opposition: the file's thumb where its pad meets each opposed fingertip's most squarely (the
+    # capsules of kinematics.opposition over the thumb's (u1, u6) grid and the finger's travel: the
+    # pairs in contact, the smallest facing angle), or at its closest where the pads never meet
     thumb = opposition.thumb_tips(h).placed(frames.thumb_cmc_placement(p.palm.thumb_cmc_offset,
                                                                         p.palm.thumb_cmc_axis))
     for f in opposition.OPPOSED:
         ft = opposition.finger_tips(h, f)
-        gap, _ = opposition.contacts(thumb, ft)
-        i, j = np.unravel_index(int(np.argmin(gap)), gap.shape)
+        gap, angle = opposition.contacts(thumb, ft)
+        band = (gap <= 0.0) & (gap >= -opposition.CONTACT_BAND)
+        pick = np.where(band, angle, np.inf) if band.any() else gap
+        i, j = np.unravel_index(int(np.argmin(pick)), gap.shape)
         u = np.zeros(N_SERVOS)
         u[chain("thumb").servo], u[cmc], u[chain(f).servo] = thumb.u[i][0], thumb.u[i][1], ft.u[j, 0]
         T = assembly.pose_transforms(p, h.forward(u, compensated=True))
@@ -124,9 +127,10 @@ def postures(p, meshes, solids, out: Path) -> None:
         b = measure.placed(solids[f"{f}_distal"], T[f"{f}_distal"])
         fname = f"hand_opposition_{f}.png"
         render.render_png(_items(meshes, T), out / fname,
-                          title=f"{p.name} hand ({p.side}): the thumb at its closest to the {f} tip",
-                          subtitle=f"thumb and {f} distal phalanges {a.distance_to(b):.1f} mm apart on the solids "
-                          "(target: the pads meet); the file's CMC placement, not the solved one (docs/opposition.md)",
+                          title=f"{p.name} hand ({p.side}): the thumb's pad on the {f} pad",
+                          subtitle=f"thumb and {f} distal phalanges {a.distance_to(b):.1f} mm apart on the solids, "
+                          "at the commands where the pads meet most "
+                          "squarely (docs/opposition.md)",
                           elev=-30.0, azim=-150.0, size_px=1000)
         print(f"wrote {out / fname}")
 

@@ -1,7 +1,7 @@
 """Pictures of the thumb's opposition (docs/opposition.md): the hand's digits as their link axes
 (frames.link_transforms), the fingertip capsules of kinematics.opposition and the palm envelope,
-at the commands where the thumb's pad meets each opposed fingertip's most squarely, for the
-placement the search finds, and today's thumb at its closest approach to the index.
+at rest and at the commands where the thumb's pad meets each opposed fingertip's most squarely,
+for the file's CMC placement (solved within the palm's thenar, docs/opposition.md).
 Run: .venv/bin/python bench/opposition_figures.py [OUT_DIR]
 """
 
@@ -63,24 +63,19 @@ def draw(ax, hand, p, u, title, highlight, view):
 def main(out: Path) -> None:
     p = load_params(DEFAULT_PARAMS)
     hand = Hand(p)
-    sol = O.solve(hand)
-    solved = _with_thumb(p, sol.offset, sol.axis)
-    hand_s = Hand(solved)
+    reach = O.reach(hand)
     out.mkdir(parents=True, exist_ok=True)
     fig = plt.figure(figsize=(15, 8.4))
-    now = O.reach(hand)["index"]
     views = ((-90, -90), (0, 180))          # from the palmar side; from the radial side
     for row, view in enumerate(views):
-        u = np.zeros(N_SERVOS)
-        u[chain("thumb").servo], u[5], u[chain("index").servo] = now.u_thumb[0], now.u_thumb[1], now.u_finger
-        draw(fig.add_subplot(2, 4, 4 * row + 1, projection="3d"), hand, p, u,
-             f"today's thumb: closest to the index\n(tips {now.surface_gap * 1e3:.1f} mm apart)", "index", view)
+        draw(fig.add_subplot(2, 4, 4 * row + 1, projection="3d"), hand, p, np.zeros(N_SERVOS),
+             "the file's thumb at rest", None, view)
         for k, f in enumerate(O.OPPOSED):
-            r = sol.reach[f]
+            r = reach[f]
             u = np.zeros(N_SERVOS)
             u[chain("thumb").servo], u[5], u[chain(f).servo] = r.u_contact
-            draw(fig.add_subplot(2, 4, 4 * row + k + 2, projection="3d"), hand_s, solved, u,
-                 f"solved CMC: thumb pad meets the {f}\n(margin {math.degrees(r.margin):+.1f} deg)", f, view)
+            draw(fig.add_subplot(2, 4, 4 * row + k + 2, projection="3d"), hand, p, u,
+                 f"the file's thumb pad meets the {f}\n(margin {math.degrees(r.margin):+.1f} deg)", f, view)
     fig.suptitle("thumb (red) and fingers as link axes, pads as squares, the palm envelope in grey; "
                  "top: seen from the palm side, bottom: from the radial side", fontsize=10)
     fig.tight_layout()

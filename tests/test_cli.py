@@ -139,14 +139,16 @@ def test_params_show_prints_derived_quantities():
 
 def test_params_opposition_solves_a_placement_the_file_then_reaches(tmp_path):
     """--solve prints parameter-file lines; pasted into a copy of the file, the hand they describe
-    is read back through the parameter path and its thumb meets the three pads."""
+    is read back through the parameter path, validates (the palm's thenar holds the CMC there) and
+    its thumb meets the three pads."""
     import re
     import tomllib
 
     from phantom_cad.params import DEFAULT_PARAMS
 
     out = cli("params", "opposition", "--solve").stdout
-    assert "index   pads +" in out                  # today's palm: not reached (issue 12)
+    assert "index   pads -" in out                  # the file's own placement (issue 12) already meets them
+    assert "the palm's thenar holds it within a palm of human breadth" in out
     lines = out[out.index("[palm]"):].splitlines()
     solved = tomllib.loads("\n".join(lines))["palm"]
     text = Path(DEFAULT_PARAMS).read_text()
@@ -162,6 +164,7 @@ def test_params_opposition_solves_a_placement_the_file_then_reaches(tmp_path):
         margin = float(re.search(r"margin ([+-][0-9.]+) deg", row).group(1))
         assert pad <= 0.0 and margin > 0.0, row
     assert "pinky" in again and "(not required)" in again
+    assert cli("params", "validate", "-p", f).returncode == 0
 
 
 def test_model_commands_never_import_cad(tmp_path):

@@ -131,8 +131,8 @@ def test_routing_document_round_trips(tmp_path):
     assert [t["name"] for t in back["tendons"]] == [t.name for t in TENDONS]
     rest = routing.lengths(p)
     for t in back["tendons"]:
-        assert t["kind"] in ("drive", "coupling", "return")
-        assert len(t["strands"]) == (2 if t["kind"] == "coupling" else 1)
+        assert t["kind"] in ("drive", "coupling", "return", "loop")
+        assert len(t["strands"]) == (2 if t["kind"] in ("coupling", "loop") else 1)
         for s in t["strands"]:
             assert s["rest_length_mm"] == pytest.approx(rest[s["name"]] * 1000, abs=1e-6)
             kinds = [e["type"] for e in s["elements"]]
@@ -244,3 +244,25 @@ def test_servo_boxes_and_wrist_by_hand():
     np.testing.assert_allclose(boxes["ears"][1], [W / 2, -off + span / 2, ear_top], atol=1e-9)
     hl = doc["hand"]["hand_length_mm"]
     assert F.wrist_y(p) * 1e3 == pytest.approx(-doc["fingers"]["index"]["length_fraction"]["metacarpal"] * hl)
+
+
+@pytest.mark.parametrize("path,side", CASES, ids=[f"{p.stem}-{s}" for p, s in CASES])
+def test_the_cmc_loop_holds_q15_at_cmc_gain_u6(path, side):
+    """The CMC loop's two strands (docs/transmission.md): turning servo 6's pulley by u6 changes
+    their paths by +- r6 u6, turning the CMC by q15 by -+ (r6 / cmc_gain) q15, by hand from the file's
+    r6 (both pulleys in one plane: the strands are straight and the wraps planar); so with q15 =
+    cmc_gain u6 both keep their lengths over the whole travel."""
+    p = _params(path, side)
+    doc = tomllib.loads(Path(path).read_text())
+    r6, g = doc["thumb"]["cmc_pulley_radius_mm"] * 1e-3, doc["thumb"]["cmc_gain"]
+    rest = routing.lengths(p)
+    for u6 in np.linspace(0.0, math.radians(doc["thumb"]["cmc_servo_travel_deg"][1]), 7):
+        q, u = np.zeros(15), np.zeros(6)
+        u[5] = u6
+        L = routing.lengths(p, q, u)
+        assert L["thumb_cmc_loop_a"] - rest["thumb_cmc_loop_a"] == pytest.approx(r6 * u6, abs=1e-12)
+        assert L["thumb_cmc_loop_b"] - rest["thumb_cmc_loop_b"] == pytest.approx(-r6 * u6, abs=1e-12)
+        q[14] = g * u6
+        L = routing.lengths(p, q, u)
+        for s in ("a", "b"):
+            assert L[f"thumb_cmc_loop_{s}"] == pytest.approx(rest[f"thumb_cmc_loop_{s}"], abs=1e-12)

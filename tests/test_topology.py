@@ -52,10 +52,12 @@ def test_link_tree():
     assert parent["palm"] is None
     assert parent["index_base"] == "palm" and parent["index_distal"] == "index_middle"
     assert parent["thumb_cmc_base"] == "palm" and parent["thumb_distal"] == "thumb_proximal"
-    assert parent["servo_pulley_6"] == "palm"
-    # the tendon servos sit in the forearm module, fixed to the palm behind the wrist
-    assert parent["forearm"] == "palm" and parent["servo_pulley_1"] == parent["servo_pulley_5"] == "forearm"
-    assert len(T.LINKS) == 1 + 1 + 4 * 4 + 3 + 6
+    # every servo sits in the forearm module, fixed to the palm behind the wrist; the CMC pulley on
+    # the CMC base (servo 6 turns it through the loop)
+    assert parent["forearm"] == "palm"
+    assert all(parent[f"servo_pulley_{k}"] == "forearm" for k in range(1, 7))
+    assert parent["thumb_cmc_pulley"] == "thumb_cmc_base"
+    assert len(T.LINKS) == 1 + 1 + 4 * 4 + 3 + 1 + 6
     # parents come before their children: a writer can walk the tuple in order
     seen = set()
     for ln in T.LINKS:
@@ -71,5 +73,9 @@ def test_tendons():
         kinds.setdefault(t.kind, []).append(t.name)
     # per digit one drive and one return; a coupling loop per pair of adjacent chain joints (4 x 2 + 1)
     assert len(kinds["drive"]) == 5 and len(kinds["return"]) == 5 and len(kinds["coupling"]) == 9
+    # and the CMC's loop from servo 6's pulley to the CMC pulley
+    (loop6,) = (t for t in T.TENDONS if t.kind == "loop")
+    assert loop6.servo == T.CMC_SERVO and loop6.joints == ("thumb_cmc",)
+    assert loop6.links[0] == "servo_pulley_6" and loop6.links[-1] == "thumb_cmc_pulley"
     loop = next(t for t in T.TENDONS if t.name == "index_mcp_pip")
     assert loop.links == ("index_base", "index_proximal", "index_middle")

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from ..kinematics import frames as F
-from ..kinematics.topology import CMC_Q, CMC_SERVO, DIGITS, JOINTS, LINKS, N_JOINTS, SERVOS, digit_links
+from ..kinematics.topology import CMC_PULLEY, CMC_Q, DIGITS, JOINTS, LINKS, N_JOINTS, digit_links
 from . import registry, verify
 from .materials import bill_of_materials  # noqa: F401  (part of the interface)
 
@@ -100,7 +100,8 @@ def verify_part(params, name: str, shape) -> list[str]:
 
 def designed_contacts(params) -> list[tuple[str, str, str]]:
     """Pairs of parts that touch at rest by design: every finger base on its palm socket, every
-    tendon-driven joint's tongue heel on its extension stop, the CMC base on its servo hub."""
+    tendon-driven joint's tongue heel on its extension stop, the CMC pulley on the CMC base's
+    column."""
     out = []
     for ln in LINKS:
         if ln.segment == "base" and ln.parent_joint is None:
@@ -108,6 +109,5 @@ def designed_contacts(params) -> list[tuple[str, str, str]]:
         for j in JOINTS:
             if j.parent == ln.name and j.index != CMC_Q:
                 out.append((j.parent, j.child, f"{j.key.upper()} joint: tongue heel on the extension stop"))
-    cmc, hub = JOINTS[CMC_Q], SERVOS[CMC_SERVO]
-    out.append((cmc.child, hub.link, f"CMC base screwed onto the {hub.link} hub"))
+    out.append((JOINTS[CMC_Q].child, CMC_PULLEY, "CMC pulley on the CMC base's keyed column (the flats touch)"))
     return out

@@ -9,8 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import units
-from ..kinematics.topology import (CMC_Q, CMC_SERVO, DIGITS, FINGER_CHAINS, FINGERS, JOINTS, N_SERVOS, SERVOS,
-                                   THUMB_CHAIN, joint)
+from ..kinematics.topology import DIGITS, FINGER_CHAINS, FINGERS, N_SERVOS, SERVOS, THUMB_CHAIN, joint
 
 
 #: cord added to a cut length for each knot or clamp it ends in (mm): enough to tie and trim
@@ -58,8 +57,14 @@ def _cords(params) -> list[dict]:
             ch = params.digit(t.digit).chain
             cut = units.mm(run + ch.servo_radius * ch.travel[1]) + 2 * KNOT_ALLOWANCE_MM
             how = ("knotted in the servo pulley's anchor hole, wound on it, across the wrist (and, for the thumb, "
-                   "up the CMC post and down the CMC axis) to G1 and G2, knotted behind G2; tensioned by "
-                   "setting the servo horn's zero")
+                   "to its turn above the CMC pulley and down the CMC axis through the column) to G1 and G2, knotted "
+                   "behind G2; tensioned by setting the servo horn's zero")
+            spec = f"{g(hw.tendon_diameter)} mm braided UHMWPE, {cut:.0f} mm"
+        elif t.kind == "loop":
+            cut = units.mm(run) + 4 * KNOT_ALLOWANCE_MM
+            how = ("closed loop: both ends knotted in servo 6's pulley's anchor hole, the two strands through the palm's "
+                   "channels, once round the CMC pulley and knotted through its anchor hole, with the servo and the "
+                   "CMC both at 0; pulled taut before the second knot")
             spec = f"{g(hw.tendon_diameter)} mm braided UHMWPE, {cut:.0f} mm"
         elif t.kind == "coupling":
             cut = units.mm(run) + 2 * KNOT_ALLOWANCE_MM
@@ -119,7 +124,7 @@ def bill_of_materials(params) -> list[dict]:
     bom.append({"item": "screw",
                 "spec": f"M{g(hw.screw_diameter)} self-tapping, {g(engage)} mm thread engagement + servo flange",
                 "quantity": 2 * N_SERVOS,
-                "used_in": "servo flanges: servos 1-5 into the forearm module's pilot holes, servo 6 into the palm's"})
+                "used_in": "servo flanges: servos 1-6 into the forearm module's pilot holes"})
     from .parts import wrist
     tab = params.palm.wall + engage
     bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} x {units.mm(tab):.0f} self-tapping",
@@ -127,9 +132,6 @@ def bill_of_materials(params) -> list[dict]:
                 "used_in": "the forearm module's tab into the palm's dorsal face at the wrist"})
     bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} horn screw (servo accessory)",
                 "quantity": 2 * N_SERVOS, "used_in": "servo pulleys 1-6 to their horns"})
-    cmc = params.thumb.thickness + params.print.hole_clearance + engage
-    bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} x {units.mm(cmc):.0f} self-tapping",
-                "quantity": 2, "used_in": f"{JOINTS[CMC_Q].child} through its hub into {SERVOS[CMC_SERVO].link}"})
     n_loops = sum(n - 1 for n in n_joints.values())
     from ..kinematics import routing
     # the hub clamp's pilot: from the cheek's outer face across the loop's groove (parts.tendons)
@@ -147,5 +149,5 @@ def bill_of_materials(params) -> list[dict]:
     bom.append({"item": "servo",
                 "spec": "micro servo, body " + " x ".join(g(v) for v in sv.body) + " mm (SCS0009 class)",
                 "quantity": N_SERVOS,
-                "used_in": "forearm module: u1 thumb flexion, u2-u5 fingers; palm (thenar housing): u6 thumb CMC"})
+                "used_in": "forearm module: u1 thumb flexion, u2-u5 fingers, u6 thumb CMC (through the CMC loop)"})
     return bom

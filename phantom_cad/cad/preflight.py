@@ -1,6 +1,6 @@
 """Rules of the palm's layout, checked when a parameter file loads (before any solid is built).
 
-The palm places the thenar housing and the finger sockets from the frames
+The palm places the thenar (the CMC's journal, its pulley's cavity) and the finger sockets from the frames
 (phantom_cad.kinematics.frames); whether they fit together is a question of the parts'
 own dimension classes, so these rules live here, numpy only (no OpenCascade), and raise the
 same :class:`ParamError` as the schema. ``check`` is called by every command that loads a
@@ -10,14 +10,15 @@ parameter file for building or validating (``params validate``, ``build``, ``dem
 from __future__ import annotations
 
 import itertools
+import math
 
 import numpy as np
 
-from ..kinematics.topology import FINGERS, SERVOS
 from ..params import ParamError
 from ..params.rules import MIN_WALL
 from .parts.common import mm
-from .parts.palm import PALM_SERVOS, Palm
+from .parts.palm import Palm
+
 
 
 def _obb(T: np.ndarray, lo, hi):
@@ -47,13 +48,6 @@ def overlap(a, b) -> float:
     return float(depth)
 
 
-def servo_tools(palm: Palm, k: int) -> list:
-    """The boxes the palm cuts for servo ``k`` (pocket, ear slots), as oriented boxes in the palm
-    frame."""
-    T = palm.T_servo(k)
-    return [_obb(T, lo, hi) for lo, hi in palm.pocket_boxes(k)]
-
-
 def magnet_pockets(palm: Palm, finger: str) -> list:
     """The socket's two magnet pockets as boxes around their cylinders, grown by the thinnest
     printable wall (params.rules.MIN_WALL)."""
@@ -67,63 +61,38 @@ def magnet_pockets(palm: Palm, finger: str) -> list:
 
 
 def check(params) -> None:
-    """Raise ParamError if the palm's servo pockets reach a finger socket's magnet pockets, if
-    the thenar housing of the CMC servo does not join the palm, or if the CMC servo's hub (which
-    turns with the thumb) or the thumb tendon's post comes closer to the palm than a clearance; and
-    if the routing model finds no clamp position for a loop or a drive (``routing.routes`` raises
-    the ParamError: a joint's travel too large for its loop's pulleys and carrier), or a finger
-    drive's coupler has no room in its palm channel or does not come out at the service angle
-    (``routing.couplers``)."""
+    """Raise ParamError if the palm's thenar cannot hold the CMC (``frames.thenar``): the CMC axis
+    must climb into the palm within 60 deg of its normal (the column along it enters the palm's
+    journal), the CMC base (a hub of half the thumb's width, the thumb's thickness, turning with the
+    thumb) must stay a clearance below the palm's palmar face, and the thumb drive's turn above the
+    CMC pulley's cavity a wall under the dorsal face; and if the routing model finds no clamp
+    position for a loop or a drive (``routing.routes`` raises the ParamError: a joint's travel too
+    large for its loop's pulleys and carrier), or a finger drive's coupler has no room in its palm
+    channel or does not come out at the service angle (``routing.couplers``)."""
+    from ..kinematics import frames as F
     from ..kinematics import routing
 
+    src = params.source
+    T0 = F.T_palm_thumb_cmc_base(params)
+    fit = F.thenar_margins(params, T0)
+    if fit["tilt"] < 0.0:
+        tilt = math.degrees(F.MAX_CMC_TILT - fit["tilt"])
+        raise ParamError("palm.thumb_cmc_axis_deg", [round(math.degrees(v), 6) for v in params.palm.thumb_cmc_axis],
+                         f"tilts the CMC axis {tilt:.1f} deg from the palm's normal: the palm holds the CMC on a "
+                         f"column along it, which must climb into the palm within {math.degrees(F.MAX_CMC_TILT):g} deg "
+                         "of its normal", src)
+    Tp = params.palm.thickness
+    if fit["base"] < -1e-12:
+        raise ParamError("palm.thumb_cmc_offset_mm", [round(mm(v), 6) for v in params.palm.thumb_cmc_offset],
+                         f"with palm.thumb_cmc_axis_deg the CMC base's top comes {mm(-fit['base']):.3f} mm too close to "
+                         f"the palm's palmar face ({mm(-Tp / 2.0):g} mm): the CMC base (a hub of half thumb.width_mm, "
+                         "thumb.thickness_mm thick, turning with the thumb) hangs a clearance below the palm and "
+                         "its column climbs into the palm's journal", src)
+    if fit["turn"] < -1e-12:
+        raise ParamError("palm.thickness_mm", round(mm(Tp), 6),
+                         f"leaves the thumb drive's turn onto the CMC axis, above the CMC pulley's cavity (radius "
+                         f"thumb.cmc_pulley_radius_mm with its flanges and running room, tilted with the CMC axis), "
+                         f"{mm(-fit['turn']):.3f} mm short of a relief and a wall under the dorsal face: a thicker "
+                         "palm, a smaller pulley or a CMC axis nearer the palm's normal", src)
     routing.routes(params)
     routing.couplers(params)
-    palm = Palm(params)
-    src = params.source
-    pockets = {f: magnet_pockets(palm, f) for f in FINGERS}
-    for servo in (SERVOS[k] for k in PALM_SERVOS):
-        for tool in servo_tools(palm, servo.index):
-            for f, boxes in pockets.items():
-                if any(overlap(tool, b) > 1e-9 for b in boxes):
-                    raise ParamError(
-                        "servo.flange_span_mm", round(mm(params.servo.flange_span), 6),
-                        f"the palm's pocket for servo {servo.label} (body servo.body_mm, ears "
-                        f"flange_span_mm, pulley cavity) leaves less than {mm(MIN_WALL):g} mm (two perimeters) to the "
-                        f"{f} socket's magnet pockets: the servo does not fit behind the finger sockets", src)
-    # the thenar housing (around the CMC servo) must join the palm (its metacarpal block or the web
-    # between them) by at least a wall
-    x0, x1, y0, y1 = palm.extents()
-    slabs = [_obb(np.eye(4), (x0, y0, -palm.thickness / 2.0), (x1, y1, palm.thickness / 2.0))]
-    lo, hi = palm.thenar_web()
-    if np.all(hi > lo):
-        slabs.append(_obb(np.eye(4), lo, hi))
-    (k,) = PALM_SERVOS
-    w = palm.tol.wall
-    housing = _obb(palm.T_servo(k), *palm.housing_box(k))
-    depth = max(overlap(housing, slab) for slab in slabs)
-    if depth < w - 1e-9:
-        raise ParamError(
-            "palm.thumb_cmc_offset_mm", [round(mm(v), 6) for v in params.palm.thumb_cmc_offset],
-            f"with palm.thumb_cmc_axis_deg the CMC servo's housing overlaps the palm by {max(depth, 0.0):.3f} mm; "
-            f"it must join it by at least a wall ({w:g} mm) or the palm prints in two pieces", src)
-    # the hub on the CMC servo's shaft turns the thumb, and the post on the housing's end wall
-    # carries the thumb tendon to the CMC axis through the air: both must clear the palm slab by a
-    # clearance (bounding boxes, so conservative at the rounds; issue 8, property test seed 5:
-    # the hub 1161 mm^3 inside the palm; the post inside the slab makes the palm an invalid solid)
-    from .parts.pulley import ServoPulley
-
-    hub = ServoPulley(params, k)
-    r, h, c = hub.outer_radius, hub.width / 2.0, palm.tol.clearance
-    a = palm.cmc_arch()
-    rp = a["r_post"]
-    for what, box in (
-            ("hub (radius thumb.cmc_horn_radius_mm, width cad.servo_pulley_width_mm)",
-             _obb(palm.T_servo(k), (-r, -r, -h), (r, r, h))),
-            ("tendon post (on its housing's end wall)",
-             _obb(palm.T_cmc(), (-rp, a["y_post"] - rp, a["z_floor"] - w), (rp, a["y_post"] + rp, a["z_hi"])))):
-        depth = max(overlap(box, slab) for slab in slabs) + c
-        if depth > 1e-9:
-            raise ParamError(
-                "palm.thumb_cmc_offset_mm", [round(mm(v), 6) for v in params.palm.thumb_cmc_offset],
-                f"with palm.thumb_cmc_axis_deg the CMC servo's {what} comes {depth:.3f} mm closer to the "
-                f"palm than the clearance ({c:g} mm): it must stand clear of the palm", src)

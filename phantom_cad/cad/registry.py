@@ -13,11 +13,11 @@ from .parts.finger_base import FingerBase
 from .parts.forearm import Forearm
 from .parts.palm import Palm
 from .parts.phalanx import Phalanx
-from .parts.pulley import ServoPulley
+from .parts.pulley import CMCPulley, ServoPulley
 from .parts.thumb import ThumbCMCBase
 
 #: the part families
-FAMILIES: tuple[type[Part], ...] = (Palm, Forearm, FingerBase, Phalanx, ThumbCMCBase, ServoPulley)
+FAMILIES: tuple[type[Part], ...] = (Palm, Forearm, FingerBase, Phalanx, ThumbCMCBase, CMCPulley, ServoPulley)
 
 #: link name -> the family that makes it, in topology order
 FAMILY: dict[str, type[Part]] = {ln.name: fam for ln in LINKS for fam in FAMILIES if ln in fam.links()}

@@ -155,7 +155,7 @@ def params_opposition(params: Optional[Path] = ParamsOpt,
     typer.echo("\n".join(opposition_lines(hand)))
     if not solve:
         return
-    sol = opposition.solve(hand)
+    sol = opposition.solve(hand, constraint=opposition.thenar_constraint(p))
     b = opposition.default_bounds(p)
     typer.echo("")
     typer.echo(f"solved ({sol.evaluations} evaluations; bounds: CMC "
@@ -168,12 +168,17 @@ def params_opposition(params: Optional[Path] = ParamsOpt,
                else "index, middle and ring are not all met pad to pad")
     palm = (f"stay {mm(-sol.intrusion):.1f} mm outside" if sol.intrusion <= 0.0
             else f"reach {mm(sol.intrusion):.1f} mm into")
-    typer.echo(f"margin {deg(sol.margin):+.1f} deg ({verdict}); the thumb's links {palm} the palm envelope")
+    thenar = ("the palm's thenar holds it within a palm of human breadth" if sol.violation <= 0.0
+              else f"the palm's thenar misses it by {mm(sol.violation):.1f} mm")
+    typer.echo(f"margin {deg(sol.margin):+.1f} deg ({verdict}); the thumb's links {palm} the palm envelope; "
+               f"{thenar}")
     typer.echo("")
     typer.echo("[palm]")
-    typer.echo(f"thumb_cmc_offset_mm = [{', '.join(f'{mm(v):.2f}' for v in sol.offset)}]"
+    # four decimals: the margin of a solved placement can sit on the edge of the command grid's
+    # contact band, where a change of 0.01 mm or deg moves it by degrees (docs/opposition.md)
+    typer.echo(f"thumb_cmc_offset_mm = [{', '.join(f'{mm(v):.4f}' for v in sol.offset)}]"
                f"  # solved: opposition margin {deg(sol.margin):+.1f} deg (phantom-cad params opposition --solve)")
-    typer.echo(f"thumb_cmc_axis_deg = [{', '.join(f'{deg(v):.2f}' for v in sol.axis)}]")
+    typer.echo(f"thumb_cmc_axis_deg = [{', '.join(f'{deg(v):.4f}' for v in sol.axis)}]")
 
 
 # -- model ---------------------------------------------------------------------

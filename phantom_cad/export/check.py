@@ -35,7 +35,8 @@ import numpy as np
 from .. import units
 from ..errors import UserError
 from ..kinematics.model import Hand
-from ..kinematics.topology import CMC_Q, CMC_SERVO, JOINTS, LINK_NAMES, SERVOS, joint
+from ..kinematics import frames as F
+from ..kinematics.topology import CMC_Q, JOINTS, LINK_NAMES, SERVOS, joint
 from .pipeline import export_problem
 
 #: poses: position (mm) and rotation (deg) tolerances of the issue
@@ -256,7 +257,7 @@ def mjcf_rows(export: Export, params, hand: Hand, U: np.ndarray, settle: int) ->
     m.opt.timestep = NEAR_RIGID_STEP
     key = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_KEY, "home")
     act = {s.index: mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, s.actuator) for s in SERVOS}
-    hinge = {s.index: mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, s.name) for s in SERVOS if s.drive == "tendon"}
+    hinge = {s.index: mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, s.name) for s in SERVOS}
     dq: dict[str, float] = {}
     for u in U[:settle]:
         mujoco.mj_resetDataKeyframe(m, d, max(key, 0))
@@ -318,14 +319,15 @@ def axis_rows(robot, params, solids: dict) -> list[Row]:
     """Each joint's axis (URDF, at rest) on the bores measured in the solids, each solid placed
     where the CAD assembly puts it at rest: the parent's axle press bore and the child's bearing
     seat and axle bore (a tongue without a bearing turns on the axle in its bore); for the CMC the
-    servo hub's round."""
+    palm's journal and the CMC base's column."""
     from ..cad.assembly import pose_transforms
     from ..cad.measure import cylinders
     from ..cad.parts.common import Tolerances
 
     tol = Tolerances(params)        # the modelled (compensated) bores, mm
     press, seat, clear = tol.axle_press / 2.0, tol.bearing_seat / 2.0, tol.axle_clear / 2.0
-    hub = params.thumb.cmc_horn_radius / units.MM
+    th = F.thenar(params)
+    journal, column = th["journal_r"] / units.MM, th["column_r"] / units.MM
     robot.update_cfg(np.zeros(len(robot.actuated_joint_names)))
     names = {j.name: j for j in robot.robot.joints}
     rest = pose_transforms(params, np.zeros(len(JOINTS)))
@@ -339,7 +341,7 @@ def axis_rows(robot, params, solids: dict) -> list[Row]:
         T = robot.get_transform(j.child, robot.base_link)
         a = T[:3, :3] @ (np.asarray(uj.axis, float) / np.linalg.norm(uj.axis))
         p = T[:3, 3] / units.MM
-        seats = ([(SERVOS[CMC_SERVO].link, (hub,), "horn hub")] if j.index == CMC_Q
+        seats = ([(j.parent, (journal,), "journal"), (j.child, (column,), "column")] if j.index == CMC_Q
                  else [(j.parent, (press,), "axle press bore"), (j.child, (seat, clear), "bearing seat and axle bore")])
         for part, radii, what in seats:
             if part not in cyl:

@@ -11,10 +11,11 @@ names, inertials and meshes as the URDF). What MuJoCo adds (docs/descriptions.md
   the dead band [0, rest length] (``springlength``), stiffness EA / rest length (a tendon) or k_s
   (the return cord, whose tension is then k_s sum R_i q_i, eq. 11), damping stiffness x
   :data:`~phantom_cad.export.robot.STRAND_TAU`.
-* **Servos**: each tendon servo's pulley turns on a hinge (named after the servo,
-  ``index_flexion``, ...; armature kv^2 / (4 kp): the position loop critically damped), driven by a position
-  actuator ``servo<n>`` (control = u in radians); the drive tendon is clamped on the pulley and
-  wound by it. ``servo6`` turns the CMC directly (q = cmc_gain u).
+* **Servos**: each servo's pulley turns on a hinge (named after the servo, ``index_flexion``, ...,
+  ``thumb_abduction``; armature kv^2 / (4 kp): the position loop critically damped), driven by a position
+  actuator ``servo<n>`` (control = u in radians); a drive tendon is clamped on the pulley and
+  wound by it; ``servo6``'s pulley turns the CMC pulley through the two strands of the CMC loop
+  (q15 = cmc_gain u6 while they hold).
 * kp = stall torque / stall error (``servo.stall_error_deg``), kv = stall torque / no-load speed.
 * Geoms: the visual mesh (class ``visual``: group 2, no contact) and the convex collision mesh
   (class ``collision``: group 3); contact excluded between every parent and child body.
@@ -30,7 +31,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from ..kinematics.routing import Point
-from .robot import JointDrive, RobotModel, ServoDrive
+from .robot import RobotModel, ServoDrive
 
 #: simulation step (s) and integrator: implicit in the velocity terms (actuator damping)
 TIMESTEP = 0.0005
@@ -201,18 +202,11 @@ def mjcf_spec(model: RobotModel, meshdir: str = "../meshes"):
         gain[0] = d.stiffness
         bias = np.zeros(10)
         gear = np.zeros(6)
-        if isinstance(d, ServoDrive):
-            act.trntype = mujoco.mjtTrn.mjTRN_JOINT
-            act.target = d.joint
-            gear[0] = 1.0
-            bias[:3] = (0.0, -d.stiffness, -d.damping)
-            act.forcerange = [-d.torque, d.torque]
-        elif isinstance(d, JointDrive):
-            act.trntype = mujoco.mjtTrn.mjTRN_JOINT
-            act.target = d.joint
-            gear[0] = 1.0 / d.ratio
-            bias[:3] = (0.0, -d.stiffness, -d.damping)
-            act.forcerange = [-d.torque, d.torque]
+        act.trntype = mujoco.mjtTrn.mjTRN_JOINT
+        act.target = d.joint
+        gear[0] = 1.0
+        bias[:3] = (0.0, -d.stiffness, -d.damping)
+        act.forcerange = [-d.torque, d.torque]
         act.gear, act.gainprm, act.biasprm = list(gear), list(gain), list(bias)
 
     for j in model.joints:

@@ -30,7 +30,7 @@ from .. import units
 from ..kinematics import closed_form as cf
 from ..kinematics import frames as F
 from ..kinematics import routing
-from ..kinematics.topology import CHAINS, CMC_Q, JOINTS, LINK_NAMES, LINKS, SERVOS, servo_joints
+from ..kinematics.topology import CHAINS, CMC_PULLEY, CMC_Q, JOINTS, LINK_NAMES, LINKS, SERVOS
 from .manifest import mass_g
 
 #: dense grid of the servo travel on which the largest joint rate is taken
@@ -102,19 +102,6 @@ class ServoDrive:
 
 
 @dataclass(frozen=True)
-class JointDrive:
-    """A servo that turns a joint directly: q = ratio u."""
-    actuator: str
-    servo: str
-    joint: str
-    ratio: float
-    travel: tuple[float, float]
-    torque: float
-    stiffness: float
-    damping: float
-
-
-@dataclass(frozen=True)
 class Strand:
     """One strand of a routed tendon (``kinematics.routing``) as the simulator models it: a cord
     through its path elements that pulls (never pushes) with ``stiffness`` once longer than
@@ -135,7 +122,7 @@ class RobotModel:
     side: str
     links: tuple[RobotLink, ...]
     joints: tuple[RobotJoint, ...]
-    drives: tuple[ServoDrive | JointDrive, ...] = ()     # servo order
+    drives: tuple[ServoDrive, ...] = ()     # servo order
     strands: tuple[Strand, ...] = ()                     # every routed tendon strand
     #: pairs of links in contact by design (a joint, a mount): no collision between them
     adjacent: tuple[tuple[str, str], ...] = ()
@@ -186,21 +173,17 @@ def _drives(params) -> dict[str, tuple[float, float, Mimic | None]]:
 STRAND_TAU = 0.002
 
 
-def transmissions(params) -> tuple[tuple[ServoDrive | JointDrive, ...], tuple[Strand, ...]]:
+def transmissions(params) -> tuple[tuple[ServoDrive, ...], tuple[Strand, ...]]:
     """The six servo drives (servo order) and every routed tendon strand, from the topology's
     servos, the routing model and the parameters."""
     tau, speed = params.servo.stall_torque, params.servo.speed
     kp, kv = tau / params.servo.stall_error, tau / speed
     drives = []
     for servo in SERVOS:
-        if servo.drive == "direct":
-            (qi,) = servo_joints(servo.index)
-            drives.append(JointDrive(servo.actuator, servo.name, JOINTS[qi].name, params.thumb.cmc_gain,
-                                     params.thumb.cmc_travel, tau, kp, kv))
-            continue
-        ch = params.digit(servo.digit).chain
+        # every servo turns its pulley: a drive's tendon, or (servo 6) the CMC's closed loop
+        travel = params.thumb.cmc_travel if servo.drive == "loop" else params.digit(servo.digit).chain.travel
         drives.append(ServoDrive(servo.actuator, servo.name, servo.link,
-                                 tuple(float(v) for v in routing.servo_axis(params)), ch.travel, tau, kp, kv,
+                                 tuple(float(v) for v in routing.servo_axis(params)), travel, tau, kp, kv,
                                  kv * kv / (4.0 * kp)))
     rest = routing.lengths(params)
     mid = routing.mid_travel_pose(params)
@@ -212,15 +195,6 @@ def transmissions(params) -> tuple[tuple[ServoDrive | JointDrive, ...], tuple[St
             strands.append(Strand(st.name, r.name, r.tendon.kind, st.elements,
                                   tuple(routing.side_sites(params, st, mid)), L, k, k * STRAND_TAU))
     return tuple(drives), tuple(strands)
-
-
-def _fixed_parent(ln) -> str:
-    """Where a fixed link hangs: the palm, or for the hub of a direct drive (coaxial with its
-    joint and turning with it) the link that joint moves."""
-    if ln.segment == "servo_pulley" and SERVOS[ln.servo].drive == "direct":
-        (qi,) = servo_joints(ln.servo)
-        return JOINTS[qi].child
-    return ln.parent
 
 
 def robot_model(params, metas: dict[str, dict], tips: dict[str, tuple[str, np.ndarray]],
@@ -243,7 +217,7 @@ def robot_model(params, metas: dict[str, dict], tips: dict[str, tuple[str, np.nd
             joints.append(RobotJoint(j["name"], "revolute", j["parent"], j["child"], np.asarray(j["origin"], float),
                                      tuple(float(a) for a in j["axis"]), *j["limits"], effort, velocity, mimic))
         else:
-            parent = _fixed_parent(ln)
+            parent = ln.parent
             origin = np.linalg.inv(rest[parent]) @ rest[ln.name]
             joints.append(RobotJoint(f"{ln.name}_joint", "fixed", parent, ln.name, origin))
     for frame, (parent, T) in tips.items():
@@ -251,6 +225,6 @@ def robot_model(params, metas: dict[str, dict], tips: dict[str, tuple[str, np.nd
         joints.append(RobotJoint(f"{frame}_joint", "fixed", parent, frame, np.asarray(T, float)))
     drives, strands = transmissions(params)
     adjacent = [(j.parent, j.child) for j in joints if j.type == "revolute" or j.child in LINK_NAMES]
-    # a direct drive's hub hangs on the joint it turns but sits in its servo, on the palm
-    adjacent += [(ln.parent, ln.name) for ln in LINKS[1:] if (ln.parent, ln.name) not in adjacent]
+    # the CMC pulley turns inside the palm's cavity (within the palm's collision solids)
+    adjacent.append((JOINTS[CMC_Q].parent, CMC_PULLEY))
     return RobotModel(params.name, params.side, tuple(links), tuple(joints), drives, strands, tuple(adjacent))

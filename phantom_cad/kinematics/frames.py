@@ -28,7 +28,12 @@ Units: metres (SI, like the parameter object). The CAD layer converts to millime
   from the servo body toward the pulley, y along the body length (the body lies toward
   -y of the shaft by cad.servo_shaft_offset).
 * Forearm module: behind the wrist crease (the index metacarpal's length behind the index
-  MCP), palm axes; it carries the five tendon servos in one row, shafts dorsal.
+  MCP, or behind the thenar where that reaches further back), palm axes; it carries the six
+  servos in one row, shafts dorsal.
+* Thenar: the CMC base carries a column along the CMC axis up into the palm, which holds it in a
+  journal; on the column, inside the palm, the CMC pulley (link ``thumb_cmc_pulley``, fixed to the
+  CMC base: origin on the CMC axis at its mid-plane, z the CMC axis, y the palm's y turned into
+  the pulley's plane at rest) that servo 6's closed cable loop turns (:func:`thenar`).
 * Left hand: every transform is conjugated by the mirror S = diag(-1, 1, 1): the left
   hand is the mirror image of the right in the palm's y-z plane, and each link's shape is
   mirrored in its own y-z plane, so T stays a proper rigid transform.
@@ -43,7 +48,7 @@ import numpy as np
 from .. import units
 from .dimensions import finger_columns, slot_back
 from .memo import memoised
-from .topology import CMC_Q, FINGERS, JOINTS, LINKS, N_JOINTS, SERVOS, chain, joint, link, servo_joints
+from .topology import CMC_Q, CMC_SERVO, FINGERS, JOINTS, LINKS, N_JOINTS, SERVOS, chain, joint, link
 
 MIRROR = np.diag([-1.0, 1.0, 1.0, 1.0])
 
@@ -163,44 +168,118 @@ def pulley_cavity_margin(params) -> float:
 
 
 def servo_radius(params, servo: int) -> float:
-    """Radius (m) of a servo's output: the chain's pulley radius r_j for a tendon servo, the
-    CMC hub radius for the direct drive."""
+    """Radius (m) of a servo's pulley: the chain's r_j for a tendon servo, the CMC loop's pulley
+    radius (thumb.cmc_pulley_radius, the same on the CMC column: q15 = u6) for servo 6."""
     s = SERVOS[servo]
-    if s.drive == "direct":
-        return params.thumb.cmc_horn_radius
+    if s.drive == "loop":
+        return params.thumb.cmc_pulley_radius
     return params.digit(s.digit).chain.servo_radius
 
 
+def cmc_pulley_radius(params) -> float:
+    """Radius (m) of the CMC pulley: servo 6's (thumb.cmc_pulley_radius) over thumb.cmc_gain, so
+    that the loop holds q15 = cmc_gain u6 (eq. 9; equal radii at the paper's gain of 1)."""
+    return params.thumb.cmc_pulley_radius / params.thumb.cmc_gain
+
+
 def T_palm_servo(params, servo: int) -> np.ndarray:
-    """Servo output frame (see module doc) of servo ``servo`` (0-based index, topology.SERVOS):
-    a tendon servo in the forearm module (:func:`forearm_servos`), or the direct-drive CMC servo
-    under the CMC base."""
-    if SERVOS[servo].drive == "direct":
-        th = params.thumb
-        pw = params.cad.servo_pulley_width
-        c = params.print.hole_clearance
-        # the CMC hub (servo pulley 6) sits under the CMC base, coaxial with the CMC axis
-        return T_palm_thumb_cmc_base(params) @ trans(0.0, 0.0, -(th.thickness / 2.0 + c + pw / 2.0))
+    """Servo output frame (see module doc) of servo ``servo`` (0-based index, topology.SERVOS), in
+    the forearm module's row (:func:`forearm_servos`)."""
     return forearm_servos(params)[servo].copy()
 
 
-def thumb_arch(params) -> dict[str, float]:
-    """The post and arch on the palm that carry the thumb's drive onto the CMC axis above the CMC
-    base (CMC base frame at rest, metres), so that turning the CMC leaves its length alone. The
-    post stands on the end wall of servo 6's housing, on the side the thumb never sweeps (q15
-    turns the thumb from +y toward -x); the arch clears the CMC base by one clearance."""
+def tendon_relief(params) -> float:
+    """Radius (m) of the sphere that rounds a tendon channel's bend: a tendon hole (the tendon
+    and two clearances) wide."""
+    return params.hardware.tendon_diameter + 2.0 * params.print.hole_clearance
+
+
+_THENAR: dict = {}
+
+
+def thenar(params) -> dict[str, float]:
+    """The palm's hold on the thumb (CMC base frame at rest, distances s along the CMC axis from
+    the CMC centre, metres; memoised, read-only):
+
+    * ``face``: where the axis crosses the palm's palmar face (the column enters the journal);
+    * ``column_r``: the column's radius (cad.cmc_column_radius); ``journal_r`` the palm's bore;
+    * ``pulley``: the CMC pulley's mid-plane: as low in the palm as its cavity allows (the cavity's
+      rim a palm wall above the palmar face); ``cavity_r``, ``cavity_h``: the cavity's radius and
+      half height along the axis (the pulley's flanges, running room and a clearance);
+    * ``top``: the column's top, flush with the pulley's upper flange;
+    * ``ceiling``: the cavity's top; ``turn``: where the thumb drive turns down onto the CMC axis,
+      a palm wall and a relief above it (the drive reaches the CMC along its axis, so turning the
+      CMC leaves its length alone).
+
+    The cavity opens radially (the pulley slides in from the thenar side, the column up through
+    the journal into it)."""
+    return memoised(_THENAR, params.digest, lambda: thenar_layout(params, T_palm_thumb_cmc_base(params)), cap=16)
+
+
+def thenar_layout(params, T0: np.ndarray) -> dict[str, float]:
+    """:func:`thenar` for the CMC placement T0 (T_palm_cmc_base at rest) instead of the file's."""
+    a, C = T0[:3, 2], T0[:3, 3]
     c, w = params.print.hole_clearance, params.palm.wall
-    relief = 2.0 * (params.hardware.tendon_diameter + 2.0 * c)
-    T = params.thumb.thickness
-    r_hub = params.thumb.cmc_horn_radius
-    r_post = w
-    y_post = -max(params.cad.servo_shaft_offset + params.servo.flange_span / 2.0 + 2.0 * c + r_post,
-                  r_hub + c + r_post)
-    z_floor = -(T / 2.0 + 2.0 * c + params.cad.servo_pulley_width)   # servo 6 housing top
-    z_lo = T / 2.0 + c                                               # arch underside
-    z_hi = z_lo + 2.0 * w
-    return {"r_post": r_post, "y_post": y_post, "z_floor": z_floor, "z_lo": z_lo, "z_hi": z_hi,
-            "z_mid": (z_lo + z_hi) / 2.0, "z_entry": z_floor + relief + w}
+    Tp = params.palm.thickness
+    az = max(float(a[2]), 1e-9)
+    R = cmc_pulley_radius(params) + pulley_cavity_margin(params)
+    h = params.cad.servo_pulley_width / 2.0 + c
+    tilt = math.sqrt(max(1.0 - az * az, 0.0))
+    face = (-Tp / 2.0 - C[2]) / az
+    z_q = -Tp / 2.0 + w + R * tilt + h * az             # the cavity's lowest rim a wall above the face
+    pulley = (z_q - C[2]) / az
+    ceiling = pulley + h
+    return {"face": face, "column_r": params.cad.cmc_column_radius,
+            "journal_r": params.cad.cmc_column_radius + c, "pulley": pulley, "cavity_r": R,
+            "cavity_h": h, "top": pulley + params.cad.servo_pulley_width / 2.0, "ceiling": ceiling,
+            "turn": ceiling + w + tendon_relief(params)}
+
+
+#: the CMC axis's largest tilt from the palm's normal (rad): the column along it climbs into the palm
+MAX_CMC_TILT = math.radians(60.0)
+
+
+def thenar_margins(params, T0: np.ndarray) -> dict[str, float]:
+    """How well the palm's thenar holds the CMC placed at T0 (T_palm_cmc_base at rest): each
+    margin >= 0 where it fits. ``tilt`` (rad): the CMC axis within MAX_CMC_TILT of the palm's
+    normal; ``base`` (m): the CMC base (a hub of half the thumb's width, the thumb's thickness,
+    turning with the thumb) a clearance below the palm's palmar face; ``turn`` (m): the thumb
+    drive's turn above the CMC pulley's cavity a relief and a wall under the dorsal face. The
+    file's are checked before a build (``cad.preflight``); the placement search keeps to them."""
+    a, C = T0[:3, 2], T0[:3, 3]
+    th, c, w, Tp = params.thumb, params.print.hole_clearance, params.palm.wall, params.palm.thickness
+    az = float(np.clip(a[2], -1.0, 1.0))
+    out = {"tilt": MAX_CMC_TILT - math.acos(az)}
+    top = C[2] + th.thickness / 2.0 * az + th.width / 2.0 * math.sqrt(max(1.0 - az * az, 0.0))
+    out["base"] = -Tp / 2.0 - c - top
+    if az <= 0.0:
+        out["turn"] = -Tp
+        return out
+    t = thenar_layout(params, T0)
+    D = T0 @ np.array([0.0, 0.0, t["turn"], 1.0])
+    out["turn"] = Tp / 2.0 - (tendon_relief(params) + w) - float(D[2])
+    return out
+
+
+def T_cmc_base_pulley(params) -> np.ndarray:
+    """The CMC pulley's frame in the CMC base's (fixed): on the CMC axis at the pulley's mid-plane,
+    the CMC base's axes (its key's flat on +y)."""
+    return trans(0.0, 0.0, thenar(params)["pulley"])
+
+
+def cmc_loop_direction(params) -> float:
+    """Polar angle (rad, the CMC pulley's frame at rest, right hand) of the direction from servo
+    6's pulley to the CMC pulley (they lie in one plane, :func:`coplanar_servo`): the loop's
+    strands reach the CMC pulley at that angle -+ 90 deg."""
+    T = T_palm_thumb_cmc_base(params) @ T_cmc_base_pulley(params)
+    d = T[:3, 3] - T_palm_servo(params, CMC_SERVO)[:3, 3]
+    v = T[:3, :3].T @ d
+    return math.atan2(v[1], v[0])
+
+
+def thenar_axis_point(params, s: float) -> np.ndarray:
+    """The palm-frame point (m, right hand) s along the CMC axis from the CMC centre, at rest."""
+    return (T_palm_thumb_cmc_base(params) @ np.array([0.0, 0.0, s, 1.0]))[:3]
 
 
 def wrist_y(params) -> float:
@@ -242,23 +321,29 @@ def servo_envelope(params, servo: int) -> np.ndarray:
     return np.vstack(pts)
 
 
-def forearm_pitch(params) -> float:
-    """Least x spacing (m) of the forearm module's servos: the wider of two pulley cavities' radii
-    and a servo body with its clearances, and a palm wall (:func:`forearm_servos` widens it where
-    the servos, each turned toward its target, would come closer than a wall)."""
-    rc = max(c.servo_radius for c in params.chains) + pulley_cavity_margin(params)
+def forearm_pitch(params, a: int | None = None, b: int | None = None) -> float:
+    """Least x spacing (m) of two neighbouring servos ``a`` and ``b`` in the forearm module (by
+    default the largest of any two): the wider of their two pulley cavities' radii and a servo body
+    with its clearances, and a palm wall (:func:`forearm_servos` widens it where the servos, each
+    turned toward its target, would come closer than a wall)."""
+    m = pulley_cavity_margin(params)
+    r = sorted(servo_radius(params, s.index) for s in SERVOS)
+    ra, rb = (r[-1], r[-2]) if a is None else (servo_radius(params, a), servo_radius(params, b))
     body = params.servo.body[1] + 2.0 * params.print.hole_clearance
-    return max(2.0 * rc, body) + params.palm.wall
+    return max(ra + rb + 2.0 * m, body) + params.palm.wall
 
 
 def servo_target(params, servo: int) -> np.ndarray:
-    """The palm-frame point (m, right hand) a tendon servo's drive heads for as it leaves its
-    pulley: the finger's tendon exit at its socket; for the thumb, the CMC centre (the drive climbs
-    the CMC post from there, kinematics.routing)."""
-    digit = SERVOS[servo].digit
-    if digit in FINGERS:
-        return socket_tendon_point(params, digit)
-    return T_palm_thumb_cmc_base(params)[:3, 3].copy()
+    """The palm-frame point (m, right hand) a servo's cable heads for as it leaves its pulley: the
+    finger's tendon exit at its socket; for the thumb's drive, its turn onto the CMC axis above the
+    CMC pulley (:func:`thenar`); for servo 6, the CMC pulley's centre (its loop's strands run either
+    side of the line between the pulleys)."""
+    s = SERVOS[servo]
+    if s.drive == "loop":
+        return thenar_axis_point(params, thenar(params)["pulley"])
+    if s.digit in FINGERS:
+        return socket_tendon_point(params, s.digit)
+    return thenar_axis_point(params, thenar(params)["turn"])
 
 
 def aimed_servo(C: np.ndarray, E: np.ndarray, r: float) -> np.ndarray:
@@ -275,69 +360,129 @@ def aimed_servo(C: np.ndarray, E: np.ndarray, r: float) -> np.ndarray:
     return T
 
 
-def spaced(want, pitch: float) -> list[float]:
-    """The x_k nearest ``want`` in least squares with x_k+1 - x_k >= pitch: with z_k = x_k - k
-    pitch it is the isotonic regression of want_k - k pitch (pool adjacent violators)."""
+def coplanar_servo(x: float, y: float, Q: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """Servo frame at (x, y) (palm frame) with its shaft along ``a`` and its pulley's mid-plane the
+    plane through Q normal to ``a`` (the height z solves (S - Q) . a = 0), turned so that its y
+    points at Q: two pulleys of equal radii in one plane, which a closed loop joins with straight
+    strands at each one's -x and +x."""
+    a = np.asarray(a, float) / np.linalg.norm(a)
+    S = np.array([x, y, Q[2] - ((x - Q[0]) * a[0] + (y - Q[1]) * a[1]) / a[2]])
+    yv = (Q - S) - ((Q - S) @ a) * a
+    yv /= np.linalg.norm(yv)
+    T = np.eye(4)
+    T[:3, 0], T[:3, 1], T[:3, 2], T[:3, 3] = np.cross(yv, a), yv, a, S
+    return T
+
+
+def spaced(want, pitch) -> list[float]:
+    """The x_k nearest ``want`` in least squares with x_k+1 - x_k >= pitch_k (``pitch`` one number
+    or one per gap): with c_k the sum of the gaps before k and z_k = x_k - c_k it is the isotonic
+    regression of want_k - c_k (pool adjacent violators)."""
+    gaps = [float(pitch)] * max(len(want) - 1, 0) if np.isscalar(pitch) else [float(g) for g in pitch]
+    c = np.concatenate([[0.0], np.cumsum(gaps)]) if gaps else np.zeros(len(want))
     blocks: list[list[float]] = []          # [mean, count]
     for k, w in enumerate(want):
-        blocks.append([w - k * pitch, 1.0])
+        blocks.append([w - c[k], 1.0])
         while len(blocks) > 1 and blocks[-2][0] > blocks[-1][0]:
             (m1, n1), (m2, n2) = blocks[-2], blocks.pop()
             blocks[-1] = [(m1 * n1 + m2 * n2) / (n1 + n2), n1 + n2]
     z = [m for m, n in blocks for _ in range(int(n))]
-    return [zk + k * pitch for k, zk in enumerate(z)]
+    return [zk + float(c[k]) for k, zk in enumerate(z)]
 
 
 _FOREARM: dict = {}
 
 
 def forearm_servos(params) -> dict[int, np.ndarray]:
-    """T_palm_servo (m, right hand) of every tendon servo in the forearm module: one row across the
-    forearm, thumb servo radial to pinky servo ulnar (the order of their targets, so no two drives
-    cross), each as near (least squares, :func:`spaced`) to where its drive leaves straight ahead
-    as at least forearm_pitch apart allows, widened until the turned servos stand a palm wall apart
-    (:func:`servo_gaps`); shafts dorsal, every pulley's mid-plane at the fingers' tendon height, so
-    that a finger drive runs level from its pulley to its socket; each servo turned about its shaft
-    so that its drive leaves straight toward its target (:func:`servo_target`); the row as far
-    forward as the servos' envelopes (:func:`servo_envelope`) allow, one palm wall behind the
-    module's front face (:func:`forearm_front`). Memoised (read-only)."""
+    """T_palm_servo (m, right hand) of every servo in the forearm module: one row across the
+    forearm in the order of their targets (radial to ulnar, so no two cables cross), each as near
+    (least squares, :func:`spaced`) to where its cable leaves straight ahead as at least
+    forearm_pitch apart allows, widened until the turned servos stand a palm wall apart
+    (:func:`servo_gaps`); the tendon servos' shafts dorsal, every pulley's mid-plane at its
+    target's height (the fingers' tendon height, the thumb drive's turn), so that every drive runs
+    level, each servo turned about its shaft so that its drive leaves straight toward its target
+    (:func:`servo_target`); servo 6's shaft parallel to the CMC axis, its pulley in the CMC pulley's
+    plane (:func:`coplanar_servo`: the loop's strands run straight and in both pulleys' planes);
+    the row as far forward as the servos' envelopes (:func:`servo_envelope`) allow, one palm wall
+    behind the module's front face (:func:`forearm_front`). Memoised (read-only)."""
     return memoised(_FOREARM, params.digest, lambda: _forearm_servos(params), cap=16)
 
 
 def _forearm_servos(params) -> dict[int, np.ndarray]:
-    tendon = [s.index for s in SERVOS if s.drive == "tendon"]
-    targets = {k: servo_target(params, k) for k in tendon}
+    targets = {s.index: servo_target(params, s.index) for s in SERVOS}
     # each pulley as near as the pitch allows to where its drive leaves straight ahead toward its
-    # target (its centre r ulnar of the target's x): least squares with x_k+1 - x_k >= pitch
-    radius = {k: servo_radius(params, k) for k in tendon}
-    envelope = {k: servo_envelope(params, k) for k in tendon}
-    want = [targets[k][0] + radius[k] for k in tendon]
-    z = tendon_height(params)
+    # target (its centre r ulnar of the target's x; a loop's centre on it): least squares with
+    # x_k+1 - x_k >= pitch, in the order of those x
+    radius = {k: servo_radius(params, k) for k in targets}
+    aim = {k: (0.0 if SERVOS[k].drive == "loop" else radius[k]) for k in targets}
+    envelope = {k: servo_envelope(params, k) for k in targets}
+    tendon = sorted(targets, key=lambda k: (targets[k][0] + aim[k], k))
+    want = [targets[k][0] + aim[k] for k in tendon]
     front = forearm_front(params) - params.palm.wall
-    pitch, w = forearm_pitch(params), params.palm.wall
+    pitch = [forearm_pitch(params, a, b) for a, b in zip(tendon, tendon[1:])]
+    w = params.palm.wall
+    axis = T_palm_thumb_cmc_base(params)[:3, 2]
     out: dict[int, np.ndarray] = {}
-    for _ in range(12):         # widen the pitch until the turned servos stand a wall apart
+    for _ in range(12):         # widen each gap until its turned servos stand a wall apart
         xs = spaced(want, pitch)
         y = front
         for _ in range(6):      # a servo's turn depends (weakly) on the row's depth: settle it
-            out = {k: aimed_servo(np.array([xs[i], y, z]), targets[k], radius[k]) for i, k in enumerate(tendon)}
+            out = {k: (coplanar_servo(xs[i], y, targets[k], axis) if SERVOS[k].drive == "loop" else
+                       aimed_servo(np.array([xs[i], y, targets[k][2]]), targets[k], aim[k]))
+                   for i, k in enumerate(tendon)}
             reach = max(float((out[k][:3, :3] @ envelope[k].T)[1].max()) for k in tendon)
             y = front - reach
-        short = w - min(servo_gaps(params, out))
-        if short <= 1e-9:
+        short = [w - g for g in servo_gaps(params, out)]      # per neighbouring pair, in row order
+        if max(short) <= 1e-9:
             break
-        pitch += short + 1e-6
+        pitch = [g + max(s, 0.0) + (1e-6 if s > 1e-9 else 0.0) for g, s in zip(pitch, short)]
     return out
 
 
-def _rectangles(params, T: np.ndarray) -> list[np.ndarray]:
-    """The xy corners (palm frame) of a servo's body and ears, grown by a clearance, placed by T."""
+def _hull(P: np.ndarray) -> np.ndarray:
+    """The convex hull (counter-clockwise) of 2-D points (monotone chain)."""
+    pts = sorted(map(tuple, np.round(P, 12)))
+    if len(pts) <= 2:
+        return np.array(pts)
+
+    def half(seq):
+        out: list = []
+        for p in seq:
+            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
+                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0.0:
+                out.pop()
+            out.append(p)
+        return out
+
+    lower, upper = half(pts), half(reversed(pts))
+    return np.array(lower[:-1] + upper[:-1])
+
+
+def _rectangles(params, T: np.ndarray, servo: int | None = None) -> list[np.ndarray]:
+    """The xy outlines (palm frame) of a servo's body and ears, grown by a clearance, placed by T
+    (and, given ``servo``, its pulley's cavity), with the pockets the module cuts for them: open
+    along the shaft up to the module's top (a wall above the palm's dorsal face), so a tilted shaft
+    sweeps them sideways (the convex hull of the outline at the servo and at the top)."""
     c = params.print.hole_clearance
-    out = []
+    z_top = params.palm.thickness / 2.0 + params.palm.wall
+    shapes = []
     for lo, hi in servo_boxes(params).values():
-        pts = np.array([[x, y, 0.0] for x, y in ((lo[0] - c, lo[1] - c), (hi[0] + c, lo[1] - c),
-                                                  (hi[0] + c, hi[1] + c), (lo[0] - c, hi[1] + c))])
-        out.append((T[:3, :3] @ pts.T).T[:, :2] + T[:2, 3])
+        shapes.append([(x, y, lo[2] - c) for x, y in ((lo[0] - c, lo[1] - c), (hi[0] + c, lo[1] - c),
+                                                       (hi[0] + c, hi[1] + c), (lo[0] - c, hi[1] + c))])
+    if servo is not None:
+        rc = servo_radius(params, servo) + pulley_cavity_margin(params)
+        a = np.linspace(0.0, 2.0 * math.pi, 24, endpoint=False)
+        h = params.cad.servo_pulley_width / 2.0 + c
+        shapes.append([(rc * math.cos(t), rc * math.sin(t), -h) for t in a])
+    out = []
+    for corners in shapes:
+        pts = []
+        for v in corners:
+            p = T[:3, :3] @ np.array(v) + T[:3, 3]
+            pts.append(p[:2])
+            if T[2, 2] > 1e-9:
+                pts.append((p + T[:3, 2] * max((z_top - p[2]) / T[2, 2], 0.0))[:2])
+        out.append(_hull(np.array(pts)))
     return out
 
 
@@ -345,14 +490,14 @@ def servo_gaps(params, servos: dict[int, np.ndarray]) -> list[float]:
     """Between each pair of neighbouring servos of a row (T_palm_servo, shafts along z), a lower
     bound (m) of the distance between their bodies and ears with clearance: the largest gap
     between their projections on an edge normal of either (separating axes)."""
-    row = sorted(servos.values(), key=lambda T: T[0, 3])
+    row = sorted(servos.items(), key=lambda kT: kT[1][0, 3])
     gaps = []
-    for Ta, Tb in zip(row, row[1:]):
+    for (ka, Ta), (kb, Tb) in zip(row, row[1:]):
         g = np.inf
-        for P in _rectangles(params, Ta):
-            for Q in _rectangles(params, Tb):
-                axes = [np.array([-(R[(i + 1) % 4] - R[i])[1], (R[(i + 1) % 4] - R[i])[0]]) for R in (P, Q)
-                        for i in range(2)]
+        for P in _rectangles(params, Ta, ka):
+            for Q in _rectangles(params, Tb, kb):
+                axes = [np.array([-(R[(i + 1) % len(R)] - R[i])[1], (R[(i + 1) % len(R)] - R[i])[0]])
+                        for R in (P, Q) for i in range(len(R))]
                 best = -np.inf
                 for n in axes:
                     n = n / np.linalg.norm(n)
@@ -363,40 +508,45 @@ def servo_gaps(params, servos: dict[int, np.ndarray]) -> list[float]:
     return gaps
 
 
-def thenar_housing_box(params) -> tuple[np.ndarray, np.ndarray]:
-    """(lo, hi) corners (m, servo frame) of the palm's housing around the direct-drive CMC servo:
-    one box around its body and flange ears grown by a hole clearance and a palm wall, up to its
-    output face."""
-    boxes = servo_boxes(params)
-    g = params.print.hole_clearance + params.palm.wall
-    (blo, bhi), (elo, ehi) = boxes["body"], boxes["ears"]
-    return (np.array([blo[0] - g, min(blo[1], elo[1]) - g, blo[2] - g]),
-            np.array([bhi[0] + g, max(bhi[1], ehi[1]) + g, bhi[2]]))
+def _ring(T0: np.ndarray, s: float, r: float, n: int = 24) -> np.ndarray:
+    """Points (n, 3) of the circle of radius r about the CMC axis, s along it (palm frame)."""
+    a = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
+    pts = np.c_[r * np.cos(a), r * np.sin(a), np.full_like(a, s), np.ones_like(a)]
+    return (T0 @ pts.T).T[:, :3]
 
 
-def thenar_points(params) -> np.ndarray:
-    """Points (m, palm frame, right hand) whose hull holds what the palm carries at the thumb's
-    CMC: the corners of servo 6's housing (:func:`thenar_housing_box`) and of the post and arch of
-    :func:`thumb_arch`."""
-    k = next(s.index for s in SERVOS if s.drive == "direct")
+def thenar_points(params, T0: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """Points (m, palm frame, right hand) of what the palm's thenar holds round the CMC axis
+    (:func:`thenar`), each grown by a palm wall: ``journal`` (the column's bore from the palmar face
+    to the pulley's cavity), ``cavity`` (the CMC pulley's cavity) and ``turn`` (the thumb drive's
+    turn onto the axis). The palm's thenar block is their bounding box, clipped to the palm's faces;
+    the cavity opens radially, so only the journal and the turn set how far radial it reaches.
+    ``T0``: another CMC placement than the file's (T_palm_cmc_base at rest)."""
+    if T0 is None:
+        T0, t = T_palm_thumb_cmc_base(params), thenar(params)
+    else:
+        t = thenar_layout(params, T0)
     w = params.palm.wall
-    lo, hi = thenar_housing_box(params)
-    box = box_corners(lo, hi)
-    Ts = T_palm_servo(params, k)
-    pts = [(Ts[:3, :3] @ box.T).T + Ts[:3, 3]]
-    a = thumb_arch(params)
-    r = a["r_post"]
-    post = box_corners((-r, a["y_post"] - r, a["z_floor"] - w), (r, a["y_post"] + r, a["z_hi"]))
-    Tc = T_palm_thumb_cmc_base(params)
-    pts.append((Tc[:3, :3] @ post.T).T + Tc[:3, 3])
-    return np.vstack(pts)
+    rj = t["journal_r"] + w
+    return {"journal": np.vstack([_ring(T0, s, rj) for s in (t["face"], t["pulley"] - t["cavity_h"])]),
+            "cavity": np.vstack([_ring(T0, s, t["cavity_r"] + w) for s in (t["pulley"] - t["cavity_h"] - w,
+                                                                          t["ceiling"] + w)]),
+            "turn": np.vstack([_ring(T0, s, tendon_relief(params) + w) for s in (t["turn"] - tendon_relief(params) - w,
+                                                                                  t["turn"] + tendon_relief(params) + w)])}
+
+
+def palm_back(params) -> float:
+    """y (m, palm frame) of the palm's back face: the wrist crease, or the back of the thenar
+    (:func:`thenar_points`) where that reaches further back (the palm's metacarpal block reaches
+    back as far, so that the finger drives stay in channels up to the forearm module)."""
+    back = min(float(v[:, 1].min()) for v in thenar_points(params).values())
+    return min(wrist_y(params), back)
 
 
 def forearm_front(params) -> float:
-    """y (m, palm frame) of the forearm module's front face: a hole clearance behind the wrist
-    crease, or behind the thenar (:func:`thenar_points`) where that reaches further back."""
-    c = params.print.hole_clearance
-    return min(wrist_y(params), float(thenar_points(params)[:, 1].min())) - c
+    """y (m, palm frame) of the forearm module's front face: a hole clearance behind the palm's
+    back face (:func:`palm_back`)."""
+    return palm_back(params) - params.print.hole_clearance
 
 
 def T_palm_forearm(params) -> np.ndarray:
@@ -487,10 +637,9 @@ def _joint_transform(params, ln, q) -> np.ndarray:
             T = T_palm_servo(params, ln.servo)
             if ln.parent != "palm":          # mounted on the forearm module
                 T = np.linalg.inv(_joint_transform(params, link(ln.parent), q)) @ T
-            if SERVOS[ln.servo].drive == "direct":   # the hub turns with its joint about its z
-                (qi,) = servo_joints(ln.servo)
-                T = T @ rot_z(float(q[qi]))
             return T
+        if ln.segment == "cmc_pulley":
+            return T_cmc_base_pulley(params)
         return T_palm_finger_base(params, ln.digit)
     j = joint(ln.parent_joint)
     if j.index == CMC_Q:

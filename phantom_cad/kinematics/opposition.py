@@ -145,7 +145,7 @@ class ThumbTips:
 
 
 def thumb_tips(hand, n1: int = 21, n6: int = 21) -> ThumbTips:
-    s1, s6 = _servo(THUMB), next(s.index for s in SERVOS if s.drive == "direct")
+    s1, s6 = _servo(THUMB), next(s.index for s in SERVOS if s.drive == "loop")
     g1, g6 = np.meshgrid(_travel(hand, s1, n1), _travel(hand, s6, n6), indexing="ij")
     u = np.zeros((n1 * n6, N_SERVOS))
     u[:, s1], u[:, s6] = g1.ravel(), g6.ravel()
@@ -155,7 +155,7 @@ def thumb_tips(hand, n1: int = 21, n6: int = 21) -> ThumbTips:
     # the links' axes: the metacarpal from its hub's rim (the hub sits on the palm) to the MP, the
     # proximal phalanx to the IP, the distal phalanx to its tip's centre, 8 points each
     hub = np.zeros_like(centres[0])
-    hub[:, 1] = min(p.thumb.cmc_horn_radius, p.thumb.metacarpal)
+    hub[:, 1] = min(p.thumb.width / 2.0, p.thumb.metacarpal)
     ends = [hub, *centres]
     t = np.linspace(0.0, 1.0, 8)[None, :, None]
     body = np.concatenate([e0[:, None] + t * (e1 - e0)[:, None] for e0, e1 in zip(ends, ends[1:])], axis=1)
@@ -259,14 +259,14 @@ class Bounds:
 def default_bounds(params) -> Bounds:
     """The thenar region of a palm of human breadth, scaled with the hand length (189 mm: the
     reference hand): the CMC centre up to 35 mm radial of the palm's radial edge
-    (:func:`palm_envelope`), 20-75 mm proximal of the index MCP and 30 mm palmar to 10 mm dorsal
-    of it (the search keeps the thumb's links out of :func:`palm_envelope`); the axis angles within
+    (:func:`palm_envelope`), 20-75 mm proximal of the index MCP and 35 mm palmar to 10 mm dorsal
+    of it (the CMC base hangs below the palm, its column climbing into it: ``frames.thenar``) (the search keeps the thumb's links out of :func:`palm_envelope`); the axis angles within
     +-90 deg roll, -90..30 deg pitch and +-90 deg yaw (docs/opposition.md)."""
     k = params.hand_length / 0.189
     mm = 1e-3 * k
     deg = math.radians
     x_edge = palm_envelope(params)[0][0]
-    return Bounds(offset=((x_edge - 35 * mm, x_edge), (-75 * mm, -20 * mm), (-30 * mm, 10 * mm)),
+    return Bounds(offset=((x_edge - 35 * mm, x_edge), (-75 * mm, -20 * mm), (-35 * mm, 10 * mm)),
                   axis=((deg(-90), deg(90)), (deg(-90), deg(30)), (deg(-90), deg(90))))
 
 
@@ -301,6 +301,49 @@ def palm_intrusion(thumb: ThumbTips, T0: np.ndarray, envelope) -> float:
     stay out, by that much)."""
     sd = box_distance(thumb.body_placed(T0), *envelope)
     return float(thumb.body_radius - sd.min())
+
+
+#: the 95th-percentile adult palm's breadth at hand length 189 mm (m), scaled with the hand length
+HUMAN_BREADTH = 0.095
+
+
+def human_edge(params) -> float:
+    """x (m, palm frame, right hand) of the radial edge of a palm of human breadth
+    (:data:`HUMAN_BREADTH`, scaled with the hand length) that ends at the pinky's ulnar edge plus a
+    wall (:func:`palm_envelope`)."""
+    return float(palm_envelope(params)[1][0]) - HUMAN_BREADTH * params.hand_length / 0.189
+
+
+def carpus(params) -> float:
+    """Length (m) of the carpus, between the metacarpals' bases (``frames.wrist_y``) and the wrist
+    crease the hand length is measured from: the hand length less the middle finger's metacarpal
+    and phalanges (15.7 mm at the default's fractions). A human thenar reaches that far back; the
+    palm's back face, and the forearm module behind it, move back with it."""
+    m = params.fingers["middle"]
+    return params.hand_length - (m.metacarpal + m.proximal + m.middle + m.distal)
+
+
+def thenar_constraint(params, human: bool = True):
+    """The placement search's ``constraint`` for the palm's thenar (``frames.thenar``): metres by
+    which a placement T0 misses ``frames.thenar_margins`` (the CMC axis's tilt priced at the thumb's
+    half width per radian) and, with ``human``, by which the journal's and the turn's walls reach
+    radial of a palm of human breadth (:func:`human_edge`; the pulley's cavity opens radially) and
+    the thenar reaches behind the carpus (:func:`carpus`)."""
+    edge = human_edge(params)
+    back = F.wrist_y(params) - carpus(params)
+    lever = params.thumb.width / 2.0
+
+    def violation(T0: np.ndarray) -> float:
+        m = F.thenar_margins(params, T0)
+        v = max(-m["tilt"], 0.0) * lever + max(-m["base"], 0.0) + max(-m["turn"], 0.0)
+        if m["tilt"] < 0.0 or not human:
+            return v
+        pts = F.thenar_points(params, T0)
+        x = min(float(pts["journal"][:, 0].min()), float(pts["turn"][:, 0].min()))
+        y = min(float(v[:, 1].min()) for v in pts.values())
+        return v + max(edge - x, 0.0) + max(back - y, 0.0)
+
+    return violation
 
 
 def _placement(x: np.ndarray) -> np.ndarray:

@@ -45,7 +45,8 @@ from ..errors import ParamError
 from .dimensions import FLANK, digit_field, slot_back
 from . import frames as F
 from .memo import memoised
-from .topology import CHAINS, JOINTS, N_JOINTS, SERVOS, TENDONS, Tendon, chain, digit_links, joint, link
+from .topology import (CHAINS, CMC_PULLEY, CMC_Q, CMC_SERVO, JOINTS, N_JOINTS, SERVOS, TENDONS, Tendon, chain,
+                       digit_links, joint, link)
 
 #: every wrap stays this far inside (0, 180 deg) over the joint's whole travel (rad)
 WRAP_MARGIN = math.radians(8.0)
@@ -295,20 +296,13 @@ def _drive(params, digit: str) -> Strand:
     first = spec.joint_names[0]
     base = joint(first).parent
     if digit == "thumb":
-        a = F.thumb_arch(params)
-        # on the palm (CMC base frame at rest = its pose in the palm with q15 = 0)
-        T = F.T_palm_thumb_cmc_base(params)
-        P = lambda *v: tuple(float(t) for t in (T @ np.array([*v, 1.0]))[:3])  # noqa: E731
-        # the drive leaves the pulley in its plane (along the servo's y) and turns toward the post
-        # just outside the pulley's cavity
-        Ts = F.T_palm_servo(params, servo.index)
-        turn = Ts @ np.array([-r, r + F.pulley_cavity_margin(params), 0.0, 1.0])
-        els += [Point("via", "palm", tuple(float(t) for t in turn[:3]), "turn"),
-                Point("via", "palm", P(0.0, a["y_post"], a["z_entry"]), "post entry"),
-                Point("via", "palm", P(0.0, a["y_post"], a["z_mid"]), "post top"),
-                Point("via", "palm", P(0.0, 0.0, a["z_mid"]), "over the CMC axis"),
-                Point("via", "palm", P(0.0, 0.0, a["z_lo"]), "CMC axis")]
-        # down the CMC axis through the hub into the CMC base, and along it to G1
+        t = F.thenar(params)
+        P = lambda s: tuple(float(v) for v in F.thenar_axis_point(params, s))  # noqa: E731
+        # the drive runs level from its pulley (aimed at the turn, at its height) to its turn onto
+        # the CMC axis above the CMC pulley's cavity, and down the axis into the CMC base's column
+        els += [Point("via", "palm", P(t["turn"]), "over the CMC axis"),
+                Point("via", "palm", P(t["ceiling"]), "CMC axis")]
+        # down the column into the CMC base, and along it to G1
         els.append(Point("via", base, (0.0, 0.0, float(g1[2])), "interface"))
     else:
         z = F.tendon_height(params)
@@ -316,6 +310,74 @@ def _drive(params, digit: str) -> Strand:
     els += [Point("via", base, tuple(float(v) for v in g1), "guide G1"),
             Point("anchor", l2, tuple(float(v) for v in g2), "guide G2")]
     return Strand(f"{digit}_drive", tuple(els))
+
+
+#: how far (rad) each of the CMC loop's clamps sits inside the wraps the travel allows
+LOOP_CLAMP_MARGIN = math.radians(2.0)
+
+
+def cmc_loop_clamps(params) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Polar angles (rad, right hand, each pulley's frame at rest: servo 6's, and the CMC pulley's
+    turned so that its y points away from servo 6) of the CMC loop's clamps, strand a's and strand
+    b's, on servo 6's pulley and on the CMC pulley. Each strand winds on one pulley as it unwinds
+    from the other; its wrap stays inside (WRAP_MARGIN, 180 deg - WRAP_MARGIN) over a pulley's
+    travel T (servo 6's; the CMC's, cmc_gain times it). Each clamp sits LOOP_CLAMP_MARGIN inside its
+    strand's allowed wraps, on the side that keeps the two clamps of a pulley furthest apart:
+    180 deg - 2 WRAP_MARGIN - T - 2 LOOP_CLAMP_MARGIN (70.1 deg by default), room for two knot
+    wells."""
+    lo, hi = params.thumb.cmc_travel
+    m, d = WRAP_MARGIN, LOOP_CLAMP_MARGIN
+    out = []
+    for what, travel in (("servo 6's pulley", hi - lo), ("CMC pulley", params.thumb.cmc_gain * (hi - lo))):
+        _clamp_angle(m + d, math.pi - m - d - travel, f"CMC loop's {what}", params,
+                     "thumb.cmc_servo_travel_deg", [round(math.degrees(lo), 6), round(math.degrees(hi), 6)],
+                     f"the pulley's travel must be at most {180 - 2 * math.degrees(m + d):g} deg (a wrap is "
+                     f"modelled up to 180 deg, each clamp {math.degrees(d):g} deg inside it)")
+        out.append(travel)
+    ts, tq = out
+    # servo 6: a winds (wrap m + d at rest, clamp at pi + wrap), b unwinds (m + d + T, clamp at -wrap)
+    servo = (math.pi + m + d, -(m + d + ts))
+    # the CMC pulley: a unwinds (m + d + T, clamp at pi - wrap), b winds (m + d, clamp at wrap)
+    cmc = (math.pi - (m + d + tq), m + d)
+    return servo, cmc
+
+
+def _cmc_loop(params) -> tuple[Strand, Strand]:
+    """The closed loop from servo 6's pulley to the CMC pulley (equal radii r6: q15 = u6): strand a
+    leaves servo 6's pulley at its -x along its y, strand b at its +x; both reach the CMC pulley
+    on the same sides (an open loop: both pulleys turn the same way) and end at one clamp on each
+    pulley (:func:`cmc_loop_clamps`). Turning servo 6's pulley by u6 (:func:`pose`) changes strand
+    a's path by + r6 u6 and b's by - r6 u6, turning the CMC by q15 by - r6 q15 / cmc_gain and + r6
+    q15 / cmc_gain: both paths keep their lengths exactly when q15 = cmc_gain u6. A via point where each strand crosses the gap
+    between the palm and the forearm module holds it between the two wraps (servo 6's pulley lies in
+    the CMC pulley's plane, ``frames.coplanar_servo``: the strands are straight and in both planes)."""
+    s = SERVOS[CMC_SERVO]
+    r, rq = F.servo_radius(params, s.index), F.cmc_pulley_radius(params)
+    w = params.cad.servo_pulley_width
+    Ts = F.T_palm_servo(params, s.index)
+    # the CMC pulley's frame turned so that its y points away from servo 6 (the strands reach it
+    # at its -x and +x, as they leave servo 6's pulley)
+    turn = F.cmc_loop_direction(params) - math.pi / 2.0
+    Tq = F.T_palm_thumb_cmc_base(params) @ F.T_cmc_base_pulley(params) @ F.rot_z(turn)
+    (sa, sb), (qa, qb) = cmc_loop_clamps(params)
+    clamps = {"a": (sa, qa + turn), "b": (sb, qb + turn)}
+    y_gap = F.forearm_front(params) + params.print.hole_clearance / 2.0
+    out = []
+    for name, side, axis in (("a", -1.0, -1.0), ("b", 1.0, 1.0)):
+        cs, cq = clamps[name]
+        p0 = (Ts @ np.array([side * r, 0.0, 0.0, 1.0]))[:3]
+        p1 = (Tq @ np.array([side * rq, 0.0, 0.0, 1.0]))[:3]
+        t = (y_gap - p0[1]) / (p1[1] - p0[1])
+        via = p0 + t * (p1 - p0)
+        out.append(Strand(f"thumb_cmc_loop_{name}", (
+            Point("anchor", s.link, ((r + CLAMP_OFFSET) * math.cos(cs), (r + CLAMP_OFFSET) * math.sin(cs), 0.0),
+                  "clamp"),
+            Pulley(s.link, (0.0, 0.0, 0.0), (0.0, 0.0, axis), r, w, "servo", s.name),
+            Point("via", "palm", tuple(float(v) for v in via), "channel"),
+            Pulley(CMC_PULLEY, (0.0, 0.0, 0.0), (0.0, 0.0, axis), rq, w, "loop", JOINTS[CMC_Q].name),
+            Point("anchor", CMC_PULLEY, ((rq + CLAMP_OFFSET) * math.cos(cq), (rq + CLAMP_OFFSET) * math.sin(cq), 0.0),
+                  "clamp"))))
+    return tuple(out)
 
 
 def _mirror_element(e):
@@ -351,6 +413,8 @@ def _routes(params, mirror: bool) -> tuple[Route, ...]:
             keys = chain(t.digit).keys
             k0 = keys.index(t.joints[0].split("_", 1)[1])
             strands, d, k = _loop(params, t.digit, k0, lay, rest), params.hardware.tendon_diameter, "EA"
+        elif t.kind == "loop":
+            strands, d, k = _cmc_loop(params), params.hardware.tendon_diameter, "EA"
         else:
             strands, d, k = (_return(params, t.digit, lay, rest),), params.cad.spring_diameter, "k_s"
         if mirror:
@@ -377,14 +441,14 @@ def _rotation(axis, angle: float) -> np.ndarray:
 
 
 def pose(params, q=None, u=None) -> dict[str, np.ndarray]:
-    """T_palm_link of every link at joint angles q (15) and servo angles u (6): the tendon servos'
-    pulleys turned by u about :func:`servo_axis`."""
+    """T_palm_link of every link at joint angles q (15) and servo angles u (6): every servo's
+    pulley turned by u about :func:`servo_axis` (servo 6's by u6: its loop holds q15 = cmc_gain u6
+    when both are given so)."""
     Ts = F.link_transforms(params, q)
     if u is not None:
         ax = servo_axis(params)
         for s in SERVOS:
-            if s.drive == "tendon":
-                Ts[s.link] = Ts[s.link] @ _rotation(ax, float(u[s.index]))
+            Ts[s.link] = Ts[s.link] @ _rotation(ax, float(u[s.index]))
     return Ts
 
 
@@ -504,7 +568,10 @@ def _runs(params, right_handed: bool) -> tuple[Run, ...]:
     for j in JOINTS:
         if j.key != "cmc":
             q_full[j.index] = _joint_travel(params, j.name)
-    u_full = np.array([params.digit(s.digit).chain.travel[1] if s.drive == "tendon" else 0.0 for s in SERVOS])
+    # the loop's pulleys turn too
+    q_full[CMC_Q] = params.thumb.cmc_gain * params.thumb.cmc_travel[1]
+    u_full = np.array([params.digit(s.digit).chain.travel[1] if s.drive == "tendon" else params.thumb.cmc_travel[1]
+                       for s in SERVOS])
     poses = [pose(params, None, np.zeros(len(SERVOS))), mid_travel_pose(params), pose(params, q_full, u_full)]
     unmirror = F.MIRROR[:3, :3] if (right_handed and params.side == "left") else np.eye(3)
     out = []

@@ -10,6 +10,8 @@ Joint vector q (15, radians), index -> label (the paper's Table I):
     2..4 q3..q5 index DIP, PIP, MCP, 5..7 middle, 8..10 ring, 11..13 pinky,
     14 q15 thumb CMC.
 Servo vector u (6, radians): 0 u1 thumb flexion, 1..4 u2..u5 index..pinky, 5 u6 thumb CMC.
+Every servo sits in the forearm module; servo 6 turns the CMC through a closed cable loop of equal
+pulley radii (q15 = cmc_gain u6, eq. 9).
 """
 
 from __future__ import annotations
@@ -28,11 +30,12 @@ DIGITS = ("thumb",) + FINGERS
 
 @dataclass(frozen=True)
 class Servo:
-    """One servo: ``index`` 0-5 in u order; it drives a tendon chain or the thumb CMC directly."""
+    """One servo: ``index`` 0-5 in u order; it drives a tendon chain, or the thumb CMC through a
+    closed cable loop."""
 
     index: int
     digit: str
-    drive: str          # "tendon" (a chain's drive tendon) or "direct" (the CMC, coaxial)
+    drive: str          # "tendon" (a chain's drive tendon) or "loop" (the CMC's cable loop)
 
     @property
     def label(self) -> str:
@@ -41,12 +44,11 @@ class Servo:
 
     @property
     def name(self) -> str:
-        return f"{self.digit}_flexion" if self.drive == "tendon" else f"{self.digit}_cmc"
+        return f"{self.digit}_flexion" if self.drive == "tendon" else f"{self.digit}_abduction"
 
     @property
     def link(self) -> str:
-        """The servo's pulley (or hub) link: on the forearm module for a tendon servo, on the palm
-        (under the CMC base) for the direct drive (:data:`SERVO_MOUNT`)."""
+        """The servo's pulley link, on the forearm module (:data:`SERVO_MOUNT`)."""
         return f"servo_pulley_{self.index + 1}"
 
     @property
@@ -88,7 +90,8 @@ class Link:
     parent: str | None       # None for the root (palm)
     parent_joint: str | None
     digit: str | None
-    segment: str             # "palm", "forearm", "base", "cmc_base", "proximal", "middle", "distal", "servo_pulley"
+    segment: str             # "palm", "forearm", "base", "cmc_base", "cmc_pulley", "proximal", "middle",
+                             # "distal", "servo_pulley"
     servo: int | None = None
 
     @property
@@ -122,7 +125,8 @@ class Chain:
 @dataclass(frozen=True)
 class Tendon:
     """A cable: ``kind`` drive (servo -> reference joint), coupling (figure-eight loop between
-    adjacent joints) or return (the dorsal cable-spring); ``links`` the links it runs on."""
+    adjacent joints), return (the dorsal cable-spring) or loop (the closed loop from servo 6's
+    pulley to the CMC's); ``links`` the links it runs on."""
 
     name: str
     kind: str
@@ -143,15 +147,17 @@ _THUMB_KEYS = ("mp", "ip")
 _THUMB_SEGMENTS = ("metacarpal", "proximal", "distal")
 _THUMB_LINKS = ("cmc_base", "proximal", "distal")
 
-#: servos in u order: one tendon servo per digit (thumb first), then the CMC's direct drive
-SERVOS = tuple(Servo(i, d, "tendon") for i, d in enumerate(DIGITS)) + (Servo(len(DIGITS), "thumb", "direct"),)
+#: servos in u order: one tendon servo per digit (thumb first), then the CMC's loop drive
+SERVOS = tuple(Servo(i, d, "tendon") for i, d in enumerate(DIGITS)) + (Servo(len(DIGITS), "thumb", "loop"),)
 N_SERVOS = len(SERVOS)
 CMC_SERVO = SERVOS[-1].index
-#: the forearm module: the link (fixed to the palm behind the wrist crease) that carries the tendon servos
+#: the forearm module: the link (fixed to the palm behind the wrist crease) that carries the servos
 FOREARM = "forearm"
-#: the link a servo of each drive is mounted on: the tendon servos in the forearm module (their drives
-#: cross the wrist), the direct drive at the CMC, coaxial with it [paper]
-SERVO_MOUNT = {"tendon": FOREARM, "direct": "palm"}
+#: the link a servo of each drive is mounted on: every servo in the forearm module (the tendon
+#: drives and the CMC's loop cross the wrist; docs/parts.md says why servo 6 is not at the CMC)
+SERVO_MOUNT = {"tendon": FOREARM, "loop": FOREARM}
+#: the pulley the CMC's loop turns: a link fixed to the CMC base, on its column inside the palm
+CMC_PULLEY = "thumb_cmc_pulley"
 #: the tendon servos' slice of u (servos 0..4)
 TENDON_SERVOS = slice(0, len(DIGITS))
 
@@ -170,6 +176,7 @@ def _build():
     for f in FINGERS:
         links += _digit_links(f, _FINGER_LINKS, _FINGER_KEYS, None)
     links += _digit_links("thumb", _THUMB_LINKS, _THUMB_KEYS, "thumb_cmc")
+    links.append(Link(CMC_PULLEY, "thumb_cmc_base", None, None, "cmc_pulley"))
     links += [Link(s.link, SERVO_MOUNT[s.drive], None, None, "servo_pulley", s.index) for s in SERVOS]
     by_child = {ln.parent_joint: ln for ln in links if ln.parent_joint}
 
@@ -199,6 +206,8 @@ def _build():
             tendons.append(Tendon(f"{ch.digit}_{a}_{b}", "coupling", ch.digit, tuple(ln[k:k + 3]),
                                   (names[k], names[k + 1])))
         tendons.append(Tendon(f"{ch.digit}_return", "return", ch.digit, tuple(ln), names))
+    tendons.append(Tendon("thumb_cmc_loop", "loop", "thumb", (SERVOS[CMC_SERVO].link, FOREARM, "palm", CMC_PULLEY),
+                          ("thumb_cmc",), CMC_SERVO))
     return tuple(links), tuple(joints), tuple(chains), tuple(tendons)
 
 

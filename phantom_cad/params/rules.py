@@ -98,10 +98,10 @@ def _segments(c, fingers, thumb, printing, hand_length) -> None:
                                  f"{', + half the thickness for a far joint flexing past 90 degrees' if need > 2.0 * back else ''})",
                                  c.source)
     back = slot_back(thumb.thickness, printing.hole_clearance)
-    if thumb.metacarpal <= thumb.cmc_horn_radius + back + 1e-12:
+    if thumb.metacarpal <= thumb.width / 2.0 + back + 1e-12:
         raise ParamError("thumb.length_fraction.metacarpal", round(thumb.metacarpal / hand_length, 6),
                          f"the thumb metacarpal ({thumb.metacarpal / MM:.2f} mm) must be longer than the CMC hub "
-                         f"(thumb.cmc_horn_radius_mm = {thumb.cmc_horn_radius / MM:g}) and the MP clevis "
+                         f"(half thumb.width_mm = {thumb.width / 2.0 / MM:g}) and the MP clevis "
                          f"({back / MM:.2f} mm)", c.source)
 
 
@@ -234,18 +234,18 @@ def _guides(c, fingers, thumb, palm, hardware, printing, cad) -> None:
                              f"(<= {room / MM:.3f} mm: half the thickness + the eyelet's relief radius)", c.source)
     # the thumb's metacarpal-side eyelet (and its relief) lies on the arm, in front of the CMC hub
     g = thumb.chain.guide
-    arm = thumb.metacarpal - thumb.cmc_horn_radius
+    arm = thumb.metacarpal - thumb.width / 2.0
     if reach(g) > arm + 1e-12:
         raise ParamError("thumb.guide.d1_mm", round(g.d1 / MM, 6),
                          f"puts the guide eyelet {reach(g) / MM:.3f} mm behind the MP axis, into the CMC hub: the "
-                         f"arm between the hub (thumb.cmc_horn_radius_mm = {thumb.cmc_horn_radius / MM:g}) and "
+                         f"arm between the hub (half thumb.width_mm = {thumb.width / 2.0 / MM:g}) and "
                          f"the MP axis is {arm / MM:.3f} mm long", c.source)
 
 
 def _servos(c, fingers, thumb, servo, hardware, printing, cad) -> None:
     pulleys = [(name, d.chain.servo_radius) for name, d in _digits(fingers, thumb)]
     screw_hole = printed_hole(hardware.screw_diameter + 2.0 * printing.hole_clearance, printing.hole_compensation)
-    for name, r in pulleys + [("thumb.cmc_horn", thumb.cmc_horn_radius)]:
+    for name, r in pulleys + [("thumb.cmc", thumb.cmc_pulley_radius)]:
         limit = r - screw_hole / 2.0 - hardware.tendon_diameter
         if cad.horn_hole_radius > limit + 1e-12:
             raise c.error("horn_hole_radius_mm", cad.horn_hole_radius / MM,

@@ -128,7 +128,7 @@ class Thumb:
     cmc_gain: float
     cmc_limits: tuple[float, float]
     cmc_travel: tuple[float, float]
-    cmc_horn_radius: float
+    cmc_pulley_radius: float     # r6: servo 6's pulley and the CMC pulley (a 1:1 cable loop)
 
 
 @dataclass(frozen=True)
@@ -218,6 +218,7 @@ class Cad:
     module_stop_margin: float    # finger module's own MCP stop beyond the palm's (operational) limit, rad
     servo_ear_offset: float      # servo output face to the flange ears' top face
     servo_ear_thickness: float   # servo flange ear thickness
+    cmc_column_radius: float     # the CMC base's column, which the palm's journal holds
 
 
 @dataclass(frozen=True)
@@ -417,7 +418,12 @@ def _thumb(t: TomlTable, hand_length: float) -> Thumb:
     seg, width, thickness, chain, limits = _digit(t, topology.chain("thumb"), (cmc,), hand_length)
     gain = t.number("cmc_gain", gt=0)
     cmc_travel = tuple(v * DEG for v in t.interval("cmc_servo_travel_deg"))
-    horn = t.number("cmc_horn_radius_mm", gt=0) * MM
+    if isinstance(t.data, dict) and "cmc_horn_radius_mm" in t.data:
+        raise t.error("cmc_horn_radius_mm", t.data["cmc_horn_radius_mm"],
+                      "servo 6 no longer sits under the CMC (it turns it through a cable loop from the "
+                      "forearm module): name the loop's pulley radius cmc_pulley_radius_mm instead "
+                      "(docs/parameters.md)")
+    horn = t.number("cmc_pulley_radius_mm", gt=0) * MM
     lo, hi = limits[cmc]
     for u in cmc_travel:
         if not lo - 1e-12 <= gain * u <= hi + 1e-12:
@@ -442,6 +448,7 @@ def _cad(c: TomlTable, hand_length, fingers, thumb, palm, servo, hardware, print
         module_stop_margin=c.number("module_stop_margin_deg", ge=0, le=10) * DEG,
         servo_ear_offset=c.number("servo_ear_offset_mm", ge=0) * MM,
         servo_ear_thickness=c.number("servo_ear_thickness_mm", gt=0) * MM,
+        cmc_column_radius=c.number("cmc_column_radius_mm", gt=0, default=3.5) * MM,
     )
     c.done()
     rules.check_parts(c, hand_length, fingers, thumb, palm, servo, hardware, printing, cad)

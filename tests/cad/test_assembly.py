@@ -20,10 +20,10 @@ FINGERS = ("index", "middle", "ring", "pinky")
 def test_part_names_stable_unique_file_safe(params):
     names = assembly.part_names(params)
     assert names == assembly.part_names(params)
-    assert len(names) == len(set(names)) == 1 + 1 + 4 * 4 + 3 + 6
+    assert len(names) == len(set(names)) == 1 + 1 + 4 * 4 + 3 + 1 + 6
     assert names[0] == "palm"
     assert all(re.fullmatch(r"[a-z0-9_]+", n) for n in names)
-    assert {f"servo_pulley_{k}" for k in range(1, 7)} <= set(names)
+    assert {f"servo_pulley_{k}" for k in range(1, 7)} | {"thumb_cmc_pulley"} <= set(names)
 
 
 def test_unknown_part_is_refused(params):
@@ -52,8 +52,10 @@ def test_part_inputs_follow_the_digit(params, variant):
     p = variant(lambda d: d["fingers"]["ring"].__setitem__("width_mm", 16.5))
     after = {n: assembly.part_inputs(p, n) for n in names}
     changed = {n for n in names if before[n] != after[n]}
-    # the palm carries every socket, the forearm module aims every servo at its socket
-    assert changed == {"palm", "forearm", "ring_base", "ring_proximal", "ring_middle", "ring_distal"}
+    # the palm carries every socket, the forearm module aims every servo at its socket, and the
+    # CMC pulley's clamp lies where servo 6's loop arrives from that row
+    assert changed == {"palm", "forearm", "ring_base", "ring_proximal", "ring_middle", "ring_distal",
+                       "thumb_cmc_pulley"}
     p = variant(lambda d: d["print"].__setitem__("hole_clearance_mm", 0.15))
     after = {n: assembly.part_inputs(p, n) for n in names}
     assert all(before[n] != after[n] for n in names)
@@ -98,9 +100,12 @@ def test_cmc_turns_the_thumb_about_its_axis(params):
         v1 -= (v1 @ a) * a
         assert np.linalg.norm(v0) == pytest.approx(np.linalg.norm(v1))
         assert math.acos(v0 @ v1 / (np.linalg.norm(v0) * np.linalg.norm(v1))) == pytest.approx(q15)
-    # servo 6's hub turns with it (direct drive, gain 1)
-    R = rest["servo_pulley_6"][:3, :3].T @ T["servo_pulley_6"][:3, :3]
+    # the CMC pulley turns with the CMC base about the same axis; servo 6's pulley, like every
+    # servo pulley, stays in the link transforms (it turns by u6 in the routing model's poses)
+    R = rest["thumb_cmc_pulley"][:3, :3].T @ T["thumb_cmc_pulley"][:3, :3]
     assert math.atan2(R[1, 0], R[0, 0]) == pytest.approx(q15)
+    assert T["thumb_cmc_pulley"][:3, 3] - o == pytest.approx((rest["thumb_cmc_pulley"][:3, 3] - o), abs=1e-12)
+    assert np.allclose(rest["servo_pulley_6"], T["servo_pulley_6"])
 
 
 def test_left_hand_poses_are_mirrored(params, variant):
@@ -137,9 +142,9 @@ def test_bill_of_materials(params):
     assert qty["magnet"] == 16
     assert qty["servo"] == 6
     # a drive per tendon servo (5), split in two strands for the four magnet-held fingers (+4), a
-    # coupling loop per pair of adjacent joints (4 x 2 + 1), a return cord per digit (5); a crimp
-    # stop per split drive
-    assert qty["tendon"] == 5 + 4 + 9
+    # coupling loop per pair of adjacent joints (4 x 2 + 1), the CMC loop (1), a return cord per
+    # digit (5); a crimp stop per split drive
+    assert qty["tendon"] == 5 + 4 + 9 + 1
     assert qty["cable spring"] == 5
     assert qty["crimp stop"] == 4
     # every tendon's cut length is its routed length (routing.lengths) plus what its ends need
@@ -181,7 +186,8 @@ def test_built_parts_carry_their_placement(built, params):
         assert all(0.0 <= c <= 1.0 for c in b.color)
         R = b.print_rotation
         assert np.allclose(R.T @ R, np.eye(3)) and np.linalg.det(R) == pytest.approx(1.0)
-        assert b.digit == (n.split("_")[0] if n.split("_")[0] in FINGERS + ("thumb",) else None)
+        assert b.digit == (n.split("_")[0] if n.split("_")[0] in FINGERS + ("thumb",) and n != "thumb_cmc_pulley"
+                           else None)
 
 
 def test_print_rotation_lays_each_part_on_a_flat_face(built):

@@ -110,14 +110,17 @@ def test_spring_channel_wider_than_the_cheek(document):
 
 def test_a_wide_servo_widens_the_forearm_row(document):
     """No tendon passes under a neighbouring servo any more (they sit in one row in the forearm
-    module): a 14 mm wide body validates (it used to be refused: 14/2 + 2 x 0.2 + 0.3 > 7 mm). The
-    row's least pitch is the wider of two pulley cavities (2 x 9.0 mm) and the body with its
-    clearances, plus a palm wall: 20.4 mm for 12.1 or 14 mm, 24.8 mm for a 22 mm body; there the
-    servos, turned toward their sockets by different angles, would come closer than a wall, so the
-    row widens. Measured by hand: every pair of neighbours' body and ear rectangles (grown by the
-    clearance) at least a wall apart, sampled densely on their outlines."""
+    module): a 14 mm wide body validates (it used to be refused: 14/2 + 2 x 0.2 + 0.3 > 7 mm). Two
+    neighbours' least pitch is the wider of their two pulley cavities (radius r + 2 x 0.6 + 0.6 +
+    0.2: 9.0 mm for a finger's 7 mm pulley, 10.0 mm for the CMC loop's 8 mm) and the body with its
+    clearances, plus a palm wall: 20.4 mm between two tendon servos and 21.4 mm beside servo 6 for a
+    12.1 or 14 mm body, 24.8 mm for a 22 mm body; where the servos, turned toward their targets by
+    different angles, would come closer than a wall, the gap widens. Measured by hand: every pair
+    of neighbours' body and ear rectangles (grown by the clearance, at the servo's mid-plane) at
+    least a wall apart, sampled densely on their outlines."""
     from phantom_cad.cad import preflight
     from phantom_cad.kinematics import frames as F
+    from phantom_cad.kinematics.topology import SERVOS
     from phantom_cad.params import parse
 
     def outline(T, lo, hi):
@@ -127,15 +130,19 @@ def test_a_wide_servo_widens_the_forearm_row(document):
         P = np.vstack(pts)
         return P @ T[:2, :2].T + T[:2, 3]
 
-    for width, pitch in ((14.0, 20.4), (22.0, 22.0 + 0.4 + 2.4)):
+    cavity = {True: 8.0 + 3 * 0.6 + 0.2, False: 7.0 + 3 * 0.6 + 0.2}        # servo 6's, a tendon servo's
+    for width in (14.0, 22.0):
         doc = copy.deepcopy(document)
         doc["servo"]["body_mm"] = [23.2, width, 25.3]
         p = parse(doc)
         preflight.check(p)
-        row = sorted(F.forearm_servos(p).values(), key=lambda T: T[0, 3])
-        xs = [T[0, 3] * 1e3 for T in row]
-        assert min(b - a for a, b in zip(xs, xs[1:])) >= pitch - 1e-9
-        assert F.forearm_pitch(p) * 1e3 == pytest.approx(pitch)
+        ks = sorted(F.forearm_servos(p), key=lambda k: F.forearm_servos(p)[k][0, 3])
+        row = [F.forearm_servos(p)[k] for k in ks]
+        for (ka, Ta), (kb, Tb) in zip(zip(ks, row), zip(ks[1:], row[1:])):
+            loop = {SERVOS[ka].drive == "loop", SERVOS[kb].drive == "loop"}
+            pitch = max(cavity[True in loop] + cavity[False], width + 0.4) + 2.4
+            assert (Tb[0, 3] - Ta[0, 3]) * 1e3 >= pitch - 1e-9, (width, ka, kb)
+        assert F.forearm_pitch(p) * 1e3 == pytest.approx(max(cavity[True] + cavity[False], width + 0.4) + 2.4)
         c, L, span, off = 0.2, 23.2, doc["servo"]["flange_span_mm"], doc["cad"]["servo_shaft_offset_mm"]
         boxes = [((-width / 2 - c, -off - L / 2 - c), (width / 2 + c, -off + L / 2 + c)),
                  ((-width / 2 - c, -off - span / 2 - c), (width / 2 + c, -off + span / 2 + c))]
@@ -197,42 +204,66 @@ def test_long_flange_ears_move_the_forearm_row_back(document):
     y0 = {k: T[1, 3] * 1e3 for k, T in F.forearm_servos(p0).items()}
     y1 = {k: T[1, 3] * 1e3 for k, T in F.forearm_servos(p1).items()}
     ahead = document["servo"]["flange_span_mm"] / 2 - document["cad"]["servo_shaft_offset_mm"]
-    cavity = 7.0 + 2 * 0.6 + 0.6 + 0.2                # r + lip + cord + clearance
+    cavity = 8.0 + 2 * 0.6 + 0.6 + 0.2                # the largest pulley (the CMC loop's): r + lip + cord + clearance
     assert ahead > cavity                              # the ears set the row's front today
-    # the module's front face moves too (servo 6's housing at the CMC grows with its ears and the
-    # front stands behind it): the row moves by that and by the 2 mm the ears grew ahead
-    dfront = (F.forearm_front(p1) - F.forearm_front(p0)) * 1e3
-    assert dfront < 0.0
-    for k in y0:
-        assert y1[k] - y0[k] == pytest.approx(dfront - 2.0, abs=0.05)   # each servo's turn shifts it a little
+    # the module's front face stands behind the palm (no servo at the CMC any more): it stays; the
+    # row moves back by what the ears grew ahead along the servo that reaches furthest forward: at
+    # most 2 mm (less along a turned or tilted servo's y), the same for every servo
+    assert F.forearm_front(p1) == F.forearm_front(p0)
+    dy = [y1[k] - y0[k] for k in y0]
+    assert -2.0 - 1e-9 <= dy[0] < -1.0 and all(v == pytest.approx(dy[0], abs=1e-9) for v in dy)
 
 
-def test_cmc_housing_off_the_palm(variant):
-    """The CMC placed 40 mm distal of the index MCP: its housing lies beyond the palm's length, the
-    web cannot join it, and the palm would print in two pieces."""
+def test_a_cmc_axis_tilted_past_60_deg_is_refused(variant):
+    """The palm holds the CMC on a column along its axis, which climbs into the palm: rolled 70
+    deg about x, the axis is 70 deg from the palm's normal."""
     from phantom_cad.cad import preflight
 
-    p = variant(lambda d: d["palm"].__setitem__("thumb_cmc_offset_mm", [-46.0, 40.0, -2.0]))
+    p = variant(lambda d: d["palm"].__setitem__("thumb_cmc_axis_deg", [70.0, 0.0, 0.0]))
     with pytest.raises(ParamError) as exc:
         preflight.check(p)
-    assert exc.value.field == "palm.thumb_cmc_offset_mm" and "prints in two pieces" in exc.value.rule
+    assert exc.value.field == "palm.thumb_cmc_axis_deg" and exc.value.value == [70.0, 0.0, 0.0]
+    assert "tilts the CMC axis 70.0 deg from the palm's normal" in exc.value.rule
 
 
-@pytest.mark.parametrize("x, what", [(-19.66, "hub"), (-24.0, "hub"), (-26.0, "hub"), (-27.0, "tendon post")])
-def test_cmc_hub_or_post_into_the_palm(variant, x, what):
-    """palm.thumb_cmc_offset_mm[0] = -19.66 validated (property test, seed 5) and the build found
-    servo pulley 6 (the CMC hub) 1161 mm^3 inside the palm. With the servos in the forearm module
-    the palm's metacarpal block starts at the index socket's radial side (-7.2 mm) and the web to
-    the thenar housing stops a clearance short of the hub and the post, so only the block can be
-    reached: at the default CMC (-46 mm) the hub's bounding box ends at -27.1 mm and the post's at
-    -25.5 mm, so the post reaches the block from about -27.5 mm and the hub from about -26.3 mm."""
+def test_a_cmc_base_into_the_palm_is_refused(variant):
+    """The CMC axis along the palm's normal, the CMC centre 19 mm below the MCP plane: the CMC base's
+    top (half the thumb's 15 mm thickness above its centre) at -11.5 mm, 0.7 mm too close to the
+    palm's palmar face (-12 mm) less a clearance (0.2 mm)."""
     from phantom_cad.cad import preflight
 
-    p = variant(lambda d: d["palm"].__setitem__("thumb_cmc_offset_mm", [x, -45.0, -2.0]))
+    def change(d):
+        d["palm"]["thumb_cmc_axis_deg"] = [0.0, 0.0, 0.0]
+        d["palm"]["thumb_cmc_offset_mm"] = [-25.0, -70.0, -19.0]
+
     with pytest.raises(ParamError) as exc:
-        preflight.check(p)
-    assert exc.value.field == "palm.thumb_cmc_offset_mm" and what in exc.value.rule
-    assert exc.value.value == [x, -45.0, -2.0]
+        preflight.check(variant(change))
+    assert exc.value.field == "palm.thumb_cmc_offset_mm" and exc.value.value == [-25.0, -70.0, -19.0]
+    assert "comes 0.700 mm too close to the palm's palmar face" in exc.value.rule
+
+
+def test_a_thin_palm_under_a_tilted_cmc_is_refused(variant):
+    """The CMC axis rolled 45 deg, the palm 18 mm thick: by hand (frames.thenar) the CMC pulley's
+    cavity (radius 8 + 1.2 + 0.6 + 0.2 = 10 mm, half height 3 + 0.2 mm, tilted 45 deg) has its lowest
+    rim a wall (2.4 mm) above the palmar face: its centre at -9 + 2.4 + 10 sin 45 + 3.2 cos 45; the
+    drive turns 3.2 + 2.4 + 1.0 mm further up the axis, at -9 + 2.4 + 13.2 sin 45 + 6.6 cos 45 +
+    ... ; it needs a relief (1.0 mm) and a wall (2.4 mm) under the dorsal face (+9 mm)."""
+    from phantom_cad.cad import preflight
+
+    s45 = math.sqrt(0.5)
+    z_pulley = -9.0 + 2.4 + 10.0 * s45 + 3.2 * s45
+    z_turn = z_pulley + (3.2 + 2.4 + 1.0) * s45
+    short = z_turn + 1.0 + 2.4 - 9.0
+
+    def change(d):
+        d["palm"]["thickness_mm"] = 18.0
+        d["palm"]["thumb_cmc_axis_deg"] = [45.0, 0.0, 0.0]
+        d["palm"]["thumb_cmc_offset_mm"] = [-25.0, -70.0, -30.0]
+
+    with pytest.raises(ParamError) as exc:
+        preflight.check(variant(change))
+    assert exc.value.field == "palm.thickness_mm" and exc.value.value == 18.0
+    assert short > 0.0 and f"{short:.3f} mm short of a relief and a wall under the dorsal face" in exc.value.rule
 
 
 def test_a_loop_without_a_clamp_position_is_a_param_error(tmp_path, document):

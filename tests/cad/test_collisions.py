@@ -83,11 +83,6 @@ def test_pinch_contacts_are_reported_and_real(hand):
     controller must respect), each with the least thumb flexion where it occurs; the largest is
     confirmed by OpenCascade on the solids at its commands."""
     name, p, shapes, r = hand
-    if name == "hand_length_170":
-        # measured: the smaller hand's thumb touches no finger at the grid's commands (its
-        # opposition needs commands between them: tests/test_opposition.py)
-        assert r["pinch"] == []
-        return
     assert r["pinch"], "the thumb never reaches a finger"
     for e in r["pinch"]:
         digits = {link(n).digit for n in e["parts"]}

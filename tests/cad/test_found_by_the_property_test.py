@@ -46,21 +46,25 @@ def test_parallel_fingers_palm(variant):
     assert facing == {(0.0, 1.0, 0.0)}
 
 
-def test_cmc_hub_and_post_clear_the_palm_where_the_rule_accepts(variant):
-    """Near the closest CMC offset the hub and post rule accepts along x (-44.2 mm; -44 is
-    refused, tests/cad/test_cad_params.py) the palm is a valid solid (it is not at -43.5) and
-    the hub stays at least one clearance from it, measured on the solids (OpenCascade's distance
-    between the palm and the hub where the assembly places them)."""
+def test_the_cmc_base_clears_the_palm_where_the_rule_accepts(variant):
+    """The CMC axis along the palm's normal and the CMC base's top 0.01 mm inside what the thenar
+    rule accepts (a clearance below the palmar face: centre at -12 - 0.2 - 7.5 - 0.01 mm): the
+    palm and the CMC base, where the assembly places them, stay at least a clearance apart
+    (OpenCascade's distance: the base's top under the palmar face, the column in the journal).
+    The property test once found a placement the old hub rule accepted that the build refused."""
     from phantom_cad.cad import preflight
     from phantom_cad.cad.assembly import pose_transforms
     from phantom_cad.cad.measure import placed
-    from phantom_cad.kinematics.topology import CMC_SERVO, JOINTS, SERVOS
+    from phantom_cad.kinematics.topology import JOINTS
 
-    p = variant(lambda d: d["palm"].__setitem__("thumb_cmc_offset_mm", [-44.2, -45.0, -2.0]))
+    def change(d):
+        d["palm"]["thumb_cmc_axis_deg"] = [0.0, 0.0, 0.0]
+        d["palm"]["thumb_cmc_offset_mm"] = [-25.0, -70.0, -12.0 - 0.2 - 7.5 - 0.01]
+
+    p = variant(change)
     preflight.check(p)
-    hub_name = SERVOS[CMC_SERVO].link
     rest = pose_transforms(p, np.zeros(len(JOINTS)))        # where the assembly places the parts (mm)
     _, palm = _build(p, "palm")
-    hub_part, hub = _build(p, hub_name)
-    gap = placed(palm, rest["palm"]).distance_to(placed(hub, rest[hub_name]))
-    assert gap >= hub_part.tol.clearance - 1e-6
+    base_part, base = _build(p, "thumb_cmc_base")
+    gap = placed(palm, rest["palm"]).distance_to(placed(base, rest["thumb_cmc_base"]))
+    assert gap >= base_part.sec.tol.clearance - 1e-6

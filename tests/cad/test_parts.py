@@ -43,7 +43,7 @@ def tendon_hole(doc):
 # ---------------------------------------------------------------------------
 
 def test_every_part_is_one_valid_solid(built):
-    assert len(built) == 27
+    assert len(built) == 28
     for name, b in built.items():
         rep = check.solid_report(b.shape)
         assert rep["n_solids"] == 1, name
@@ -99,25 +99,40 @@ def _is_inside(shape, p) -> bool:
     return shape.is_inside(Vector(*p))
 
 
-@pytest.mark.parametrize("k", [1, 2, 3, 4, 5])
+@pytest.mark.parametrize("k", [1, 2, 3, 4, 5, 6])
 def test_forearm_servo_cavity_and_its_front_wall(built, params, document, k):
-    from phantom_cad.kinematics import frames
+    from phantom_cad.kinematics import frames, routing
 
     hw, pr = document["hardware"], document["print"]
-    src = document["thumb"] if k == 1 else document["fingers"][FINGERS[k - 2]]
+    r = (document["thumb"]["cmc_pulley_radius_mm"] if k == 6 else
+         (document["thumb"] if k == 1 else document["fingers"][FINGERS[k - 2]])["servo_pulley_radius_mm"])
     # by hand: the pulley's flanges stand two tendon diameters above its groove, plus one tendon
     # diameter of running room and a hole clearance: 7 + 2 * 0.6 + 0.6 + 0.2 = 9.0 mm by default
-    cavity = src["servo_pulley_radius_mm"] + 3 * hw["tendon_diameter_mm"] + pr["hole_clearance_mm"]
+    cavity = r + 3 * hw["tendon_diameter_mm"] + pr["hole_clearance_mm"]
     T = np.linalg.inv(frames.T_palm_forearm(params)) @ frames.T_palm_servo(params, k - 1)   # forearm frame
     shaft, axis = T[:3, 3] * 1e3, T[:3, 2]
     shape = built["forearm"].shape
     measured = [c["radius"] for c in check.cylinders(shape) if check.coaxial(c, shaft, axis)]
     assert measured and max(measured) == pytest.approx(cavity, abs=1e-6)
-    # the shaft is dorsal (palm z) and the pulley's mid-plane at the tendon height, one wall above
-    # the thinnest finger's palmar face
-    assert axis == pytest.approx([0.0, 0.0, 1.0])
-    thinnest = min(f["thickness_mm"] for f in document["fingers"].values())
-    assert shaft[2] == pytest.approx(-thinnest / 2 + document["palm"]["wall_mm"], abs=1e-9)
+    if k == 6:
+        # servo 6's shaft is parallel to the CMC axis and its pulley lies in the CMC pulley's plane
+        Tc = frames.T_palm_thumb_cmc_base(params) @ frames.T_cmc_base_pulley(params)
+        Ts = frames.T_palm_servo(params, k - 1)
+        assert Ts[:3, 2] == pytest.approx(Tc[:3, 2], abs=1e-12)
+        assert (Ts[:3, 3] - Tc[:3, 3]) @ Tc[:3, 2] == pytest.approx(0.0, abs=1e-12)
+    elif k == 1:
+        # the thumb's shaft is dorsal, its pulley's mid-plane at the height where its drive turns
+        # onto the CMC axis (the routing model's via point): the drive runs level
+        assert axis == pytest.approx([0.0, 0.0, 1.0])
+        turn = next(e for r_ in routing.routes(params) for st in r_.strands if st.name == "thumb_drive"
+                    for e in st.elements if getattr(e, "role", "") == "over the CMC axis")
+        assert frames.T_palm_servo(params, 0)[2, 3] == pytest.approx(turn.pos[2], abs=1e-12)
+    else:
+        # a finger's shaft is dorsal (palm z) and its pulley's mid-plane at the tendon height, one
+        # wall above the thinnest finger's palmar face
+        assert axis == pytest.approx([0.0, 0.0, 1.0])
+        thinnest = min(f["thickness_mm"] for f in document["fingers"].values())
+        assert shaft[2] == pytest.approx(-thinnest / 2 + document["palm"]["wall_mm"], abs=1e-9)
     # ahead of the shaft (toward the wrist, along the servo's y in the pulley's plane) the ear slot
     # is open to the dorsal side (the servo drops in) as far as the ears reach with a clearance,
     # flange_span / 2 - shaft_offset + clearance (farther than the cavity by default); beyond it
@@ -151,24 +166,27 @@ def test_forearm_drives_leave_straight_for_their_sockets(built, params):
 
 
 def test_forearm_front_wall_holes_only_where_a_drive_runs(built, params, document):
-    """Straight on from each pulley's tangent point along the servo's y, mid-way through the module's
-    front wall: a finger's drive channel is open there; the thumb's drive turns toward its CMC post
-    before the wall, so the wall is solid on its straight line (no hole that carries no tendon)."""
+    """Straight on from each pulley's tangent points along the servo's y, mid-way through the
+    module's front wall: a drive's channel is open there on the servo's -x (the CMC loop's on both
+    sides); on a tendon servo's +x, where no cable leaves, the wall is solid (no hole that carries
+    no tendon)."""
     from phantom_cad.kinematics import frames
-    from phantom_cad.kinematics.topology import SERVO_MOUNT, SERVOS, THUMB_CHAIN
+    from phantom_cad.kinematics.topology import SERVO_MOUNT, SERVOS
 
     T_fp = np.linalg.inv(frames.T_palm_forearm(params))
     mid_wall = frames.forearm_front(params) * 1e3 - document["palm"]["wall_mm"] / 2     # palm y (mm)
     shape = built["forearm"].shape
     held = [s.index for s in SERVOS if SERVO_MOUNT[s.drive] == "forearm"]
-    assert len(held) == 5
+    assert len(held) == 6
     for k in held:
         T = frames.T_palm_servo(params, k)
-        tangent = T[:3, 3] * 1e3 - frames.servo_radius(params, k) * 1e3 * T[:3, 0]
-        y = T[:3, 1]
-        p = tangent + y * (mid_wall - tangent[1]) / y[1]
-        inside = _is_inside(shape, (T_fp @ np.array([*(p / 1e3), 1.0]))[:3] * 1e3)
-        assert inside == (k == THUMB_CHAIN.servo), (k, p)
+        for side in (-1.0, 1.0):
+            tangent = T[:3, 3] * 1e3 + side * frames.servo_radius(params, k) * 1e3 * T[:3, 0]
+            y = T[:3, 1]
+            p = tangent + y * (mid_wall - tangent[1]) / y[1]
+            inside = _is_inside(shape, (T_fp @ np.array([*(p / 1e3), 1.0]))[:3] * 1e3)
+            carries = side < 0 or SERVOS[k].drive == "loop"
+            assert inside == (not carries), (k, side, p)
 
 
 # ---------------------------------------------------------------------------
@@ -276,10 +294,15 @@ def test_servo_pulley_anchor_at_the_clamp_and_clear_of_the_horn_screws(built, do
         assert wall >= document["palm"]["wall_mm"]
 
 
-def test_cmc_hub_radius_is_the_horn_radius(built, document):
-    cs = [c for c in check.cylinders(built["servo_pulley_6"].shape)
-          if check.coaxial(c, (0, 0, 0), (0, 0, 1))]
-    assert max(c["radius"] for c in cs) == pytest.approx(document["thumb"]["cmc_horn_radius_mm"], abs=1e-6)
+def test_the_cmc_loop_pulleys_have_equal_grooves(built, document):
+    """Servo 6's pulley and the CMC pulley: groove floors half a tendon inside r6 and r6 / cmc_gain
+    (measured about each pulley's axis): equal radii at the default gain of 1, so q15 = u6."""
+    r6, g = document["thumb"]["cmc_pulley_radius_mm"], document["thumb"]["cmc_gain"]
+    d = document["hardware"]["tendon_diameter_mm"]
+    hole = d + 2 * document["print"]["hole_clearance_mm"]
+    for name, r in (("servo_pulley_6", r6), ("thumb_cmc_pulley", r6 / g)):
+        assert check.measure_groove_radius(built[name].shape, (0, 0, 0), (0, 0, 1), hole) == \
+            pytest.approx(r - d / 2, abs=1e-6)
 
 
 # ---------------------------------------------------------------------------
@@ -443,23 +466,35 @@ def test_axle_bore_and_bearing_seats_are_coaxial(built, document, parent, child)
                and abs(abs(_dir(P.T_hand_link, c["direction"]) @ d) - 1) < 1e-9 for c in bores)
 
 
-def test_cmc_base_screws_meet_the_hub(built, document):
-    hw, pr = document["hardware"], document["print"]
-    clear = hw["screw_diameter_mm"] / 2 + pr["hole_clearance_mm"] + _comp(document)
-    pilot = 0.8 * hw["screw_diameter_mm"] / 2 + _comp(document)    # the pilot ratio's default: 1.6 mm for M2
-    base, hub = built["thumb_cmc_base"], built["servo_pulley_6"]
-    base_axes = [(_hand(base.T_hand_link, c["point"]), _dir(base.T_hand_link, c["direction"]))
-                 for c in check.cylinders(base.shape) if abs(c["radius"] - clear) < 1e-6]
-    hub_holes = [c for c in check.cylinders(hub.shape) if abs(c["radius"] - pilot) < 1e-6]
-    assert len(hub_holes) == 2
-    for c in hub_holes:
-        p, d = _hand(hub.T_hand_link, c["point"]), _dir(hub.T_hand_link, c["direction"])
-        assert any(check.point_line_distance(p, a, dd) < 1e-6 and abs(abs(d @ dd) - 1) < 1e-9
-                   for a, dd in base_axes)
-    # and the hub turns on the CMC axis: its axis is the CMC base's z
-    assert _dir(hub.T_hand_link, (0, 0, 1)) @ _dir(base.T_hand_link, (0, 0, 1)) == pytest.approx(1.0)
-    assert check.point_line_distance(_hand(hub.T_hand_link, (0, 0, 0)), _hand(base.T_hand_link, (0, 0, 0)),
-                                     _dir(base.T_hand_link, (0, 0, 1))) < 1e-9
+def test_the_cmc_pulley_sits_keyed_on_the_column_in_the_palms_journal(built, document):
+    """The CMC base's column (radius cad.cmc_column_radius_mm, 4 mm by default), the palm's journal
+    and the CMC pulley's bore (the column's radius and a hole clearance; the pulley's compensated)
+    are coaxial with the CMC axis at rest, measured in the placed solids; the pulley's flat and
+    the column's flat (1 mm deep) touch: one plane, facing each other."""
+    from phantom_cad.cad.parts.thumb import KEY_DEPTH
+
+    pr = document["print"]
+    rc = document["cad"].get("cmc_column_radius_mm", 4.0)
+    base, palm, pul = built["thumb_cmc_base"], built["palm"], built["thumb_cmc_pulley"]
+    a, d = _hand(base.T_hand_link, (0, 0, 0)), _dir(base.T_hand_link, (0, 0, 1))
+
+    def on_axis(part, r):
+        return [c for c in check.cylinders(part.shape) if abs(c["radius"] - r) < 1e-6
+                and check.point_line_distance(_hand(part.T_hand_link, c["point"]), a, d) < 1e-6
+                and abs(abs(_dir(part.T_hand_link, c["direction"]) @ d) - 1) < 1e-9]
+
+    assert on_axis(base, rc)
+    assert on_axis(palm, rc + pr["hole_clearance_mm"])
+    assert on_axis(pul, rc + pr["hole_clearance_mm"] + _comp(document))
+    flats = {}
+    for name, part, want in (("column", base, rc - KEY_DEPTH), ("pulley", pul, rc - KEY_DEPTH)):
+        for f in check.planar_faces(part.shape):
+            n = _dir(part.T_hand_link, f["normal"])
+            p = _hand(part.T_hand_link, f["centre"])
+            if abs(n @ d) < 1e-9 and abs(check.point_line_distance(p, a, d) - want) < 1e-6:
+                flats[name] = n
+    # the column's flat faces out of the column, the pulley's into its bore: opposite normals
+    assert set(flats) == {"column", "pulley"} and flats["column"] @ flats["pulley"] == pytest.approx(-1.0)
 
 
 # ---------------------------------------------------------------------------
@@ -673,22 +708,19 @@ def test_verify_part_reports_several_solids(params):
 
 
 def test_thumb_tendon_reaches_the_cmc_base_on_its_axis(built, document):
-    """The palm's arch drops the thumb tendon onto the CMC axis (measured: the hub's axis of
-    the CMC base) and the CMC base has its bore on that axis, so CMC rotation leaves the
-    tendon length alone."""
+    """The palm drops the thumb tendon onto the CMC axis above the CMC pulley's cavity (measured:
+    the axis of the CMC base's column) and the column carries it down that axis, so CMC rotation
+    leaves the tendon length alone."""
     palm, base = built["palm"], built["thumb_cmc_base"]
-    r_hub = document["thumb"]["cmc_horn_radius_mm"]
-    hub = [c for c in check.cylinders(base.shape) if abs(c["radius"] - r_hub) < 1e-6]
-    assert hub
-    a, d = _hand(base.T_hand_link, hub[0]["point"]), _dir(base.T_hand_link, hub[0]["direction"])
-    holes = [c for c in check.cylinders(palm.shape) if abs(c["radius"] - tendon_hole(document) / 2) < 1e-6]
-    on_axis = [c for c in holes if check.point_line_distance(c["point"], a, d) < 1e-6
-               and abs(abs(c["direction"] @ d) - 1) < 1e-9]
-    assert len(on_axis) == 1
-    # the CMC base's central bore is coaxial too
-    clear = document["hardware"]["screw_diameter_mm"] / 2 + document["print"]["hole_clearance_mm"] + _comp(document)
-    assert any(abs(c["radius"] - clear) < 1e-6 and check.coaxial(c, hub[0]["point"], hub[0]["direction"])
-               for c in check.cylinders(base.shape))
+    rc = document["cad"].get("cmc_column_radius_mm", 4.0)
+    column = [c for c in check.cylinders(base.shape) if abs(c["radius"] - rc) < 1e-6]
+    assert column
+    a, d = _hand(base.T_hand_link, column[0]["point"]), _dir(base.T_hand_link, column[0]["direction"])
+    for part in (palm, base):
+        holes = [c for c in check.cylinders(part.shape) if abs(c["radius"] - tendon_hole(document) / 2) < 1e-6]
+        on_axis = [c for c in holes if check.point_line_distance(_hand(part.T_hand_link, c["point"]), a, d) < 1e-6
+                   and abs(abs(_dir(part.T_hand_link, c["direction"]) @ d) - 1) < 1e-9]
+        assert len(on_axis) >= 1, part.name
 
 
 def _pilots_and_pairs(shape, document):
@@ -708,15 +740,15 @@ def _pilots_and_pairs(shape, document):
 
 
 def test_two_flange_screw_pilots_per_servo(built, document, placed):
-    """Ten pilots in the forearm module (servos 1-5), two in the palm's thenar housing (servo 6),
-    and the palm's two under the forearm tab's clearance holes (coaxial, measured in the hand)."""
+    """Twelve pilots in the forearm module (servos 1-6), none for a servo in the palm, and the
+    palm's two under the forearm tab's clearance holes (coaxial, measured in the hand)."""
     hw = document["hardware"]
     holes, pairs = _pilots_and_pairs(built["forearm"].shape, document)
-    assert len(holes) == 10 and pairs == 5
+    assert len(holes) == 12 and pairs == 6
     # each servo pilot is 3 screw diameters deep below the ear slot (plus one clearance)
     assert all(c["length"] >= 3 * hw["screw_diameter_mm"] for c in holes)
     holes, pairs = _pilots_and_pairs(built["palm"].shape, document)
-    assert len(holes) == 4 and pairs == 1
+    assert len(holes) == 2 and pairs == 0
     # the tab's clearance holes (screw + 2 clearances) over the palm's two other pilots
     clear = hw["screw_diameter_mm"] / 2 + document["print"]["hole_clearance_mm"] + _comp(document)
     tab = [c for c in check.cylinders(placed["forearm"]) if abs(c["radius"] - clear) < 1e-6]

@@ -141,4 +141,4 @@ def test_every_wall_of_a_170_mm_hand_is_two_perimeters(variant):
         r = thin_walls(*step_stl.tessellate(assembly.build_part(p, n).shape, tol), bar)
         if r["wall_thinnest"] < bar:
             thin[n] = round(r["wall_thinnest"], 3)
-    assert len(assembly.part_names(p)) == 27 and thin == {}
+    assert len(assembly.part_names(p)) == 28 and thin == {}

@@ -93,7 +93,7 @@ def cmc_gain_error():
     class CmcGainError(Effect):
         name = "cmc_gain_error"
         stage = "joint"
-        explanation = "the thumb CMC drifts in proportion to u6: the direct-drive gain is not 1"
+        explanation = "the thumb CMC drifts in proportion to u6: the loop's pulley ratio is not 1"
         formula = "q15 = (1 + g) u6"
         signature = "linear in u6 on q15 only"
         reference = "toy example of docs/effects.md"

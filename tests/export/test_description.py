@@ -41,13 +41,12 @@ def test_package_layout_and_uris_resolve(pkg):
     for name, resolve in (("phantom.urdf", lambda u: pkg / u.removeprefix("package://phantom_description/")),
                           ("phantom.local.urdf", lambda u: pkg / "urdf" / u)):
         root = ET.parse(pkg / "urdf" / name).getroot()
-        assert [len(ln.findall("visual")) for ln in root.iter("link") if ln.find("visual") is not None] == [1] * 27
+        assert [len(ln.findall("visual")) for ln in root.iter("link") if ln.find("visual") is not None] == [1] * 28
         pieces = {ln.get("name"): len(ln.findall("collision")) for ln in root.iter("link")
                   if ln.find("visual") is not None}
-        # one convex hull per link; the palm's convex solids: its block, the web to the thenar,
-        # 4 socket blocks, 2 limiter rails per finger, the CMC post and arch, servo 6's housing;
-        # the forearm module's block and tab
-        assert pieces.pop("palm") == 1 + 1 + 4 + 2 * 4 + 2 + 1
+        # one convex hull per link; the palm's convex solids: its block, the thenar block,
+        # 4 socket blocks, 2 limiter rails per finger; the forearm module's block and tab
+        assert pieces.pop("palm") == 1 + 1 + 4 + 2 * 4
         assert pieces.pop("forearm") == 2 and set(pieces.values()) == {1}
         uris = [m.get("filename") for m in root.iter("mesh")]
         for u in uris:
@@ -143,7 +142,7 @@ def test_inertials_match_the_written_meshes(urdf, pkg):
         assert np.allclose(I, mesh.moment_inertia, rtol=0, atol=5e-3 * np.abs(I).max())
         ev = np.linalg.eigvalsh(I)
         assert ev.min() > 0 and ev[0] + ev[1] >= ev[2] * (1 - 1e-9)
-    assert n == 27
+    assert n == 28
 
 
 def test_collision_meshes_are_light_convex_and_cover_the_visual(pkg):
@@ -158,7 +157,7 @@ def test_collision_meshes_are_light_convex_and_cover_the_visual(pkg):
     from scipy.spatial import ConvexHull
 
     collision = sorted((pkg / "meshes" / "collision").glob("*.stl"))
-    assert len(collision) > 27
+    assert len(collision) > 28
     split: dict[str, list] = {}
     for path in collision:
         piece = trimesh.load(path)

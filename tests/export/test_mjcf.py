@@ -98,8 +98,8 @@ def test_same_tree_names_and_limits_as_the_urdf(pkg, model):
         assert _name(m, mujoco.mjtObj.mjOBJ_BODY, m.jnt_bodyid[jid]) == j.child
         assert np.allclose(m.jnt_axis[jid], j.axis, atol=1e-12)
         assert np.allclose(m.jnt_range[jid], [j.limit.lower, j.limit.upper], atol=1e-12)
-    # 15 joints and the 5 tendon servos' pulleys, each on its hinge; no equality
-    assert m.njnt == 20 and m.nu == 6 and m.neq == 0
+    # 15 joints and the 6 servos' pulleys, each on its hinge; no equality
+    assert m.njnt == 21 and m.nu == 6 and m.neq == 0
     for servo, digit in SERVO_DIGIT.items():
         jid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"{digit}_flexion")
         assert _name(m, mujoco.mjtObj.mjOBJ_BODY, m.jnt_bodyid[jid]) == f"servo_pulley_{servo[-1]}"
@@ -201,7 +201,7 @@ def test_loops_hold_the_coupling_and_only_it(model, doc):
     m, d = model, mujoco.MjData(model)
     _set_q(m, d, {}, {})
     rest = {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_TENDON, t): d.ten_length[t] for t in range(m.ntendon)}
-    loops = [n for n in rest if n.endswith(("_a", "_b"))]
+    loops = [n for n in rest if n.endswith(("_a", "_b")) and not n.startswith("thumb_cmc_loop")]
     assert len(loops) == 2 * (1 + 2 * len(FINGERS))
     for ref in np.linspace(0.0, 1.2, 13):
         q = {j: ref for j in SERVO_JOINT.values() if j != "thumb_cmc"}
@@ -255,8 +255,9 @@ def test_near_rigid_twin_is_the_cosine_law(pkg, doc):
                 r = _servo_radius(doc, digit)
                 L0 = math.sqrt(d1 * d1 + d2 * d2 - 2 * d1 * d2 * math.cos(alpha))
                 by_hand[jn] = alpha - math.acos((d1 * d1 + d2 * d2 - (L0 - r * reached[k]) ** 2) / (2 * d1 * d2))
-            else:
-                by_hand[jn] = doc["thumb"]["cmc_gain"] * u[k]
+            else:                   # the CMC loop: q15 = cmc_gain times the angle servo 6 reached
+                reached[k] = d.qpos[_qadr(m, "thumb_abduction")]
+                by_hand[jn] = doc["thumb"]["cmc_gain"] * reached[k]
         by_hand.update({f: k * by_hand[r] for f, (r, k) in MIMIC.items()})
         analytic = hand.forward(reached)
         for i, name in enumerate(JOINT_NAMES):

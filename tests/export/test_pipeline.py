@@ -365,7 +365,7 @@ def test_demo_without_prusa_slicer(hand_build, tmp_path, monkeypatch):
     assert "slicing skipped: prusa-slicer is not installed" in res.output
     man = json.loads((tmp_path / "o" / "manifest.json").read_text())
     assert man["slicer"]["used"] is False
-    assert len(list((tmp_path / "o" / "stl").glob("*.stl"))) == 27
+    assert len(list((tmp_path / "o" / "stl").glob("*.stl"))) == 28
 
 
 def test_cache_serves_only_what_it_verified(standin_build, standin, tmp_path):

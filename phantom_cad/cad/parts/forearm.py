@@ -1,16 +1,18 @@
-"""Forearm module: the tendon servos behind the wrist.
+"""Forearm module: the six servos behind the wrist.
 
 Frame: the forearm link frame (``kinematics.frames.T_palm_forearm``: palm axes, origin on the
 wrist crease at the middle of the servo row); the part is built in the palm frame and placed
 back into its own. Why the servos are here and not in the palm: docs/parts.md.
 
-* one row of the five tendon servos (thumb flexion radial, pinky ulnar), shafts dorsal, each
-  turned about its shaft so that its drive leaves the pulley straight toward its finger's socket
-  (the thumb's toward its CMC post): pockets and ear slots open on the dorsal side (the servos
-  drop in, then their pulleys go on), pulley cavities, M2 pilot holes under the flange ears;
-* each drive's channel from its pulley through the front wall, on to the palm (the thumb's turns
-  just outside its pulley's cavity toward the CMC post), joined by a slot to its servo's drop-in
-  pocket where it runs beside it closer than a flank (``ServoMount.drive_slot``);
+* one row of the six servos in the order of their targets (the CMC's loop servo radial, then
+  thumb flexion, the pinky ulnar): the tendon servos' shafts dorsal, each turned about its shaft
+  so that its drive leaves the pulley straight toward its finger's socket (the thumb's toward its
+  turn onto the CMC axis); servo 6's shaft parallel to the CMC axis, its pulley in the CMC
+  pulley's plane (``frames.coplanar_servo``); pockets and ear slots open along the shafts (the
+  servos drop in, then their pulleys go on), pulley cavities, M2 pilot holes under the flange ears;
+* each drive's channel (the loop's two) from its pulley through the front wall, on to the palm,
+  joined by a slot to its servo's drop-in pocket where it runs beside it closer than a flank
+  (``ServoMount.drive_slot``);
 * a tab over the palm's dorsal face at the wrist with two M2 clearance holes: the module screws
   onto the palm there.
 """
@@ -22,7 +24,7 @@ import math
 import numpy as np
 
 from ...kinematics import frames as F
-from ...kinematics.topology import FOREARM, SERVO_MOUNT, SERVOS, THUMB_CHAIN, link
+from ...kinematics.topology import FOREARM, SERVO_MOUNT, SERVOS, link
 from ..measure import circular_pockets
 from .base import Part
 from .common import Tolerances, box, build, cylinder, mm, transform
@@ -104,31 +106,25 @@ class Forearm(ServoMount, Part):
         x0, x1, y0, y1, z0, z1 = self.extents()
         body = self.body()
         tools = []
+        reach = y1 - y0 + 2.0 * wrist.TAB_LENGTH
         for k in FOREARM_SERVOS:
             Ts = self.T_servo(k)
-            top = z1 - Ts[2, 3] + 1.0                     # shaft dorsal: servo z = palm z
+            # open along the shaft out of the block's top (a tilted shaft: its corners too)
+            top = (z1 - Ts[2, 3]) / Ts[2, 2] + 1.0 + (x1 - x0) * math.sqrt(max(1.0 - Ts[2, 2] ** 2, 0.0)) / Ts[2, 2]
             for blo, bhi in self.open_pockets(k, top):
                 tools.append(transform(box(blo[0], bhi[0], blo[1], bhi[1], blo[2], bhi[2]), Ts))
             rc = self.cavity_radius(k)
             zc0, _ = self.cavity_span(k)
             tools.append(transform(cylinder((0, 0, zc0), (0, 0, top), rc), Ts))
             tools += [transform(p, Ts) for p in self.pilot_tools(k)]
-            if k != THUMB_CHAIN.servo:                     # a finger's drive runs straight on to its socket
-                p, u = self.drive_line(k)
-                tools.append(cylinder(p - u, p + u * (y1 - y0 + 2.0 * wrist.TAB_LENGTH), t.tendon_hole / 2.0))
-                run = None
-            else:                                         # the thumb's runs to its turn
-                pts = wrist.thumb_drive_path(self.params)
-                run = float(np.linalg.norm(pts[1] - pts[0]))
-            slot = self.drive_slot(k, t.tendon_hole, run)
-            if slot is not None:
-                tools.append(transform(box(slot[0][0], slot[1][0], slot[0][1], slot[1][1], slot[0][2], slot[1][2]), Ts))
-        # the thumb drive turns just outside its pulley's cavity toward the CMC post (beside the
-        # ear slot, open on the dorsal side: no relief sphere, whose faces there did not survive a
-        # STEP round trip); its channel stops at the turn
-        pts = wrist.thumb_drive_path(self.params)
-        u = (pts[1] - pts[0]) / np.linalg.norm(pts[1] - pts[0])
-        tools += [cylinder(pts[0] - u, pts[1], t.tendon_hole / 2.0), cylinder(pts[1], pts[2], t.tendon_hole / 2.0)]
+            # every drive runs straight on toward its target (servo 6's loop: both strands)
+            for side in self.strand_sides(k):
+                p, u = self.drive_line(k, side)
+                tools.append(cylinder(p - u, p + u * reach, t.tendon_hole / 2.0))
+                slot = self.drive_slot(k, t.tendon_hole, side=side)
+                if slot is not None:
+                    tools.append(transform(box(slot[0][0], slot[1][0], slot[0][1], slot[1][1], slot[0][2], slot[1][2]),
+                                           Ts))
         for s in self.tab_screws():
             tools.append(cylinder(s - np.array([0, 0, 1.0]), s + np.array([0, 0, 2.0 * t.wall + 1.0]),
                                   t.screw_clear / 2.0))

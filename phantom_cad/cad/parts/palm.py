@@ -7,16 +7,19 @@ y distal, z dorsal. Built from:
   sits at rest, turned by palm.arc_offset from finger to finger (the socket face normal is
   the finger column's y), each with two magnet pockets facing the finger base's pockets
   and the tendon exit at the palm's tendon height;
-* the metacarpal block: from the wrist crease to the sockets, across the four fingers (the
-  tendon servos sit in the forearm module behind the wrist, ``forearm.py``);
-* the thenar housing of the direct-drive CMC servo, coaxial with the thumb CMC axis (open on the
-  shaft side), joined to the block;
+* the metacarpal block: from its back face (the wrist crease, or the thenar's back,
+  ``frames.palm_back``) to the sockets, across the four fingers (the servos sit in the forearm
+  module behind it, ``forearm.py``);
+* the thenar block, radial of the metacarpal block: the journal that holds the CMC base's column
+  (from the palmar face up along the CMC axis), the cavity of the CMC pulley on that column (open
+  radially: the pulley slides in from the thenar side, the column up through the journal into it)
+  and, above it, the thumb drive's turn onto the CMC axis (``frames.thenar``);
 * tendon channels from each socket's tendon exit straight back toward its servo pulley in the
   forearm, each with the bore its drive's coupler (the crimp stop and the finger strand's
-  loop, ``routing.couplers``) travels in, and the thumb tendon's channel up to the CMC post;
-* two pilot holes on the dorsal face at the wrist for the forearm module's tab;
-* the CMC post and arch: the thumb tendon climbs a post on servo 6's housing and reaches the
-  CMC axis above the CMC base, so turning the thumb about the CMC does not change its length;
+  loop, ``routing.couplers``) travels in; the thumb drive's channel from the back face to its
+  turn and down the CMC axis (turning the thumb about the CMC leaves its length alone); the CMC
+  loop's two channels from the CMC pulley back to servo 6;
+* two pilot holes on the dorsal face at the back for the forearm module's tab;
 * the flexion-limiting housing (rails under each finger base, at the Table I MCP limit).
 """
 
@@ -29,16 +32,12 @@ import numpy as np
 from ... import units
 from ...kinematics import frames as F
 from ...kinematics import routing
-from ...kinematics.topology import FINGERS, LINKS, SERVO_MOUNT, SERVOS, chain
+from ...kinematics.topology import FINGERS, LINKS, chain
 from ..measure import circular_pockets
 from .base import Part
 from .common import DigitSection, Tolerances, box, build, cylinder, mm, prism_x, sphere, transform
 from . import wrist
 from .servos import ServoMount
-
-#: the servos the palm holds (in its thenar housing: the direct-drive CMC servo)
-PALM_SERVOS = tuple(s.index for s in SERVOS if SERVO_MOUNT[s.drive] == "palm")
-
 
 def _mm(T):
     return F.to_mm(T)
@@ -106,52 +105,39 @@ class Palm(ServoMount, Part):
         """The finger drives' couplers (``routing.couplers``: metres, s from the socket face)."""
         return routing.couplers(self.params)
 
-    def pocket_boxes(self, servo: int) -> list:
-        """(lo, hi) corners, servo frame, of the boxes the thenar housing cuts for the servo's body
-        and its flange ears: open on the shaft side (the servo drops in before the hub goes on)."""
-        return self.open_pockets(servo, self.body_box(servo)[1][2] + self.tol.clearance + 1.0)
-
-    def housing_box(self, servo: int):
-        """(lo, hi) corners, servo frame, of the thenar housing around a servo outside the bay: a
-        wall around its body and ears, up to its output face (``frames.thenar_housing_box``)."""
-        lo, hi = F.thenar_housing_box(self.params)
-        return np.array([mm(v) for v in lo]), np.array([mm(v) for v in hi])
-
     def metacarpal_x(self) -> tuple[float, float]:
         """x extent (mm) of the metacarpal block (``wrist.metacarpal_x``)."""
         return wrist.metacarpal_x(self.params)
 
     def extents(self):
-        """x0, x1, y0, y1 (mm) of the metacarpal block: across the sockets, from the wrist crease
-        to behind the socket faces."""
+        """x0, x1, y0, y1 (mm) of the metacarpal block: across the sockets (and ulnar far enough
+        that every finger drive's channel keeps a wall to the block's ulnar face, where a drive
+        runs ulnar toward its servo), from the palm's back face to behind the socket faces."""
         x0, x1 = self.metacarpal_x()
-        return x0, x1, mm(F.wrist_y(self.params)), self.slab_front()
+        y0 = mm(F.palm_back(self.params))
+        t = self.tol
+        for f in FINGERS:
+            tangent, _ = self.drive_line(chain(f).servo)
+            exit_ = (self.T_socket(f) @ np.array([0.0, 0.0, self.tendon_z, 1.0]))[:3]
+            at_back = exit_ + (tangent - exit_) * (y0 - exit_[1]) / (tangent[1] - exit_[1])
+            x1 = max(x1, max(exit_[0], at_back[0]) + t.tendon_hole / 2.0 + t.wall)
+        return x0, x1, y0, self.slab_front()
 
     def _placed_box(self, T, lo, hi) -> np.ndarray:
         return F.box_corners(lo, hi) @ T[:3, :3].T + T[:3, 3]
 
-    def thenar_web(self) -> tuple[np.ndarray, np.ndarray]:
-        """(lo, hi) palm frame (mm) of the web that joins the CMC servo's housing to the metacarpal
-        block: radial of the block over the housing's length, the palm's thickness, as far radial
-        as the CMC hub (which turns with the thumb) and the tendon post leave a clearance. Empty
-        (lo not below hi) when the housing lies beyond the block's length or the hub or post reaches
-        the block."""
-        from .pulley import ServoPulley
-        (k,) = PALM_SERVOS
-        c = self.tol.clearance
-        T = self.T_servo(k)
-        hub = ServoPulley(self.params, k)
-        r, h = hub.outer_radius, hub.width / 2.0
-        a = self.cmc_arch()
-        rp, w = a["r_post"], self.tol.wall
-        stops = np.vstack([self._placed_box(T, (-r, -r, -h), (r, r, h)),
-                           self._placed_box(self.T_cmc(), (-rp, a["y_post"] - rp, a["z_floor"] - w),
-                                            (rp, a["y_post"] + rp, a["z_hi"]))])
-        housing = self._placed_box(T, *self.housing_box(k))
-        x0, _, y0, y1 = self.extents()
+    def thenar_block(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lo, hi) palm frame (mm) of the thenar block: the bounding box of the journal's and the
+        turn's walls across x (the pulley's cavity opens radially), of everything it holds
+        (``frames.thenar_points``) along y, from the palm's palmar to its dorsal face, reaching a
+        wall into the metacarpal block. Empty (lo not below hi) where it all lies inside the block."""
+        pts = {k: v * 1e3 for k, v in F.thenar_points(self.params).items()}
+        allp = np.vstack(list(pts.values()))
+        x0 = self.extents()[0]
+        xs = np.vstack([pts["journal"], pts["turn"]])[:, 0]
         Tp = self.thickness
-        return (np.array([stops[:, 0].max() + c, max(y0, housing[:, 1].min()), -Tp / 2.0]),
-                np.array([x0 + w, min(y1, housing[:, 1].max()), Tp / 2.0]))
+        return (np.array([xs.min(), max(allp[:, 1].min(), self.extents()[2]), -Tp / 2.0]),
+                np.array([x0 + self.tol.wall, allp[:, 1].max(), Tp / 2.0]))
 
     def slab_front(self) -> float:
         """The slab stops behind every socket face (its trailing corner), one clearance back."""
@@ -163,38 +149,38 @@ class Palm(ServoMount, Part):
                 ys.append((T @ np.array([sx, 0.0, 0.0, 1.0]))[1])
         return min(ys) - self.tol.clearance
 
-    # -- thumb tendon over the CMC axis --------------------------------------
+    # -- the thenar: the CMC's column, its pulley and the thumb drive's turn --------
     def T_cmc(self) -> np.ndarray:
         return _mm(F.T_palm_thumb_cmc_base(self.params))
 
-    def cmc_arch(self) -> dict:
-        """Dimensions (CMC frame, mm) of the post and arch that carry the thumb tendon onto the
-        CMC axis (``kinematics.frames.thumb_arch``: the routing model runs the drive over them)."""
-        return {k: mm(v) for k, v in F.thumb_arch(self.params).items()}
+    def thenar(self) -> dict:
+        """``frames.thenar`` in mm (CMC base frame: distances along the CMC axis)."""
+        return {k: mm(v) for k, v in F.thenar(self.params).items()}
 
     def thumb_tendon_path(self) -> list[np.ndarray]:
         """Palm-frame points (mm) of the thumb drive on the palm (``wrist.thumb_drive_path``)."""
         return wrist.thumb_drive_path(self.params)
 
-    def cmc_arch_body(self):
-        a = self.cmc_arch()
-        w, r = self.tol.wall, a["r_post"]
-        post = cylinder((0.0, a["y_post"], a["z_floor"] - w), (0.0, a["y_post"], a["z_hi"]), r)
-        arch = box(-r, r, a["y_post"], r, a["z_lo"], a["z_hi"])
-        return [post, arch]
-
-    def cmc_arch_tools(self):
-        """Tendon channel in the post and arch (CMC frame): relief spheres at the bends."""
-        a = self.cmc_arch()
-        t = self.tol
-        r, rr = t.tendon_hole / 2.0, t.tendon_relief / 2.0
-        e = np.array([0.0, a["y_post"], a["z_entry"]])
-        top = np.array([0.0, a["y_post"], a["z_mid"]])
-        over = np.array([0.0, 0.0, a["z_mid"]])
-        # the entry hole is the channel from the turn (``build``: one cylinder along that line)
-        return [sphere(e, rr), cylinder(e, top, r), sphere(top, rr),
-                cylinder(top, over, r), sphere(over, rr),
-                cylinder(over, (0.0, 0.0, a["z_lo"] - 1.0), r)]
+    def thenar_tools(self) -> list:
+        """The journal (from below the palmar face to the cavity), the pulley's cavity and its slot
+        out of the palm toward servo 6 (CMC base frame): the loop's two strands run in it, in the
+        pulley's plane, and the pulley slides in through it."""
+        t = self.thenar()
+        T0 = self.T_cmc()
+        R, h, q = t["cavity_r"], t["cavity_h"], t["pulley"]
+        # from below the palmar face all round (the axis is tilted: the journal's end disc too)
+        az = T0[2, 2]
+        below = 1.0 + t["journal_r"] * math.sqrt(max(1.0 - az * az, 0.0)) / az
+        journal = cylinder((0.0, 0.0, t["face"] - below), (0.0, 0.0, q - h + 0.5), t["journal_r"])
+        cavity = cylinder((0.0, 0.0, q - h), (0.0, 0.0, q + h), R)
+        # the slot: the cavity swept toward servo 6 (in the pulley's plane, servo 6's pulley lies in
+        # it) out of the palm
+        phi = F.cmc_loop_direction(self.params) + math.pi
+        v = np.array([math.cos(phi), math.sin(phi), 0.0])
+        M = np.eye(4)
+        M[:3, 0], M[:3, 1], M[:3, 2], M[:3, 3] = v, np.cross([0.0, 0.0, 1.0], v), (0.0, 0.0, 1.0), (0.0, 0.0, q)
+        slot = transform(box(0.0, 4.0 * R + 60.0, -R, R, -h, h), M)
+        return [journal, cavity, slot]
 
     def limiter_polygon(self, finger: str) -> list[tuple[float, float]]:
         """(y, z) outline, in the finger base frame (MCP axis at the origin), of the palm's
@@ -226,9 +212,9 @@ class Palm(ServoMount, Part):
         return build(*self.solids())
 
     def collision_solids(self) -> list:
-        """The convex solids the palm is fused from (boxes, the limiter rails' convex prisms, the
-        CMC post and arch, servo 6's housing), before its cuts: the stepped sockets' notches and
-        the thenar's outline stay open, the channels and pockets are filled."""
+        """The convex solids the palm is fused from (boxes, the limiter rails' convex prisms),
+        before its cuts: the stepped sockets' notches stay open, the channels, pockets and the
+        thenar's cavity are filled."""
         return self.solids()[0]
 
     def solids(self) -> tuple[list, list]:
@@ -236,7 +222,7 @@ class Palm(ServoMount, Part):
         t, Tp = self.tol, self.thickness
         x0, x1, y0, y1 = self.extents()
         body = [box(x0, x1, y0, y1, -Tp / 2.0, Tp / 2.0)]
-        lo, hi = self.thenar_web()
+        lo, hi = self.thenar_block()
         if np.all(hi > lo):
             body.append(box(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]))
         tools = []
@@ -265,26 +251,17 @@ class Palm(ServoMount, Part):
         for f in FINGERS:
             for rail in self.limiter_rails(f):
                 body.append(transform(rail, _mm(F.T_palm_finger_base(self.params, f))))
-        # thumb tendon: from servo 1's pulley along its plane to the turn, then (in the air)
-        # to the CMC post, up the post, along the arch and down the CMC axis into the thumb
+        # the thenar: the journal, the CMC pulley's cavity and its radial slot
+        Tc = self.T_cmc()
+        tools += [transform(tool, Tc) for tool in self.thenar_tools()]
+        # thumb drive: from servo 1's pulley level to its turn above the cavity, down the CMC axis
+        # (its run on down the column is the CMC base's)
         pts = self.thumb_tendon_path()
         u = (pts[1] - pts[0]) / np.linalg.norm(pts[1] - pts[0])
         tools.append(cylinder(pts[0] - u, pts[1], t.tendon_hole / 2.0))
         tools.append(sphere(pts[1], t.tendon_relief / 2.0))            # the turn
-        tools.append(cylinder(pts[1], pts[2], t.tendon_hole / 2.0))   # through the post's entry
-        Tc = self.T_cmc()
-        for tool in self.cmc_arch_tools():
-            tools.append(transform(tool, Tc))
-        for part in self.cmc_arch_body():
-            body.append(transform(part, Tc))
-        # the CMC servo's housing (pocket open on the shaft side, ear slots, flange pilots)
-        for k in PALM_SERVOS:
-            Ts = self.T_servo(k)
-            for lo, hi in self.pocket_boxes(k):      # body pocket and ear slots
-                tools.append(transform(box(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]), Ts))
-            lo, hi = self.housing_box(k)
-            body.append(transform(box(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]), Ts))
-            tools += [transform(p, Ts) for p in self.pilot_tools(k)]
+        tools.append(cylinder(pts[1], pts[2] - (pts[1] - pts[2]), t.tendon_hole / 2.0))
+        # (the CMC loop's two strands run in the cavity's slot toward servo 6: no channel)
         # pilot holes for the forearm module's tab screws, down from the dorsal face
         for p in wrist.tab_screws(self.params):
             tools.append(cylinder(p + np.array([0, 0, 1.0]), p - np.array([0, 0, t.screw_engagement]),

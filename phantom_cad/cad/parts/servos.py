@@ -2,8 +2,8 @@
 
 A servo's pocket, flange-ear slots, pulley cavity and flange pilot holes, in its servo frame
 (``kinematics.frames``: origin on the shaft at the pulley's mid-plane, z along the shaft toward
-the pulley, the body toward -y), in mm. The forearm module holds the tendon servos, the palm's
-thenar housing the direct-drive CMC servo; both use this one description.
+the pulley, the body toward -y), in mm. The forearm module holds the six servos; the palm cuts
+the drives' channels from the same lines.
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ import numpy as np
 
 from ...kinematics import frames as F
 from ...kinematics.dimensions import FLANK
+from ...kinematics.topology import SERVOS
 from .common import mm
 
 
@@ -25,12 +26,17 @@ class ServoMount:
     def pulley_radius(self, servo: int) -> float:
         return mm(F.servo_radius(self.params, servo))
 
-    def drive_line(self, servo: int) -> tuple[np.ndarray, np.ndarray]:
-        """Where a servo's drive leaves its pulley, the tangent point (servo frame (-r, 0, 0): the
-        servo's x is across the drive), and the drive's unit direction there (the servo's y), palm
-        frame (mm)."""
+    def strand_sides(self, servo: int) -> tuple[float, ...]:
+        """The sides (servo frame x, in pulley radii) where cables leave a servo's pulley along its
+        y: a tendon servo's drive at -x, the CMC loop's two strands at -x and +x."""
+        return (-1.0, 1.0) if SERVOS[servo].drive == "loop" else (-1.0,)
+
+    def drive_line(self, servo: int, side: float = -1.0) -> tuple[np.ndarray, np.ndarray]:
+        """Where a servo's drive leaves its pulley, the tangent point (servo frame (side r, 0, 0):
+        the servo's x is across the drive), and the drive's unit direction there (the servo's y),
+        palm frame (mm)."""
         T = self.T_servo(servo)
-        return (T @ np.array([-self.pulley_radius(servo), 0.0, 0.0, 1.0]))[:3], T[:3, 1].copy()
+        return (T @ np.array([side * self.pulley_radius(servo), 0.0, 0.0, 1.0]))[:3], T[:3, 1].copy()
 
     def cavity_radius(self, servo: int) -> float:
         return self.pulley_radius(servo) + mm(F.pulley_cavity_margin(self.params))
@@ -68,19 +74,21 @@ class ServoMount:
         elo, ehi = self.ear_box(servo, grow=c)
         return [(lo, np.array([hi[0], hi[1], top])), (elo, np.array([ehi[0], ehi[1], top]))]
 
-    def drive_slot(self, servo: int, channel: float, run: float | None = None):
+    def drive_slot(self, servo: int, channel: float, run: float | None = None, side: float = -1.0):
         """(lo, hi) corners, servo frame, of the slot that joins a drive's channel (diameter
-        ``channel``, leaving the pulley at (-r, 0, 0) along +y) to the servo's own drop-in pocket
-        where it runs beside it less than a flank (``dimensions.FLANK``) away (a pulley barely
-        wider than half the body: 0.25 mm was left), over ``run`` mm of the drive (default: the
-        pocket's length ahead of the shaft); None where the wall is a flank or more."""
-        lo = min(p[0][0] for p in self.open_pockets(servo, 0.0))
+        ``channel``, leaving the pulley at (side r, 0, 0) along +y) to the servo's own drop-in
+        pocket where it runs beside it less than a flank (``dimensions.FLANK``) away (a pulley
+        barely wider than half the body: 0.25 mm was left), over ``run`` mm of the drive (default:
+        the pocket's length ahead of the shaft); None where the wall is a flank or more."""
+        pockets = self.open_pockets(servo, 0.0)
+        edge = min(p[0][0] for p in pockets) if side < 0 else max(p[1][0] for p in pockets)
         r = self.pulley_radius(servo)
-        if lo - (-r + channel / 2.0) >= mm(FLANK):
+        if side * (side * (r - channel / 2.0) - edge) >= mm(FLANK):     # the wall beside the pocket
             return None
-        ahead = max(p[1][1] for p in self.open_pockets(servo, 0.0))
+        ahead = max(p[1][1] for p in pockets)
         y1 = ahead if run is None else min(ahead, run)
-        return (np.array([-r - channel / 2.0, 0.0, -channel / 2.0]), np.array([lo + 0.01, y1, channel / 2.0]))
+        x = sorted((side * (r + channel / 2.0), edge - side * 0.01))
+        return (np.array([x[0], 0.0, -channel / 2.0]), np.array([x[1], y1, channel / 2.0]))
 
     def pilot_tools(self, servo: int) -> list:
         """The flange screws' pilot holes (servo frame), down from the ears' underside."""

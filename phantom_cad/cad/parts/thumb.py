@@ -1,13 +1,14 @@
-"""Thumb CMC base: the thumb's metacarpal module, turned about the CMC axis by servo 6.
+"""Thumb CMC base: the thumb's metacarpal module, turned about the CMC axis by servo 6's loop.
 
-Frame: origin on the CMC axis (the frame's z, coaxial with servo 6's output), y along the
-thumb metacarpal to the MP axis at y = thumb.metacarpal, z toward the thumb's dorsal side
-(docs/frames.md). Features: a hub of radius thumb.cmc_horn_radius that sits on servo
-pulley 6 with four clearance holes on the horn circle (two for the screws into the hub,
-two for access to the horn screws) and the spline-screw bore; the metacarpal arm; the MP
-clevis (axle press bore, extension and flexion stops at the MP limit); the
-metacarpal-side MP guide eyelet at d1_th; the tendon path from the hub to the eyelet; the
-anchors of the two cable springs. The thumb phalanges are phalanx.Phalanx("thumb", ...).
+Frame: origin on the CMC axis (the frame's z), y along the thumb metacarpal to the MP axis at
+y = thumb.metacarpal, z toward the thumb's dorsal side (docs/frames.md). Features: a hub of half
+the thumb's width round the axis; the column (radius cad.cmc_column_radius) up the axis into the
+palm's journal, hollow for the drive, its end keyed by a flat for the CMC pulley
+(``pulley.CMCPulley``);
+the metacarpal arm; the MP clevis (axle press bore, extension and flexion stops at the MP limit);
+the metacarpal-side MP guide eyelet at d1_th; the drive's path down the column and along the arm
+to the eyelet; the anchors of the two cable springs. The thumb phalanges are
+phalanx.Phalanx("thumb", ...).
 """
 
 from __future__ import annotations
@@ -17,13 +18,16 @@ import math
 import numpy as np
 
 from ... import canon
+from ...kinematics import frames as F
 from ...kinematics.topology import CMC_Q, JOINTS, link
 from ..measure import eyelet_centres, point_line_distance
-from .base import DORSAL_DOWN, Part, child_joint, digit_table
-from .common import DigitSection, box, build, cylinder, mm, prism_x, sphere
+from .base import Part, child_joint, digit_table
+from .common import DigitSection, box, build, cylinder, mm, prism_x, sphere, transform
 from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, hub_grooves
 from .tendons import link_tendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry, verify_grooves
-from .pulley import BASE_ANGLES, HORN_ANGLES
+
+#: depth (mm) of the flat that keys the column's end to the CMC pulley [choice]
+KEY_DEPTH = 1.0
 
 
 class ThumbCMCBase(Part):
@@ -37,8 +41,9 @@ class ThumbCMCBase(Part):
         self.link = link(JOINTS[CMC_Q].child)
         self.sec = DigitSection(params, self.link.digit)
         self.length = mm(getattr(params.digit(self.link.digit), self.link.length_key))
-        self.hub_radius = mm(params.thumb.cmc_horn_radius)
-        self.horn_radius = mm(params.cad.horn_hole_radius)
+        self.hub_radius = mm(params.thumb.width) / 2.0
+        #: the column and the CMC pulley (frames.thenar, mm along the axis)
+        self.thenar = {k: mm(v) for k, v in F.thenar(params).items()}
         #: the joint at its distal end (the thumb MP): its clevis
         self.joint = child_joint(self.link).key
         if self.length <= self.hub_radius + self.sec.slot_back:
@@ -50,7 +55,11 @@ class ThumbCMCBase(Part):
         return cls(params)
 
     def inputs(self) -> dict:
-        return {**self.common_inputs(), "thumb": canon.plain(digit_table(self.params.document, self.digit))}
+        """The thumb's table and the palm's (its thickness and the CMC placement set the column's
+        length, ``frames.thenar``)."""
+        doc = self.params.document
+        return {**self.common_inputs(), "thumb": canon.plain(digit_table(doc, self.digit)),
+                "palm": canon.plain(doc["palm"])}
 
     def verify(self, shape) -> list[str]:
         """The metacarpal-side guide eyelet at d1 from the MP axis (at y = metacarpal)."""
@@ -70,14 +79,30 @@ class ThumbCMCBase(Part):
 
     @property
     def print_rotation(self) -> np.ndarray:
-        """On its dorsal face, as the phalanges (``export.orient`` measures it)."""
-        return DORSAL_DOWN
+        """On its side (its +x face: the hub's and the arm's flat side), the column lying along the
+        bed (``export.orient`` measures it)."""
+        return F.rot_y(math.pi / 2.0)[:3, :3]
+
+    def T_pulley(self) -> np.ndarray:
+        """The CMC pulley's frame in this part's (mm)."""
+        return F.to_mm(F.T_cmc_base_pulley(self.params))
+
+    def key_tool(self):
+        """The flat on the column's end (pulley frame: on its +y), over the pulley and a clearance
+        below it."""
+        t = self.thenar
+        r = t["column_r"]
+        h = mm(self.params.cad.servo_pulley_width) / 2.0
+        c = self.sec.tol.clearance
+        return transform(box(-r - 1.0, r + 1.0, r - KEY_DEPTH, r + 1.0, -h - c, t["top"] - t["pulley"] + 1.0),
+                         self.T_pulley())
 
     def build(self):
         sec, t = self.sec, self.sec.tol
         W, T, L = sec.width, sec.thickness, self.length
         body = [cylinder((0, 0, -T / 2.0), (0, 0, T / 2.0), self.hub_radius),
-                box(-W / 2.0, W / 2.0, 0.0, L, -T / 2.0, T / 2.0)]
+                box(-W / 2.0, W / 2.0, 0.0, L, -T / 2.0, T / 2.0),
+                cylinder((0, 0, 0.0), (0, 0, self.thenar["top"]), self.thenar["column_r"])]
         lt = link_tendons(self.params, self.link.name)
         b, tools = clevis(sec, self.joint, L, lt.hubs().get(child_joint(self.link).name))
         body += b
@@ -106,10 +131,7 @@ class ThumbCMCBase(Part):
         r = t.tendon_hole / 2.0
         floor = -T / 2.0 - 2.0 * sec.eyelet_boss_radius - 1.0
         guide.append(prism_x([(turn[1], turn[2]), (end[1], end[2]), (end[1], floor), (turn[1], floor)], -r, r))
-        # hub: spline-screw bore and the four holes on the horn circle
-        h = T / 2.0 + 1.0
-        tools.append(cylinder((0, 0, -h), (0, 0, h), t.screw_clear / 2.0))
-        for a in HORN_ANGLES + BASE_ANGLES:
-            c = self.horn_radius * np.array([math.cos(a), math.sin(a), 0.0])
-            tools.append(cylinder(c - (0, 0, h), c + (0, 0, h), t.screw_clear / 2.0))
+        # the column's keyed end, and the drive's bore down its axis to the turn
+        tools.append(self.key_tool())
+        tools.append(cylinder(turn, (0.0, 0.0, self.thenar["top"] + 1.0), t.tendon_hole / 2.0))
         return build(body, tools, guide, channel_tools(lt, up=self.print_up) + anchor_tools(lt, sec, self.print_up))

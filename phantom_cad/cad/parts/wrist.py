@@ -1,9 +1,10 @@
 """The wrist joint between the palm and the forearm module (numpy only, palm frame, mm).
 
-The palm's metacarpal block ends at the wrist crease; the forearm module's front face stands a
-clearance behind it (or behind the thenar, ``frames.forearm_front``). A tab of the module lies
-on the palm's dorsal face there and two M2 screws hold it: the palm drills their pilots, the
-module their clearance holes. Both parts read this one description.
+The palm ends at its back face (the wrist crease, or the back of the thenar where the CMC's
+column sits further back, ``frames.palm_back``); the forearm module's front face stands a
+clearance behind it (``frames.forearm_front``). A tab of the module lies on the palm's dorsal face
+there and two M2 screws hold it: the palm drills their pilots, the module their clearance holes.
+Both parts read this one description.
 """
 
 from __future__ import annotations
@@ -47,29 +48,29 @@ def forearm_block(params) -> tuple[float, float, float, float, float, float]:
 
 def tab(params) -> tuple[np.ndarray, np.ndarray]:
     """(lo, hi) of the forearm module's tab on the palm: across the metacarpal block where the
-    module covers it, from the module's front face to TAB_LENGTH ahead of the wrist crease, one
-    palm wall thick on the palm's dorsal face."""
+    module covers it, from the module's front face to TAB_LENGTH ahead of the palm's back face,
+    one palm wall thick on the palm's dorsal face."""
     forearm_x = forearm_block(params)[:2]
     px0, px1 = metacarpal_x(params)
     top = mm(params.palm.thickness) / 2.0
     return (np.array([max(forearm_x[0], px0), mm(F.forearm_front(params)), top]),
-            np.array([min(forearm_x[1], px1), mm(F.wrist_y(params)) + TAB_LENGTH, top + mm(params.palm.wall)]))
+            np.array([min(forearm_x[1], px1), mm(F.palm_back(params)) + TAB_LENGTH, top + mm(params.palm.wall)]))
 
 
 def tab_screws(params) -> list[np.ndarray]:
     """Centres of the tab's two screws on the palm's dorsal face, half a tab length in from its
     ends, halfway along its length over the palm."""
     lo, hi = tab(params)
-    y = (mm(F.wrist_y(params)) + hi[1]) / 2.0
+    y = (mm(F.palm_back(params)) + hi[1]) / 2.0
     inset = TAB_LENGTH / 2.0
     return [np.array([lo[0] + inset, y, lo[2]]), np.array([hi[0] - inset, y, lo[2]])]
 
 
 def thumb_drive_path(params) -> list[np.ndarray]:
     """Palm-frame points (mm, right hand) of the thumb drive where the routing model runs it on the
-    forearm module and the palm: where it leaves servo 1's pulley (tangent), the turn just outside
-    the pulley's cavity, the post entry, the post top, the point above the CMC axis, the CMC axis at
-    the arch's underside (``kinematics.routing``). Both parts cut its channel."""
+    forearm module and the palm: where it leaves servo 1's pulley (tangent), its turn onto the CMC
+    axis above the CMC pulley's cavity, the CMC axis at the cavity's ceiling (``kinematics.routing``).
+    Both parts cut its channel."""
     st = next(s for r in routing.routes(params, right_handed=True)
               if r.tendon.kind == "drive" and r.tendon.digit == THUMB_CHAIN.digit for s in r.strands)
     run = next(r for r in routing.runs(params, right_handed=True) if r.strand == st.name and "palm" in r.links)
