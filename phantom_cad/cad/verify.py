@@ -46,7 +46,7 @@ def check_solid(name: str, shape) -> None:
 def verify_part(params, name: str, shape) -> list[str]:
     """Problems found by measuring ``shape`` (part ``name`` in its link frame, mm) against the
     parameters: first one valid solid of positive volume (:func:`solid_problems`), then what
-    the part's family measures (``Part.verify``: groove radius R or r_j, the CMC hub radius,
+    the part's family measures (``Part.verify``: groove radius R, r_j or r6,
     the guide eyelets at d1 / d2, magnet pockets, socket angles). An empty list means the
     part is sound."""
     out = [f"{name}: {p.problem}" for p in solid_problems(name, shape)]

@@ -467,14 +467,14 @@ def test_axle_bore_and_bearing_seats_are_coaxial(built, document, parent, child)
 
 
 def test_the_cmc_pulley_sits_keyed_on_the_column_in_the_palms_journal(built, document):
-    """The CMC base's column (radius cad.cmc_column_radius_mm, 4 mm by default), the palm's journal
+    """The CMC base's column (radius cad.cmc_column_radius_mm, 3.5 mm by default), the palm's journal
     and the CMC pulley's bore (the column's radius and a hole clearance; the pulley's compensated)
     are coaxial with the CMC axis at rest, measured in the placed solids; the pulley's flat and
     the column's flat (1 mm deep) touch: one plane, facing each other."""
     from phantom_cad.cad.parts.thumb import KEY_DEPTH
 
     pr = document["print"]
-    rc = document["cad"].get("cmc_column_radius_mm", 4.0)
+    rc = document["cad"].get("cmc_column_radius_mm", 3.5)
     base, palm, pul = built["thumb_cmc_base"], built["palm"], built["thumb_cmc_pulley"]
     a, d = _hand(base.T_hand_link, (0, 0, 0)), _dir(base.T_hand_link, (0, 0, 1))
 
@@ -712,7 +712,7 @@ def test_thumb_tendon_reaches_the_cmc_base_on_its_axis(built, document):
     the axis of the CMC base's column) and the column carries it down that axis, so CMC rotation
     leaves the tendon length alone."""
     palm, base = built["palm"], built["thumb_cmc_base"]
-    rc = document["cad"].get("cmc_column_radius_mm", 4.0)
+    rc = document["cad"].get("cmc_column_radius_mm", 3.5)
     column = [c for c in check.cylinders(base.shape) if abs(c["radius"] - rc) < 1e-6]
     assert column
     a, d = _hand(base.T_hand_link, column[0]["point"]), _dir(base.T_hand_link, column[0]["direction"])

@@ -10,7 +10,7 @@ and the horn interface: a central clearance bore for the spline screw and two ho
 the cad.horn_hole_radius circle.
 
 The CMC pulley (link ``thumb_cmc_pulley``, frame ``frames.T_cmc_base_pulley``): the same groove
-radius r6 and width, the loop's clamp, and a keyed bore pressed onto the CMC base's column.
+radius r6 / cmc_gain and width, the loop's two clamps, and a keyed bore on the CMC base's column.
 """
 
 from __future__ import annotations
