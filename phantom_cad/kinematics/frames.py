@@ -211,8 +211,8 @@ def thenar(params) -> dict[str, float]:
       a palm wall and a relief above it (the drive reaches the CMC along its axis, so turning the
       CMC leaves its length alone).
 
-    The cavity opens radially (the pulley slides in from the thenar side, the column up through
-    the journal into it)."""
+    The palm cuts a slot from the cavity toward servo 6 (the loop runs in it; the pulley slides in
+    through it, then the column up through the journal into it)."""
     return memoised(_THENAR, params.digest, lambda: thenar_layout(params, T_palm_thumb_cmc_base(params)), cap=16)
 
 
@@ -439,41 +439,23 @@ def _forearm_servos(params) -> dict[int, np.ndarray]:
     return out
 
 
-def _hull(P: np.ndarray) -> np.ndarray:
-    """The convex hull (counter-clockwise) of 2-D points (monotone chain)."""
-    pts = sorted(map(tuple, np.round(P, 12)))
-    if len(pts) <= 2:
-        return np.array(pts)
+def _outlines(params, T: np.ndarray, servo: int) -> list[np.ndarray]:
+    """The xy outlines (palm frame, counter-clockwise) of servo ``servo``'s body, ears and pulley
+    cavity, grown by a clearance, placed by T, with the pockets the module cuts for them: open along
+    the shaft up to the module's top (a wall above the palm's dorsal face), so a tilted shaft sweeps
+    them sideways (the convex hull of the outline at the servo and at the top)."""
+    from scipy.spatial import ConvexHull
 
-    def half(seq):
-        out: list = []
-        for p in seq:
-            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
-                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 0.0:
-                out.pop()
-            out.append(p)
-        return out
-
-    lower, upper = half(pts), half(reversed(pts))
-    return np.array(lower[:-1] + upper[:-1])
-
-
-def _rectangles(params, T: np.ndarray, servo: int | None = None) -> list[np.ndarray]:
-    """The xy outlines (palm frame) of a servo's body and ears, grown by a clearance, placed by T
-    (and, given ``servo``, its pulley's cavity), with the pockets the module cuts for them: open
-    along the shaft up to the module's top (a wall above the palm's dorsal face), so a tilted shaft
-    sweeps them sideways (the convex hull of the outline at the servo and at the top)."""
     c = params.print.hole_clearance
     z_top = params.palm.thickness / 2.0 + params.palm.wall
     shapes = []
     for lo, hi in servo_boxes(params).values():
         shapes.append([(x, y, lo[2] - c) for x, y in ((lo[0] - c, lo[1] - c), (hi[0] + c, lo[1] - c),
                                                        (hi[0] + c, hi[1] + c), (lo[0] - c, hi[1] + c))])
-    if servo is not None:
-        rc = servo_radius(params, servo) + pulley_cavity_margin(params)
-        a = np.linspace(0.0, 2.0 * math.pi, 24, endpoint=False)
-        h = params.cad.servo_pulley_width / 2.0 + c
-        shapes.append([(rc * math.cos(t), rc * math.sin(t), -h) for t in a])
+    rc = servo_radius(params, servo) + pulley_cavity_margin(params)
+    a = np.linspace(0.0, 2.0 * math.pi, 24, endpoint=False)
+    h = params.cad.servo_pulley_width / 2.0 + c
+    shapes.append([(rc * math.cos(t), rc * math.sin(t), -h) for t in a])
     out = []
     for corners in shapes:
         pts = []
@@ -482,20 +464,22 @@ def _rectangles(params, T: np.ndarray, servo: int | None = None) -> list[np.ndar
             pts.append(p[:2])
             if T[2, 2] > 1e-9:
                 pts.append((p + T[:3, 2] * max((z_top - p[2]) / T[2, 2], 0.0))[:2])
-        out.append(_hull(np.array(pts)))
+        pts = np.array(pts)
+        out.append(pts[ConvexHull(pts).vertices])
     return out
 
 
 def servo_gaps(params, servos: dict[int, np.ndarray]) -> list[float]:
-    """Between each pair of neighbouring servos of a row (T_palm_servo, shafts along z), a lower
-    bound (m) of the distance between their bodies and ears with clearance: the largest gap
-    between their projections on an edge normal of either (separating axes)."""
+    """Between each pair of neighbouring servos of a row (T_palm_servo), a lower bound (m) of the
+    distance between their outlines (:func:`_outlines`: body, ears and pulley cavity with clearance,
+    swept along the shaft to the module's top): the largest gap between their projections on an
+    edge normal of either (separating axes)."""
     row = sorted(servos.items(), key=lambda kT: kT[1][0, 3])
     gaps = []
     for (ka, Ta), (kb, Tb) in zip(row, row[1:]):
         g = np.inf
-        for P in _rectangles(params, Ta, ka):
-            for Q in _rectangles(params, Tb, kb):
+        for P in _outlines(params, Ta, ka):
+            for Q in _outlines(params, Tb, kb):
                 axes = [np.array([-(R[(i + 1) % len(R)] - R[i])[1], (R[(i + 1) % len(R)] - R[i])[0]])
                         for R in (P, Q) for i in range(len(R))]
                 best = -np.inf
@@ -520,7 +504,8 @@ def thenar_points(params, T0: np.ndarray | None = None) -> dict[str, np.ndarray]
     (:func:`thenar`), each grown by a palm wall: ``journal`` (the column's bore from the palmar face
     to the pulley's cavity), ``cavity`` (the CMC pulley's cavity) and ``turn`` (the thumb drive's
     turn onto the axis). The palm's thenar block is their bounding box, clipped to the palm's faces;
-    the cavity opens radially, so only the journal and the turn set how far radial it reaches.
+    only the journal and the turn set how far radial it reaches (the cavity is cut where it reaches
+    past that: open, as its slot toward servo 6 is).
     ``T0``: another CMC placement than the file's (T_palm_cmc_base at rest)."""
     if T0 is None:
         T0, t = T_palm_thumb_cmc_base(params), thenar(params)

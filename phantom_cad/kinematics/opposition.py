@@ -260,7 +260,8 @@ def default_bounds(params) -> Bounds:
     """The thenar region of a palm of human breadth, scaled with the hand length (189 mm: the
     reference hand): the CMC centre up to 35 mm radial of the palm's radial edge
     (:func:`palm_envelope`), 20-75 mm proximal of the index MCP and 35 mm palmar to 10 mm dorsal
-    of it (the CMC base hangs below the palm, its column climbing into it: ``frames.thenar``) (the search keeps the thumb's links out of :func:`palm_envelope`); the axis angles within
+    of it (the CMC base hangs below the palm, its column climbing into it: ``frames.thenar``; the
+    search keeps the thumb's links out of :func:`palm_envelope`); the axis angles within
     +-90 deg roll, -90..30 deg pitch and +-90 deg yaw (docs/opposition.md)."""
     k = params.hand_length / 0.189
     mm = 1e-3 * k
@@ -327,7 +328,7 @@ def thenar_constraint(params, human: bool = True):
     """The placement search's ``constraint`` for the palm's thenar (``frames.thenar``): metres by
     which a placement T0 misses ``frames.thenar_margins`` (the CMC axis's tilt priced at the thumb's
     half width per radian) and, with ``human``, by which the journal's and the turn's walls reach
-    radial of a palm of human breadth (:func:`human_edge`; the pulley's cavity opens radially) and
+    radial of a palm of human breadth (:func:`human_edge`; the pulley's cavity may open there) and
     the thenar reaches behind the carpus (:func:`carpus`)."""
     edge = human_edge(params)
     back = F.wrist_y(params) - carpus(params)
@@ -340,7 +341,7 @@ def thenar_constraint(params, human: bool = True):
             return v
         pts = F.thenar_points(params, T0)
         x = min(float(pts["journal"][:, 0].min()), float(pts["turn"][:, 0].min()))
-        y = min(float(v[:, 1].min()) for v in pts.values())
+        y = min(float(p[:, 1].min()) for p in pts.values())
         return v + max(edge - x, 0.0) + max(back - y, 0.0)
 
     return violation

@@ -28,6 +28,8 @@ The mechanism (right hand; x ulnar, y along the link, z dorsal in every link fra
   strands has length const +- (R_a q_a - R_b q_b): the loop holds R_a q_a = R_b q_b (eq. 2).
   Loops alternate sides: the MCP-PIP loop in the ulnar half of the slot, the PIP-DIP loop in the
   radial half, each in one plane.
+* **CMC loop** (servo 6 to the CMC pulley on the CMC base's column, :func:`_cmc_loop`): a closed
+  cord with two strands between two pulleys in one plane; it holds q15 = cmc_gain u6.
 * **Return** (the dorsal cable-spring): anchored on the digit's first link, over the dorsal side
   of every chain joint at its radius R_i, anchored on the distal phalanx. Via points on each link
   hold it tangent to every groove even at rest, so its length is const + sum R_i q_i exactly and

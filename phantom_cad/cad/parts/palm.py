@@ -11,14 +11,14 @@ y distal, z dorsal. Built from:
   ``frames.palm_back``) to the sockets, across the four fingers (the servos sit in the forearm
   module behind it, ``forearm.py``);
 * the thenar block, radial of the metacarpal block: the journal that holds the CMC base's column
-  (from the palmar face up along the CMC axis), the cavity of the CMC pulley on that column (open
-  radially: the pulley slides in from the thenar side, the column up through the journal into it)
-  and, above it, the thumb drive's turn onto the CMC axis (``frames.thenar``);
+  (from the palmar face up along the CMC axis), the cavity of the CMC pulley on that column with
+  its slot toward servo 6 (the loop runs in it; the pulley slides in through it, the column up
+  through the journal into it) and, above it, the thumb drive's turn onto the CMC axis
+  (``frames.thenar``);
 * tendon channels from each socket's tendon exit straight back toward its servo pulley in the
   forearm, each with the bore its drive's coupler (the crimp stop and the finger strand's
   loop, ``routing.couplers``) travels in; the thumb drive's channel from the back face to its
-  turn and down the CMC axis (turning the thumb about the CMC leaves its length alone); the CMC
-  loop's two channels from the CMC pulley back to servo 6;
+  turn and down the CMC axis (turning the thumb about the CMC leaves its length alone);
 * two pilot holes on the dorsal face at the back for the forearm module's tab;
 * the flexion-limiting housing (rails under each finger base, at the Table I MCP limit).
 """
@@ -128,7 +128,7 @@ class Palm(ServoMount, Part):
 
     def thenar_block(self) -> tuple[np.ndarray, np.ndarray]:
         """(lo, hi) palm frame (mm) of the thenar block: the bounding box of the journal's and the
-        turn's walls across x (the pulley's cavity opens radially), of everything it holds
+        turn's walls across x (the pulley's cavity is cut open where it reaches past), of everything it holds
         (``frames.thenar_points``) along y, from the palm's palmar to its dorsal face, reaching a
         wall into the metacarpal block. Empty (lo not below hi) where it all lies inside the block."""
         pts = {k: v * 1e3 for k, v in F.thenar_points(self.params).items()}

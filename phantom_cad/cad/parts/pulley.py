@@ -5,7 +5,7 @@ mid-plane, z along the shaft from the servo body toward the pulley.
 
 Every servo (u1-u6): a grooved pulley whose groove bottom radius is the chain's servo pulley
 radius r_j (eq. 5: L = L0 - r_j u_j; servo 6: the CMC loop's r6), an anchor (radial hole from the
-groove into an axial knot well: a drive's clamp, or the one clamp both ends of the CMC loop share)
+groove into an axial knot well: a drive's clamp, or each of the CMC loop's two strands' clamps)
 and the horn interface: a central clearance bore for the spline screw and two horn screw holes on
 the cad.horn_hole_radius circle.
 
