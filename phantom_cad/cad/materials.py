@@ -62,9 +62,10 @@ def _cords(params) -> list[dict]:
             spec = f"{g(hw.tendon_diameter)} mm braided UHMWPE, {cut:.0f} mm"
         elif t.kind == "loop":
             cut = units.mm(run) + 4 * KNOT_ALLOWANCE_MM
-            how = ("closed loop: both ends knotted in servo 6's pulley's anchor hole, the two strands through the palm's "
-                   "channels, once round the CMC pulley and knotted through its anchor hole, with the servo and the "
-                   "CMC both at 0; pulled taut before the second knot")
+            how = ("closed loop: one end knotted in servo 6's pulley's strand-a anchor hole, through the forearm "
+                   "module's channel and the thenar's slot, round the CMC pulley through both of its anchor holes "
+                   "(a knot in each well), back to servo 6's pulley and knotted in its strand-b anchor hole, with the "
+                   "servo and the CMC both at 0; pulled taut before the last knot")
             spec = f"{g(hw.tendon_diameter)} mm braided UHMWPE, {cut:.0f} mm"
         elif t.kind == "coupling":
             cut = units.mm(run) + 2 * KNOT_ALLOWANCE_MM

@@ -1,63 +1,18 @@
 """Rules of the palm's layout, checked when a parameter file loads (before any solid is built).
 
-The palm places the thenar (the CMC's journal, its pulley's cavity) and the finger sockets from the frames
-(phantom_cad.kinematics.frames); whether they fit together is a question of the parts'
-own dimension classes, so these rules live here, numpy only (no OpenCascade), and raise the
-same :class:`ParamError` as the schema. ``check`` is called by every command that loads a
+The palm's thenar holds the CMC where the frames place it: whether it can is measured by
+``kinematics.frames.thenar_margins`` (numpy), which the placement search keeps to as well; this
+module turns a miss into the same :class:`ParamError` as the schema, naming the field, and runs the
+routing model's own refusals (no OpenCascade). ``check`` is called by every command that loads a
 parameter file for building or validating (``params validate``, ``build``, ``demo``).
 """
 
 from __future__ import annotations
 
-import itertools
 import math
 
-import numpy as np
-
 from ..params import ParamError
-from ..params.rules import MIN_WALL
 from .parts.common import mm
-from .parts.palm import Palm
-
-
-
-def _obb(T: np.ndarray, lo, hi):
-    """(centre, axes as columns, half extents) of the box [lo, hi] placed by T (mm)."""
-    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
-    c = T[:3, :3] @ ((lo + hi) / 2.0) + T[:3, 3]
-    return c, T[:3, :3], (hi - lo) / 2.0
-
-
-def overlap(a, b) -> float:
-    """Penetration depth of two oriented boxes (separating-axis theorem), the smallest overlap
-    along the 15 candidate axes (mm): when they are apart, minus their largest separation along
-    those axes (a lower bound of their distance)."""
-    ca, Ra, ha = a
-    cb, Rb, hb = b
-    d = cb - ca
-    axes = [Ra[:, i] for i in range(3)] + [Rb[:, i] for i in range(3)]
-    for i, j in itertools.product(range(3), range(3)):
-        n = np.cross(Ra[:, i], Rb[:, j])
-        if np.linalg.norm(n) > 1e-9:
-            axes.append(n / np.linalg.norm(n))
-    depth = np.inf
-    for n in axes:
-        ra = np.sum(ha * np.abs(Ra.T @ n))
-        rb = np.sum(hb * np.abs(Rb.T @ n))
-        depth = min(depth, ra + rb - abs(d @ n))
-    return float(depth)
-
-
-def magnet_pockets(palm: Palm, finger: str) -> list:
-    """The socket's two magnet pockets as boxes around their cylinders, grown by the thinnest
-    printable wall (params.rules.MIN_WALL)."""
-    t = palm.tol
-    T = palm.T_socket(finger)
-    w = mm(MIN_WALL)
-    r = t.magnet_pocket_d / 2.0 + w
-    from .parts.finger_base import FingerBase
-    s = FingerBase(palm.params, finger).magnet_offset
-    return [_obb(T, (sx - r, -t.magnet_pocket_depth - w, -r), (sx + r, 0.0, r)) for sx in (-s, s)]
 
 
 def check(params) -> None:
