@@ -4,7 +4,8 @@ constraint (``opposition.thenar_constraint``: the CMC axis within 60 deg of the 
 CMC base below the palm, the thumb drive's turn above the CMC pulley under the dorsal face, the
 journal's and the turn's walls within a palm of human breadth), a larger population and more
 generations than `params opposition --solve`, for several seeds (the landscape has several optima:
-each row is a placement the search reaches, a lower bound of the best).
+each row is a placement the search reaches, a lower bound of the best). Four decimals, as
+`--solve` prints: the margin can sit on an edge that rounding to 0.01 crosses (docs/opposition.md).
 
 About 100 s a seed on the project's machine.
 Run: .venv/bin/python bench/opposition_thenar.py [PARAMS.toml] [SEEDS, e.g. 1,2,3]
@@ -31,8 +32,8 @@ def main(argv):
     for seed in seeds:
         t = time.perf_counter()
         s = O.solve(hand, seed=seed, population=16, generations=150, constraint=O.thenar_constraint(params))
-        c = ", ".join(f"{v * 1e3:.2f}" for v in s.offset)
-        a = ", ".join(f"{math.degrees(v):.2f}" for v in s.axis)
+        c = ", ".join(f"{v * 1e3:.4f}" for v in s.offset)
+        a = ", ".join(f"{math.degrees(v):.4f}" for v in s.axis)
         meet = " / ".join(("yes" if s.reach[f].reaches else "no") for f in O.OPPOSED)
         held = "" if s.violation <= 0.0 else f" (the thenar misses it by {s.violation * 1e3:.1f} mm)"
         print(f"| {seed} | {c} | {a} | {math.degrees(s.margin):+.1f}{held} | {meet} | {-s.intrusion * 1e3:.1f} | "

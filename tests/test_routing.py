@@ -23,7 +23,8 @@ from phantom_cad.kinematics.topology import JOINT_NAMES, SERVOS, TENDONS
 from phantom_cad.params.io import load_params
 
 ROOT = Path(__file__).resolve().parents[1]
-FILES = (ROOT / "params" / "phantom.toml", ROOT / "params" / "examples" / "slender.toml")
+FILES = (ROOT / "params" / "phantom.toml", ROOT / "params" / "examples" / "slender.toml",
+         ROOT / "params" / "examples" / "small.toml")
 DIGITS = ("thumb", "index", "middle", "ring", "pinky")
 KEYS = {"thumb": ("mp", "ip"), **{f: ("mcp", "pip", "dip") for f in DIGITS[1:]}}
 

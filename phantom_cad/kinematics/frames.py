@@ -137,6 +137,34 @@ def T_palm_socket(params, finger: str) -> np.ndarray:
     return T_palm_finger_base(params, finger) @ trans(0.0, -params.cad.finger_base_length, 0.0)
 
 
+def socket_x(params) -> tuple[float, float]:
+    """x extent (m, palm frame, right hand) of the palm's finger sockets: the outer sides of the
+    index's and the pinky's (the columns converge toward the wrist, so their faces are widest)."""
+    xs = []
+    for f in FINGERS:
+        T = T_palm_socket(params, f)
+        w = params.fingers[f].width / 2.0
+        xs += [float((T @ np.array([sx, 0.0, 0.0, 1.0]))[0]) for sx in (-w, w)]
+    return min(xs), max(xs)
+
+
+def metacarpal_x(params) -> tuple[float, float]:
+    """x extent (m, palm frame, right hand) of the palm's metacarpal block: across the sockets
+    (:func:`socket_x`), and ulnar far enough that every finger drive's channel keeps a wall to the
+    block's ulnar face where the drive runs ulnar toward its servo (from its exit under the socket
+    to the palm's back face). The palm's ulnar face; its radial side is the thenar's."""
+    x0, x1 = socket_x(params)
+    y0 = palm_back(params)
+    half = tendon_relief(params) / 2.0 + params.palm.wall     # half a tendon hole and a wall
+    for f in FINGERS:
+        s = chain(f).servo
+        tangent = T_palm_servo(params, s) @ np.array([-servo_radius(params, s), 0.0, 0.0, 1.0])
+        exit_ = T_palm_socket(params, f) @ np.array([0.0, 0.0, tendon_height(params), 1.0])
+        at_back = exit_ + (tangent - exit_) * (y0 - exit_[1]) / (tangent[1] - exit_[1])
+        x1 = max(x1, float(max(exit_[0], at_back[0])) + half)
+    return x0, x1
+
+
 def thumb_cmc_placement(offset, axis) -> np.ndarray:
     """T_palm_cmc_base at q15 = 0 for a CMC centre ``offset`` (m, palm frame) and ``axis`` =
     (roll, pitch, yaw) (rad): R = Rz(yaw) Ry(pitch) Rx(roll); the CMC axis is the frame's z."""

@@ -310,9 +310,10 @@ HUMAN_BREADTH = 0.095
 
 def human_edge(params) -> float:
     """x (m, palm frame, right hand) of the radial edge of a palm of human breadth
-    (:data:`HUMAN_BREADTH`, scaled with the hand length) that ends at the pinky's ulnar edge plus a
-    wall (:func:`palm_envelope`)."""
-    return float(palm_envelope(params)[1][0]) - HUMAN_BREADTH * params.hand_length / 0.189
+    (:data:`HUMAN_BREADTH`, scaled with the hand length) that ends at the palm's ulnar face
+    (``frames.metacarpal_x``: the pinky socket's outer side, or a wall ulnar of a drive's channel
+    where the file's servo row draws one further)."""
+    return F.metacarpal_x(params)[1] - HUMAN_BREADTH * params.hand_length / 0.189
 
 
 def carpus(params) -> float:

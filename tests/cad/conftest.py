@@ -4,11 +4,14 @@
 * ``built``: {name: Built} of every part (right hand).
 * ``placed``: {name: solid} every part moved to its rest pose in the hand frame.
 * ``variant(edit)``: parse the default document after ``edit(doc)`` (a plain dict).
+* ``hand_parts(kind)``: (params, {name: shape}) of every part of one of issue 12's three hands
+  (:data:`HANDS`), built once per session.
 """
 
 from __future__ import annotations
 
 import copy
+from pathlib import Path
 
 import pytest
 
@@ -46,3 +49,40 @@ def built(params):
 def placed(built):
     from phantom_cad.cad import measure as check
     return {name: check.placed(b.shape, b.T_hand_link) for name, b in built.items()}
+
+
+#: issue 12's three hands: the default, its left twin, and a hand of hand_length 170 mm (a file of its
+#: own, params/examples/small.toml: the fingers narrower, the pitch shorter, its CMC placement solved
+#: for it)
+HANDS = ("default", "left", "hand_length_170")
+SMALL = Path(__file__).resolve().parents[2] / "params" / "examples" / "small.toml"
+
+
+def hand_document(kind: str, document: dict) -> dict:
+    """The plain document of one of :data:`HANDS`."""
+    if kind == "hand_length_170":
+        return _plain(load_params(SMALL).document)
+    doc = copy.deepcopy(document)
+    if kind == "left":
+        doc["hand"]["side"] = "left"
+    return doc
+
+
+@pytest.fixture(scope="session")
+def hand_parts(document, built):
+    """``hand_parts(kind)`` -> (params, {name: shape in its link frame}) of every part of one of
+    :data:`HANDS`, built once per session (the default hand's are ``built``'s)."""
+    from phantom_cad.cad import assembly
+
+    cache = {}
+
+    def get(kind: str):
+        if kind not in cache:
+            p = parse(hand_document(kind, document))
+            if kind == "default":
+                shapes = {n: b.shape for n, b in built.items()}
+            else:
+                shapes = {n: assembly.build_part(p, n).shape for n in assembly.part_names(p)}
+            cache[kind] = (p, shapes)
+        return cache[kind]
+    return get

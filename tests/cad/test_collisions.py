@@ -11,8 +11,6 @@ each other (the check can fail).
 
 from __future__ import annotations
 
-import copy
-
 import numpy as np
 import pytest
 
@@ -22,9 +20,9 @@ from phantom_cad.cad import measure as check
 from phantom_cad.export import step_stl
 from phantom_cad.export.interference import command_sweep
 from phantom_cad.kinematics.topology import JOINTS, SERVOS, link
-from phantom_cad.params import parse
 
-HANDS = ("default", "left", "hand_length_170")
+from tests.cad.conftest import HANDS
+
 FRACTIONS = (0.0, 0.25, 0.5, 0.75, 0.9, 1.0)
 
 
@@ -53,18 +51,8 @@ def _occ_overlap(p, shapes: dict, pair, commands: dict) -> float:
 
 
 @pytest.fixture(scope="module", params=HANDS)
-def hand(request, document, built):
-    if request.param == "default":
-        p = parse(document)
-        shapes = {n: b.shape for n, b in built.items()}
-    else:
-        doc = copy.deepcopy(document)
-        if request.param == "left":
-            doc["hand"]["side"] = "left"
-        else:
-            doc["hand"]["hand_length_mm"] = 170.0
-        p = parse(doc)
-        shapes = {n: assembly.build_part(p, n).shape for n in assembly.part_names(p)}
+def hand(request, hand_parts):
+    p, shapes = hand_parts(request.param)
     return request.param, p, shapes, _sweep(p, shapes)
 
 

@@ -1,5 +1,5 @@
 """Issue 12, human scale, measured on the built solids of the default hand, its left twin and a
-hand of hand_length_mm 170.
+hand of hand_length_mm 170 (params/examples/small.toml).
 
 A 95th-percentile adult palm is about 95 mm broad at the metacarpal heads (hand length 189 mm;
 the target scales with the hand length) and at most 35 mm thick, with nothing hanging below its
@@ -9,32 +9,25 @@ turns the CMC through a cable loop, and the palm's thenar holds the CMC base's c
 
 from __future__ import annotations
 
-import copy
-
 import numpy as np
 import pytest
 
 from phantom_cad.cad import assembly
 from phantom_cad.cad import measure as check
+from phantom_cad.canon import plain
 from phantom_cad.kinematics import frames
 from phantom_cad.kinematics.topology import FINGERS, SERVO_MOUNT, SERVOS
-from phantom_cad.params import parse
 
-HANDS = ("default", "left", "hand_length_170")
+from tests.cad.conftest import HANDS
 
 
 @pytest.fixture(scope="module", params=HANDS)
-def hand(request, document):
-    doc = copy.deepcopy(document)
-    if request.param == "left":
-        doc["hand"]["side"] = "left"
-    elif request.param == "hand_length_170":
-        doc["hand"]["hand_length_mm"] = 170.0
-    p = parse(doc)
+def hand(request, hand_parts):
+    p, shapes = hand_parts(request.param)
     T = assembly.pose_transforms(p)
     names = ("palm", "forearm") + tuple(f"{f}_base" for f in FINGERS)
-    solids = {n: check.placed(assembly.build_part(p, n).shape, T[n]) for n in names}
-    return request.param, p, doc, solids
+    solids = {n: check.placed(shapes[n], T[n]) for n in names}
+    return request.param, p, plain(p.document), solids
 
 
 def _section(shape, y: float, xs=(-500.0, 500.0)):
@@ -81,7 +74,7 @@ def test_the_metacarpal_block_is_the_palms_thickness(hand):
     palm = solids["palm"]
     T = doc["palm"]["thickness_mm"]
     assert T <= 35.0
-    x0, x1 = W.metacarpal_x(p)
+    x0, x1 = W.socket_x(p)
     x0 = max(x0, max(v[:, 0].max() for v in frames.thenar_points(p).values()) * 1e3)   # ulnar of the thenar
     if kind == "left":
         x0, x1 = -x1, -x0
@@ -92,30 +85,22 @@ def test_the_metacarpal_block_is_the_palms_thickness(hand):
         assert hi[2] == pytest.approx(T / 2, abs=1e-6) and lo[2] == pytest.approx(-T / 2, abs=1e-6), (kind, y)
 
 
-#: the 170 mm hand is the default file with hand_length_mm changed alone: the fingers' widths and
-#: pitch, the servos and the CMC placement stay in mm (measured at the branch's last commit)
-SMALL_HAND = ("the 170 mm hand keeps the default's finger widths, pitch, servo row and CMC placement in "
-              "mm: its palm is 89.1 mm broad against 85.4 and its thenar reaches 8.7 mm behind the "
-              "carpus (a 170 mm hand needs its own placement and narrower fingers); issue 12 goes on")
-
-
-def test_the_palm_is_human_broad(hand, request):
+def test_the_palm_is_human_broad(hand):
     """The palm solid's breadth (its bounding box across x, the thenar included) within the
     95th-percentile envelope."""
     kind, p, doc, solids = hand
-    if kind == "hand_length_170":
-        request.applymarker(pytest.mark.xfail(strict=True, reason=SMALL_HAND))
     bb = solids["palm"].bounding_box()
     assert bb.max.X - bb.min.X <= _limit(doc)
+    # its ulnar face is the one the placement search's human edge starts from
+    ulnar = bb.max.X if kind != "left" else -bb.min.X
+    assert ulnar == pytest.approx(frames.metacarpal_x(p)[1] * 1e3, abs=1e-6)
 
 
-def test_the_servos_sit_behind_the_palm(hand, request):
+def test_the_servos_sit_behind_the_palm(hand):
     """The six servos' pulleys lie behind the palm's back face (the wrist crease, or the back of
     the thenar: at most the carpus, hand length less the middle finger's bones, behind it), and the
     forearm module reaches ahead of it only with its tab on the palm's dorsal face."""
     kind, p, doc, solids = hand
-    if kind == "hand_length_170":
-        request.applymarker(pytest.mark.xfail(strict=True, reason=SMALL_HAND))
     hl = doc["hand"]["hand_length_mm"]
     wrist = -doc["fingers"]["index"]["length_fraction"]["metacarpal"] * hl
     carpus = hl * (1 - sum(doc["fingers"]["middle"]["length_fraction"].values()))

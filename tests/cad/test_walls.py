@@ -128,17 +128,17 @@ def test_every_wall_is_two_perimeters(walls, params):
     assert thin == {}
 
 
-def test_every_wall_of_a_170_mm_hand_is_two_perimeters(variant):
-    """The same rule on every part of a hand of hand_length 170 mm (issue 12's third hand): the
-    digits shorter, the same sections, the palm and forearm laid out again."""
-    from phantom_cad.cad import assembly
-
-    p = variant(lambda d: d["hand"].__setitem__("hand_length_mm", 170.0))
+def test_every_wall_of_a_170_mm_hand_is_two_perimeters(hand_parts):
+    """The same rule on every part of a hand of hand_length 170 mm (issue 12's third hand,
+    params/examples/small.toml): the digits shorter and narrower, the palm and forearm laid out
+    again."""
+    p, shapes = hand_parts("hand_length_170")
+    assert p.hand_length == pytest.approx(0.170)
     tol = p.print.stl_tolerance * 1e3
     bar = MIN_WALL - 2.0 * tol
     thin = {}
-    for n in assembly.part_names(p):
-        r = thin_walls(*step_stl.tessellate(assembly.build_part(p, n).shape, tol), bar)
+    for n, shape in shapes.items():
+        r = thin_walls(*step_stl.tessellate(shape, tol), bar)
         if r["wall_thinnest"] < bar:
             thin[n] = round(r["wall_thinnest"], 3)
-    assert len(assembly.part_names(p)) == 28 and thin == {}
+    assert len(shapes) == 28 and thin == {}

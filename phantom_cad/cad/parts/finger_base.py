@@ -19,7 +19,8 @@ from ..measure import circular_pockets, eyelet_centres, point_line_distance
 from .base import MAGNET_DOWN, Part, child_joint, digit_table
 from .common import DigitSection, box, build, cylinder, mm
 from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, hub_grooves
-from .tendons import link_tendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry, verify_grooves
+from .tendons import (link_tendons, anchor_tools, channel_tools, clear_of_fans, drive_fan_tools, guide_entry,
+                      verify_grooves)
 
 class FingerBase(Part):
     """The metacarpal module of ``finger``: a link fixed to the palm by two magnets."""
@@ -87,20 +88,23 @@ class FingerBase(Part):
         W, T, Lb = sec.width, sec.thickness, self.length
         body = [box(-W / 2.0, W / 2.0, -Lb, 0.0, -T / 2.0, T / 2.0)]
         lt = link_tendons(self.params, self.link.name)
-        b, tools = clevis(sec, self.joint, 0.0, lt.hubs().get(child_joint(self.link).name))
-        body += b
-        tools += hub_grooves(sec, lt)
         # metacarpal-side MCP guide at d1, and the tendon path from the magnet face to it
         G1, G2 = sec.guide_points()
         b3, guide, u, (s_near, s_far) = eyelet(sec, G1, lt.eyelet_toward(G1), clip_y=-Lb)
-        body += b3
+        start = float(np.linalg.norm(s_near - np.array([0.0, *G1])))
+        # the MCP stop's wedge, left standing in the clevis slot, ends in an edge on the palmar face
+        # over the drive's fan: it stands only where it lies a flank clear of the fan
+        b, tools = clevis(sec, self.joint, 0.0, lt.hubs().get(child_joint(self.link).name),
+                          lambda poly: clear_of_fans(lt, sec, start, poly))
+        body += b + b3
+        tools += hub_grooves(sec, lt)
         # the drive's run from the magnet face toward G1 (routing), a clearance hole that ends inside
         # the far relief sphere (a wider one would bite the eyelet)
         g1 = np.array([0.0, *G1])
         end = guide_entry(self.tendon_entry, g1, s_far)
         u_in = (end - self.tendon_entry) / np.linalg.norm(end - self.tendon_entry)
         guide.append(cylinder(self.tendon_entry - u_in, end, t.tendon_hole / 2.0))
-        guide += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - np.array([0.0, *G1]))))
+        guide += drive_fan_tools(lt, sec, start)
         # the near relief leaves through the clevis slot's back wall along the chord at rest: opened
         # along it, a relief wide, it leaves square (as a sphere it left a 0.7 mm rim at 28 deg)
         guide.append(cylinder(s_near, s_near + NEAR_RELIEF_RUN * u, t.tendon_relief / 2.0))

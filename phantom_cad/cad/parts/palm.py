@@ -105,23 +105,12 @@ class Palm(ServoMount, Part):
         """The finger drives' couplers (``routing.couplers``: metres, s from the socket face)."""
         return routing.couplers(self.params)
 
-    def metacarpal_x(self) -> tuple[float, float]:
-        """x extent (mm) of the metacarpal block (``wrist.metacarpal_x``)."""
-        return wrist.metacarpal_x(self.params)
-
     def extents(self):
-        """x0, x1, y0, y1 (mm) of the metacarpal block: across the sockets (and ulnar far enough
-        that every finger drive's channel keeps a wall to the block's ulnar face, where a drive
-        runs ulnar toward its servo), from the palm's back face to behind the socket faces."""
-        x0, x1 = self.metacarpal_x()
-        y0 = mm(F.palm_back(self.params))
-        t = self.tol
-        for f in FINGERS:
-            tangent, _ = self.drive_line(chain(f).servo)
-            exit_ = (self.T_socket(f) @ np.array([0.0, 0.0, self.tendon_z, 1.0]))[:3]
-            at_back = exit_ + (tangent - exit_) * (y0 - exit_[1]) / (tangent[1] - exit_[1])
-            x1 = max(x1, max(exit_[0], at_back[0]) + t.tendon_hole / 2.0 + t.wall)
-        return x0, x1, y0, self.slab_front()
+        """x0, x1, y0, y1 (mm) of the metacarpal block: across the sockets and ulnar far enough for
+        the finger drives' channels (``frames.metacarpal_x``), from the palm's back face to behind
+        the socket faces."""
+        x0, x1 = (mm(v) for v in F.metacarpal_x(self.params))
+        return x0, x1, mm(F.palm_back(self.params)), self.slab_front()
 
     def _placed_box(self, T, lo, hi) -> np.ndarray:
         return F.box_corners(lo, hi) @ T[:3, :3].T + T[:3, 3]
@@ -180,7 +169,19 @@ class Palm(ServoMount, Part):
         M = np.eye(4)
         M[:3, 0], M[:3, 1], M[:3, 2], M[:3, 3] = v, np.cross([0.0, 0.0, 1.0], v), (0.0, 0.0, 1.0), (0.0, 0.0, q)
         slot = transform(box(0.0, 4.0 * R + 60.0, -R, R, -h, h), M)
-        return [journal, cavity, slot]
+        tools = [journal, cavity, slot]
+        # the back: the cavity reaches the palm's back face (frames.palm_back is its back), so it
+        # is swept on out through that face, in the pulley's plane (a cylinder tangent to the face,
+        # or one sampled a hair inside it, left a skin of 0 to 0.55 mm)
+        back = -T0[1, :3]                       # the palm's -y in the CMC base frame
+        n = math.hypot(back[0], back[1])
+        if n > 1e-6:
+            w = np.array([back[0] / n, back[1] / n, 0.0])
+            depth = ((T0 @ np.array([0.0, 0.0, q, 1.0]))[1] - mm(F.palm_back(self.params)) + 2.0 * (R + h)) / n
+            M = np.eye(4)
+            M[:3, 0], M[:3, 1], M[:3, 2], M[:3, 3] = w, np.cross([0.0, 0.0, 1.0], w), (0.0, 0.0, 1.0), (0.0, 0.0, q)
+            tools.append(transform(box(0.0, depth, -R, R, -h, h), M))
+        return tools
 
     def limiter_polygon(self, finger: str) -> list[tuple[float, float]]:
         """(y, z) outline, in the finger base frame (MCP axis at the origin), of the palm's

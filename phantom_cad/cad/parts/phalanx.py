@@ -92,9 +92,11 @@ def _segment_axis_distance(a, b) -> float:
     return float(np.linalg.norm(a + t * d))
 
 
-def clevis(sec: DigitSection, joint: str, y: float, hub_x: float | None = None):
+def clevis(sec: DigitSection, joint: str, y: float, hub_x: float | None = None, stop_clear=None):
     """Parent side of a joint whose axis is parallel to x through (y, 0); a loop's hub (groove
-    plane ``hub_x``) is the material the slot leaves beside that side's cheek."""
+    plane ``hub_x``) is the material the slot leaves beside that side's cheek. ``stop_clear``: a
+    function that takes the flexion stop's (y, z) outline (joint frame) and returns the outline the
+    slot leaves standing (``tendons.clear_of_fans``); default: the whole outline."""
     t = sec.tol
     rb, W, T, sw = sec.boss_radius, sec.width, sec.thickness, sec.slot_width
     body = [cyl_x(rb, -W / 2.0, W / 2.0, y, 0.0)]
@@ -115,8 +117,8 @@ def clevis(sec: DigitSection, joint: str, y: float, hub_x: float | None = None):
         slot = slot.fuse(quadrant.cut(cyl_x(rb, -half - 1.0, half + 1.0, y, 0.0)))
     poly = sec.stop_polygon(sec.q_stop[joint])
     if poly is not None:   # keep the flexion-stop wedge: the slot tool leaves it standing
-        wedge = prism_x([(py + y, pz) for py, pz in poly], -half - 0.5, half + 0.5)
-        slot = slot.cut(wedge)
+        poly = [(py + y, pz) for py, pz in (poly if stop_clear is None else stop_clear(poly))]
+        slot = slot.cut(prism_x(poly, -half - 0.5, half + 0.5))
     tools = [slot, cyl_x(t.axle_press / 2.0, -W / 2.0 - 1.0, W / 2.0 + 1.0, y, 0.0)]
     return body, tools
 

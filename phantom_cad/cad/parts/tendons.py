@@ -344,14 +344,10 @@ def knot_pocket_depth(sec, floor: float, cord: float) -> float:
     return max(0.0, min(2.0 * cord, floor - sec.tol.axle_clear / 2.0 - units.mm(FLANK)))
 
 
-def drive_fan_tools(lt: LinkTendons, sec, start: float, flanks: tuple = (), span: tuple | None = None) -> list:
-    """The slot a drive chord sweeps through this link over the travel: a fan from the end fixed
-    here (from ``start`` mm along the chord, past the eyelet) to the other end's positions, a
-    clearance diameter wide about the chord's plane. ``flanks``: the x of the faces of grooves the
-    fan passes beside within ``span`` = (y0, y1) (a joint's tongue); where one lies less than a
-    flank (``dimensions.FLANK``) beside the fan, the fan is widened to it there (a 0.4 mm fin stood
-    between the drive's fan and the return cord's groove on the proximal phalanges)."""
-    from .common import box, prism_x
+def drive_fan_outlines(lt: LinkTendons, sec, start: float) -> list[tuple[list, float, float]]:
+    """(y-z outline, x0, x1) of each slot a drive chord sweeps through this link over the travel:
+    a fan from the end fixed here (from ``start`` mm along the chord, past the eyelet) to the other
+    end's positions, a clearance diameter wide about the chord's plane."""
     out = []
     w = sec.tol.tendon_hole
     for fixed, moving in lt.drive_sweeps:
@@ -378,15 +374,55 @@ def drive_fan_tools(lt: LinkTendons, sec, start: float, flanks: tuple = (), span
         near = [c + start * np.array([math.cos(a), math.sin(a)]) for a in order]
         far = [c + rays[a] * np.array([math.cos(a), math.sin(a)]) for a in order]
         poly = _simple([tuple(p) for p in near] + [tuple(p) for p in reversed(far)])
-        out.append(prism_x(poly, fixed[0] - w / 2.0, fixed[0] + w / 2.0))
+        out.append((poly, fixed[0] - w / 2.0, fixed[0] + w / 2.0))
+    return out
+
+
+def drive_fan_tools(lt: LinkTendons, sec, start: float, flanks: tuple = (), span: tuple | None = None) -> list:
+    """The drive's fans (:func:`drive_fan_outlines`) as cutting tools. ``flanks``: the x of the
+    faces of grooves the fan passes beside within ``span`` = (y0, y1) (a joint's tongue); where one
+    lies less than a flank (``dimensions.FLANK``) beside the fan, the fan is widened to it there (a
+    0.4 mm fin stood between the drive's fan and the return cord's groove on the proximal
+    phalanges)."""
+    from .common import box, prism_x
+    out = []
+    for poly, x0, x1 in drive_fan_outlines(lt, sec, start):
+        out.append(prism_x(poly, x0, x1))
         for face in flanks:
-            for edge, side in ((fixed[0] - w / 2.0, -1.0), (fixed[0] + w / 2.0, 1.0)):
+            for edge, side in ((x0, -1.0), (x1, 1.0)):
                 if 0.0 < side * (face - edge) < units.mm(FLANK):
                     # to the face and 0.05 mm into the groove beyond it (no coplanar faces)
                     a, b = sorted((edge, face + side * 0.05))
                     big = max(abs(v) for p in poly for v in p) + 1.0
                     out.append(cutter(prism_x(poly, a, b).intersect(box(a - 1.0, b + 1.0, *span, -big, big))))
     return out
+
+
+def clear_of_fans(lt: LinkTendons, sec, start: float, wedge) -> list:
+    """A flexion stop's wedge (``DigitSection.stop_polygon``: a (y, z) triangle on the palmar face,
+    its edge at the face) where a drive's fan (:func:`drive_fan_outlines`) passes under it: cut
+    back, square to the face, to where the wedge stands a flank (``dimensions.FLANK``) above the
+    fan's top. Its edge left a web over the fan (0.14 mm on a 170 mm hand's middle finger base)."""
+    if len(wedge) != 3:
+        return list(wedge)
+    (y0, z0), (y1, _), (_, z2) = wedge          # (back, face), (edge, face), (back, top)
+    top = None
+    t = np.linspace(0.0, 1.0, 9)[:, None]
+    for poly, _, _ in drive_fan_outlines(lt, sec, start):
+        ring = np.asarray(poly, float)
+        pts = np.vstack([a + t * (b - a) for a, b in zip(ring, np.roll(ring, -1, axis=0))])
+        zs = [z for y, z in pts if min(y0, y1) <= y <= max(y0, y1)]
+        if zs and max(zs) > z0:
+            top = max(zs) if top is None else max(top, max(zs))
+    if top is None:
+        return list(wedge)
+    z = top + units.mm(FLANK)
+    if z >= z2:
+        return list(wedge)
+    y = y1 + (y0 - y1) * (z - z0) / (z2 - z0)   # on the wedge's slope at height z
+    if (y - y1) * (y0 - y1) <= 0.0:
+        return list(wedge)
+    return [(y0, z0), (y, z0), (y, z), (y0, z2)]
 
 
 def guide_entry(start, guide, relief_centre) -> np.ndarray:

@@ -14,22 +14,17 @@ import numpy as np
 from ... import units
 from ...kinematics import frames as F
 from ...kinematics import routing
-from ...kinematics.topology import FINGERS, THUMB_CHAIN
+from ...kinematics.topology import THUMB_CHAIN
 from .common import mm
 
 #: the fastening tab's length over the palm (mm, along y) [choice]
 TAB_LENGTH = 10.0
 
 
-def metacarpal_x(params) -> tuple[float, float]:
-    """x extent (mm) of the palm's metacarpal block: flush with the outer sides of the index's and
-    the pinky's sockets (the columns converge toward the wrist, so their faces are widest)."""
-    xs = []
-    for f in FINGERS:
-        T = F.to_mm(F.T_palm_socket(params, f))
-        W = mm(params.fingers[f].width)
-        xs += [(T @ np.array([sx, 0.0, 0.0, 1.0]))[0] for sx in (-W / 2.0, W / 2.0)]
-    return min(xs), max(xs)
+def socket_x(params) -> tuple[float, float]:
+    """x extent (mm) of the palm's finger sockets (``frames.socket_x``)."""
+    lo, hi = F.socket_x(params)
+    return mm(lo), mm(hi)
 
 
 def forearm_block(params) -> tuple[float, float, float, float, float, float]:
@@ -51,7 +46,7 @@ def tab(params) -> tuple[np.ndarray, np.ndarray]:
     module covers it, from the module's front face to TAB_LENGTH ahead of the palm's back face,
     one palm wall thick on the palm's dorsal face."""
     forearm_x = forearm_block(params)[:2]
-    px0, px1 = metacarpal_x(params)
+    px0, px1 = socket_x(params)
     top = mm(params.palm.thickness) / 2.0
     return (np.array([max(forearm_x[0], px0), mm(F.forearm_front(params)), top]),
             np.array([min(forearm_x[1], px1), mm(F.palm_back(params)) + TAB_LENGTH, top + mm(params.palm.wall)]))
