@@ -437,7 +437,7 @@ def collision_rows(export: Export, params, hand: Hand, log=lambda msg: None) -> 
     interface): a joint's parent and child and the designed contacts may touch; the pinch
     contacts (a thumb part with a finger part) are logged with the commands where they begin."""
     from . import interface
-    from .interference import SWEEP_FRACTIONS, SWEEP_TOL_MM3, command_sweep
+    from .interference import SWEEP_FRACTIONS, SWEEP_TOL_MM3, command_sweep, may_touch
     from .step_stl import read_stl
 
     asm = interface.assembly()
@@ -448,9 +448,8 @@ def collision_rows(export: Export, params, hand: Hand, log=lambda msg: None) -> 
         if path.is_file():
             v, f = read_stl(path.read_bytes())
             meshes[name] = (v / units.MM, f)
-    allowed = ({frozenset((j.parent, j.child)) for j in JOINTS}
-               | {frozenset(c[:2]) for c in asm.designed_contacts(params)})
-    r = command_sweep(meshes, hand, lambda q: asm.pose_transforms(params, q), allowed)
+    r = command_sweep(meshes, hand, lambda q: asm.pose_transforms(params, q),
+                      may_touch(asm.designed_contacts(params)))
     grid = ", ".join(f"{f:.0%}" for f in SWEEP_FRACTIONS)
     for e in r["pinch"]:
         at = " ".join(f"{k} {v:.0%}" for k, v in e["commands"].items())

@@ -9,11 +9,17 @@ from typing import Any
 
 import numpy as np
 
-from ..kinematics.topology import DIGITS, LINKS, SERVOS, THUMB_CHAIN, link
+from ..kinematics.topology import DIGITS, JOINTS, LINKS, SERVOS, THUMB_CHAIN, link
 
 #: overlap volume (mm^3) above which two placed parts count as intersecting; it absorbs
 #: the tessellation error (params.print.stl_tolerance) of parts that merely touch
 INTERFERENCE_TOL_MM3 = 1.0
+
+
+def may_touch(contacts) -> set[frozenset]:
+    """The pairs of parts that may touch: every joint's parent and child, and the designed
+    contacts ``contacts`` ((a, b, why) rows of the assembly's ``designed_contacts``)."""
+    return {frozenset((j.parent, j.child)) for j in JOINTS} | {frozenset(c[:2]) for c in contacts}
 
 
 def interference(meshes: dict[str, tuple[np.ndarray, np.ndarray]], poses: dict[str, np.ndarray],

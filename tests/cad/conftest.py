@@ -5,7 +5,8 @@
 * ``placed``: {name: solid} every part moved to its rest pose in the hand frame.
 * ``variant(edit)``: parse the default document after ``edit(doc)`` (a plain dict).
 * ``hand_parts(kind)``: (params, {name: shape}) of every part of one of issue 12's three hands
-  (:data:`HANDS`), built once per session.
+  (:data:`HANDS`), built once per session; ``hand_meshes(kind)``: their meshes at the export's
+  STL tolerance.
 """
 
 from __future__ import annotations
@@ -84,5 +85,22 @@ def hand_parts(document, built):
             else:
                 shapes = {n: assembly.build_part(p, n).shape for n in assembly.part_names(p)}
             cache[kind] = (p, shapes)
+        return cache[kind]
+    return get
+
+
+@pytest.fixture(scope="session")
+def hand_meshes(hand_parts):
+    """``hand_meshes(kind)`` -> {name: (vertices, faces)} of :func:`hand_parts`' shapes at the
+    export's STL tolerance (link frames, mm), tessellated once per session."""
+    from phantom_cad.export import step_stl
+
+    cache = {}
+
+    def get(kind: str):
+        if kind not in cache:
+            p, shapes = hand_parts(kind)
+            tol = p.print.stl_tolerance * 1e3
+            cache[kind] = {n: step_stl.tessellate(s, tol) for n, s in shapes.items()}
         return cache[kind]
     return get

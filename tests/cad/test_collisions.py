@@ -18,23 +18,17 @@ from phantom_cad import make_hand
 from phantom_cad.cad import assembly
 from phantom_cad.cad import measure as check
 from phantom_cad.export import step_stl
-from phantom_cad.export.interference import command_sweep
-from phantom_cad.kinematics.topology import JOINTS, SERVOS, link
+from phantom_cad.export.interference import command_sweep, may_touch
+from phantom_cad.kinematics.topology import SERVOS, link
 
 from tests.cad.conftest import HANDS
 
 FRACTIONS = (0.0, 0.25, 0.5, 0.75, 0.9, 1.0)
 
 
-def _allowed(p) -> set[frozenset]:
-    return ({frozenset((j.parent, j.child)) for j in JOINTS}
-            | {frozenset(c[:2]) for c in assembly.designed_contacts(p)})
-
-
-def _sweep(p, shapes: dict):
-    tol = p.print.stl_tolerance * 1e3
-    meshes = {n: step_stl.tessellate(s, tol) for n, s in shapes.items()}
-    return command_sweep(meshes, make_hand(p), lambda q: assembly.pose_transforms(p, q), _allowed(p))
+def _sweep(p, meshes: dict):
+    return command_sweep(meshes, make_hand(p), lambda q: assembly.pose_transforms(p, q),
+                         may_touch(assembly.designed_contacts(p)))
 
 
 def _occ_overlap(p, shapes: dict, pair, commands: dict) -> float:
@@ -51,9 +45,9 @@ def _occ_overlap(p, shapes: dict, pair, commands: dict) -> float:
 
 
 @pytest.fixture(scope="module", params=HANDS)
-def hand(request, hand_parts):
+def hand(request, hand_parts, hand_meshes):
     p, shapes = hand_parts(request.param)
-    return request.param, p, shapes, _sweep(p, shapes)
+    return request.param, p, shapes, _sweep(p, hand_meshes(request.param))
 
 
 def test_no_two_parts_collide_over_the_command_grid(hand):
@@ -88,7 +82,8 @@ def test_the_old_finger_pitch_collides(document, variant):
     p = variant(lambda d: d["palm"].__setitem__("finger_pitch_mm", 19.5))
     names = [n for n in assembly.part_names(p) if link(n).digit in ("index", "middle")]
     shapes = {n: assembly.build_part(p, n).shape for n in names}
-    r = _sweep(p, shapes)
+    tol = p.print.stl_tolerance * 1e3
+    r = _sweep(p, {n: step_stl.tessellate(s, tol) for n, s in shapes.items()})
     pairs = {tuple(e["parts"]): e for e in r["collisions"]}
     e = pairs[("index_distal", "middle_distal")]
     assert e["volume_mm3"] > 5.0 and e["commands"] == {"u2": 1.0, "u3": 1.0}

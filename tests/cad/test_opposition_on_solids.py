@@ -23,10 +23,9 @@ import pytest
 from phantom_cad import make_hand
 from phantom_cad.cad import assembly
 from phantom_cad.cad import measure as check
-from phantom_cad.export import step_stl
-from phantom_cad.export.interference import interference
+from phantom_cad.export.interference import interference, may_touch
 from phantom_cad.kinematics import frames, opposition
-from phantom_cad.kinematics.topology import CMC_SERVO, JOINTS, SERVOS, chain
+from phantom_cad.kinematics.topology import CMC_SERVO, SERVOS, chain
 
 from tests.cad.conftest import HANDS
 
@@ -40,13 +39,9 @@ CANDIDATES = 8
 
 
 @pytest.fixture(scope="module", params=HANDS)
-def hand(request, hand_parts):
+def hand(request, hand_parts, hand_meshes):
     p, shapes = hand_parts(request.param)
-    tol = p.print.stl_tolerance * 1e3
-    meshes = {n: step_stl.tessellate(s, tol) for n, s in shapes.items()}
-    allowed = ({frozenset((j.parent, j.child)) for j in JOINTS}
-               | {frozenset(c[:2]) for c in assembly.designed_contacts(p)})
-    return request.param, p, shapes, meshes, allowed
+    return request.param, p, shapes, hand_meshes(request.param), may_touch(assembly.designed_contacts(p))
 
 
 def _candidates(h, finger: str, n: int = CANDIDATES) -> list[np.ndarray]:
