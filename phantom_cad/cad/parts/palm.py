@@ -162,25 +162,24 @@ class Palm(ServoMount, Part):
         below = 1.0 + t["journal_r"] * math.sqrt(max(1.0 - az * az, 0.0)) / az
         journal = cylinder((0.0, 0.0, t["face"] - below), (0.0, 0.0, q - h + 0.5), t["journal_r"])
         cavity = cylinder((0.0, 0.0, q - h), (0.0, 0.0, q + h), R)
+        def swept(v: np.ndarray, length: float):
+            """The cavity swept ``length`` along the unit vector v of the pulley's plane."""
+            M = np.eye(4)
+            M[:3, 0], M[:3, 1], M[:3, 2], M[:3, 3] = v, np.cross([0.0, 0.0, 1.0], v), (0.0, 0.0, 1.0), (0.0, 0.0, q)
+            return transform(box(0.0, length, -R, R, -h, h), M)
+
         # the slot: the cavity swept toward servo 6 (in the pulley's plane, servo 6's pulley lies in
         # it) out of the palm
         phi = F.cmc_loop_direction(self.params) + math.pi
-        v = np.array([math.cos(phi), math.sin(phi), 0.0])
-        M = np.eye(4)
-        M[:3, 0], M[:3, 1], M[:3, 2], M[:3, 3] = v, np.cross([0.0, 0.0, 1.0], v), (0.0, 0.0, 1.0), (0.0, 0.0, q)
-        slot = transform(box(0.0, 4.0 * R + 60.0, -R, R, -h, h), M)
-        tools = [journal, cavity, slot]
+        tools = [journal, cavity, swept(np.array([math.cos(phi), math.sin(phi), 0.0]), 4.0 * R + 60.0)]
         # the back: the cavity reaches the palm's back face (frames.palm_back is its back), so it
         # is swept on out through that face, in the pulley's plane (a cylinder tangent to the face,
         # or one sampled a hair inside it, left a skin of 0 to 0.55 mm)
         back = -T0[1, :3]                       # the palm's -y in the CMC base frame
         n = math.hypot(back[0], back[1])
         if n > 1e-6:
-            w = np.array([back[0] / n, back[1] / n, 0.0])
             depth = ((T0 @ np.array([0.0, 0.0, q, 1.0]))[1] - mm(F.palm_back(self.params)) + 2.0 * (R + h)) / n
-            M = np.eye(4)
-            M[:3, 0], M[:3, 1], M[:3, 2], M[:3, 3] = w, np.cross([0.0, 0.0, 1.0], w), (0.0, 0.0, 1.0), (0.0, 0.0, q)
-            tools.append(transform(box(0.0, depth, -R, R, -h, h), M))
+            tools.append(swept(np.array([back[0] / n, back[1] / n, 0.0]), depth))
         return tools
 
     def limiter_polygon(self, finger: str) -> list[tuple[float, float]]:
