@@ -1,8 +1,8 @@
 """Pictures of the assembled hand (docs/parts.md, README, docs/assembly.md, docs/opposition.md): the default
 hand's built solids placed by ``assembly.pose_transforms`` at rest (two views), at 60 % of every joint limit,
 in the power grasp (every tendon servo at the end of its travel, the CMC at rest) with each fingertip's
-distance to the palm measured on the solids, at the thumb's closest approach to the index, middle and ring
-pads (``kinematics.opposition.reach`` of the file's thumb), and exploded (each part moved off the one it
+distance to the palm measured on the solids, where the thumb's pad comes within 1 mm of the index, middle
+and ring pads on the solids (``cad.pinch.solid_contact``), and exploded (each part moved off the one it
 mounts on, along the way it goes on). Run from the repository's root:
 .venv/bin/python bench/hand_figures.py [OUT_DIR]   (default docs/img; about a minute)
 """
@@ -10,15 +10,16 @@ mounts on, along the way it goes on). Run from the repository's root:
 from __future__ import annotations
 
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from phantom_cad import make_hand
-from phantom_cad.cad import assembly, measure, registry
+from phantom_cad.cad import assembly, measure, pinch, registry
 from phantom_cad.export import render, step_stl
 from phantom_cad.kinematics import frames, opposition
-from phantom_cad.kinematics.topology import FINGERS, JOINTS, N_SERVOS, SERVOS, chain, digit_links, link
+from phantom_cad.kinematics.topology import FINGERS, JOINTS, SERVOS, digit_links, link
 from phantom_cad.params.io import DEFAULT_PARAMS, load_params
 
 
@@ -109,31 +110,62 @@ def postures(p, meshes, solids, out: Path) -> None:
                       + "; target 10 mm (docs/parts.md, known gaps)",
                       elev=5.0, azim=0.0, size_px=1000)
     print(f"wrote {out / 'hand_power.png'}")
-    # opposition: the file's thumb where its pad meets each opposed fingertip's most squarely (the
-    # capsules of kinematics.opposition over the thumb's (u1, u6) grid and the finger's travel: the
-    # pairs in contact, the smallest facing angle), or at its closest where the pads never meet
-    thumb = opposition.thumb_tips(h).placed(frames.thumb_cmc_placement(p.palm.thumb_cmc_offset,
-                                                                        p.palm.thumb_cmc_axis))
+    # opposition: the commands where the thumb's pad comes within 1 mm of each opposed fingertip's pad on
+    # the solids (cad.pinch.solid_contact: the model's contacts, squarest first, the finger flexed onto
+    # the still thumb), seen square to the line between the closest points, whole and close up
     for f in opposition.OPPOSED:
-        ft = opposition.finger_tips(h, f)
-        gap, angle = opposition.contacts(thumb, ft)
-        band = (gap <= 0.0) & (gap >= -opposition.CONTACT_BAND)
-        pick = np.where(band, angle, np.inf) if band.any() else gap
-        i, j = np.unravel_index(int(np.argmin(pick)), gap.shape)
-        u = np.zeros(N_SERVOS)
-        u[chain("thumb").servo], u[cmc], u[chain(f).servo] = thumb.u[i][0], thumb.u[i][1], ft.u[j, 0]
-        T = assembly.pose_transforms(p, h.forward(u, compensated=True))
-        a = measure.placed(solids["thumb_distal"], T["thumb_distal"])
-        b = measure.placed(solids[f"{f}_distal"], T[f"{f}_distal"])
+        c = pinch.solid_contact(h, solids, f)
+        if c is None:
+            sys.exit(f"error: the thumb's pad does not reach the {f}'s on the solids (cad.pinch)")
+        T = assembly.pose_transforms(p, h.forward(c.u, compensated=True))
+        elev, azim = _square_to(c, T)
         fname = f"hand_opposition_{f}.png"
-        render.render_png(_items(meshes, T), out / fname,
-                          title=f"{p.name} hand ({p.side}): the thumb's pad on the {f} pad",
-                          subtitle=f"thumb and {f} distal phalanges {a.distance_to(b):.1f} mm apart on the solids, "
-                          "at the commands where the pads meet most "
-                          "squarely (docs/opposition.md)",
-                          elev=-30.0, azim=-150.0, size_px=1000)
-        print(f"wrote {out / fname}")
+        cmd = ", ".join(f"{x:.1f}" for x in np.degrees(c.u))
+        with tempfile.TemporaryDirectory() as tmp:
+            whole, near = Path(tmp) / "whole.png", Path(tmp) / "near.png"
+            hand_only = {n: m for n, m in meshes.items() if n != "forearm" and not n.startswith("servo_pulley_")}
+            render.render_png(_tips_labelled(hand_only, T, ("thumb", f)), whole,
+                              title=f"{p.name} hand ({p.side}): the thumb's pad on the {f} pad",
+                              subtitle=f"servo commands {cmd} deg (u1..u6), seen square to the contact; "
+                              "the forearm module left out",
+                              elev=elev, azim=azim, size_px=800)
+            close = {n: m for n, m in meshes.items() if n in (f"{f}_distal", f"{f}_middle", "thumb_distal")}
+            render.render_png(_tips_labelled(close, T, ("thumb", f)), near,
+                              title="close up: the two fingertips",
+                              subtitle=f"{c.distance_mm:.2f} mm apart on the solids (OpenCascade), pad to pad",
+                              elev=elev, azim=azim, size_px=800)
+            _side_by_side(whole, near, out / fname)
+        print(f"wrote {out / fname}: {c.distance_mm:.3f} mm at {cmd} deg")
 
+
+def _tips_labelled(meshes, T, digits):
+    """The meshes placed by ``T``, the distal phalanges of ``digits`` labelled with their digit."""
+    return [render.MeshItem(name, v @ T[name][:3, :3].T + T[name][:3, 3], f, tuple(color),
+                            digit if digit in digits and name == f"{digit}_distal" else None)
+            for name, (v, f, color, digit) in meshes.items()]
+
+
+def _square_to(c, T) -> tuple[float, float]:
+    """(elev, azim) deg of a view square to the contact's line (thumb point to finger point), from
+    the palmar, radial and distal side as far as that allows: the gap shows as a sliver between
+    the two tips, the other fingers behind them."""
+    n = c.finger_point - c.thumb_point
+    n = n / np.linalg.norm(n)
+    radial = np.sign(T["thumb_cmc_base"][0, 3] - T["middle_base"][0, 3])
+    want = np.array([radial, 0.4, -1.0])
+    v = want - (want @ n) * n
+    v = v / np.linalg.norm(v)
+    return float(np.degrees(np.arcsin(v[2]))), float(np.degrees(np.arctan2(v[1], v[0])))
+
+
+def _side_by_side(left: Path, right: Path, out: Path) -> None:
+    from PIL import Image
+
+    a, b = Image.open(left), Image.open(right)
+    both = Image.new("RGB", (a.width + b.width, max(a.height, b.height)), "white")
+    both.paste(a.convert("RGB"), (0, 0))
+    both.paste(b.convert("RGB"), (a.width, 0))
+    both.save(out, optimize=True)
 
 if __name__ == "__main__":
     main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).resolve().parents[1] / "docs" / "img")
