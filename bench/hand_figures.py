@@ -1,8 +1,9 @@
 """Pictures of the assembled hand (docs/parts.md, README, docs/assembly.md, docs/opposition.md): the default
 hand's built solids placed by ``assembly.pose_transforms`` at rest (two views), at 60 % of every joint limit,
 in the power grasp (every tendon servo at the end of its travel, the CMC at rest) with each fingertip's
-distance to the palm measured on the solids, where the thumb's pad comes within 1 mm of the index, middle
-and ring pads on the solids (``cad.pinch.solid_contact``), and exploded (each part moved off the one it
+distance to the palm measured on the solids, closed on a 35 mm cylinder across the palm
+(``cad.grasp.power_grasp``), where the thumb's pad comes within 1 mm of the index, middle
+and ring pads on the solids (``cad.grasp.solid_contact``), and exploded (each part moved off the one it
 mounts on, along the way it goes on). Run from the repository's root:
 .venv/bin/python bench/hand_figures.py [OUT_DIR]   (default docs/img; about a minute)
 """
@@ -16,13 +17,15 @@ from pathlib import Path
 import numpy as np
 
 from phantom_cad import make_hand
-from phantom_cad.cad import assembly, measure, pinch, registry
+from phantom_cad.cad import assembly, grasp, measure, registry
 from phantom_cad.export import render, step_stl
 from phantom_cad.kinematics import frames, opposition
 from phantom_cad.kinematics.topology import FINGERS, JOINTS, SERVOS, digit_links, link
 from phantom_cad.params.io import DEFAULT_PARAMS, load_params
 
 
+#: issue 12's power grasp: a cylinder of this diameter (mm) across the palm
+CYLINDER_MM = 35.0
 #: how far (mm) each level of an exploded digit moves along the digit, the forearm module back from the
 #: wrist, the servo pulleys up off their servos
 EXPLODE_DIGIT, EXPLODE_FOREARM, EXPLODE_PULLEY = 28.0, 45.0, 28.0
@@ -110,13 +113,36 @@ def postures(p, meshes, solids, out: Path) -> None:
                       + "; target 10 mm (docs/parts.md, known gaps)",
                       elev=5.0, azim=0.0, size_px=1000)
     print(f"wrote {out / 'hand_power.png'}")
+    # power grasp on issue 12's 35 mm cylinder across the palm (cad.grasp.power_grasp: the first position
+    # from the palm's distal edge where every finger touches it past its equator, the thumb out of the way)
+    g, _ = grasp.power_grasp(h, solids, CYLINDER_MM)
+    if g is None:
+        sys.exit(f"error: no position across the palm where the four fingers enclose a {CYLINDER_MM} mm cylinder")
+    T = assembly.pose_transforms(p, h.forward(g.u, compensated=True))
+    cv, cf = step_stl.tessellate(g.solid(), 0.05)
+    hand_only = {n: m for n, m in meshes.items() if n != "forearm" and not n.startswith("servo_pulley_")}
+    cylinder = render.MeshItem("cylinder", cv, cf, (0.85, 0.85, 0.80), f"{CYLINDER_MM:g} mm cylinder")
+    wraps = ", ".join(f"{f} {c.wrap_deg:.0f}" for f, c in g.fingers.items())
+    fname = "hand_power_cylinder.png"
+    with tempfile.TemporaryDirectory() as tmp:
+        views = []
+        for i, (elev, azim, what) in enumerate(((5.0, 0.0, "seen from the ulnar side"),
+                                                (-35.0, 45.0, "seen from the palm's distal, ulnar side"))):
+            views.append(Path(tmp) / f"{i}.png")
+            render.render_png(_tips_labelled(hand_only, T, FINGERS) + [cylinder], views[-1],
+                              title=f"{p.name} hand ({p.side}): power grasp on a {CYLINDER_MM:g} mm cylinder, {what}",
+                              subtitle=f"each finger flexed until 1 mm from it (commands {', '.join(f'{x:.0f}' for x in np.degrees(g.u))} deg); "
+                              f"wrap (deg, 90 = its distal side): {wraps}",
+                              elev=elev, azim=azim, size_px=800)
+        _side_by_side(views[0], views[1], out / fname)
+    print(f"wrote {out / fname}: axis at y {g.axis_y_mm:.1f} mm, wraps {wraps}")
     # opposition: the commands where the thumb's pad comes within 1 mm of each opposed fingertip's pad on
-    # the solids (cad.pinch.solid_contact: the model's contacts, squarest first, the finger flexed onto
+    # the solids (cad.grasp.solid_contact: the model's contacts, squarest first, the finger flexed onto
     # the still thumb), seen square to the line between the closest points, whole and close up
     for f in opposition.OPPOSED:
-        c = pinch.solid_contact(h, solids, f)
+        c = grasp.solid_contact(h, solids, f)
         if c is None:
-            sys.exit(f"error: the thumb's pad does not reach the {f}'s on the solids (cad.pinch)")
+            sys.exit(f"error: the thumb's pad does not reach the {f}'s on the solids (cad.grasp)")
         T = assembly.pose_transforms(p, h.forward(c.u, compensated=True))
         elev, azim = _square_to(c, T)
         fname = f"hand_opposition_{f}.png"

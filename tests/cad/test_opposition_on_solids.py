@@ -2,7 +2,7 @@
 (surface distance <= 1 mm, no interpenetration) at servo commands within the travel; default
 hand, left hand and the 170 mm hand (params/examples/small.toml).
 
-``cad.pinch.solid_contact`` finds the commands: of the kinematic model's contacts (squarest first,
+``cad.grasp.solid_contact`` finds the commands: of the kinematic model's contacts (squarest first,
 at most eight distinct thumb commands), the first where the finger, flexing from rest onto the
 still thumb, comes within (0, 1] mm of it with the closest points on both pads. What it returns is
 measured again here, each with a tool of its own: the commands within the travel (the hand's
@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from phantom_cad import make_hand
-from phantom_cad.cad import assembly, pinch
+from phantom_cad.cad import assembly, grasp
 from phantom_cad.cad import measure as check
 from phantom_cad.export.interference import interference, may_touch
 from phantom_cad.kinematics import opposition
@@ -58,7 +58,7 @@ def _in_link(T, point) -> np.ndarray:
 def test_the_thumb_pad_reaches_the_fingertip_pad(hand, finger):
     kind, p, shapes, meshes, allowed = hand
     h = make_hand(p)
-    c = pinch.solid_contact(h, shapes, finger, reach_mm=REACH_MM)
+    c = grasp.solid_contact(h, shapes, finger, reach_mm=REACH_MM)
     assert c is not None, f"{kind}: the thumb's pad does not reach the {finger}'s on the solids"
     assert np.all(c.u >= h.u_min - 1e-12) and np.all(c.u <= h.u_max + 1e-12)
     T = assembly.pose_transforms(p, h.forward(c.u, compensated=True))

@@ -1,0 +1,314 @@
+"""Grasps measured on the solids: the servo commands at which the built parts close onto what they
+hold, with OpenCascade's distances (docs/opposition.md, docs/parts.md "Power grasp").
+
+Both grasps close a digit from rest onto something that holds still, by a bisection on the digit's
+command (``close_onto``): the solids' distance must end in (0, reach] mm (0 is touching or
+overlapping: OpenCascade cannot tell the two apart, so it is never accepted).
+
+**Pinch** (``solid_contact``). The kinematic model (``kinematics.opposition``) finds where the
+fingertips' capsules meet; the capsules lie inside the printed tips, so there the solids touch or
+overlap. For each of the model's contacts (``model_contacts``: squarest first, one per distinct
+thumb command), the thumb holds still and the finger flexes onto it from rest. The first contact
+whose closest points lie on both pads (``on_pad``) is returned.
+
+**Power grasp** (``cylinder_grasp``, ``power_grasp``). A cylinder lies across the palm, its axis
+along the knuckle line (the palm frame's x), resting on the palm's palmar face (``PALM_GAP_MM``
+off it) and spanning the finger bases; each finger flexes from rest until one of its phalanges comes
+within reach of it; the thumb turns out of the way (the first command pair of a grid over its CMC's
+and its IP/MP's travel where its parts clear the cylinder and the closed fingers). The cylinder is *enclosed* when
+every finger touches it before the end of its travel at a point past its equator: the *wrap angle*,
+about the axis from the palm's contact line (0 deg) toward the fingertips, is over 90 deg, so each
+finger presses it toward the palm.
+
+Used by ``bench/hand_figures.py`` (the opposition and power-grasp pictures are drawn at these
+commands) and by tests/cad/test_opposition_on_solids.py and tests/cad/test_power_grasp.py, which
+re-measure what they return with other tools.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..kinematics import frames, opposition
+from ..kinematics.topology import CMC_SERVO, N_SERVOS, THUMB_CHAIN, chain, digit_links
+from .assembly import pose_transforms
+from .measure import placed
+
+#: the surface distance (mm) a grasp's contacts must come within (issue 12)
+REACH_MM = 1.0
+#: how many of the model's contacts (distinct thumb commands, squarest first) are tried
+CANDIDATES = 8
+#: bisection steps on the finger's command (2^-40 of its travel)
+STEPS = 40
+#: how far (mm) the power grasp's cylinder lies off the palm's palmar face: in contact, within reach
+PALM_GAP_MM = 0.5
+#: the thumb's CMC and IP/MP commands tried (evenly over each travel) to turn it out of the way of the
+#: power grasp's cylinder and the closed fingers
+THUMB_CMC_STEPS, THUMB_FLEX_STEPS = 21, 5
+
+
+def close_onto(distance_at, reach_mm: float = REACH_MM):
+    """Bisection on a command fraction s in [0, 1] (0 the digit at rest, 1 at the end of the move)
+    for a distance in (0, reach_mm]: ``distance_at(s)`` returns (distance mm, anything); the result
+    is (s, that tuple) or None when the digit is already within reach at rest, never gets within
+    reach at s = 1, or the bisection ends without a distance in the band."""
+    first = distance_at(0.0)
+    if first[0] <= reach_mm:
+        return None
+    last = distance_at(1.0)
+    if last[0] > reach_mm:
+        return None
+    lo, hi = 0.0, 1.0
+    for _ in range(STEPS):
+        s = 0.5 * (lo + hi)
+        r = distance_at(s)
+        if r[0] > reach_mm:
+            lo = s
+        elif r[0] <= 0.0:
+            hi = s
+        else:
+            return s, r
+    return None
+
+
+@dataclass(frozen=True)
+class SolidContact:
+    """A measured pinch: the commands (rad, one per servo), the solids' distance there (mm) and
+    the closest points (hand frame, mm) on the thumb's and the finger's distal phalanges."""
+    finger: str
+    u: np.ndarray
+    distance_mm: float
+    thumb_point: np.ndarray
+    finger_point: np.ndarray
+    tried: tuple[str, ...]       # the model contacts tried before it (why each was passed over)
+
+
+def model_contacts(hand, finger: str, n: int = CANDIDATES) -> list[np.ndarray]:
+    """The model's command vectors where the thumb's tip meets the finger's (capsules overlapping
+    by at most ``opposition.CONTACT_BAND``), squarest first (the facing angle), one per distinct
+    thumb command, at most n."""
+    p = hand.params
+    T0 = frames.thumb_cmc_placement(p.palm.thumb_cmc_offset, p.palm.thumb_cmc_axis)
+    thumb = opposition.thumb_tips(hand).placed(T0)
+    tips = opposition.finger_tips(hand, finger)
+    gap, angle = opposition.contacts(thumb, tips)
+    ok = (gap <= 0.0) & (gap >= -opposition.CONTACT_BAND)
+    out, seen = [], set()
+    for flat in np.argsort(np.where(ok, angle, np.inf), axis=None, kind="stable"):
+        i, j = np.unravel_index(int(flat), gap.shape)
+        if not ok[i, j] or len(out) == n:
+            break
+        if i in seen:
+            continue
+        seen.add(i)
+        u = np.zeros(N_SERVOS)
+        u[THUMB_CHAIN.servo], u[CMC_SERVO] = thumb.u[i]
+        u[chain(finger).servo] = tips.u[j, 0]
+        out.append(u)
+    return out
+
+
+def on_pad(params, T_hand_link: np.ndarray, digit: str, point) -> bool:
+    """Whether a point (hand frame, mm) of a digit's distal phalanx lies on its pad: in the link's
+    frame on its palmar half (z <= 0) and its distal half (y >= L / 2, ``frames.fingertip``)."""
+    x = np.linalg.solve(T_hand_link, np.r_[np.asarray(point, float), 1.0])[:3] * 1e-3
+    return bool(x[2] <= 0.0 and x[1] >= frames.fingertip(params, digit)[0] / 2.0)
+
+
+def _distal(digit: str) -> str:
+    return digit_links(digit)[-1].name
+
+
+def solid_contact(hand, solids: dict, finger: str, reach_mm: float = REACH_MM,
+                  n: int = CANDIDATES) -> SolidContact | None:
+    """The first of the model's contacts (``model_contacts``) at which the finger, flexing from rest
+    onto the still thumb, brings the two distal phalanges within (0, reach_mm] mm of each other with
+    the closest points on both pads; None when none of the n does. ``solids``: the built parts in
+    their link frames (mm), at least the two distal phalanges."""
+    p = hand.params
+    a_name, b_name = _distal(THUMB_CHAIN.digit), _distal(finger)
+    k = chain(finger).servo
+    tried: list[str] = []
+    for u_end in model_contacts(hand, finger, n):
+        def measure(s: float):
+            u = u_end.copy()
+            u[k] = s * u_end[k]
+            T = pose_transforms(p, hand.forward(u, compensated=True))
+            a, b = placed(solids[a_name], T[a_name]), placed(solids[b_name], T[b_name])
+            d, pa, pb = a.distance_to_with_closest_points(b)
+            return d, u, T, np.array(tuple(pa)), np.array(tuple(pb))
+
+        where = f"{np.degrees(u_end).round(2).tolist()} deg"
+        found = close_onto(measure, reach_mm)
+        if found is None:
+            tried.append(f"{where}: not within (0, {reach_mm}] mm from rest to the contact, or already at rest")
+            continue
+        _, (d, u, T, pa, pb) = found
+        if not (on_pad(p, T[a_name], THUMB_CHAIN.digit, pa) and on_pad(p, T[b_name], finger, pb)):
+            tried.append(f"{where}: {d:.3f} mm apart, not pad to pad")
+            continue
+        return SolidContact(finger, u, float(d), pa, pb, tuple(tried))
+    return None
+
+
+# ---------------------------------------------------------------------------
+# power grasp: a cylinder across the palm
+
+@dataclass(frozen=True)
+class FingerOnCylinder:
+    """Where a finger, flexing from rest, first comes within reach of the cylinder: its command as
+    a fraction of its travel, the distance (mm), the phalanx and point (hand frame, mm) closest to
+    the cylinder, and the wrap angle (deg) of that point about the cylinder's axis."""
+    finger: str
+    fraction: float
+    distance_mm: float
+    link: str
+    point: np.ndarray
+    wrap_deg: float
+
+
+@dataclass(frozen=True)
+class CylinderGrasp:
+    """A cylinder across the palm (axis along the palm frame's x at (axis_y_mm, axis_z_mm), from
+    x_mm[0] to x_mm[1]) and how the hand closes on it: the commands ``u`` (rad; each finger at its
+    contact, or at the end of its travel where it has none; the thumb out of the way), the palm's
+    distance to it, each finger's contact (None: it never comes within reach, or already is at
+    rest) and the thumb's distance at ``u`` from the cylinder and the closed fingers (None: no
+    command on the thumb's grid clears them, or the fingers do not enclose the cylinder, where the
+    thumb is not tried)."""
+    diameter_mm: float
+    axis_y_mm: float
+    axis_z_mm: float
+    x_mm: tuple[float, float]
+    u: np.ndarray
+    palm_mm: float
+    fingers: dict
+    thumb_mm: float | None
+
+    @property
+    def enclosed(self) -> bool:
+        """Every finger touches the cylinder past its equator (wrap over 90 deg), the thumb clears
+        it."""
+        return self.thumb_mm is not None and all(c is not None and c.wrap_deg > 90.0
+                                                 for c in self.fingers.values())
+
+    def solid(self):
+        """The cylinder as a build123d solid (hand frame, mm)."""
+        return cylinder_solid(self.diameter_mm, self.axis_y_mm, self.axis_z_mm, self.x_mm)
+
+
+def cylinder_solid(diameter_mm: float, axis_y_mm: float, axis_z_mm: float, x_mm: tuple[float, float]):
+    """A cylinder of ``diameter_mm`` whose axis runs along the hand frame's x from x_mm[0] to
+    x_mm[1] at (y, z) = (axis_y_mm, axis_z_mm)."""
+    from .parts.common import bd
+
+    b = bd()
+    length = x_mm[1] - x_mm[0]
+    return b.Pos(0.5 * (x_mm[0] + x_mm[1]), axis_y_mm, axis_z_mm) * b.Rot(0, 90, 0) * b.Cylinder(
+        diameter_mm / 2.0, length)
+
+
+def wrap_angle_deg(point, axis_y_mm: float, axis_z_mm: float, palmar_sign: float = -1.0) -> float:
+    """The angle (deg, 0-360) of a point about the cylinder's axis, from the palm's contact line
+    (the direction toward the palm, ``-palmar_sign`` z) toward the fingertips (+y): 90 is the
+    cylinder's distal side, 180 its palmar side, under it."""
+    dy = float(point[1]) - axis_y_mm
+    dz = (float(point[2]) - axis_z_mm) * -palmar_sign
+    return float(np.degrees(np.arctan2(dy, dz)) % 360.0)
+
+
+def _finger_links(finger: str) -> list[str]:
+    """The links that move when the finger flexes (every one but its base)."""
+    return [ln.name for ln in digit_links(finger)[1:]]
+
+
+def cylinder_grasp(hand, solids: dict, diameter_mm: float, axis_y_mm: float,
+                   reach_mm: float = REACH_MM) -> CylinderGrasp:
+    """Close the hand on a cylinder of ``diameter_mm`` across the palm at ``axis_y_mm`` (palm frame):
+    it rests on the palm's palmar face (``PALM_GAP_MM`` off it, measured on the palm solid: its
+    lowest z) and spans the finger bases (their solids' x extent, at rest). ``solids``: every part
+    in its link frame (mm): the palm, the finger and thumb parts."""
+    from ..kinematics.topology import FINGERS
+    from .parts.common import bd
+
+    p = hand.params
+    T0 = pose_transforms(p)
+    palm = placed(solids["palm"], T0["palm"])
+    palm_box = palm.bounding_box()
+    R = diameter_mm / 2.0
+    z = palm_box.min.Z - PALM_GAP_MM - R
+    boxes = [placed(solids[ln.name], T0[ln.name]).bounding_box() for f in FINGERS for ln in digit_links(f)[:1]]
+    x = (min(bb.min.X for bb in boxes), max(bb.max.X for bb in boxes))
+    cyl = cylinder_solid(diameter_mm, axis_y_mm, z, x)
+    lo = np.asarray(hand.u_min, float)
+    span = np.asarray(hand.u_max, float) - lo
+    u = lo.copy()
+    fingers = {}
+    for f in FINGERS:
+        k, links = chain(f).servo, _finger_links(f)
+
+        def measure(s: float):
+            v = u.copy()
+            v[k] = lo[k] + s * span[k]
+            T = pose_transforms(p, hand.forward(v, compensated=True))
+            best = None
+            for n in links:
+                d, pa, _ = placed(solids[n], T[n]).distance_to_with_closest_points(cyl)
+                if best is None or d < best[0]:
+                    best = (d, n, np.array(tuple(pa)))
+            return best
+
+        found = close_onto(measure, reach_mm)
+        if found is None:
+            fingers[f] = None
+            u[k] = lo[k] + span[k]
+            continue
+        s, (d, n, point) = found
+        u[k] = lo[k] + s * span[k]
+        fingers[f] = FingerOnCylinder(f, float(s), float(d), n, point, wrap_angle_deg(point, axis_y_mm, z))
+    # the thumb out of the way of the cylinder and of the closed fingers (where the fingers enclose
+    # it: elsewhere the grasp fails anyway): the first command pair, the CMC's grid outermost, the
+    # IP/MP's inner, where the thumb's parts clear the cylinder, then the fingers
+    thumb_mm = None
+    if all(c is not None and c.wrap_deg > 90.0 for c in fingers.values()):
+        T = pose_transforms(p, hand.forward(u, compensated=True))
+        closed = bd().Compound(children=[placed(solids[n], T[n]) for f in FINGERS for n in _finger_links(f)])
+        thumb_links = [ln.name for ln in digit_links(THUMB_CHAIN.digit)]
+        k1 = THUMB_CHAIN.servo
+        for s6 in np.linspace(0.0, 1.0, THUMB_CMC_STEPS):
+            for s1 in np.linspace(0.0, 1.0, THUMB_FLEX_STEPS):
+                u[CMC_SERVO] = lo[CMC_SERVO] + s6 * span[CMC_SERVO]
+                u[k1] = lo[k1] + s1 * span[k1]
+                T = pose_transforms(p, hand.forward(u, compensated=True))
+                thumb = [placed(solids[n], T[n]) for n in thumb_links]
+                d = min(t.distance_to(cyl) for t in thumb)
+                if d > 0.0:
+                    d = min(d, min(t.distance_to(closed) for t in thumb))
+                if d > 0.0:
+                    thumb_mm = float(d)
+                    break
+            if thumb_mm is not None:
+                break
+    return CylinderGrasp(float(diameter_mm), float(axis_y_mm), float(z), (float(x[0]), float(x[1])), u.copy(),
+                         float(palm.distance_to(cyl)), fingers, thumb_mm)
+
+
+def power_grasp(hand, solids: dict, diameter_mm: float, step_mm: float = 5.0,
+                reach_mm: float = REACH_MM) -> tuple[CylinderGrasp | None, list[CylinderGrasp]]:
+    """The cylinder of ``diameter_mm`` tried across the palm from its distal edge (the axis over the
+    palm solid's most distal point) toward the wrist in ``step_mm`` steps, as long as the axis lies
+    over the palm: (the first position that is enclosed or None, every grasp tried)."""
+    p = hand.params
+    T0 = pose_transforms(p)
+    box = placed(solids["palm"], T0["palm"]).bounding_box()
+    tried = []
+    y = box.max.Y
+    while y >= box.min.Y:
+        g = cylinder_grasp(hand, solids, diameter_mm, y, reach_mm)
+        tried.append(g)
+        if g.enclosed:
+            return g, tried
+        y -= step_mm
+    return None, tried

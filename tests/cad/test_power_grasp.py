@@ -1,0 +1,109 @@
+"""Issue 12, power grasp: a 35 mm cylinder across the palm is enclosed by all four fingers; default
+hand, left hand and the 170 mm hand (params/examples/small.toml).
+
+``cad.grasp.power_grasp`` lays the cylinder on the palm's palmar face, axis along the knuckle line,
+from the palm's distal edge toward the wrist in 5 mm steps, turns the thumb out of its way and
+flexes each finger from rest until it comes within 1 mm of it; it returns the first position where
+every finger touches the cylinder past its equator. What it returns is measured again here, each
+with a tool of its own: the cylinder rebuilt from the palm's and the finger bases' measured
+extents; the commands within the travel; OpenCascade's distances from the palm and from each
+finger's phalanges to it, in (0, 1] mm; the wrap angle of each finger's closest point about the
+cylinder's axis, from the point's coordinates, over 90 deg (the finger presses it toward the
+palm); and manifold3d: no part of the hand overlaps the cylinder (a 256-sided prism of its own),
+and no two parts of the hand interpenetrate (a joint's parent and child and the designed contacts
+may touch).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from phantom_cad import make_hand
+from phantom_cad.cad import assembly, grasp
+from phantom_cad.cad import measure as check
+from phantom_cad.export.interference import interference, may_touch
+from phantom_cad.kinematics.topology import FINGERS
+
+from tests.cad.conftest import HANDS
+
+#: issue 12: the cylinder across the palm (mm), and the distance its contacts must come within
+DIAMETER_MM = 35.0
+REACH_MM = 1.0
+#: manifold3d's overlap (mm^3) that counts as interpenetration: the command sweep's bar
+OVERLAP_MM3 = 0.01
+
+
+@pytest.fixture(scope="module", params=HANDS)
+def hand(request, hand_parts, hand_meshes):
+    p, shapes = hand_parts(request.param)
+    h = make_hand(p)
+    g, tried = grasp.power_grasp(h, shapes, DIAMETER_MM)
+    return request.param, p, h, shapes, hand_meshes(request.param), g, tried
+
+
+def _cylinder(p, shapes, y: float):
+    """The test's own cylinder: build123d's Cylinder along x, on the palm's lowest face less half a
+    millimetre, over the finger bases' x extent at rest (their solids' boxes)."""
+    from build123d import Cylinder, Pos, Rot
+
+    T0 = assembly.pose_transforms(p)
+    z = check.placed(shapes["palm"], T0["palm"]).bounding_box().min.Z - 0.5 - DIAMETER_MM / 2
+    boxes = [check.placed(shapes[f"{f}_base"], T0[f"{f}_base"]).bounding_box() for f in FINGERS]
+    x0, x1 = min(b.min.X for b in boxes), max(b.max.X for b in boxes)
+    return Pos((x0 + x1) / 2, y, z) * Rot(0, 90, 0) * Cylinder(DIAMETER_MM / 2, x1 - x0), z, (x0, x1)
+
+
+def test_the_cylinder_is_found(hand):
+    kind, p, h, shapes, meshes, g, tried = hand
+    report = [(round(t.axis_y_mm, 1), {f: c and round(c.wrap_deg) for f, c in t.fingers.items()}) for t in tried]
+    assert g is not None, f"{kind}: no position across the palm where all four fingers enclose it: {report}"
+    cyl, z, x = _cylinder(p, shapes, g.axis_y_mm)
+    assert g.axis_z_mm == pytest.approx(z, abs=1e-9) and g.x_mm == pytest.approx(x, abs=1e-9)
+    assert abs(g.solid().volume - cyl.volume) < 1e-6 * cyl.volume
+    # the cylinder's volume by hand: pi r^2 l
+    assert cyl.volume == pytest.approx(math.pi * (DIAMETER_MM / 2) ** 2 * (x[1] - x[0]), rel=1e-6)
+
+
+def test_every_finger_wraps_the_cylinder(hand):
+    kind, p, h, shapes, meshes, g, tried = hand
+    assert g is not None
+    assert np.all(g.u >= h.u_min - 1e-12) and np.all(g.u <= h.u_max + 1e-12)
+    cyl, z, _ = _cylinder(p, shapes, g.axis_y_mm)
+    T = assembly.pose_transforms(p, h.forward(g.u, compensated=True))
+    palm = check.placed(shapes["palm"], T["palm"]).distance_to(cyl)
+    assert 0.0 < palm <= REACH_MM
+    for f in FINGERS:
+        d, point = min(((*check.placed(shapes[n], T[n]).distance_to_with_closest_points(cyl)[:2],)
+                        for n in (f"{f}_proximal", f"{f}_middle", f"{f}_distal")), key=lambda r: r[0])
+        assert 0.0 < d <= REACH_MM, (kind, f, d)
+        # the angle about the axis from the palm's side (+z) toward the fingertips (+y)
+        wrap = math.degrees(math.atan2(point.Y - g.axis_y_mm, point.Z - z)) % 360.0
+        assert wrap > 90.0, (kind, f, wrap)
+        assert wrap == pytest.approx(g.fingers[f].wrap_deg, abs=1e-6)
+
+
+def test_nothing_interpenetrates_at_the_grasp(hand):
+    import manifold3d
+
+    kind, p, h, shapes, meshes, g, tried = hand
+    assert g is not None
+    T = assembly.pose_transforms(p, h.forward(g.u, compensated=True))
+    r = interference(meshes, T, may_touch(assembly.designed_contacts(p)), tol_mm3=OVERLAP_MM3)
+    assert r["collisions"] == [], (kind, r["collisions"])
+    c = manifold3d.Manifold.cylinder(g.x_mm[1] - g.x_mm[0], DIAMETER_MM / 2, DIAMETER_MM / 2, 256)
+    c = c.rotate((0.0, 90.0, 0.0)).translate((g.x_mm[0], g.axis_y_mm, g.axis_z_mm))
+    lo, hi = np.array(c.bounding_box()[:3]), np.array(c.bounding_box()[3:])
+    assert lo == pytest.approx([g.x_mm[0], g.axis_y_mm - 17.5, g.axis_z_mm - 17.5], abs=1e-3)
+    assert hi == pytest.approx([g.x_mm[1], g.axis_y_mm + 17.5, g.axis_z_mm + 17.5], abs=1e-3)
+    overlaps = {}
+    for n, (v, f) in meshes.items():
+        w = v @ T[n][:3, :3].T + T[n][:3, 3]
+        m = manifold3d.Manifold(manifold3d.Mesh(vert_properties=w.astype(np.float32),
+                                                tri_verts=np.asarray(f, np.uint32)))
+        vol = (m ^ c).volume()
+        if vol > OVERLAP_MM3:
+            overlaps[n] = vol
+    assert overlaps == {}, (kind, overlaps)
