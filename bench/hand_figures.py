@@ -113,11 +113,12 @@ def postures(p, meshes, solids, out: Path) -> None:
                       + "; target 10 mm (docs/parts.md, known gaps)",
                       elev=5.0, azim=0.0, size_px=1000)
     print(f"wrote {out / 'hand_power.png'}")
-    # power grasp on issue 12's 35 mm cylinder across the palm (cad.grasp.power_grasp: the first position
-    # from the palm's distal edge where every finger touches it past its equator, the thumb out of the way)
+    # issue 12's 35 mm cylinder across the palm at first contact (cad.grasp.power_grasp: the first position
+    # from the palm's distal edge where every finger touches it past its equator, the thumb out of the way;
+    # MuJoCo then squeezes it out toward the wrist: docs/parts.md)
     g, _ = grasp.power_grasp(h, solids, CYLINDER_MM)
     if g is None:
-        sys.exit(f"error: no position across the palm where the four fingers enclose a {CYLINDER_MM} mm cylinder")
+        sys.exit(f"error: no position across the palm where the four fingers reach past a {CYLINDER_MM} mm cylinder's equator")
     T = assembly.pose_transforms(p, h.forward(g.u, compensated=True))
     cv, cf = step_stl.tessellate(g.solid(), 0.05)
     hand_only = {n: m for n, m in meshes.items() if n != "forearm" and not n.startswith("servo_pulley_")}
@@ -126,14 +127,16 @@ def postures(p, meshes, solids, out: Path) -> None:
     fname = "hand_power_cylinder.png"
     with tempfile.TemporaryDirectory() as tmp:
         views = []
-        for i, (elev, azim, what) in enumerate(((5.0, 0.0, "seen from the ulnar side"),
-                                                (-35.0, 45.0, "seen from the palm's distal, ulnar side"))):
+        shots = ((5.0, 0.0, "seen from the ulnar side",
+                  f"each finger flexed until 1 mm from it; wrap (deg, 90 = its distal side): {wraps}"),
+                 (-35.0, 45.0, "from the palm's distal, ulnar side",
+                  f"commands {', '.join(f'{x:.0f}' for x in np.degrees(g.u))} deg; pressing on, the fingers squeeze "
+                  "it out toward the wrist (MuJoCo)"))
+        for i, (elev, azim, what, sub) in enumerate(shots):
             views.append(Path(tmp) / f"{i}.png")
             render.render_png(_tips_labelled(hand_only, T, FINGERS) + [cylinder], views[-1],
-                              title=f"{p.name} hand ({p.side}): power grasp on a {CYLINDER_MM:g} mm cylinder, {what}",
-                              subtitle=f"each finger flexed until 1 mm from it (commands {', '.join(f'{x:.0f}' for x in np.degrees(g.u))} deg); "
-                              f"wrap (deg, 90 = its distal side): {wraps}",
-                              elev=elev, azim=azim, size_px=800)
+                              title=f"first contact on a {CYLINDER_MM:g} mm cylinder, {what}",
+                              subtitle=sub, elev=elev, azim=azim, size_px=800)
         _side_by_side(views[0], views[1], out / fname)
     print(f"wrote {out / fname}: axis at y {g.axis_y_mm:.1f} mm, wraps {wraps}")
     # opposition: the commands where the thumb's pad comes within 1 mm of each opposed fingertip's pad on

@@ -15,10 +15,12 @@ whose closest points lie on both pads (``on_pad``) is returned.
 along the knuckle line (the palm frame's x), resting on the palm's palmar face (``PALM_GAP_MM``
 off it) and spanning the finger bases; each finger flexes from rest until one of its phalanges comes
 within reach of it; the thumb turns out of the way (the first command pair of a grid over its CMC's
-and its IP/MP's travel where its parts clear the cylinder and the closed fingers). The cylinder is *enclosed* when
-every finger touches it before the end of its travel at a point past its equator: the *wrap angle*,
-about the axis from the palm's contact line (0 deg) toward the fingertips, is over 90 deg, so each
-finger presses it toward the palm.
+and its IP/MP's travel where its parts clear the cylinder and the closed fingers). The first-contact
+criterion (``CylinderGrasp.past_equator``): every finger touches it before the end of its travel at a
+point past its equator (the *wrap angle*, about the axis from the palm's contact line (0 deg) toward
+the fingertips, over 90 deg), so that at first contact each finger presses it toward the palm.
+Whether the closing hand then holds it is a question of dynamics: tests/export/test_mjcf.py
+simulates it in MuJoCo (it does not: docs/parts.md "Power grasp").
 
 Used by ``bench/hand_figures.py`` (the opposition and power-grasp pictures are drawn at these
 commands) and by tests/cad/test_opposition_on_solids.py and tests/cad/test_power_grasp.py, which
@@ -176,7 +178,7 @@ class CylinderGrasp:
     contact, or at the end of its travel where it has none; the thumb out of the way), the palm's
     distance to it, each finger's contact (None: it never comes within reach, or already is at
     rest) and the thumb's distance at ``u`` from the cylinder and the closed fingers (None: no
-    command on the thumb's grid clears them, or the fingers do not enclose the cylinder, where the
+    command on the thumb's grid clears them, or the fingers do not reach past its equator, where the
     thumb is not tried)."""
     diameter_mm: float
     axis_y_mm: float
@@ -188,9 +190,11 @@ class CylinderGrasp:
     thumb_mm: float | None
 
     @property
-    def enclosed(self) -> bool:
-        """Every finger touches the cylinder past its equator (wrap over 90 deg), the thumb clears
-        it."""
+    def past_equator(self) -> bool:
+        """Every finger touches the cylinder past its equator (wrap over 90 deg: at first contact it
+        presses the cylinder toward the palm), and the thumb clears it. A necessary condition of a
+        power grasp, not a sufficient one: it says nothing of where the cylinder goes as the
+        fingers press on (tests/export/test_mjcf.py simulates that)."""
         return self.thumb_mm is not None and all(c is not None and c.wrap_deg > 90.0
                                                  for c in self.fingers.values())
 
@@ -268,8 +272,8 @@ def cylinder_grasp(hand, solids: dict, diameter_mm: float, axis_y_mm: float,
         s, (d, n, point) = found
         u[k] = lo[k] + s * span[k]
         fingers[f] = FingerOnCylinder(f, float(s), float(d), n, point, wrap_angle_deg(point, axis_y_mm, z))
-    # the thumb out of the way of the cylinder and of the closed fingers (where the fingers enclose
-    # it: elsewhere the grasp fails anyway): the first command pair, the CMC's grid outermost, the
+    # the thumb out of the way of the cylinder and of the closed fingers (where the fingers reach past its
+    # equator: elsewhere the grasp fails anyway): the first command pair, the CMC's grid outermost, the
     # IP/MP's inner, where the thumb's parts clear the cylinder, then the fingers
     thumb_mm = None
     if all(c is not None and c.wrap_deg > 90.0 for c in fingers.values()):
@@ -299,7 +303,8 @@ def power_grasp(hand, solids: dict, diameter_mm: float, step_mm: float = 5.0,
                 reach_mm: float = REACH_MM) -> tuple[CylinderGrasp | None, list[CylinderGrasp]]:
     """The cylinder of ``diameter_mm`` tried across the palm from its distal edge (the axis over the
     palm solid's most distal point) toward the wrist in ``step_mm`` steps, as long as the axis lies
-    over the palm: (the first position that is enclosed or None, every grasp tried)."""
+    over the palm: (the first position where every finger reaches past its equator
+    (``CylinderGrasp.past_equator``) or None, every grasp tried)."""
     p = hand.params
     T0 = pose_transforms(p)
     box = placed(solids["palm"], T0["palm"]).bounding_box()
@@ -308,7 +313,7 @@ def power_grasp(hand, solids: dict, diameter_mm: float, step_mm: float = 5.0,
     while y >= box.min.Y:
         g = cylinder_grasp(hand, solids, diameter_mm, y, reach_mm)
         tried.append(g)
-        if g.enclosed:
+        if g.past_equator:
             return g, tried
         y -= step_mm
     return None, tried

@@ -398,3 +398,86 @@ def test_compiled_mjcf_is_served_from_the_cache_only_when_it_matches(hand_build,
     assert again.built == []
     assert (tmp_path / "again" / "description" / "mjcf" / "phantom.xml").read_bytes() == written
     assert json.loads(entries[0].read_text())["xml"].encode() == written     # the entry was rewritten
+
+
+#: issue 12's power grasp: a cylinder of this diameter (mm) across the palm, and the mass (kg) the
+#: closed hand must hold with the palm facing down
+CYLINDER_MM, CYLINDER_KG = 35.0, 0.1
+
+
+@pytest.fixture(scope="module")
+def cylinder_grasp():
+    """``cad.grasp.power_grasp`` of the default hand on a 35 mm cylinder: where the solids say every
+    finger reaches past its equator, and the thumb's commands that clear it."""
+    from phantom_cad import make_hand
+    from phantom_cad.cad import assembly, grasp
+
+    p = load_params(PARAMS)
+    names = [n for n in assembly.part_names(p) if n != "forearm" and not n.startswith("servo_pulley_")]
+    g, _ = grasp.power_grasp(make_hand(p), {n: assembly.build_part(p, n).shape for n in names}, CYLINDER_MM)
+    assert g is not None
+    return g
+
+
+@pytest.mark.xfail(strict=True, reason="issue 12's power grasp, simulated (default hand, 2026-11-24): closing the "
+                   "fingers on the 35 mm cylinder where the solids say they reach past its equator squeezes it "
+                   "11.3 mm toward the wrist (the fingertips press it up and wristward, the palm only up; nothing "
+                   "stops it on its wrist side) and every finger servo reaches the end of its travel; palm down "
+                   "it falls out (100 g, 278 mm to the floor). The curl is too open: at full travel the fingertips "
+                   "stay 17.6-29.1 mm from the palm (Table I's limits, docs/parts.md)")
+def test_the_closed_hand_holds_a_cylinder_palm_down(pkg, cylinder_grasp):
+    """MuJoCo, contacts on: a free 35 mm cylinder (100 g, solid) where ``cad.grasp`` puts it, the thumb
+    at its commands there (the cylinder's contacts off while the thumb turns, gravity off); then every
+    finger servo commanded to the end of its travel for 2 s; then gravity toward the palm's palmar
+    side (the palm facing down) for 2 s: the cylinder moves less than 5 mm, no warning."""
+    g = cylinder_grasp
+    spec = mujoco.MjSpec.from_file(str(pkg / "mjcf" / "scene.xml"))
+    r, length = CYLINDER_MM / 2e3, (g.x_mm[1] - g.x_mm[0]) / 1e3
+    body = spec.worldbody.add_body(name="cylinder", pos=[(g.x_mm[0] + g.x_mm[1]) / 2e3, g.axis_y_mm / 1e3,
+                                                         g.axis_z_mm / 1e3],
+                                   quat=[math.cos(math.pi / 4), 0.0, math.sin(math.pi / 4), 0.0])   # z -> x
+    body.add_freejoint(name="cylinder")
+    body.add_geom(name="cylinder", type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[r, length / 2, 0.0])
+    # a solid cylinder by hand: I_axis = m r^2 / 2, across it m (3 r^2 + l^2) / 12
+    M = CYLINDER_KG
+    body.mass, body.explicitinertial = M, True
+    body.inertia = [M * (3 * r * r + length * length) / 12] * 2 + [M * r * r / 2]
+    m = spec.compile()
+    d = mujoco.MjData(m)
+    gid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "cylinder")
+    bid = m.geom_bodyid[gid]
+    contype, conaffinity = int(m.geom_contype[gid]), int(m.geom_conaffinity[gid])
+    gravity = m.opt.gravity.copy()
+    assert gravity == pytest.approx([0.0, 0.0, -9.81])          # the palm frame's -z: palmar
+
+    def run(seconds):
+        for _ in range(int(seconds / m.opt.timestep)):
+            mujoco.mj_step(m, d)
+
+    from phantom_cad.kinematics.topology import CMC_SERVO, SERVOS, THUMB_CHAIN, chain
+
+    # the actuators in u order (each drives its servo's joint), as g.u
+    assert [_name(m, mujoco.mjtObj.mjOBJ_JOINT, m.actuator_trnid[a, 0]) for a in range(m.nu)] == [s.name for s in SERVOS]
+    hi = m.actuator_ctrlrange[:, 1]
+    fingers = [chain(f).servo for f in FINGERS]
+    thumb = [THUMB_CHAIN.servo, CMC_SERVO]
+    try:
+        m.geom_contype[gid] = m.geom_conaffinity[gid] = 0
+        m.opt.gravity[:] = 0.0
+        mujoco.mj_resetDataKeyframe(m, d, 0)
+        d.ctrl[:] = 0.0
+        d.ctrl[thumb] = g.u[thumb]
+        run(1.0)
+        start = d.xpos[bid].copy()
+        m.geom_contype[gid], m.geom_conaffinity[gid] = contype, conaffinity
+        d.ctrl[fingers] = hi[fingers]
+        run(2.0)
+        closed = d.xpos[bid].copy()
+        m.opt.gravity[:] = gravity
+        run(2.0)
+        fell = np.linalg.norm(d.xpos[bid] - closed) * 1e3
+        assert [d.warning[i].number for i in range(len(d.warning))] == [0] * len(d.warning)
+        assert fell < 5.0, (f"squeezed {np.linalg.norm(closed - start) * 1e3:.1f} mm while closing, then "
+                            f"moved {fell:.1f} mm palm down; servo torques {d.actuator_force.round(3).tolist()}")
+    finally:
+        m.opt.gravity[:] = gravity
