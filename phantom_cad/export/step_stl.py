@@ -235,7 +235,7 @@ def _mesh(wrapped, tolerance: float, angular_tolerance: float):
     from OCP.StlAPI import StlAPI_Writer
 
     BRepTools.Clean_s(wrapped)   # drop any coarser/finer mesh left by an earlier call
-    BRepMesh_IncrementalMesh(wrapped, tolerance, False, angular_tolerance, False).Perform()
+    BRepMesh_IncrementalMesh(wrapped, tolerance, False, angular_tolerance, False)   # meshes in its constructor
     if _untriangulated(wrapped):
         return None
     writer = StlAPI_Writer()
