@@ -33,8 +33,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import units
 from ..kinematics import frames, opposition
-from ..kinematics.topology import CMC_SERVO, N_SERVOS, THUMB_CHAIN, chain, digit_links
+from ..kinematics.topology import CMC_SERVO, FINGERS, N_SERVOS, THUMB_CHAIN, chain, digit_links
 from .assembly import pose_transforms
 from .measure import placed
 
@@ -115,8 +116,8 @@ def model_contacts(hand, finger: str, n: int = CANDIDATES) -> list[np.ndarray]:
 def on_pad(params, T_hand_link: np.ndarray, digit: str, point) -> bool:
     """Whether a point (hand frame, mm) of a digit's distal phalanx lies on its pad: in the link's
     frame on its palmar half (z <= 0) and its distal half (y >= L / 2, ``frames.fingertip``)."""
-    x = np.linalg.solve(T_hand_link, np.r_[np.asarray(point, float), 1.0])[:3] * 1e-3
-    return bool(x[2] <= 0.0 and x[1] >= frames.fingertip(params, digit)[0] / 2.0)
+    x = np.linalg.solve(T_hand_link, np.r_[np.asarray(point, float), 1.0])[:3]
+    return bool(x[2] <= 0.0 and x[1] >= units.mm(frames.fingertip(params, digit)[0]) / 2.0)
 
 
 def _distal(digit: str) -> str:
@@ -214,13 +215,11 @@ def cylinder_solid(diameter_mm: float, axis_y_mm: float, axis_z_mm: float, x_mm:
         diameter_mm / 2.0, length)
 
 
-def wrap_angle_deg(point, axis_y_mm: float, axis_z_mm: float, palmar_sign: float = -1.0) -> float:
-    """The angle (deg, 0-360) of a point about the cylinder's axis, from the palm's contact line
-    (the direction toward the palm, ``-palmar_sign`` z) toward the fingertips (+y): 90 is the
-    cylinder's distal side, 180 its palmar side, under it."""
-    dy = float(point[1]) - axis_y_mm
-    dz = (float(point[2]) - axis_z_mm) * -palmar_sign
-    return float(np.degrees(np.arctan2(dy, dz)) % 360.0)
+def wrap_angle_deg(point, axis_y_mm: float, axis_z_mm: float) -> float:
+    """The angle (deg, 0-360) of a point (hand frame, mm) about the cylinder's axis, from the palm's
+    contact line (+z, dorsal: toward the palm) toward the fingertips (+y): 90 is the cylinder's
+    distal side, 180 its palmar side, under it."""
+    return float(units.deg(np.arctan2(float(point[1]) - axis_y_mm, float(point[2]) - axis_z_mm)) % 360.0)
 
 
 def _finger_links(finger: str) -> list[str]:
@@ -234,7 +233,6 @@ def cylinder_grasp(hand, solids: dict, diameter_mm: float, axis_y_mm: float,
     it rests on the palm's palmar face (``PALM_GAP_MM`` off it, measured on the palm solid: its
     lowest z) and spans the finger bases (their solids' x extent, at rest). ``solids``: every part
     in its link frame (mm): the palm, the finger and thumb parts."""
-    from ..kinematics.topology import FINGERS
     from .parts.common import bd
 
     p = hand.params
