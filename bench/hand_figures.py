@@ -99,6 +99,8 @@ def postures(p, meshes, solids, out: Path) -> None:
     """The power grasp and the thumb's closest approach to each opposed fingertip, on the solids."""
     h = make_hand(p)
     cmc = next(s.index for s in SERVOS if s.drive == "loop")
+    # the hand without its forearm module and servo pulleys: the grasp pictures' close views
+    hand_only = {n: m for n, m in meshes.items() if n != "forearm" and not n.startswith("servo_pulley_")}
     # power grasp: every tendon servo at the end of its travel, the CMC at rest
     u = np.array(h.u_max, float)
     u[cmc] = 0.0
@@ -121,7 +123,6 @@ def postures(p, meshes, solids, out: Path) -> None:
         sys.exit(f"error: no position across the palm where the four fingers reach past a {CYLINDER_MM} mm cylinder's equator")
     T = assembly.pose_transforms(p, h.forward(g.u, compensated=True))
     cv, cf = step_stl.tessellate(g.solid(), 0.05)
-    hand_only = {n: m for n, m in meshes.items() if n != "forearm" and not n.startswith("servo_pulley_")}
     cylinder = render.MeshItem("cylinder", cv, cf, (0.85, 0.85, 0.80), f"{CYLINDER_MM:g} mm cylinder")
     wraps = ", ".join(f"{f} {c.wrap_deg:.0f}" for f, c in g.fingers.items())
     fname = "hand_power_cylinder.png"
@@ -152,7 +153,6 @@ def postures(p, meshes, solids, out: Path) -> None:
         cmd = ", ".join(f"{x:.1f}" for x in np.degrees(c.u))
         with tempfile.TemporaryDirectory() as tmp:
             whole, near = Path(tmp) / "whole.png", Path(tmp) / "near.png"
-            hand_only = {n: m for n, m in meshes.items() if n != "forearm" and not n.startswith("servo_pulley_")}
             render.render_png(_tips_labelled(hand_only, T, ("thumb", f)), whole,
                               title=f"{p.name} hand ({p.side}): the thumb's pad on the {f} pad",
                               subtitle=f"servo commands {cmd} deg (u1..u6), seen square to the contact; "
