@@ -117,7 +117,7 @@ def postures(p, meshes, solids, out: Path) -> None:
     print(f"wrote {out / 'hand_power.png'}")
     # issue 12's 35 mm cylinder across the palm at first contact (cad.grasp.power_grasp: the first position
     # from the palm's distal edge where every finger touches it past its equator, the thumb out of the way;
-    # MuJoCo then squeezes it out toward the wrist: docs/parts.md)
+    # pressing on, MuJoCo's fingers hold it against the palm's heel, palm down: docs/parts.md)
     g, _ = grasp.power_grasp(h, solids, CYLINDER_MM)
     if g is None:
         sys.exit(f"error: no position across the palm where the four fingers reach past a {CYLINDER_MM} mm cylinder's equator")
@@ -131,8 +131,8 @@ def postures(p, meshes, solids, out: Path) -> None:
         shots = ((5.0, 0.0, "seen from the ulnar side",
                   f"each finger flexed until 1 mm from it; wrap (deg, 90 = its distal side): {wraps}"),
                  (-35.0, 45.0, "from the palm's distal, ulnar side",
-                  f"commands {', '.join(f'{x:.0f}' for x in np.degrees(g.u))} deg; pressing on, the fingers squeeze "
-                  "it out toward the wrist (MuJoCo)"))
+                  f"commands {', '.join(f'{x:.0f}' for x in np.degrees(g.u))} deg; pressing on, they hold it against "
+                  "the palm's heel (MuJoCo, palm down)"))
         for i, (elev, azim, what, sub) in enumerate(shots):
             views.append(Path(tmp) / f"{i}.png")
             render.render_png(_tips_labelled(hand_only, T, FINGERS) + [cylinder], views[-1],

@@ -306,6 +306,9 @@ def _field(document, path, value):
     ("palm.thickness_mm", 1.0, "palm.thickness_mm", "must be >= 10.200 mm"),
     # the thickest finger (16) + 2 x 0.2
     ("palm.thickness_mm", 16.2, "palm.thickness_mm", "must exceed the thickest finger (16 mm)"),
+    ("palm.heel_height_mm", -1.0, "palm.heel_height_mm", "must be >= 0"),
+    # a heel of height 11 (the file's) and no length
+    ("palm.heel_length_mm", 0.0, "palm.heel_length_mm", "must be > 0 with the other heel dimension"),
     ("print.stl_tolerance_mm", 1e-9, "print.stl_tolerance_mm", "must be >= 0.001"),
     # PrusaSlicer's limit for a 0.4 mm nozzle is 0.75 x 0.4 = 0.3 mm
     ("print.layer_height_mm", 0.32, "print.layer_height_mm", "must be <= 0.3"),

@@ -23,7 +23,8 @@ def check(params) -> None:
     CMC pulley's cavity a wall under the dorsal face; and if the routing model finds no clamp
     position for a loop or a drive (``routing.routes`` raises the ParamError: a joint's travel too
     large for its loop's pulleys and carrier), or a finger drive's coupler has no room in its palm
-    channel or does not come out at the service angle (``routing.couplers``)."""
+    channel or does not come out at the service angle (``routing.couplers``), or if the palm's heel
+    reaches past the metacarpal block's front."""
     from ..kinematics import frames as F
     from ..kinematics import routing
 
@@ -49,5 +50,14 @@ def check(params) -> None:
                          f"thumb.cmc_pulley_radius_mm with its flanges and running room, tilted with the CMC axis), "
                          f"{mm(-fit['turn']):.3f} mm short of a relief and a wall under the dorsal face: a thicker "
                          "palm, a smaller pulley or a CMC axis nearer the palm's normal", src)
+    if params.palm.heel_height > 0.0:
+        from .parts.palm import Palm
+
+        x0, x1, y0, y1 = Palm(params).extents()
+        if mm(params.palm.heel_length) > y1 - y0 + 1e-9:
+            raise ParamError("palm.heel_length_mm", round(mm(params.palm.heel_length), 6),
+                             f"must be <= {y1 - y0:.3f} mm: the heel lies under the metacarpal block, from its back "
+                             "face to at most the block's front (behind the finger sockets and their flexion "
+                             "limiters)", src)
     routing.routes(params)
     routing.couplers(params)

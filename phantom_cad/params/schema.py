@@ -145,6 +145,8 @@ class Palm:
     wall: float
     thumb_cmc_offset: tuple[float, float, float]
     thumb_cmc_axis: tuple[float, float, float]   # roll, pitch, yaw (rad)
+    heel_height: float = 0.0     # m below the palmar face (0: a flat palm)
+    heel_length: float = 0.0     # m from the palm's back face distally
 
     @property
     def arc_radius(self) -> float:
@@ -495,7 +497,14 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
         wall=p.number("wall_mm", gt=0) * MM,
         thumb_cmc_offset=tuple(v * MM for v in p.vector("thumb_cmc_offset_mm", 3)),
         thumb_cmc_axis=tuple(v * DEG for v in p.vector("thumb_cmc_axis_deg", 3, ge=-180, le=180)),
+        heel_height=p.number("heel_height_mm", ge=0, default=0.0) * MM,
+        heel_length=p.number("heel_length_mm", ge=0, default=0.0) * MM,
     )
+    if (palm.heel_height > 0.0) != (palm.heel_length > 0.0):
+        key, v = (("palm.heel_length_mm", palm.heel_length) if palm.heel_height > 0.0
+                  else ("palm.heel_height_mm", palm.heel_height))
+        raise ParamError(key, round(v / MM, 6), "must be > 0 with the other heel dimension (both 0: a flat palm)",
+                         source)
     p.done()
     if palm.finger_pitch > rules.MAX_FINGER_PITCH + 1e-12:
         raise ParamError("palm.finger_pitch_mm", palm.finger_pitch / MM,

@@ -214,6 +214,20 @@ def test_long_flange_ears_move_the_forearm_row_back(document):
     assert -2.0 - 1e-9 <= dy[0] < -1.0 and all(v == pytest.approx(dy[0], abs=1e-9) for v in dy)
 
 
+def test_a_heel_past_the_metacarpal_block_is_refused(variant):
+    """The heel lies under the metacarpal block, from the palm's back face: one reaching further than
+    the block is long (the palm solid's flat palmar stretch ends at the block's front, behind the
+    finger sockets' limiters) is refused, naming the field; the file's 40 mm builds (test_human_scale)."""
+    from phantom_cad.cad import preflight
+
+    p = variant(lambda d: d["palm"].__setitem__("heel_length_mm", 100.0))
+    with pytest.raises(ParamError) as exc:
+        preflight.check(p)
+    assert exc.value.field == "palm.heel_length_mm" and exc.value.value == 100.0
+    assert "the heel lies under the metacarpal block" in exc.value.rule
+    preflight.check(variant(lambda d: d["palm"].__setitem__("heel_length_mm", 40.0)))
+
+
 def test_a_cmc_axis_tilted_past_60_deg_is_refused(variant):
     """The palm holds the CMC on a column along its axis, which climbs into the palm: rolled 70
     deg about x, the axis is 70 deg from the palm's normal."""

@@ -1,14 +1,14 @@
 """Issue 12, power grasp, its first-contact half: a 35 mm cylinder across the palm, every finger
 flexing onto it touches it past its equator; default hand, left hand and the 170 mm hand
 (params/examples/small.toml). Whether the closing hand then holds it is simulated in MuJoCo
-(tests/export/test_mjcf.py: it does not, a strict xfail).
+(tests/export/test_mjcf.py: it does, against the palm's heel).
 
 ``cad.grasp.power_grasp`` lays the cylinder on the palm's palmar face, axis along the knuckle line,
 from the palm's distal edge toward the wrist in 5 mm steps, flexes each finger from rest until it
 comes within 1 mm of it and turns the thumb out of the way; it returns the first position where
 every finger touches the cylinder past its equator. What it returns is measured again here, each
-with a tool of its own: the cylinder rebuilt from the palm's and the finger bases' measured
-extents; the commands within the travel; OpenCascade's distances from the palm and from each
+with a tool of its own: the cylinder rebuilt from the parameter file's palm thickness (in front
+of the heel) and the finger bases' measured extents; the commands within the travel; OpenCascade's distances from the palm and from each
 finger's phalanges to it, in (0, 1] mm; the wrap angle of each finger's closest point about the
 cylinder's axis, from the point's coordinates, over 90 deg (at first contact the finger presses it
 toward the palm); and manifold3d: no part of the hand overlaps the cylinder (a 256-sided prism of
@@ -47,12 +47,16 @@ def hand(request, hand_parts, hand_meshes):
 
 
 def _cylinder(p, shapes, y: float):
-    """The test's own cylinder: build123d's Cylinder along x, on the palm's lowest face less half a
-    millimetre, over the finger bases' x extent at rest (their solids' boxes)."""
+    """The test's own cylinder: build123d's Cylinder along x, half a millimetre under the palm's
+    palmar face (-thickness_mm / 2 in the parameter file: it lies in front of the heel, checked
+    here), over the finger bases' x extent at rest (their solids' boxes)."""
     from build123d import Cylinder, Pos, Rot
 
     T0 = assembly.pose_transforms(p)
-    z = check.placed(shapes["palm"], T0["palm"]).bounding_box().min.Z - 0.5 - DIAMETER_MM / 2
+    palm = p.document["palm"]
+    heel_front = check.placed(shapes["palm"], T0["palm"]).bounding_box().min.Y + palm["heel_length_mm"]
+    assert heel_front < y - DIAMETER_MM / 2
+    z = -palm["thickness_mm"] / 2 - 0.5 - DIAMETER_MM / 2
     boxes = [check.placed(shapes[f"{f}_base"], T0[f"{f}_base"]).bounding_box() for f in FINGERS]
     x0, x1 = min(b.min.X for b in boxes), max(b.max.X for b in boxes)
     return Pos((x0 + x1) / 2, y, z) * Rot(0, 90, 0) * Cylinder(DIAMETER_MM / 2, x1 - x0), z, (x0, x1)

@@ -1,4 +1,5 @@
-"""The MJCF of the default hand (description/mjcf), loaded and simulated by MuJoCo.
+"""The MJCF of the default hand (description/mjcf), loaded and simulated by MuJoCo (the power grasp
+also on the left and the 170 mm hands' MJCF).
 
 Known answers: the URDF read by yourdfpy (tree, forward kinematics, inertials), the cosine law
 of eq. (4)-(6) computed here by hand from params/phantom.toml, the radii 5:4:5 and 5:4 by hand,
@@ -402,42 +403,53 @@ def test_compiled_mjcf_is_served_from_the_cache_only_when_it_matches(hand_build,
 
 #: the mass (kg) of the cylinder the closed hand must hold with the palm facing down
 CYLINDER_KG = 0.1
-#: the cylinders (diameter, mm) across the palm: issue 12's 35 mm, which the hand does not hold (the
-#: fingertips squeeze it toward the wrist and nothing stops it there). Larger ones slide into the
-#: thumb's CMC base and may stay there or not with the part masses (docs/parts.md): not tested
-CYLINDERS = [
-    pytest.param(35.0, marks=pytest.mark.xfail(strict=True, reason=(
-        "issue 12's power grasp, simulated (default hand, 2026-11-24): closing the fingers on the 35 mm "
-        "cylinder where the solids say they reach past its equator squeezes it 11.3 mm toward the wrist "
-        "(the fingertips press it up and wristward, the palm only up; nothing stops it on its wrist side) "
-        "and every finger servo reaches the end of its travel; palm down it falls out (100 g, 278 mm to "
-        "the floor). The curl is too open: at full travel the fingertips stay 17.6-29.1 mm from the palm "
-        "(Table I's limits, docs/parts.md)"))),
-]
+#: the cylinders (diameter, mm) across the palm: issue 12's 35 mm. Without the palm's heel the
+#: fingertips squeezed it 11.3 mm toward the wrist and it fell out palm down (docs/parts.md)
+CYLINDERS = [35.0]
 
 
-@pytest.fixture(scope="module", params=CYLINDERS)
-def cylinder_grasp(request):
-    """``cad.grasp.power_grasp`` of the default hand on a cylinder: where the solids say every finger
-    reaches past its equator, and the thumb's commands that clear it."""
+#: issue 12's three hands: (name, parameter file, side); the default hand's export is the session's
+GRASP_HANDS = [("default", PARAMS, None), ("left", PARAMS, "left"),
+               ("hand_length_170", PARAMS.parent / "examples" / "small.toml", None)]
+
+
+@pytest.fixture(scope="module", params=[(h, d) for h in GRASP_HANDS for d in CYLINDERS],
+                ids=lambda v: f"{v[0][0]}-{v[1]:g}mm")
+def cylinder_grasp(request, hand_build, tmp_path_factory):
+    """(``cad.grasp.power_grasp`` of a hand on a cylinder: where the solids say every finger reaches
+    past its equator, and the thumb's commands that clear it; the hand's MJCF scene), each hand's
+    export built with the session's part cache."""
     from phantom_cad import make_hand
     from phantom_cad.cad import assembly, grasp
+    from phantom_cad.export.pipeline import build_hand
 
-    p = load_params(PARAMS)
+    (kind, path, side), diameter = request.param
+    result, cache = hand_build
+    if kind != "default":
+        result = build_hand(path, tmp_path_factory.mktemp(kind) / "export", side=side, cache_dir=cache, jobs=2,
+                            slice=None)
+    from phantom_cad.canon import plain
+    from phantom_cad.params import parse
+
+    doc = plain(load_params(path).document)
+    if side is not None:
+        doc["hand"]["side"] = side
+    p = parse(doc)
+    assert (p.side, p.digest) == (result.side, result.params_digest)
     names = [n for n in assembly.part_names(p) if n != "forearm" and not n.startswith("servo_pulley_")]
-    g, _ = grasp.power_grasp(make_hand(p), {n: assembly.build_part(p, n).shape for n in names}, request.param)
+    g, _ = grasp.power_grasp(make_hand(p), {n: assembly.build_part(p, n).shape for n in names}, diameter)
     assert g is not None
-    return g
+    return g, result.out_dir / "description" / "mjcf" / "scene.xml"
 
 
-def test_the_closed_hand_holds_a_cylinder_palm_down(pkg, cylinder_grasp):
+def test_the_closed_hand_holds_a_cylinder_palm_down(cylinder_grasp):
     """MuJoCo, contacts on: a free cylinder (100 g, solid) where ``cad.grasp`` puts it, the thumb at
     its commands there (the cylinder's contacts off while the thumb turns, gravity off); then every
     finger servo commanded to the end of its travel for 2 s; then gravity toward the palm's palmar
     side (the palm facing down) for 3 s: the cylinder moves less than 5 mm and has come to rest, no
-    warning."""
-    g = cylinder_grasp
-    spec = mujoco.MjSpec.from_file(str(pkg / "mjcf" / "scene.xml"))
+    warning, and the palm (its heel) touches it on its wrist side."""
+    g, scene = cylinder_grasp
+    spec = mujoco.MjSpec.from_file(str(scene))
     r, length = g.diameter_mm / 2e3, (g.x_mm[1] - g.x_mm[0]) / 1e3
     body = spec.worldbody.add_body(name="cylinder", pos=[(g.x_mm[0] + g.x_mm[1]) / 2e3, g.axis_y_mm / 1e3,
                                                          g.axis_z_mm / 1e3],
@@ -488,5 +500,11 @@ def test_the_closed_hand_holds_a_cylinder_palm_down(pkg, cylinder_grasp):
                 f"palm down; servo torques {d.actuator_force.round(3).tolist()}")
         assert fell < 5.0, what
         assert np.abs(d.qvel[free:free + 3]).max() < 0.01, what        # m/s: it has come to rest
+        # what holds it on its wrist side: the palm (its heel), touching it behind its axis
+        palm = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "palm")
+        behind = [c.pos[1] for c in d.contact[:d.ncon]
+                  if gid in (c.geom1, c.geom2) and palm in (m.geom_bodyid[c.geom1], m.geom_bodyid[c.geom2])
+                  and c.pos[1] < d.xpos[bid][1] - r / 2]
+        assert behind, what
     finally:
         m.opt.gravity[:] = gravity

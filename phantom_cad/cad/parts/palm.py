@@ -20,7 +20,11 @@ y distal, z dorsal. Built from:
   loop, ``routing.couplers``) travels in; the thumb drive's channel from the back face to its
   turn and down the CMC axis (turning the thumb about the CMC leaves its length alone);
 * two pilot holes on the dorsal face at the back for the forearm module's tab;
-* the flexion-limiting housing (rails under each finger base, at the Table I MCP limit).
+* the flexion-limiting housing (rails under each finger base, at the Table I MCP limit);
+* the heel: a pad ``palm.heel_height_mm`` below the metacarpal block's palmar face, from its back
+  face ``palm.heel_length_mm`` distally (the heel of the hand); an object held in the palm's
+  hollow, in front of it, cannot slide out toward the wrist when the fingertips press it there
+  (docs/parts.md "Power grasp").
 """
 
 from __future__ import annotations
@@ -54,6 +58,8 @@ class Palm(ServoMount, Part):
         self.link = next(ln for ln in LINKS if ln.parent is None)
         self.tol = Tolerances(params)
         self.thickness = mm(params.palm.thickness)
+        self.heel_height = mm(params.palm.heel_height)
+        self.heel_length = mm(params.palm.heel_length)
         self.pulley_width = mm(params.cad.servo_pulley_width)
         self.tendon_z = mm(F.tendon_height(params))
 
@@ -111,6 +117,15 @@ class Palm(ServoMount, Part):
         the socket faces."""
         x0, x1 = (mm(v) for v in F.metacarpal_x(self.params))
         return x0, x1, mm(F.palm_back(self.params)), self.slab_front()
+
+    def heel(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """(lo, hi) palm frame (mm) of the heel, under the metacarpal block from its back face, or None
+        (a flat palm: ``palm.heel_height_mm`` 0)."""
+        if self.heel_height <= 0.0:
+            return None
+        x0, x1, y0, _ = self.extents()
+        return (np.array([x0, y0, -self.thickness / 2.0 - self.heel_height]),
+                np.array([x1, y0 + self.heel_length, -self.thickness / 2.0]))
 
     def _placed_box(self, T, lo, hi) -> np.ndarray:
         return F.box_corners(lo, hi) @ T[:3, :3].T + T[:3, 3]
@@ -225,6 +240,9 @@ class Palm(ServoMount, Part):
         lo, hi = self.thenar_block()
         if np.all(hi > lo):
             body.append(box(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]))
+        heel = self.heel()
+        if heel is not None:
+            body.append(box(heel[0][0], heel[1][0], heel[0][1], heel[1][1], heel[0][2], heel[1][2]))
         tools = []
         # finger sockets
         for f in FINGERS:
