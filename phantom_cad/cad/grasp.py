@@ -12,9 +12,9 @@ thumb command), the thumb holds still and the finger flexes onto it from rest. T
 whose closest points lie on both pads (``on_pad``) is returned.
 
 **Power grasp** (``cylinder_grasp``, ``power_grasp``). A cylinder lies across the palm, its axis
-along the knuckle line (the palm frame's x), resting on the palm's palmar face under it
-(``PALM_GAP_MM`` off it, ``palmar_face_z``) and spanning the finger bases; each finger flexes from rest until one of its phalanges comes
-within reach of it; the thumb turns out of the way (the first command pair of a grid over its CMC's
+along the knuckle line (the palm frame's x), resting against the palm (``PALM_GAP_MM`` off it,
+``resting_axis_z``) and spanning the finger bases; each finger flexes from rest until one of its
+phalanges comes within reach of it; the thumb turns out of the way (the first command pair of a grid over its CMC's
 and its IP/MP's travel where its parts clear the cylinder and the closed fingers). The first-contact
 criterion (``CylinderGrasp.past_equator``): every finger touches it before the end of its travel at a
 point past its equator (the *wrap angle*, about the axis from the palm's contact line (0 deg) toward
@@ -222,17 +222,22 @@ def wrap_angle_deg(point, axis_y_mm: float, axis_z_mm: float) -> float:
     return float(units.deg(np.arctan2(float(point[1]) - axis_y_mm, float(point[2]) - axis_z_mm)) % 360.0)
 
 
-def palmar_face_z(palm, y0_mm: float, y1_mm: float) -> float:
-    """The lowest z (mm) of the palm solid (hand frame) between y0 and y1: its palmar face under a
-    cylinder lying there (the heel's face where the cylinder reaches over the heel)."""
-    from .parts.common import bd, box
-
+def resting_axis_z(palm, diameter_mm: float, axis_y_mm: float, x_mm: tuple[float, float],
+                   gap_mm: float = PALM_GAP_MM) -> float:
+    """The z (mm, hand frame) of the axis of a cylinder across the palm at ``axis_y_mm``, as close to
+    the palm solid as it comes with ``gap_mm`` between them (OpenCascade's distance, a bisection on z):
+    under the palmar face, or held off by the heel's edge where it reaches over it. The palm's
+    material all lies above its lowest point, so the distance shrinks as the cylinder rises."""
+    R = diameter_mm / 2.0
     bb = palm.bounding_box()
-    cut = palm.intersect(box(bb.min.X - 1.0, bb.max.X + 1.0, y0_mm, y1_mm, bb.min.Z - 1.0, bb.max.Z + 1.0))
-    pieces = [] if cut is None else (list(cut) if isinstance(cut, list) else [cut])
-    if not pieces or all(s.volume <= 0.0 for s in pieces):
-        raise ValueError(f"the palm has no material between y = {y0_mm:.1f} and {y1_mm:.1f} mm")
-    return float(bd().Compound(children=pieces).bounding_box().min.Z)
+    lo, hi = bb.min.Z - gap_mm - R, bb.max.Z            # at lo the cylinder clears the palm by gap_mm
+    for _ in range(STEPS):
+        mid = 0.5 * (lo + hi)
+        if palm.distance_to(cylinder_solid(diameter_mm, axis_y_mm, mid, x_mm)) >= gap_mm:
+            lo = mid
+        else:
+            hi = mid
+    return lo
 
 
 def _finger_links(finger: str) -> list[str]:
@@ -243,19 +248,17 @@ def _finger_links(finger: str) -> list[str]:
 def cylinder_grasp(hand, solids: dict, diameter_mm: float, axis_y_mm: float,
                    reach_mm: float = REACH_MM) -> CylinderGrasp:
     """Close the hand on a cylinder of ``diameter_mm`` across the palm at ``axis_y_mm`` (palm frame):
-    it rests on the palm's palmar face (``PALM_GAP_MM`` off it, measured on the palm solid: its
-    lowest z under the cylinder, ``palmar_face_z``) and spans the finger bases (their solids' x
-    extent, at rest). ``solids``: every part in its link frame (mm): the palm, the finger and thumb
-    parts."""
+    it rests against the palm (``PALM_GAP_MM`` off the palm solid, ``resting_axis_z``) and spans the
+    finger bases (their solids' x extent, at rest). ``solids``: every part in its link frame (mm): the
+    palm, the finger and thumb parts."""
     from .parts.common import bd
 
     p = hand.params
     T0 = pose_transforms(p)
     palm = placed(solids["palm"], T0["palm"])
-    R = diameter_mm / 2.0
-    z = palmar_face_z(palm, axis_y_mm - R, axis_y_mm + R) - PALM_GAP_MM - R
     boxes = [placed(solids[ln.name], T0[ln.name]).bounding_box() for f in FINGERS for ln in digit_links(f)[:1]]
     x = (min(bb.min.X for bb in boxes), max(bb.max.X for bb in boxes))
+    z = resting_axis_z(palm, diameter_mm, axis_y_mm, x)
     cyl = cylinder_solid(diameter_mm, axis_y_mm, z, x)
     lo = np.asarray(hand.u_min, float)
     span = np.asarray(hand.u_max, float) - lo

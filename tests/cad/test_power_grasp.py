@@ -107,3 +107,25 @@ def test_nothing_interpenetrates_at_the_grasp(hand):
     r = interference({**meshes, "cylinder": (np.asarray(mesh.vert_properties)[:, :3], np.asarray(mesh.tri_verts))},
                      {**T, "cylinder": np.eye(4)}, may_touch(assembly.designed_contacts(p)), tol_mm3=OVERLAP_MM3)
     assert r["collisions"] == [], (kind, r["collisions"])
+
+
+def test_a_cylinder_reaching_over_the_heel_rests_on_its_edge(hand_parts):
+    """``grasp.resting_axis_z`` by hand (default hand, the file's palm): a 35 mm cylinder in front of
+    the heel lies half a millimetre under the palmar face, its axis at -T/2 - 0.5 - R; a 45 mm one
+    whose back reaches 3.5 mm over the heel's front is held off by the heel's lower front edge (at the
+    heel's front y_f and its face z_h = -T/2 - heel_height): its axis lies R + 0.5 from that edge,
+    z = z_h - sqrt((R + 0.5)^2 - (y - y_f)^2), 0.96 mm lower than the face alone would put it."""
+    p, shapes = hand_parts("default")
+    doc = p.document["palm"]
+    T, H, L = doc["thickness_mm"], doc["heel_height_mm"], doc["heel_length_mm"]
+    palm = check.placed(shapes["palm"], assembly.pose_transforms(p)["palm"])
+    bb = palm.bounding_box()
+    y_f, z_h = bb.min.Y + L, -T / 2 - H
+    x = (bb.min.X + 20.0, bb.max.X - 5.0)           # under the metacarpal block, across the heel
+    y = y_f + 17.5 + 1.0
+    assert grasp.resting_axis_z(palm, 35.0, y, x) == pytest.approx(-T / 2 - 0.5 - 17.5, abs=1e-6)
+    R = 22.5
+    y = y_f + R - 3.5
+    want = z_h - math.sqrt((R + 0.5) ** 2 - (y - y_f) ** 2)
+    assert want < -T / 2 - 0.5 - R - 0.5                # the edge, not the face, holds it off
+    assert grasp.resting_axis_z(palm, 2 * R, y, x) == pytest.approx(want, abs=1e-6)
