@@ -44,9 +44,9 @@ def test_package_layout_and_uris_resolve(pkg):
         assert [len(ln.findall("visual")) for ln in root.iter("link") if ln.find("visual") is not None] == [1] * 28
         pieces = {ln.get("name"): len(ln.findall("collision")) for ln in root.iter("link")
                   if ln.find("visual") is not None}
-        # one convex hull per link; the palm's convex solids: its block, the thenar block,
+        # one convex hull per link; the palm's convex solids: its block, the thenar block, the heel,
         # 4 socket blocks, 2 limiter rails per finger; the forearm module's block and tab
-        assert pieces.pop("palm") == 1 + 1 + 4 + 2 * 4
+        assert pieces.pop("palm") == 1 + 1 + 1 + 4 + 2 * 4
         assert pieces.pop("forearm") == 2 and set(pieces.values()) == {1}
         uris = [m.get("filename") for m in root.iter("mesh")]
         for u in uris:

@@ -197,6 +197,51 @@ class Palm(ServoMount, Part):
             tools.append(swept(np.array([back[0] / n, back[1] / n, 0.0]), depth))
         return tools
 
+    def thumb_channel_relief(self) -> list:
+        """Where the thumb drive's channel enters the back face over the CMC pulley cavity's back
+        opening (``thenar_tools``: the cavity swept out through the back face) with less than two
+        perimeters (``rules.MIN_WALL``) of palm between them, the material between is cut: a slot of
+        the channel's width from the channel down into the opening, from outside the back face to
+        where the wall reaches two perimeters (the 170 mm hand: a 0.52 mm skin otherwise). The cord
+        runs in its channel's slot there, open toward the cavity. [] where the wall is thick enough."""
+        from ...params.rules import MIN_WALL
+
+        t = self.thenar()
+        T0 = self.T_cmc()
+        R, h, q = t["cavity_r"], t["cavity_h"], t["pulley"]
+        r = self.tol.tendon_hole / 2.0
+        p0, p1 = self.thumb_tendon_path()[:2]
+        Ti = np.linalg.inv(T0)
+        back = -T0[1, :3]
+        n = math.hypot(back[0], back[1])
+        if n <= 1e-6:
+            return []
+        v = np.array([back[0] / n, back[1] / n, 0.0])
+        w = np.cross([0.0, 0.0, 1.0], v)
+        y_back = mm(F.palm_back(self.params))
+        ss = np.linspace(0.0, 1.0, 401)
+        thin = []
+        for s in ss:
+            x = p0 + s * (p1 - p0)
+            c = (Ti @ np.append(x, 1.0))[:3]
+            over = c @ v >= 0.0 and abs(c @ w) <= R + r
+            if x[1] >= y_back - 1.0 and over and c[2] - q - h - r < mm(MIN_WALL):
+                thin.append(s)
+        if not thin:
+            return []
+        s0, s1 = min(thin), min(max(thin) + 1.0 / 400.0, 1.0)
+        a0, a1 = p0 + s0 * (p1 - p0), p0 + s1 * (p1 - p0)
+        d = (a1 - a0) / np.linalg.norm(a1 - a0)
+        axis = T0[:3, 2]
+        z = axis - (axis @ d) * d
+        z /= np.linalg.norm(z)
+        # down to a hair inside the opening's top face (the plane z_CMC = q + h)
+        drop = max(float((Ti @ np.append(a, 1.0))[2] - q - h) for a in (a0, a1)) + 0.05
+        drop /= float(z @ axis)
+        M = np.eye(4)
+        M[:3, 0], M[:3, 1], M[:3, 2], M[:3, 3] = d, np.cross(z, d), z, a0
+        return [transform(box(0.0, float(np.linalg.norm(a1 - a0)), -r, r, -drop, 0.0), M)]
+
     def limiter_polygon(self, finger: str) -> list[tuple[float, float]]:
         """(y, z) outline, in the finger base frame (MCP axis at the origin), of the palm's
         flexion limiter: from inside the socket block to the plane the proximal phalanx's
@@ -279,6 +324,7 @@ class Palm(ServoMount, Part):
         tools.append(cylinder(pts[0] - u, pts[1], t.tendon_hole / 2.0))
         tools.append(sphere(pts[1], t.tendon_relief / 2.0))            # the turn
         tools.append(cylinder(pts[1], pts[2] - (pts[1] - pts[2]), t.tendon_hole / 2.0))
+        tools += self.thumb_channel_relief()
         # (the CMC loop's two strands run in the cavity's slot toward servo 6: no channel)
         # pilot holes for the forearm module's tab screws, down from the dorsal face
         for p in wrist.tab_screws(self.params):
