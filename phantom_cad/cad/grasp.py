@@ -47,6 +47,8 @@ CANDIDATES = 8
 STEPS = 40
 #: how far (mm) the power grasp's cylinder lies off the palm's palmar face: in contact, within reach
 PALM_GAP_MM = 0.5
+#: ``resting_axis_z`` stops rising when its clearance is within this of the gap (mm)
+ADVANCE_TOL_MM = 1e-9
 #: the thumb's CMC and IP/MP commands tried (evenly over each travel) to turn it out of the way of the
 #: power grasp's cylinder and the closed fingers
 THUMB_CMC_STEPS, THUMB_FLEX_STEPS = 21, 5
@@ -225,15 +227,29 @@ def wrap_angle_deg(point, axis_y_mm: float, axis_z_mm: float) -> float:
 def resting_axis_z(palm, diameter_mm: float, axis_y_mm: float, x_mm: tuple[float, float],
                    gap_mm: float = PALM_GAP_MM) -> float:
     """The z (mm, hand frame) of the axis of a cylinder across the palm at ``axis_y_mm``, as close to
-    the palm solid as it comes with ``gap_mm`` between them (OpenCascade's distance, a bisection on z):
-    under the palmar face, or held off by the heel's edge where it reaches over it. The palm's
-    material all lies above its lowest point, so the distance shrinks as the cylinder rises."""
+    the palm solid as it comes with ``gap_mm`` between them (OpenCascade's distance): under the palmar
+    face, or held off by the heel's edge where it reaches over it.
+
+    Conservative advancement: from below the palm's lowest point, the cylinder rises by its measured
+    clearance less the gap. The distance between two solids changes by at most the length of a
+    translation, so no step passes the gap: one step under a flat face, a few under an edge (each
+    leaves the clearance times 1 - cos of the contact normal's angle to z). What is left after
+    ``STEPS`` steps (a contact normal near horizontal) is bisected."""
     R = diameter_mm / 2.0
     bb = palm.bounding_box()
     lo, hi = bb.min.Z - gap_mm - R, bb.max.Z            # at lo the cylinder clears the palm by gap_mm
+
+    def clearance(z: float) -> float:
+        return palm.distance_to(cylinder_solid(diameter_mm, axis_y_mm, z, x_mm)) - gap_mm
+
+    for _ in range(STEPS):
+        step = clearance(lo)
+        if step <= ADVANCE_TOL_MM:
+            return lo
+        lo += step
     for _ in range(STEPS):
         mid = 0.5 * (lo + hi)
-        if palm.distance_to(cylinder_solid(diameter_mm, axis_y_mm, mid, x_mm)) >= gap_mm:
+        if clearance(mid) >= 0.0:
             lo = mid
         else:
             hi = mid

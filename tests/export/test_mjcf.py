@@ -17,6 +17,7 @@ import pytest
 
 from phantom_cad.kinematics.topology import JOINT_NAMES
 from phantom_cad.params.io import load_params
+from tests.cad.conftest import HANDS, SMALL, hand_document
 
 mujoco = pytest.importorskip("mujoco")
 
@@ -408,9 +409,10 @@ CYLINDER_KG = 0.1
 CYLINDERS = [35.0]
 
 
-#: issue 12's three hands: (name, parameter file, side); the default hand's export is the session's
-GRASP_HANDS = [("default", PARAMS, None), ("left", PARAMS, "left"),
-               ("hand_length_170", PARAMS.parent / "examples" / "small.toml", None)]
+#: issue 12's three hands (tests/cad/conftest.py): (name, parameter file, side); the default hand's
+#: export is the session's
+GRASP_HANDS = [("default", PARAMS, None), ("left", PARAMS, "left"), ("hand_length_170", SMALL, None)]
+assert [h[0] for h in GRASP_HANDS] == list(HANDS)
 
 
 @pytest.fixture(scope="module", params=[(h, d) for h in GRASP_HANDS for d in CYLINDERS],
@@ -418,26 +420,27 @@ GRASP_HANDS = [("default", PARAMS, None), ("left", PARAMS, "left"),
 def cylinder_grasp(request, hand_build, tmp_path_factory):
     """(``cad.grasp.power_grasp`` of a hand on a cylinder: where the solids say every finger reaches
     past its equator, and the thumb's commands that clear it; the hand's MJCF scene), each hand's
-    export built with the session's part cache."""
+    export built with the session's part cache; the solids are the export's own (each part's BREP
+    from the cache entry its manifest names)."""
     from phantom_cad import make_hand
     from phantom_cad.cad import assembly, grasp
+    from phantom_cad.canon import plain
+    from phantom_cad.export import step_stl
+    from phantom_cad.export.cache import Cache
     from phantom_cad.export.pipeline import build_hand
+    from phantom_cad.params import parse
 
     (kind, path, side), diameter = request.param
     result, cache = hand_build
     if kind != "default":
         result = build_hand(path, tmp_path_factory.mktemp(kind) / "export", side=side, cache_dir=cache, jobs=2,
                             slice=None)
-    from phantom_cad.canon import plain
-    from phantom_cad.params import parse
-
-    doc = plain(load_params(path).document)
-    if side is not None:
-        doc["hand"]["side"] = side
-    p = parse(doc)
+    p = parse(hand_document(kind, plain(load_params(PARAMS).document)))
     assert (p.side, p.digest) == (result.side, result.params_digest)
     names = [n for n in assembly.part_names(p) if n != "forearm" and not n.startswith("servo_pulley_")]
-    g, _ = grasp.power_grasp(make_hand(p), {n: assembly.build_part(p, n).shape for n in names}, diameter)
+    keys = {e["name"]: e["cache_key"] for e in result.manifest["parts"]}
+    shapes = {n: step_stl.read_brep(Cache(cache).part_dir(keys[n]) / "part.brep") for n in names}
+    g, _ = grasp.power_grasp(make_hand(p), shapes, diameter)
     assert g is not None
     return g, result.out_dir / "description" / "mjcf" / "scene.xml"
 

@@ -190,34 +190,44 @@ class Palm(ServoMount, Part):
         # the back: the cavity reaches the palm's back face (frames.palm_back is its back), so it
         # is swept on out through that face, in the pulley's plane (a cylinder tangent to the face,
         # or one sampled a hair inside it, left a skin of 0 to 0.55 mm)
-        back = -T0[1, :3]                       # the palm's -y in the CMC base frame
-        n = math.hypot(back[0], back[1])
-        if n > 1e-6:
+        back = self.back_sweep()
+        if back is not None:
+            v, n = back
             depth = ((T0 @ np.array([0.0, 0.0, q, 1.0]))[1] - mm(F.palm_back(self.params)) + 2.0 * (R + h)) / n
-            tools.append(swept(np.array([back[0] / n, back[1] / n, 0.0]), depth))
+            tools.append(swept(v, depth))
         return tools
 
-    def thumb_channel_relief(self) -> list:
+    def back_sweep(self) -> tuple[np.ndarray, float] | None:
+        """(v, n): the unit vector, in the CMC base frame and the pulley's plane, along which the
+        pulley's cavity is swept out through the palm's back face (the palm's -y projected into that
+        plane), and the length n of that projection; None when the CMC axis lies along the palm's y."""
+        back = -self.T_cmc()[1, :3]             # the palm's -y in the CMC base frame
+        n = math.hypot(back[0], back[1])
+        if n <= 1e-6:
+            return None
+        return np.array([back[0] / n, back[1] / n, 0.0]), n
+
+    def thumb_channel_relief(self, path: list[np.ndarray]) -> list:
         """Where the thumb drive's channel enters the back face over the CMC pulley cavity's back
         opening (``thenar_tools``: the cavity swept out through the back face) with less than two
         perimeters (``rules.MIN_WALL``) of palm between them, the material between is cut: a slot of
         the channel's width from the channel down into the opening, from outside the back face to
         where the wall reaches two perimeters (the 170 mm hand: a 0.52 mm skin otherwise). The cord
-        runs in its channel's slot there, open toward the cavity. [] where the wall is thick enough."""
+        runs in its channel's slot there, open toward the cavity. [] where the wall is thick enough.
+        ``path``: ``thumb_tendon_path()``."""
         from ...params.rules import MIN_WALL
 
+        back = self.back_sweep()
+        if back is None:
+            return []
+        v = back[0]
+        w = np.cross([0.0, 0.0, 1.0], v)
         t = self.thenar()
         T0 = self.T_cmc()
         R, h, q = t["cavity_r"], t["cavity_h"], t["pulley"]
         r = self.tol.tendon_hole / 2.0
-        p0, p1 = self.thumb_tendon_path()[:2]
+        p0, p1 = path[:2]
         Ti = np.linalg.inv(T0)
-        back = -T0[1, :3]
-        n = math.hypot(back[0], back[1])
-        if n <= 1e-6:
-            return []
-        v = np.array([back[0] / n, back[1] / n, 0.0])
-        w = np.cross([0.0, 0.0, 1.0], v)
         y_back = mm(F.palm_back(self.params))
         ss = np.linspace(0.0, 1.0, 401)
         thin = []
@@ -324,7 +334,7 @@ class Palm(ServoMount, Part):
         tools.append(cylinder(pts[0] - u, pts[1], t.tendon_hole / 2.0))
         tools.append(sphere(pts[1], t.tendon_relief / 2.0))            # the turn
         tools.append(cylinder(pts[1], pts[2] - (pts[1] - pts[2]), t.tendon_hole / 2.0))
-        tools += self.thumb_channel_relief()
+        tools += self.thumb_channel_relief(pts)
         # (the CMC loop's two strands run in the cavity's slot toward servo 6: no channel)
         # pilot holes for the forearm module's tab screws, down from the dorsal face
         for p in wrist.tab_screws(self.params):
