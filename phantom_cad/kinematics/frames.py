@@ -472,8 +472,6 @@ def _outlines(params, T: np.ndarray, servo: int) -> list[np.ndarray]:
     cavity, grown by a clearance, placed by T, with the pockets the module cuts for them: open along
     the shaft up to the module's top (a wall above the palm's dorsal face), so a tilted shaft sweeps
     them sideways (the convex hull of the outline at the servo and at the top)."""
-    from scipy.spatial import ConvexHull
-
     c = params.print.hole_clearance
     z_top = params.palm.thickness / 2.0 + params.palm.wall
     shapes = []
@@ -493,8 +491,33 @@ def _outlines(params, T: np.ndarray, servo: int) -> list[np.ndarray]:
             if T[2, 2] > 1e-9:
                 pts.append((p + T[:3, 2] * max((z_top - p[2]) / T[2, 2], 0.0))[:2])
         pts = np.array(pts)
-        out.append(pts[ConvexHull(pts).vertices])
+        out.append(pts[convex_hull_2d(pts)])
     return out
+
+
+def convex_hull_2d(points) -> np.ndarray:
+    """The indices of the vertices of the convex hull of 2-D points (n, 2), counter-clockwise from
+    the lowest x (then y); points on its edges left out (Andrew's monotone chain). numpy only: the
+    forearm's servo row is laid out on every build, and scipy.spatial costs 0.6 s to import.
+    ValueError when the points span no area."""
+    P = np.asarray(points, dtype=float)
+
+    def turn(o: int, a: int, b: int) -> float:     # > 0: o -> a -> b turns counter-clockwise
+        return float((P[a, 0] - P[o, 0]) * (P[b, 1] - P[o, 1]) - (P[a, 1] - P[o, 1]) * (P[b, 0] - P[o, 0]))
+
+    order = [int(i) for i in np.lexsort((P[:, 1], P[:, 0]))]
+    chains = []
+    for seq in (order, order[::-1]):                # the lower chain, then the upper one
+        chain_: list[int] = []
+        for i in seq:
+            while len(chain_) >= 2 and turn(chain_[-2], chain_[-1], i) <= 0.0:
+                chain_.pop()
+            chain_.append(i)
+        chains.append(chain_[:-1])
+    hull = chains[0] + chains[1]
+    if len(hull) < 3:
+        raise ValueError(f"convex_hull_2d: {len(P)} points span no area")
+    return np.array(hull)
 
 
 def servo_gaps(params, servos: dict[int, np.ndarray]) -> list[float]:
@@ -503,21 +526,25 @@ def servo_gaps(params, servos: dict[int, np.ndarray]) -> list[float]:
     swept along the shaft to the module's top): the largest gap between their projections on an
     edge normal of either (separating axes)."""
     row = sorted(servos.items(), key=lambda kT: kT[1][0, 3])
+    outlines = [[(P, _edge_normals(P)) for P in _outlines(params, T, k)] for k, T in row]
     gaps = []
-    for (ka, Ta), (kb, Tb) in zip(row, row[1:]):
+    for A, B in zip(outlines, outlines[1:]):
         g = np.inf
-        for P in _outlines(params, Ta, ka):
-            for Q in _outlines(params, Tb, kb):
-                axes = [np.array([-(R[(i + 1) % len(R)] - R[i])[1], (R[(i + 1) % len(R)] - R[i])[0]])
-                        for R in (P, Q) for i in range(len(R))]
-                best = -np.inf
-                for n in axes:
-                    n = n / np.linalg.norm(n)
-                    p, q = P @ n, Q @ n
-                    best = max(best, q.min() - p.max(), p.min() - q.max())
-                g = min(g, best)
+        for P, nP in A:
+            for Q, nQ in B:
+                n = np.vstack([nP, nQ])             # every edge normal of either: the axes
+                p, q = P @ n.T, Q @ n.T             # projections, one column per axis
+                best = np.maximum(q.min(axis=0) - p.max(axis=0), p.min(axis=0) - q.max(axis=0)).max()
+                g = min(g, float(best))
         gaps.append(float(g))
     return gaps
+
+
+def _edge_normals(R: np.ndarray) -> np.ndarray:
+    """The unit normals (k, 2) of a closed polygon's k edges (its vertices in order)."""
+    e = np.roll(R, -1, axis=0) - R
+    n = np.c_[-e[:, 1], e[:, 0]]
+    return n / np.linalg.norm(n, axis=1, keepdims=True)
 
 
 def _ring(T0: np.ndarray, s: float, r: float, n: int = 24) -> np.ndarray:

@@ -154,6 +154,32 @@ def test_a_wide_servo_widens_the_forearm_row(document):
             assert d >= doc["palm"]["wall_mm"] - 1e-6, (width, d)
 
 
+def test_convex_hull_2d_is_qhulls():
+    """``frames.convex_hull_2d`` (the servo row's outlines) against scipy's Qhull: the same vertices in
+    the same counter-clockwise cycle, on random clouds, the servo pulley's 24-gon with its swept copy,
+    a square with points on its edges and corners repeated; no area is an error."""
+    from scipy.spatial import ConvexHull
+
+    from phantom_cad.kinematics import frames as F
+
+    def cycle(P, idx):                # the hull's points as a cycle from its lowest (x, y): a point
+        pts = [tuple(P[int(i)]) for i in idx]       # repeated may be either index
+        k = pts.index(min(pts))
+        return pts[k:] + pts[:k]
+
+    rng = np.random.default_rng(7)
+    a = np.linspace(0.0, 2.0 * math.pi, 24, endpoint=False)
+    gon = np.c_[np.cos(a), np.sin(a)] * 9.0
+    square = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0.5, 0], [1, 0.5], [0.5, 1], [0, 0.5], [0, 0], [1, 1],
+                       [0.5, 0.5]], float)
+    clouds = [rng.normal(size=(n, 2)) * rng.uniform(1e-3, 10.0) for n in (3, 4, 10, 50, 400)]
+    clouds += [np.vstack([gon, gon + [3.0, -1.5]]), square]
+    for P in clouds:
+        assert cycle(P, F.convex_hull_2d(P)) == cycle(P, ConvexHull(P).vertices), P[:4]
+    with pytest.raises(ValueError, match="no area"):
+        F.convex_hull_2d(np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]))
+
+
 def test_shaft_offset_beyond_the_body(document):
     e = _fails(document, lambda d: d["cad"].__setitem__("servo_shaft_offset_mm", 11.6))
     assert e.field == "cad.servo_shaft_offset_mm"
