@@ -122,11 +122,13 @@ def coaxial(c, point, direction, tol: float = 1e-3) -> bool:
     return abs(abs(c["direction"] @ d) - 1.0) < tol and point_line_distance(c["point"], point, d) < tol
 
 
-def measure_groove_radius(shape, axis_point, axis_direction, width: float, tol: float = 1e-3) -> float:
+def measure_groove_radius(shape, axis_point, axis_direction, width: float, tol: float = 1e-3,
+                          faces: list[dict] | None = None) -> float:
     """Radius of the groove bottom about an axis: the coaxial cylindrical face whose axial length
     equals the groove ``width`` (a groove is a short concave band) and whose radius is the
-    smallest such band beyond the bore (if several bands, the outermost is the pulley flange)."""
-    cs = [c for c in cylinders(shape) if coaxial(c, axis_point, axis_direction, tol)
+    smallest such band beyond the bore (if several bands, the outermost is the pulley flange).
+    ``faces``: ``cylinders(shape)``, when the caller measures several grooves of one shape."""
+    cs = [c for c in (cylinders(shape) if faces is None else faces) if coaxial(c, axis_point, axis_direction, tol)
           and abs(c["length"] - width) < 1e-3]
     if not cs:
         raise ValueError("no coaxial cylindrical band of that width")
@@ -150,21 +152,26 @@ def circular_pockets(shape, radius: float, tol: float = 1e-3) -> list[dict]:
     opening (the end not closed by a flat bottom face) and the outward direction (bottom ->
     opening)."""
     bd = _bd()
-    planes = [f for f in shape.faces() if f.geom_type == bd.GeomType.PLANE]
+    pockets = [c for c in cylinders(shape) if abs(c["radius"] - radius) <= tol]
+    if not pockets:
+        return []
+    # each plane's centre and normal once (OpenCascade's surface properties: the costly part)
+    planes = []
+    for f in shape.faces():
+        if f.geom_type == bd.GeomType.PLANE:
+            centre = f.center()
+            planes.append((f, _vec(centre), _vec(f.normal_at(centre))))
     out = []
-    for c in cylinders(shape):
-        if abs(c["radius"] - radius) > tol:
-            continue
+    for c in pockets:
         p, d = c["point"], c["direction"]
         ends = [p + d * c["s_min"], p + d * c["s_max"]]
         closed = []
         for e in ends:
             hit = False
-            for f in planes:
-                n = _vec(f.normal_at(f.center()))
-                if abs(abs(n @ d) - 1.0) < 1e-6 and abs((e - _vec(f.center())) @ n) < 1e-6 \
+            for f, centre, n in planes:
+                if abs(abs(n @ d) - 1.0) < 1e-6 and abs((e - centre) @ n) < 1e-6 \
                         and f.area < math.pi * radius * radius * 1.01 and \
-                        np.linalg.norm(_vec(f.center()) - e) < 1e-3:
+                        np.linalg.norm(centre - e) < 1e-3:
                     hit = True
             closed.append(hit)
         if closed[0] == closed[1]:

@@ -170,10 +170,11 @@ class LinkTendons:
 def verify_grooves(part, shape, lt: LinkTendons, out: list[str]) -> None:
     """Every groove the routing model puts on this link (hub, loop groove, return groove), measured
     on the solid: its floor, half a cord inside the pulley radius, about the pulley's axis."""
-    from ..measure import measure_groove_radius
+    from ..measure import cylinders, measure_groove_radius
+    faces = cylinders(shape) if lt.grooves else []
     for g in lt.grooves:
         try:
-            r = measure_groove_radius(shape, (g.x, g.y, g.z), (1, 0, 0), g.width)
+            r = measure_groove_radius(shape, (g.x, g.y, g.z), (1, 0, 0), g.width, faces=faces)
         except ValueError:
             r = None
         label = {"hub": "loop hub", "groove": "loop groove", "return": "return groove"}[g.role]
