@@ -2,7 +2,7 @@
 hand's built solids placed by ``assembly.pose_transforms`` at rest (two views), at 60 % of every joint limit,
 in the power grasp (every tendon servo at the end of its travel, the CMC at rest) with each fingertip's
 distance to the palm measured on the solids, closed on a 35 mm cylinder across the palm
-(``cad.grasp.power_grasp``), where the thumb's pad comes within 1 mm of the index, middle
+(``cad.grasp.power_grasp``) and holding it palm down in MuJoCo (``export.hold``), where the thumb's pad comes within 1 mm of the index, middle
 and ring pads on the solids (``cad.grasp.solid_contact``), and exploded (each part moved off the one it
 mounts on, along the way it goes on). Run from the repository's root:
 .venv/bin/python bench/hand_figures.py [OUT_DIR]   (default docs/img; about a minute)
@@ -19,6 +19,8 @@ import numpy as np
 from phantom_cad import make_hand
 from phantom_cad.cad import assembly, grasp, measure, registry
 from phantom_cad.export import render, step_stl
+from phantom_cad.export.hold import hold_cylinder
+from phantom_cad.export.pipeline import build_hand
 from phantom_cad.kinematics import frames, opposition
 from phantom_cad.kinematics.topology import FINGERS, JOINTS, SERVOS, digit_links, link
 from phantom_cad.params.io import DEFAULT_PARAMS, load_params
@@ -140,6 +142,23 @@ def postures(p, meshes, solids, out: Path) -> None:
                               subtitle=sub, elev=elev, azim=azim, size_px=800)
         _side_by_side(views[0], views[1], out / fname)
     print(f"wrote {out / fname}: axis at y {g.axis_y_mm:.1f} mm, wraps {wraps}")
+    # pressing on, in MuJoCo (export.hold, on the default hand's exported MJCF, as tests/export/test_mjcf.py):
+    # the fingers closed to the end of their travel, then the palm facing down (gravity toward its palmar side)
+    with tempfile.TemporaryDirectory() as tmp:
+        result = build_hand(None, Path(tmp) / "export", slice=None)
+        held = hold_cylinder(result.out_dir / "description" / "mjcf" / "scene.xml", g)
+    T = assembly.pose_transforms(p, held.q)
+    M = held.T_cylinder @ np.linalg.inv(held.T_start)
+    cylinder = render.MeshItem("cylinder", cv @ M[:3, :3].T + M[:3, 3], cf, (0.85, 0.85, 0.80),
+                               f"{CYLINDER_MM:g} mm cylinder, {held.mass_kg * 1e3:.0f} g")
+    fname = "hand_power_held.png"
+    render.render_png(_tips_labelled(hand_only, T, FINGERS) + [cylinder], out / fname,
+                      title=f"held in MuJoCo, palm down: the {CYLINDER_MM:g} mm cylinder after 2 s of closing and 3 s of gravity",
+                      subtitle=f"gravity toward the palmar side (down here); squeezed {held.squeezed_mm:.1f} mm toward the "
+                      f"wrist onto the heel, then moved {held.moved_mm:.1f} mm; seen from the ulnar side",
+                      elev=5.0, azim=0.0, size_px=1000)
+    print(f"wrote {out / fname}: squeezed {held.squeezed_mm:.1f} mm, moved {held.moved_mm:.1f} mm palm down, "
+          f"servo torques {held.servo_torques.round(3).tolist()} N m")
     # opposition: the commands where the thumb's pad comes within 1 mm of each opposed fingertip's pad on
     # the solids (cad.grasp.solid_contact: the model's contacts, squarest first, the finger flexed onto
     # the still thumb), seen square to the line between the closest points, whole and close up

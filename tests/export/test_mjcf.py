@@ -446,68 +446,26 @@ def cylinder_grasp(request, hand_build, tmp_path_factory):
 
 
 def test_the_closed_hand_holds_a_cylinder_palm_down(cylinder_grasp):
-    """MuJoCo, contacts on: a free cylinder (100 g, solid) where ``cad.grasp`` puts it, the thumb at
-    its commands there (the cylinder's contacts off while the thumb turns, gravity off); then every
-    finger servo commanded to the end of its travel for 2 s; then gravity toward the palm's palmar
-    side (the palm facing down) for 3 s: the cylinder moves less than 5 mm and has come to rest, no
-    warning, and the palm (its heel) touches it on its wrist side."""
+    """MuJoCo, contacts on (``export.hold.hold_cylinder``): a free cylinder (100 g, solid) where
+    ``cad.grasp`` puts it, the thumb at its commands there (the cylinder's contacts off while the
+    thumb turns, gravity off); then every finger servo commanded to the end of its travel for 2 s;
+    then gravity toward the palm's palmar side (the palm facing down) for 3 s: the cylinder moves
+    less than 5 mm and has come to rest, no warning, and the palm (its heel) touches it on its
+    wrist side."""
+    from phantom_cad.export.hold import hold_cylinder
+    from phantom_cad.kinematics.topology import SERVOS
+
     g, scene = cylinder_grasp
-    spec = mujoco.MjSpec.from_file(str(scene))
-    r, length = g.diameter_mm / 2e3, (g.x_mm[1] - g.x_mm[0]) / 1e3
-    body = spec.worldbody.add_body(name="cylinder", pos=[(g.x_mm[0] + g.x_mm[1]) / 2e3, g.axis_y_mm / 1e3,
-                                                         g.axis_z_mm / 1e3],
-                                   quat=[math.cos(math.pi / 4), 0.0, math.sin(math.pi / 4), 0.0])   # z -> x
-    body.add_freejoint(name="cylinder")
-    body.add_geom(name="cylinder", type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[r, length / 2, 0.0])
-    # a solid cylinder by hand: I_axis = m r^2 / 2, across it m (3 r^2 + l^2) / 12
-    M = CYLINDER_KG
-    body.mass, body.explicitinertial = M, True
-    body.inertia = [M * (3 * r * r + length * length) / 12] * 2 + [M * r * r / 2]
-    m = spec.compile()
-    d = mujoco.MjData(m)
-    gid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "cylinder")
-    bid = m.geom_bodyid[gid]
-    contype, conaffinity = int(m.geom_contype[gid]), int(m.geom_conaffinity[gid])
-    gravity = m.opt.gravity.copy()
-    assert gravity == pytest.approx([0.0, 0.0, -9.81])          # the palm frame's -z: palmar
-
-    def run(seconds):
-        for _ in range(int(seconds / m.opt.timestep)):
-            mujoco.mj_step(m, d)
-
-    from phantom_cad.kinematics.topology import CMC_SERVO, SERVOS, THUMB_CHAIN, chain
-
-    # the actuators in u order (each drives its servo's joint), as g.u
+    m = mujoco.MjModel.from_xml_path(str(scene))
+    # the actuators in u order (each drives its servo's joint), as g.u; gravity along the palm's -z
     assert [_name(m, mujoco.mjtObj.mjOBJ_JOINT, m.actuator_trnid[a, 0]) for a in range(m.nu)] == [s.name for s in SERVOS]
-    hi = m.actuator_ctrlrange[:, 1]
-    fingers = [chain(f).servo for f in FINGERS]
-    thumb = [THUMB_CHAIN.servo, CMC_SERVO]
-    try:
-        m.geom_contype[gid] = m.geom_conaffinity[gid] = 0
-        m.opt.gravity[:] = 0.0
-        mujoco.mj_resetDataKeyframe(m, d, 0)
-        d.ctrl[:] = 0.0
-        d.ctrl[thumb] = g.u[thumb]
-        run(1.0)
-        start = d.xpos[bid].copy()
-        m.geom_contype[gid], m.geom_conaffinity[gid] = contype, conaffinity
-        d.ctrl[fingers] = hi[fingers]
-        run(2.0)
-        closed = d.xpos[bid].copy()
-        m.opt.gravity[:] = gravity
-        run(3.0)
-        fell = np.linalg.norm(d.xpos[bid] - closed) * 1e3
-        free = m.jnt_dofadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, "cylinder")]
-        assert [d.warning[i].number for i in range(len(d.warning))] == [0] * len(d.warning)
-        what = (f"squeezed {np.linalg.norm(closed - start) * 1e3:.1f} mm while closing, then moved {fell:.1f} mm "
-                f"palm down; servo torques {d.actuator_force.round(3).tolist()}")
-        assert fell < 5.0, what
-        assert np.abs(d.qvel[free:free + 3]).max() < 0.01, what        # m/s: it has come to rest
-        # what holds it on its wrist side: the palm (its heel), touching it behind its axis
-        palm = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "palm")
-        behind = [c.pos[1] for c in d.contact[:d.ncon]
-                  if gid in (c.geom1, c.geom2) and palm in (m.geom_bodyid[c.geom1], m.geom_bodyid[c.geom2])
-                  and c.pos[1] < d.xpos[bid][1] - r / 2]
-        assert behind, what
-    finally:
-        m.opt.gravity[:] = gravity
+    assert m.opt.gravity == pytest.approx([0.0, 0.0, -9.81])          # the palm frame's -z: palmar
+    h = hold_cylinder(scene, g, mass_kg=CYLINDER_KG)
+    assert h.gravity == pytest.approx([0.0, 0.0, -9.81])
+    what = (f"squeezed {h.squeezed_mm:.1f} mm while closing, then moved {h.moved_mm:.1f} mm palm down; "
+            f"servo torques {h.servo_torques.round(3).tolist()}")
+    assert h.warnings == {}, what
+    assert h.moved_mm < 5.0, what
+    assert h.speed_mm_s < 10.0, what              # it has come to rest
+    # what holds it on its wrist side: the palm (its heel), touching it behind its axis
+    assert any(y < h.end_mm[1] - g.diameter_mm / 4 for y in h.palm_contacts_y_mm), what
