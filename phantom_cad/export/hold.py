@@ -81,7 +81,6 @@ def hold_cylinder(scene: str | Path, grasp, mass_kg: float = 0.1) -> Hold:
     gravity = m.opt.gravity.copy()
     act = {s.index: mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, s.actuator) for s in SERVOS}
     fingers = [act[chain(f).servo] for f in FINGERS]
-    thumb = {act[THUMB_CHAIN.servo]: THUMB_CHAIN.servo, act[CMC_SERVO]: CMC_SERVO}
 
     def run(seconds: float) -> None:
         for _ in range(int(seconds / m.opt.timestep)):
@@ -93,8 +92,8 @@ def hold_cylinder(scene: str | Path, grasp, mass_kg: float = 0.1) -> Hold:
     d.ctrl[:] = 0.0
     m.geom_contype[gid] = m.geom_conaffinity[gid] = 0
     m.opt.gravity[:] = 0.0
-    for a, k in thumb.items():
-        d.ctrl[a] = g.u[k]
+    for k in (THUMB_CHAIN.servo, CMC_SERVO):
+        d.ctrl[act[k]] = g.u[k]
     run(THUMB_S)
     start = d.xpos[bid].copy()
     m.geom_contype[gid], m.geom_conaffinity[gid] = contype, conaffinity
@@ -114,4 +113,4 @@ def hold_cylinder(scene: str | Path, grasp, mass_kg: float = 0.1) -> Hold:
                           if d.warning[i].number},
                 palm_contacts_y_mm=contacts,
                 servo_torques=np.array([d.actuator_force[act[s.index]] for s in SERVOS]),
-                q=q, T_start=T_start, T_cylinder=pose(bid), gravity=gravity.copy())
+                q=q, T_start=T_start, T_cylinder=pose(bid), gravity=gravity)

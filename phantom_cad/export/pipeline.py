@@ -60,6 +60,15 @@ from .results import BuildError, BuildResult, PartFailure, failure_from
 __all__ = ["build_hand", "BuildError", "BuildResult", "PartFailure", "INTERFERENCE_TOL_MM3"]
 
 
+def occt_threads(jobs: int, cpus: int | None = None) -> int | None:
+    """OpenCascade threads for each of ``jobs`` workers on ``cpus`` CPUs (default: this process's,
+    ``workers.available_cpus``): each worker's share, at least one, when the workers fill the CPUs;
+    None (OpenCascade's default, every core) when one worker has them all."""
+    cpus = workers.available_cpus() if cpus is None else cpus
+    share = cpus // max(1, jobs)
+    return None if share >= cpus else max(1, share)
+
+
 def _is_export(folder: Path) -> bool:
     """Whether ``folder`` holds an earlier export (its manifest.json names our format)."""
     from .manifest import MANIFEST_FORMAT
@@ -133,7 +142,8 @@ class _Build:
     def get_pool(self) -> ProcessPoolExecutor:
         if self.pool is None:
             self.pool = ProcessPoolExecutor(max_workers=self.jobs, mp_context=workers.mp_context(),
-                                            initializer=workers.die_with_parent, initargs=(os.getpid(),))
+                                            initializer=pool_mod.init_worker,
+                                            initargs=(os.getpid(), occt_threads(self.jobs)))
         return self.pool
 
     def close(self) -> None:

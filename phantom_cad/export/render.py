@@ -216,18 +216,24 @@ def render_png(items: list[MeshItem], path: str | os.PathLike, title: str, *,
                 ends = to_px(np.array([[*a, 0.0], [*b, 0.0]]))
                 pen.line([tuple(ends[0, :2]), tuple(ends[1, :2])], fill=_rgb8(_BED_LINE), width=S)
     img = np.asarray(canvas).copy()
-    hit = index >= 0
-    img[hit] = np.round(color * 255.0).astype(np.uint8)[index[hit]]
-    # outlines: a depth step to a neighbour (or to the background) of more than a fraction of
-    # the view's size
-    d = np.where(hit, depth, -1e30).astype(np.float32)
-    step = _OUTLINE_STEP * max(W, H)
-    edge = np.zeros((H, W), bool)
-    for a, b in ((np.s_[1:, :], np.s_[:-1, :]), (np.s_[:, 1:], np.s_[:, :-1])):
-        diff = d[a] - d[b]
-        edge[a] |= diff > step            # the nearer side carries the line
-        edge[b] |= diff < -step
-    img[edge] = _rgb8(_OUTLINE)
+    # the window of the items' pixels, one pixel wider: the outlines lie in it (two background
+    # pixels have no depth step between them)
+    rows, cols = np.flatnonzero((index >= 0).any(axis=1)), np.flatnonzero((index >= 0).any(axis=0))
+    if len(rows):
+        win = np.s_[max(rows[0] - 1, 0):rows[-1] + 2, max(cols[0] - 1, 0):cols[-1] + 2]
+        index, depth, sub = index[win], depth[win], img[win]
+        hit = index >= 0
+        sub[hit] = np.round(color * 255.0).astype(np.uint8)[index[hit]]
+        # outlines: a depth step to a neighbour (or to the background) of more than a fraction of
+        # the view's size
+        d = np.where(hit, depth, -1e30).astype(np.float32)
+        step = _OUTLINE_STEP * max(W, H)
+        edge = np.zeros(d.shape, bool)
+        for a, b in ((np.s_[1:, :], np.s_[:-1, :]), (np.s_[:, 1:], np.s_[:, :-1])):
+            diff = d[a] - d[b]
+            edge[a] |= diff > step            # the nearer side carries the line
+            edge[b] |= diff < -step
+        sub[edge] = _rgb8(_OUTLINE)
     # SUPERSAMPLE x SUPERSAMPLE samples per pixel
     out = Image.fromarray(img, "RGB").resize((size_px, size_px), Image.Resampling.BOX)
     draw = ImageDraw.Draw(out)

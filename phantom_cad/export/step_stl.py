@@ -75,6 +75,31 @@ def _refs(body: bytes) -> list[int]:
     return out
 
 
+_BLOCK = b"MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION"
+_ENTITY_START = re.compile(rb"#\d+\s*=\s*")
+
+
+def _split_presentation(data: bytes):
+    """(prefix through the DATA section's geometry, [(id, body)] of the presentation block, suffix),
+    parsing only the block: None where the block's start is not found as an entity's or the
+    geometry before it refers to (or numbers) an entity at or past the block's first, the cases
+    :func:`canonicalize_step`'s whole-file parse handles."""
+    at = data.find(_BLOCK)
+    if at < 0:
+        return None
+    line = data.rfind(b"\n", 0, at) + 1
+    if _ENTITY_START.fullmatch(data, line, at) is None:
+        return None
+    start, end = data.index(b"DATA;") + len(b"DATA;"), data.rindex(b"ENDSEC;")
+    tail = [(int(m.group(1)), m.group(2)) for m in _ENTITY.finditer(data, line, end)]
+    if not tail:
+        return None
+    head_numbers = _REF.findall(data, start, line)
+    if head_numbers and max(map(int, head_numbers)) >= min(eid for eid, _ in tail):
+        return None
+    return data[:line], tail, data[end:]
+
+
 def canonicalize_step(data: bytes) -> bytes:
     """Renumber the presentation block at the end of an OCCT STEP file canonically.
 
@@ -86,15 +111,23 @@ def canonicalize_step(data: bytes) -> bytes:
     Entity contents are unchanged; the file is returned as is if it has no such block."""
     import hashlib
 
-    try:
-        prefix, entities, suffix = _split_entities(data)
-    except ValueError:
+    if _BLOCK not in data:
         return data
-    first = next((k for k, (_, body) in enumerate(entities)
-                  if body.startswith(b"MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION")), None)
-    if first is None:
-        return data
-    tail = entities[first:]
+    # the block alone where the geometry before it is written as it is (renumbering nothing of
+    # it: its 10^5 entities parsed took most of this function's time); else the whole file
+    fast = _split_presentation(data)
+    if fast is not None:
+        prefix, tail, suffix = fast
+        entities, first = [], 0
+    else:
+        try:
+            prefix, entities, suffix = _split_entities(data)
+        except ValueError:
+            return data
+        first = next((k for k, (_, body) in enumerate(entities) if body.startswith(_BLOCK)), None)
+        if first is None:
+            return data
+        tail = entities[first:]
     tail_ids = [eid for eid, _ in tail]
     body_of = dict(tail)
     if len(body_of) != len(tail) or min(tail_ids) < max(eid for eid, _ in entities[:first] or [(0, b"")]):
@@ -149,9 +182,8 @@ def canonicalize_step(data: bytes) -> bytes:
         return b"'".join(parts)
 
     head = entities[:first]
-    out = [prefix, b"\n"]
+    out = [prefix] if fast is not None else [prefix, b"\n"]
     # the geometry before the block refers to none of it, as a rule: then it is written unchanged
-    # (renumbering its 10^5 entities one by one took most of this function's time)
     head_refs = [int(r) for _, body in head for r in _REF.findall(body)]
     keep = not head_refs or max(head_refs) < base
     for eid, body in head:

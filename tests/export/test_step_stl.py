@@ -39,12 +39,20 @@ BLOCK_B = b"""#10 = MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION('',(
 """
 
 
-def test_canonical_step_block_is_order_independent():
-    a = step_stl.canonicalize_step(HEAD + BLOCK_A + TAIL)
-    b = step_stl.canonicalize_step(HEAD + BLOCK_B + TAIL)
+# heads the block-only parse (``_split_presentation``) hands back to the whole-file parse: the
+# block's keyword in a label before the block, a quoted '#15' (at or past the block's first id)
+HEADS = [HEAD,
+         HEAD + b"#4 = PRODUCT('MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION','',(#2));\n",
+         HEAD + b"#4 = PRODUCT('see #15','',(#2));\n"]
+
+
+@pytest.mark.parametrize("head", HEADS, ids=["plain", "keyword in a label", "quoted reference"])
+def test_canonical_step_block_is_order_independent(head):
+    a = step_stl.canonicalize_step(head + BLOCK_A + TAIL)
+    b = step_stl.canonicalize_step(head + BLOCK_B + TAIL)
     assert a == b
     # the head (geometry) is untouched, quoted ';' and '#' survive
-    assert a.startswith(HEAD)
+    assert a.startswith(head)
     assert a.endswith(TAIL)
     # each styled item still points at the right geometry with the right colour
     ents = dict(step_stl._split_entities(a)[1])

@@ -27,6 +27,7 @@ from ... import units
 from ...kinematics import frames as F
 from ...kinematics import topology
 from ...kinematics.dimensions import printed_hole, slot_back
+from ..kernel import import_build123d
 
 
 def mm(x: float) -> float:
@@ -311,8 +312,7 @@ def internal_tangents(ra: float, yb: float, rb: float) -> list[tuple[np.ndarray,
 # ---------------------------------------------------------------------------
 
 def bd():
-    import build123d
-    return build123d
+    return import_build123d()
 
 
 def box(x0, x1, y0, y1, z0, z1):
