@@ -41,7 +41,7 @@ def import_build123d():
     sys.modules.update({"sklearn": parent, "sklearn.cluster": cluster})
     try:
         import build123d
-    except ImportError:
+    except (ImportError, AttributeError):       # it asked the placeholders for more than DBSCAN
         for name in [m for m in sys.modules if m == "build123d" or m.startswith("build123d.")]:
             del sys.modules[name]
         build123d = None

@@ -59,6 +59,24 @@ print(json.dumps({"same": brep_from_stl.DBSCAN is sklearn.cluster.DBSCAN}))
     assert got["same"] is True
 
 
+def test_build123d_asking_for_more_of_scikit_learn(tmp_path):
+    """A build123d whose import asks scikit-learn for more than DBSCAN (a stand-in package first on
+    the path) is imported again as usual: the real scikit-learn then, the stand-in's body run."""
+    pkg = tmp_path / "build123d"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("from sklearn.cluster import KMeans\nKIND = KMeans.__module__\n")
+    code = f"""
+import json, sys
+sys.path.insert(0, {str(tmp_path)!r})
+from phantom_cad.cad.kernel import import_build123d
+bd = import_build123d()
+print(json.dumps({{"file": bd.__file__, "kind": bd.KIND, "sklearn": hasattr(sys.modules["sklearn"], "__version__")}}))
+"""
+    got = _run(code)
+    assert got["file"] == str(pkg / "__init__.py")
+    assert got["kind"].startswith("sklearn.cluster") and got["sklearn"] is True
+
+
 _PARTS = ("palm", "index_proximal", "thumb_cmc_base")
 _BUILD = """
 import hashlib, json
