@@ -139,4 +139,3 @@ def test_init_worker_sets_up_the_build_workers():
                              initargs=(os.getpid(), 1)) as ex:
         state = ex.submit(_worker_state).result(timeout=300)
     assert state == {"sklearn": False, "build123d": True, "occt": True, "threads": 1}
-

@@ -788,18 +788,3 @@ def test_every_knot_well_is_cut_in_material(built, params):
             if not shape.is_inside(tuple(q)):
                 missing.append((link_name, tuple(np.round(q, 2))))
     assert not missing, missing
-
-
-def test_tools_cut_in_groups_apart():
-    """parts.common.apart: boxes A [0, 1], B [2, 3] (apart), C [0.5, 1.5] (meets A), D [1, 2]
-    (touches A and B, meets C), a sphere E at x = 10: groups [A, B, E], [C], [D]; build() cuts them
-    from a 20 x 4 x 4 box: by hand 320 - 3 (the boxes' union, x in [0, 3]) - pi / 6 (E, r 0.5)."""
-    from phantom_cad.cad.parts.common import apart, box, build, sphere
-
-    tools = {"A": box(0, 1, 0, 1, 0, 1), "B": box(2, 3, 0, 1, 0, 1), "C": box(0.5, 1.5, 0, 1, 0, 1),
-             "D": box(1, 2, 0, 1, 0, 1), "E": sphere((10.0, 2.0, 2.0), 0.5)}
-    name = {id(t): k for k, t in tools.items()}
-    assert [[name[id(t)] for t in g] for g in apart(list(tools.values()))] == [["A", "B", "E"], ["C"], ["D"]]
-    solid = build([box(0, 20, 0, 4, 0, 4)], list(tools.values()))
-    assert len(solid.solids()) == 1
-    assert solid.volume == pytest.approx(320.0 - 3.0 - math.pi / 6.0, rel=1e-6)

@@ -410,36 +410,16 @@ def as_solid(shape):
     return b.Solid(s.wrapped) if not isinstance(s, b.Solid) else s
 
 
-def apart(tools) -> list[list]:
-    """``tools`` in groups whose members' bounding boxes are apart (touching counts as meeting),
-    each tool in the first group it fits, in order. OpenCascade's multi-tool cut intersects the
-    tools with one another as well as with the body: tools that meet cost intersections that cut
-    nothing, and where they meet at tangent or coincident faces they can leave material."""
-    groups: list[tuple[list, list[np.ndarray]]] = []
-    for t in tools:
-        bb = t.bounding_box()
-        box_ = np.array([tuple(bb.min), tuple(bb.max)])
-        for members, boxes in groups:
-            if not any(np.all(box_[0] <= o[1] + 1e-6) and np.all(o[0] <= box_[1] + 1e-6) for o in boxes):
-                members.append(t)
-                boxes.append(box_)
-                break
-        else:
-            groups.append(([t], [box_]))
-    return [members for members, _ in groups]
-
-
 def build(body_parts, tools, *later):
-    """Fuse the body parts, then cut ``tools`` and then each group of ``later`` tools (kept apart:
-    a guide eyelet's relief sphere inside a clevis slot, measured by ``cad.clearance``), each
-    split into the groups of :func:`apart`, one boolean per group (the default hand's 28 parts:
-    8.4-8.7 s of CPU against 10.2 s for one boolean per group of the caller's, on one thread; the
-    same volumes, areas, face and edge counts); the result should be one valid solid (checked once
-    per part by ``phantom_cad.cad.verify``)."""
+    """Fuse the body parts and cut every tool in one boolean, then each group of ``later`` tools
+    in one boolean of its own (OpenCascade's multi-tool cut can leave material where several
+    tools overlap one another at tangent or coincident faces: a guide eyelet's relief sphere
+    inside a clevis slot, measured by ``cad.clearance``); the result should be one valid solid
+    (checked once per part by ``phantom_cad.cad.verify``)."""
     body = body_parts[0]
     if len(body_parts) > 1:
         body = body.fuse(*body_parts[1:])
     for group in (tools, *later):
-        for members in apart(group):
-            body = as_solid(body.cut(*members))
+        if group:
+            body = as_solid(body.cut(*group))
     return as_solid(body)
