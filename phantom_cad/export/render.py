@@ -218,11 +218,11 @@ def render_png(items: list[MeshItem], path: str | os.PathLike, title: str, *,
     img = np.asarray(canvas).copy()
     # the window of the items' pixels, one pixel wider: the outlines lie in it (two background
     # pixels have no depth step between them)
-    rows, cols = np.flatnonzero((index >= 0).any(axis=1)), np.flatnonzero((index >= 0).any(axis=0))
+    hit = index >= 0
+    rows, cols = np.flatnonzero(hit.any(axis=1)), np.flatnonzero(hit.any(axis=0))
     if len(rows):
         win = np.s_[max(rows[0] - 1, 0):rows[-1] + 2, max(cols[0] - 1, 0):cols[-1] + 2]
-        index, depth, sub = index[win], depth[win], img[win]
-        hit = index >= 0
+        index, depth, hit, sub = index[win], depth[win], hit[win], img[win]
         sub[hit] = np.round(color * 255.0).astype(np.uint8)[index[hit]]
         # outlines: a depth step to a neighbour (or to the background) of more than a fraction of
         # the view's size
