@@ -22,7 +22,7 @@ come from :mod:`phantom_cad.cad.registry`, one per topology link.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -43,6 +43,13 @@ class Built:
     digit: str | None
     #: convex solids (link frame, mm) whose union is the collision shape; empty: the shape's hull
     collision: tuple = ()
+    #: ``tendons.Blocker`` meshes (link frame, mm) where a slicer must not put support
+    #: (``Part.support_blockers``)
+    blockers: tuple = ()
+
+
+#: the left hand's mirror (x -> -x)
+MIRROR = np.array([-1.0, 1.0, 1.0])
 
 
 def part_names(params) -> list[str]:
@@ -85,12 +92,17 @@ def build_part(params, name: str) -> Built:
     part = registry.part(params, name)
     shape = part.build()
     collision = tuple(part.collision_solids())
+    blockers = tuple(part.support_blockers())
     if params.side == "left":
         import build123d as bd
         shape = shape.mirror(bd.Plane.YZ)
         collision = tuple(s.mirror(bd.Plane.YZ) for s in collision)
+        # the mirror x -> -x, its faces turned back outward
+        blockers = tuple(replace(b, vertices=b.vertices * MIRROR, faces=b.faces[:, ::-1].copy(),
+                                 flat=None if b.flat is None else tuple(np.multiply(b.flat, MIRROR)))
+                         for b in blockers)
     return Built(name=name, shape=shape, T_hand_link=pose_transforms(params)[name], color=part.color,
-                 print_rotation=part.print_rotation, digit=part.digit, collision=collision)
+                 print_rotation=part.print_rotation, digit=part.digit, collision=collision, blockers=blockers)
 
 
 def verify_part(params, name: str, shape) -> list[str]:

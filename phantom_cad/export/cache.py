@@ -118,7 +118,7 @@ def part_key(params, name: str, part_inputs: Mapping[str, Any]) -> str:
 
 
 #: the files of every part entry (render.png too unless the build was --no-render)
-PART_FILES = ("part.brep", "part.step", "part.stl", "mesh.npz", "visual.stl", "collision.npz")
+PART_FILES = ("part.brep", "part.step", "part.stl", "part.3mf", "mesh.npz", "visual.stl", "collision.npz")
 #: the files of the fit-test coupon's entry (render.png too unless the build was --no-render)
 COUPON_FILES = ("fit_coupon.step", "fit_coupon.stl", "fit_coupon.md")
 #: the files of every assembly entry (render.png too unless the build was --no-render)

@@ -81,6 +81,9 @@ def build_manifest(*, stage: Path, params, params_path: Path, names, keys, metas
             "print_transform": [[_r(x, 9) for x in row] for row in m["print_transform"]],
             "T_hand_link": [[_r(x, 9) for x in row] for row in T.tolist()],
             "stl_triangles": m["stl"]["triangles"],
+            # print/<name>.3mf: the STL's mesh (centred on project3mf.BED_CENTRE) and this many
+            # support blockers over its tendon features (cad/parts/tendons.feature_blockers)
+            "support_blockers": m.get("support_blockers", 0),
             "checks": {
                 "one_valid_solid": True,
                 "verify_part": m.get("verify_part", "skipped"),
@@ -98,6 +101,7 @@ def build_manifest(*, stage: Path, params, params_path: Path, names, keys, metas
     for p in parts:
         by_file[f"step/{p['name']}.step"] = ("step", p, p["bbox_mm"], p["volume_mm3"])
         by_file[f"stl/{p['name']}.stl"] = ("stl", p, p["print_bbox_mm"], p["checks"]["stl_volume_mm3"])
+        by_file[f"print/{p['name']}.3mf"] = ("print_project", p, None, None)
         by_file[f"renders/{p['name']}.png"] = ("render", p, None, None)
     asm_box = {"min": [_r(x) for x in lo], "max": [_r(x) for x in hi]}
     by_file["step/hand_assembly.step"] = ("assembly_step", None, asm_box, _r(total_volume, 4))

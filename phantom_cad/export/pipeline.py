@@ -322,12 +322,13 @@ class _Build:
         if stage.exists():
             shutil.rmtree(stage)
         try:
-            for sub in ("step", "stl", "renders", "slicer"):
+            for sub in ("step", "stl", "print", "renders", "slicer"):
                 (stage / sub).mkdir(parents=True)
             for n in names:
                 pdir = cache.part_dir(keys[n])
                 shutil.copyfile(pdir / "part.step", stage / "step" / f"{n}.step")
                 shutil.copyfile(pdir / "part.stl", stage / "stl" / f"{n}.stl")
+                shutil.copyfile(pdir / "part.3mf", stage / "print" / f"{n}.3mf")
                 if render and (pdir / "render.png").is_file():
                     shutil.copyfile(pdir / "render.png", stage / "renders" / f"{n}.png")
             cdir = cache.coupon_dir(self.coupon_key)

@@ -86,7 +86,7 @@ def part_worker(task: dict) -> dict:
         params = parse(task["document"], source=task["source"])
         asm = interface.assembly(task.get("assembly_module"))
         inputs = asm.part_inputs(params, name)
-        from . import description, render, step_stl
+        from . import description, project3mf, render, step_stl
 
         built = asm.build_part(params, name)
         timings["build_part"] = time.perf_counter() - t0
@@ -124,6 +124,11 @@ def part_worker(task: dict) -> dict:
         vp, T_print = step_stl.to_print_pose(v, R)
         stl, mesh_checks = _checked_stl(name, vp, f, volume)
         (tmp / "part.stl").write_bytes(stl)
+        # the PrusaSlicer project: the part as in the STL, and the support blockers that hold in
+        # this orientation (a groove's only with its axis flat), moved alike
+        blockers = [(b.label, b.vertices @ T_print[:3, :3].T + T_print[:3, 3], b.faces)
+                    for b in getattr(built, "blockers", ()) if b.holds(R[2])]
+        (tmp / "part.3mf").write_bytes(project3mf.project_bytes(name, vp, f, blockers))
         np.savez(tmp / "mesh.npz", vertices=v, faces=f.astype(np.int32))
         # the robot description's; a part's convex collision solids (if it names them) each give
         # one collision piece
@@ -148,6 +153,7 @@ def part_worker(task: dict) -> dict:
             "area_mm2": area,
             "bbox_mm": _bbox(v),
             "print_bbox_mm": _bbox(vp),
+            "support_blockers": len(blockers),
             "stl": {"sha256": sha256(stl), "bytes": len(stl), **mesh_checks},
             "step": {"sha256": sha256(step), "bytes": len(step), "reimport_volume_mm3": reimported},
             "part_inputs": jsonable(inputs),

@@ -113,7 +113,7 @@ def parse_gcode(text: str) -> PrintEstimate:
 
 def _gcode(stl_path: Path, ini_text: str, exe: str | None, timeout: float, options: tuple = (),
            gcode_path: str | os.PathLike | None = None) -> str:
-    """Slice one STL with the given config and extra command-line ``options``; the G-code text
+    """Slice one STL (or 3MF) with the given config and extra command-line ``options``; the G-code text
     (also kept at ``gcode_path`` when given)."""
     exe = exe or find_slicer()
     if exe is None:
@@ -183,19 +183,29 @@ def support_points(text: str, spacing: float = SUPPORT_SPACING):
     return np.vstack(pts) if pts else np.zeros((0, 3))
 
 
-def slice_supports(stl_path: str | os.PathLike, ini_text: str, exe: str | None = None, timeout: float = 600):
+def slice_supports(stl_path: str | os.PathLike, ini_text: str, exe: str | None = None, timeout: float = 600,
+                   project: str | os.PathLike | None = None):
     """Where PrusaSlicer puts support under an STL as it lies (its automatic supports, the
     config's other settings): :func:`support_points` moved into the STL's own frame (the object
-    is centred on :data:`BED_CENTRE` by its bounding box and stands on the bed at z = 0)."""
+    is centred on :data:`BED_CENTRE` by its bounding box and stands on the bed at z = 0).
+    ``project``: slice that part's PrusaSlicer project instead (``export.project3mf``: the STL's
+    mesh centred on its ``BED_CENTRE``, with its support blockers), where it lies."""
+    from . import project3mf
     from .step_stl import read_stl
 
     stl_path = Path(stl_path).resolve()
     v, _ = read_stl(stl_path.read_bytes())
     centre = (v.min(axis=0) + v.max(axis=0)) / 2.0
-    pts = support_points(_gcode(stl_path, ini_text, exe, timeout, options=(
-        "--support-material", "--support-material-auto", "--center", f"{BED_CENTRE[0]:g},{BED_CENTRE[1]:g}")))
-    pts[:, 0] += centre[0] - BED_CENTRE[0]
-    pts[:, 1] += centre[1] - BED_CENTRE[1]
+    if project is None:
+        bed = BED_CENTRE
+        pts = support_points(_gcode(stl_path, ini_text, exe, timeout, options=(
+            "--support-material", "--support-material-auto", "--center", f"{bed[0]:g},{bed[1]:g}")))
+    else:
+        bed = project3mf.BED_CENTRE
+        pts = support_points(_gcode(Path(project).resolve(), ini_text, exe, timeout, options=(
+            "--support-material", "--support-material-auto", "--dont-arrange")))
+    pts[:, 0] += centre[0] - bed[0]
+    pts[:, 1] += centre[1] - bed[1]
     pts[:, 2] += v[:, 2].min()
     return pts
 

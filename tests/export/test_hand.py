@@ -160,31 +160,6 @@ def test_every_part_slices(hand):
     assert infill * vol_cm3 * 0.9 < est["filament_cm3"] < vol_cm3 * 1.1
 
 
-@pytest.mark.xfail(strict=True, reason="PrusaSlicer's automatic supports stand in every digit part's tendon grooves "
-                   "(57-364 mm of support path each, under the pulley floors the cord bears on, which face down "
-                   "with the joint axes flat) and, where the channels end in them, in the channels' mouths (up to "
-                   "80 mm; the teardrop channels' own roofs take none), exported orientation (dorsal or magnet "
-                   "face down), 0.2 mm layers, default hand 2026-11-24 (docs/parts.md); issue 12 goes on")
-def test_tendon_grooves_and_channels_print_without_support(hand):
-    """Issue 12: sliced as exported with PrusaSlicer's automatic supports, no support path lies in
-    a tendon groove or channel (``export.supports``) of the index finger's and the thumb's parts."""
-    from phantom_cad.export import slicer, supports
-
-    if slicer.find_slicer() is None:
-        pytest.skip("prusa-slicer is not installed (bash .ci/sysdeps installs Debian's prusa-slicer)")
-    result, man = hand
-    params = load_params()
-    ini = slicer.config_ini(params.print)
-    found = {}
-    for p in man["parts"]:
-        if p["digit"] not in ("index", "thumb"):
-            continue
-        r = supports.part_support(params, result.out_dir / "stl" / f"{p['name']}.stl", p["print_transform"],
-                                  p["name"], ini)
-        found[p["name"]] = {k: v for k, v in r["features"].items() if v > 0.0}
-    assert len(found) == 7 and all(v == {} for v in found.values()), found
-
-
 def test_mass_estimates(hand):
     result, man = hand
     params = load_params()

@@ -50,7 +50,7 @@ def test_layout_and_manifest_checksums(standin_build):
     names = ["palm", "index_proximal", "servo_pulley_2"]
     assert result.parts == names
     expected = {f"step/{n}.step" for n in names} | {f"stl/{n}.stl" for n in names} \
-        | {f"renders/{n}.png" for n in names} \
+        | {f"print/{n}.3mf" for n in names} | {f"renders/{n}.png" for n in names} \
         | {"step/hand_assembly.step", "renders/hand_assembly.png", "bom.csv", "routing.json", "manifest.json",
            "slicer/config.ini"} \
         | {f"coupon/fit_coupon.{ext}" for ext in ("step", "stl", "md", "png")}

@@ -12,6 +12,9 @@ imports build123d lazily. A family declares:
 * ``build()``: the right-hand solid in its link frame (mm);
 * optionally ``collision_solids()``: the convex solids whose union is its collision shape in the
   robot description (default: none, the hull of the built solid);
+* optionally ``support_blockers()``: regions (``tendons.Blocker``, link frame) where a slicer must
+  not put support, because every overhang in them bridges between close walls (the tendon
+  grooves, pilots and channels); the export writes them into the part's PrusaSlicer project;
 * ``inputs()``: the plain parameter values the solid depends on (a superset, never a
   subset): the part cache's key;
 * ``verify(shape)``: what a built solid must measure (groove radius, guides, pockets...),
@@ -117,6 +120,11 @@ class Part:
         description: a part with concavities that matter for contact (the palm's stepped sockets and
         thenar) names the convex solids it is fused from, before its cuts. Empty: the convex hull
         of the built part."""
+        return []
+
+    def support_blockers(self) -> list:
+        """Where a slicer must not put support (``tendons.Blocker`` meshes, link frame, mm):
+        default none."""
         return []
 
     def inputs(self) -> dict:

@@ -24,8 +24,8 @@ from ...kinematics.topology import CMC_Q, LINKS, digit_links, joint
 from ..measure import eyelet_centres, point_line_distance
 from .base import DORSAL_DOWN, Part, child_joint, digit_table, parent_joint
 from .common import DigitSection, box, build, cyl_x, cylinder, mm, prism_x, sphere
-from .tendons import (LinkTendons, link_tendons, anchor_tools, channel_tools, drive_fan_tools, groove_tool, knot_pocket_depth,
-                      sector_prism, cutter,
+from .tendons import (LinkTendons, RoutedPart, link_tendons, anchor_tools, channel_tools, drive_fan_tools, groove_outer,
+                      groove_tool, knot_pocket_depth, sector_prism, cutter,
                       parent_hub_x, verify_grooves)
 
 #: how far (rad) the drive's knot well behind G2 leans distally from the palmar normal (see
@@ -50,10 +50,7 @@ def tongue(sec: DigitSection, joint_name: str, lt: LinkTendons):
         box(lo, hi, 0.0, sec.slot_back, -T / 2.0, T / 2.0),
         box(lo, hi, -sec.slot_back, 0.0, sec.heel_z, T / 2.0),                 # extension-stop heel
     ]
-    # out past the tongue's corners: the strands beyond the arc belong to the parent, and sweep
-    # through the tongue's plane as the joint turns
-    outer = math.hypot(sec.slot_back, T / 2.0) + 1.0
-    tools = [groove_tool(g, outer) for g in lt.tongue_grooves(joint_name)]
+    tools = [groove_tool(g, groove_outer(sec, g)) for g in lt.tongue_grooves(joint_name)]
     tools += [cyl_x(t.axle_clear / 2.0, lo - 1.0, hi + 1.0, 0.0, 0.0)]           # axle clearance bore
     face = tongue_bearing_face(sec, joint_name, lt)
     if face is not None:
@@ -167,7 +164,7 @@ def channel(p0, p1, d: float, extend: float = 0.0):
 # phalanges
 # ---------------------------------------------------------------------------
 
-class Phalanx(Part):
+class Phalanx(RoutedPart, Part):
     """One phalanx of a digit: ``segment`` is its link's segment (``proximal``, ``middle``,
     ``distal``; the thumb has no middle). Dimensions in mm; the joints at its two ends come
     from the topology (the joint at its origin, and the next link's joint)."""
@@ -289,10 +286,10 @@ def hub_grooves(sec: DigitSection, lt: LinkTendons) -> list:
     cylinder one millimetre past the boss) leaves the dorsal or palmar face it would meet it at a
     shallow angle and leave a knife edge (0.07 mm at 27 deg); there the groove is opened square to
     the face, out to where the rim lies a flank (0.8 mm) inside it."""
-    outer = sec.boss_radius + 1.0
     wall = mm(FLANK)
     tools = []
     for g in (g for g in lt.grooves if g.role == "hub"):
+        outer = groove_outer(sec, g)
         tools.append(groove_tool(g, outer))
         for side in (1.0, -1.0):
             floor = sec.thickness / 2.0 - wall - side * g.z          # the slab's floor from the axis

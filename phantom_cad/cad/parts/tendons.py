@@ -38,6 +38,17 @@ from ...kinematics.topology import TENDONS, joint
 SECTOR_MARGIN = math.radians(15.0)
 #: a drive chord's fan reaches this far (rad) beyond the extreme chords it holds
 FAN_PAD = math.radians(4.0)
+#: a tendon feature no wider than this needs no support in any orientation: every overhang in it
+#: spans at most this between its walls, and prints as a bridge (mm; the widest groove is 1.9 mm)
+BRIDGE_MM = 2.0
+#: how far (mm) a support blocker reaches past the feature it covers (at 0.05 mm PrusaSlicer left
+#: a few support lines against a groove's flank; less than a flank, so it stays in the walls)
+BLOCKER_MARGIN = 0.3
+#: how far (mm) a groove's blocker reaches past its flanks (the flanks' outer faces are the boss's,
+#: which may need support)
+FLANK_MARGIN = 0.05
+#: the joint axes' direction in a digit link's frame
+AXIS = (1.0, 0.0, 0.0)
 #: the loop and return tendons: the ones whose features this module cuts (the drive's eyelets and
 #: channels are the guide features of the parts themselves)
 KINDS = ("coupling", "return")
@@ -215,6 +226,15 @@ def sector_prism(g: Groove, outer: float):
     return prism_x(poly, g.x - g.width, g.x + g.width)
 
 
+def groove_outer(sec, g: Groove) -> float:
+    """How far (mm) from its axis a groove is cut: a millimetre past the boss (a hub's groove, in
+    the parent's cheek), or past the tongue's corners (a groove in the child's tongue: the strands
+    beyond the arc belong to the parent, and sweep through the tongue's plane as the joint turns)."""
+    if g.role == "hub":
+        return sec.boss_radius + 1.0
+    return math.hypot(sec.slot_back, sec.thickness / 2.0) + 1.0
+
+
 def groove_tool(g: Groove, outer: float):
     """The cutter of a groove: from its floor out to ``outer`` (mm), over its sector."""
     from .common import ring_x
@@ -317,12 +337,7 @@ def anchor_tools(lt: LinkTendons, sec, up=None) -> list:
     for a in lt.anchors:
         p = a.pos
         if a.role == "hub clamp":            # set-screw pilot from the cheek's outer face across the groove
-            side = math.copysign(1.0, p[0])
-            on_circle = a.centre + (p - a.centre) * (a.radius / np.linalg.norm((p - a.centre)[1:]))
-            on_circle[0] = p[0]
-            x_in = p[0] - side * (sec.layout.groove / 2.0)
-            out.append(cylinder((x_in, *on_circle[1:]), (side * (sec.width / 2.0 + 1.0), *on_circle[1:]),
-                                t.screw_pilot / 2.0))
+            out.append(cylinder(*pilot_axis(a, sec), t.screw_pilot / 2.0))
         elif a.role == "groove clamp":       # knot pocket in the groove floor
             v = (p - a.centre)[1:]
             v = v / np.linalg.norm(v)
@@ -337,6 +352,133 @@ def anchor_tools(lt: LinkTendons, sec, up=None) -> list:
             d = a.cord + 4.0 * t.clearance   # than the channel it meets (equal bores meet degenerately)
             out.append(teardrop(p, (p[0], p[1], sec.thickness / 2.0 + 1.0), d / 2.0, up, lt.roof))
     return out
+
+
+def pilot_axis(a: Anchor, sec) -> tuple[np.ndarray, np.ndarray]:
+    """The ends (mm) of a hub clamp's set-screw pilot: along x through the cord's centreline at
+    the clamp, from the groove's inner flank out past the cheek's outer face."""
+    p = a.pos
+    side = math.copysign(1.0, p[0])
+    on_circle = a.centre + (p - a.centre) * (a.radius / np.linalg.norm((p - a.centre)[1:]))
+    x_in = p[0] - side * (sec.layout.groove / 2.0)
+    return np.array([x_in, *on_circle[1:]]), np.array([side * (sec.width / 2.0 + 1.0), *on_circle[1:]])
+
+
+@dataclass(frozen=True)
+class Blocker:
+    """A region where a slicer must not put support (a closed triangle mesh, link frame, mm,
+    outward faces): one tendon feature, every overhang in which bridges between its walls, at
+    most :data:`BRIDGE_MM` apart. The export writes them into each part's PrusaSlicer project as
+    support blockers (``export.project3mf``)."""
+    label: str
+    vertices: np.ndarray
+    faces: np.ndarray
+    #: the direction (link frame) that must lie flat as printed for the feature's overhangs to be
+    #: bridges (a groove's or a pilot's axis: stood upright, a groove's upper flank is a ceiling
+    #: reaching out from its floor to its mouth); None: any orientation (a channel's roof spans its
+    #: width however it lies)
+    flat: tuple[float, float, float] | None = None
+
+    def holds(self, up) -> bool:
+        """Whether the blocker applies with the printer's +z along ``up`` (link frame)."""
+        return self.flat is None or abs(float(np.dot(self.flat, up))) < 1e-6
+
+
+def feature_blockers(lt: LinkTendons, sec) -> list[Blocker]:
+    """The support blockers of a link's tendon features (the routing model's, as cut by
+    :func:`groove_tool`, :func:`anchor_tools` and :func:`channel_tools`), each a
+    :data:`BLOCKER_MARGIN` larger:
+
+    * a **groove**: its slot over its width and sector, from half a flank outside the axle's
+      clearance bore (the knot pockets in its floor included; the bore itself is not a tendon
+      feature) out to where it is cut (:func:`groove_outer`), when its axis lies flat;
+    * a hub clamp's **set-screw pilot** (a hole of 1.6 mm along the axis), when it lies flat;
+    * a **channel**: about its axis, out to its teardrop roof's apex, past each end as cut.
+
+    Which of them apply is up to the print orientation (:meth:`Blocker.holds`)."""
+    m = BLOCKER_MARGIN
+    r_in = sec.tol.axle_clear / 2.0 + units.mm(FLANK) / 2.0
+    out = []
+    for g in lt.grooves:
+        V, F = sector_ring_mesh(g.y, g.z, g.x - g.width / 2.0 - FLANK_MARGIN, g.x + g.width / 2.0 + FLANK_MARGIN,
+                                r_in, groove_outer(sec, g) + m, g.sector)
+        out.append(Blocker(f"groove {g.role} {g.joint}", V, F, AXIS))
+    for a in lt.anchors:
+        if a.role == "hub clamp":
+            p0, p1 = pilot_axis(a, sec)
+            out.append(Blocker(f"set-screw pilot {a.pos[0]:+.1f}", *cylinder_mesh(p0, p1, sec.tol.screw_pilot / 2.0 + m),
+                               AXIS))
+    apex = 1.0 / math.sin(lt.roof)
+    for k, (p0, p1, d) in enumerate(lt.channels):
+        u = (p1 - p0) / np.linalg.norm(p1 - p0)
+        out.append(Blocker(f"channel {k}", *cylinder_mesh(p0 - d / 2.0 * u, p1 + d / 2.0 * u, apex * d / 2.0 + m)))
+    return out
+
+
+def sector_ring_mesh(y: float, z: float, x0: float, x1: float, r0: float, r1: float,
+                     sector: tuple[float, float] | None = None, step: float = math.radians(5.0)):
+    """A closed mesh (vertices, faces; outward) of the ring r0 <= r <= r1 about the x-parallel axis
+    through (y, z), x0 <= x <= x1, over the polar ``sector`` (rad; None: all round). Its polygon's
+    outer chords lie outside r1 and its inner ones inside r0."""
+    a0, a1 = (0.0, 2.0 * math.pi) if sector is None else sector
+    n = max(2, int(math.ceil((a1 - a0) / step)))
+    half = (a1 - a0) / (2.0 * n)
+    ang = np.linspace(a0, a1, n, endpoint=False) if sector is None else np.linspace(a0, a1, n + 1)
+    k = len(ang)
+    rings = []
+    for x, r in ((x0, r0 * math.cos(half)), (x0, r1 / math.cos(half)), (x1, r1 / math.cos(half)), (x1, r0 * math.cos(half))):
+        rings.append(np.c_[np.full(k, x), y + r * np.cos(ang), z + r * np.sin(ang)])
+    V = np.vstack(rings)
+    faces = []
+    segs = range(k) if sector is None else range(k - 1)
+    for i in segs:
+        j = (i + 1) % k
+        for A in range(4):             # x0 face, outer, x1 face, inner: ring A to ring A + 1
+            B = (A + 1) % 4
+            faces += [(A * k + i, A * k + j, B * k + j), (A * k + i, B * k + j, B * k + i)]
+    if sector is not None:             # the two radial ends
+        for i, flip in ((0, False), (k - 1, True)):
+            q = [0 * k + i, 1 * k + i, 2 * k + i, 3 * k + i]
+            tri = [(q[0], q[1], q[2]), (q[0], q[2], q[3])]
+            faces += [t[::-1] for t in tri] if flip else tri
+    return _outward(V, np.array(faces, np.int64))
+
+
+def cylinder_mesh(p0, p1, r: float, n: int = 24):
+    """A closed mesh (vertices, faces; outward) of the cylinder of radius r (its polygon's chords
+    outside it) from p0 to p1."""
+    p0, p1 = np.asarray(p0, float), np.asarray(p1, float)
+    u = (p1 - p0) / np.linalg.norm(p1 - p0)
+    e = np.eye(3)[int(np.argmin(np.abs(u)))]
+    v = np.cross(u, e)
+    v /= np.linalg.norm(v)
+    w = np.cross(u, v)
+    ang = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
+    rr = r / math.cos(math.pi / n)
+    circle = rr * (np.cos(ang)[:, None] * v + np.sin(ang)[:, None] * w)
+    V = np.vstack([p0 + circle, p1 + circle, p0, p1])
+    c0, c1 = 2 * n, 2 * n + 1
+    faces = []
+    for i in range(n):
+        j = (i + 1) % n
+        faces += [(i, j, n + j), (i, n + j, n + i), (c0, j, i), (c1, n + i, n + j)]
+    return _outward(V, np.array(faces, np.int64))
+
+
+def _outward(V: np.ndarray, F: np.ndarray):
+    """(V, F) with the faces turned outward (a positive signed volume)."""
+    t = V[F]
+    if np.einsum("ij,ij->i", t[:, 0], np.cross(t[:, 1], t[:, 2])).sum() < 0.0:
+        F = F[:, ::-1].copy()
+    return V, F
+
+
+class RoutedPart:
+    """A digit part whose tendon features come from the routing model (``self.params``,
+    ``self.link``, ``self.sec``): its support blockers (:func:`feature_blockers`)."""
+
+    def support_blockers(self) -> list[Blocker]:
+        return feature_blockers(link_tendons(self.params, self.link.name), self.sec)
 
 
 def knot_pocket_depth(sec, floor: float, cord: float) -> float:

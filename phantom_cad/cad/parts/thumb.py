@@ -24,13 +24,13 @@ from ..measure import eyelet_centres, point_line_distance
 from .base import Part, child_joint, digit_table
 from .common import DigitSection, box, build, cylinder, mm, prism_x, sphere, transform
 from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, hub_grooves
-from .tendons import link_tendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry, verify_grooves
+from .tendons import RoutedPart, link_tendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry, verify_grooves
 
 #: depth (mm) of the flat that keys the column's end to the CMC pulley [choice]
 KEY_DEPTH = 1.0
 
 
-class ThumbCMCBase(Part):
+class ThumbCMCBase(RoutedPart, Part):
     """The thumb's metacarpal module: the link the CMC joint turns (its parent joint is the
     CMC, direct drive by the CMC servo)."""
 
