@@ -13,8 +13,11 @@ support everywhere else it would, and none in them.
 
 The file is a 3MF package (the 3MF core specification's model, one object) with PrusaSlicer's
 volume table (``Metadata/Slic3r_PE_model.config``: each volume's triangle range and type;
-``volume_type`` ``SupportBlocker``), which PrusaSlicer (2.4 and later) and the slicers derived
-from it read. It holds no print settings: the build's ``slicer/config.ini`` is loaded apart.
+``volume_type`` ``SupportBlocker``), which PrusaSlicer reads (2.5 here: the tests slice the
+projects with it). The blockers are volumes of the part's one object, so a slicer that reads
+only the 3MF core would take them for material: for any slicer but PrusaSlicer and its
+descendants, the STL is the file. The project holds no print settings: the build's
+``slicer/config.ini`` is loaded apart.
 Deterministic: the same meshes give the same bytes (fixed zip dates and order).
 """
 

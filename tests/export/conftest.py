@@ -6,6 +6,8 @@
 * ``standin_build``: the stand-in hand built once per session into a tmp dir.
 * ``hand_build``: the real default hand (phantom_cad.cad's parts) built once per session.
 * ``pkg``: its robot description package (``description/``).
+* ``hand_export``: ``hand_export(kind)`` -> the export of one of issue 12's three hands
+  (tests/cad/conftest.py ``HANDS``), built once per session with ``hand_build``'s part cache.
 """
 
 from __future__ import annotations
@@ -79,3 +81,26 @@ def pkg(hand_build):
     """The description package of the default hand (``hand_build``)."""
     result, _ = hand_build
     return result.out_dir / "description"
+
+
+#: issue 12's three hands (tests/cad/conftest.py HANDS): (name, parameter file, side)
+EXPORT_HANDS = [("default", None, None), ("left", None, "left"),
+                ("hand_length_170", HERE.parents[1] / "params" / "examples" / "small.toml", None)]
+
+
+@pytest.fixture(scope="session")
+def hand_export(hand_build, tmp_path_factory):
+    """``hand_export(kind)`` -> the BuildResult of one of :data:`EXPORT_HANDS` (the default hand's
+    is ``hand_build``'s), each built once per session, not sliced."""
+    from phantom_cad.export.pipeline import build_hand
+
+    result, cache = hand_build
+    done = {"default": result}
+
+    def get(kind: str):
+        if kind not in done:
+            _, path, side = next(h for h in EXPORT_HANDS if h[0] == kind)
+            done[kind] = build_hand(path, tmp_path_factory.mktemp(kind) / "export", side=side, cache_dir=cache,
+                                    jobs=2, slice=None)
+        return done[kind]
+    return get

@@ -417,7 +417,7 @@ assert [h[0] for h in GRASP_HANDS] == list(HANDS)
 
 @pytest.fixture(scope="module", params=[(h, d) for h in GRASP_HANDS for d in CYLINDERS],
                 ids=lambda v: f"{v[0][0]}-{v[1]:g}mm")
-def cylinder_grasp(request, hand_build, tmp_path_factory):
+def cylinder_grasp(request, hand_build, hand_export):
     """(``cad.grasp.power_grasp`` of a hand on a cylinder: where the solids say every finger reaches
     past its equator, and the thumb's commands that clear it; the hand's MJCF scene), each hand's
     export built with the session's part cache; the solids are the export's own (each part's BREP
@@ -427,14 +427,11 @@ def cylinder_grasp(request, hand_build, tmp_path_factory):
     from phantom_cad.canon import plain
     from phantom_cad.export import step_stl
     from phantom_cad.export.cache import Cache
-    from phantom_cad.export.pipeline import build_hand
     from phantom_cad.params import parse
 
     (kind, path, side), diameter = request.param
-    result, cache = hand_build
-    if kind != "default":
-        result = build_hand(path, tmp_path_factory.mktemp(kind) / "export", side=side, cache_dir=cache, jobs=2,
-                            slice=None)
+    _, cache = hand_build
+    result = hand_export(kind)
     p = parse(hand_document(kind, plain(load_params(PARAMS).document)))
     assert (p.side, p.digest) == (result.side, result.params_digest)
     names = [n for n in assembly.part_names(p) if n != "forearm" and not n.startswith("servo_pulley_")]

@@ -38,14 +38,15 @@ from ...kinematics.topology import TENDONS, joint
 SECTOR_MARGIN = math.radians(15.0)
 #: a drive chord's fan reaches this far (rad) beyond the extreme chords it holds
 FAN_PAD = math.radians(4.0)
-#: a tendon feature no wider than this needs no support in any orientation: every overhang in it
-#: spans at most this between its walls, and prints as a bridge (mm; the widest groove is 1.9 mm)
+#: the widest gap (mm) a support blocker may cover: an overhang between walls no further apart
+#: prints as a bridge (the widest groove is 1.9 mm; tests/export/test_project3mf.py measures it)
 BRIDGE_MM = 2.0
-#: how far (mm) a support blocker reaches past the feature it covers (at 0.05 mm PrusaSlicer left
-#: a few support lines against a groove's flank; less than a flank, so it stays in the walls)
+#: how far (mm) a blocker reaches past its feature: past where a groove is cut, around a pilot's
+#: and a channel's wall (at 0.05 mm PrusaSlicer left 0.75-1.0 mm of support path in the hub
+#: grooves, by their set-screw pilots)
 BLOCKER_MARGIN = 0.3
-#: how far (mm) a groove's blocker reaches past its flanks (the flanks' outer faces are the boss's,
-#: which may need support)
+#: how far (mm) a groove's blocker reaches past its flanks (at 0.3 mm it reached the boss's own
+#: rounded underside beside a hub's groove, which is no bridge)
 FLANK_MARGIN = 0.05
 #: the joint axes' direction in a digit link's frame
 AXIS = (1.0, 0.0, 0.0)
@@ -386,8 +387,8 @@ class Blocker:
 
 def feature_blockers(lt: LinkTendons, sec) -> list[Blocker]:
     """The support blockers of a link's tendon features (the routing model's, as cut by
-    :func:`groove_tool`, :func:`anchor_tools` and :func:`channel_tools`), each a
-    :data:`BLOCKER_MARGIN` larger:
+    :func:`groove_tool`, :func:`anchor_tools` and :func:`channel_tools`), each
+    :data:`BLOCKER_MARGIN` larger (a groove :data:`FLANK_MARGIN` past its flanks):
 
     * a **groove**: its slot over its width and sector, from half a flank outside the axle's
       clearance bore (the knot pockets in its floor included; the bore itself is not a tendon
