@@ -137,22 +137,24 @@ def measure_groove_radius(shape, axis_point, axis_direction, width: float, tol: 
     return float(min(c["radius"] for c in cs))
 
 
-def eyelet_centres(shape, radius: float, length: float, tol: float = 1e-3) -> list[dict]:
+def eyelet_centres(shape, radius: float, length: float, tol: float = 1e-3, faces: list[dict] | None = None
+                   ) -> list[dict]:
     """Guide eyelets: full cylindrical holes of ``radius`` whose axial length is ``length``;
-    returns their axis direction and the centre of the band (the guide point)."""
+    returns their axis direction and the centre of the band (the guide point). ``faces``:
+    ``cylinders(shape)``, when the caller has them."""
     out = []
-    for c in cylinders(shape):
+    for c in (cylinders(shape) if faces is None else faces):
         if abs(c["radius"] - radius) < tol and abs(c["length"] - length) < 0.005:
             out.append({"centre": c["centre"], "direction": c["direction"], "length": c["length"]})
     return out
 
 
-def circular_pockets(shape, radius: float, tol: float = 1e-3) -> list[dict]:
+def circular_pockets(shape, radius: float, tol: float = 1e-3, faces: list[dict] | None = None) -> list[dict]:
     """Blind round pockets of ``radius``: for each such cylindrical face, the centre of its
     opening (the end not closed by a flat bottom face) and the outward direction (bottom ->
-    opening)."""
+    opening). ``faces``: ``cylinders(shape)``, when the caller has them."""
     bd = _bd()
-    pockets = [c for c in cylinders(shape) if abs(c["radius"] - radius) <= tol]
+    pockets = [c for c in (cylinders(shape) if faces is None else faces) if abs(c["radius"] - radius) <= tol]
     if not pockets:
         return []
     # each plane's centre and normal once (OpenCascade's surface properties: the costly part)

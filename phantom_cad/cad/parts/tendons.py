@@ -179,11 +179,13 @@ class LinkTendons:
         return [g for g in self.grooves if g.joint == joint_name and g.role in ("groove", "return")]
 
 
-def verify_grooves(part, shape, lt: LinkTendons, out: list[str]) -> None:
+def verify_grooves(part, shape, lt: LinkTendons, out: list[str], faces: list[dict] | None = None) -> None:
     """Every groove the routing model puts on this link (hub, loop groove, return groove), measured
-    on the solid: its floor, half a cord inside the pulley radius, about the pulley's axis."""
+    on the solid: its floor, half a cord inside the pulley radius, about the pulley's axis.
+    ``faces``: ``measure.cylinders(shape)``, when the caller has them."""
     from ..measure import cylinders, measure_groove_radius
-    faces = cylinders(shape) if lt.grooves else []
+    if faces is None:
+        faces = cylinders(shape) if lt.grooves else []
     for g in lt.grooves:
         try:
             r = measure_groove_radius(shape, (g.x, g.y, g.z), (1, 0, 0), g.width, faces=faces)

@@ -20,7 +20,7 @@ import numpy as np
 from ... import canon
 from ...kinematics import frames as F
 from ...kinematics.topology import CMC_Q, JOINTS, link
-from ..measure import eyelet_centres, point_line_distance
+from ..measure import cylinders, eyelet_centres, point_line_distance
 from .base import Part, child_joint, digit_table
 from .common import DigitSection, box, build, cylinder, mm, prism_x, sphere, transform
 from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, hub_grooves
@@ -65,8 +65,9 @@ class ThumbCMCBase(RoutedPart, Part):
         """The metacarpal-side guide eyelet at d1 from the MP axis (at y = metacarpal)."""
         out: list[str] = []
         tol = self.sec.tol
-        verify_grooves(self, shape, link_tendons(self.params, self.link.name), out)
-        eyes = eyelet_centres(shape, tol.tendon_hole / 2.0, tol.eyelet_length)
+        faces = cylinders(shape)       # once, for the grooves, the eyelet and the pockets
+        verify_grooves(self, shape, link_tendons(self.params, self.link.name), out, faces)
+        eyes = eyelet_centres(shape, tol.tendon_hole / 2.0, tol.eyelet_length, faces=faces)
         d = (point_line_distance(eyes[0]["centre"], (0, self.length, 0), (1, 0, 0)) if len(eyes) == 1
              else None)
         self.expect(out, "guide d1", d, mm(self.sec.guide.d1), 0.02)
