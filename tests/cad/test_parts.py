@@ -375,6 +375,43 @@ def test_thumb_mp_guides_at_d1_d2_alpha(built, document):
     assert math.degrees(alpha) == pytest.approx(g["alpha_deg"], abs=0.1)
 
 
+def test_thumb_cmc_base_prints_on_its_palmar_pad(built, document):
+    """Issue 12: the CMC base rests on its palmar face, deepened to a pad as low as the MP guide's
+    boss reaches (the guide sits inside the palmar face, its boss does not): the planar faces
+    looking straight down at its lowest z cover more than a quarter of its footprint
+    (``export.orient``'s rule); laid that way its MP axis is flat, so every blocker of its MP hub
+    groove holds."""
+    from build123d import GeomType
+
+    base = built["thumb_cmc_base"]
+    bb = base.shape.bounding_box()
+    T = document["thumb"]["thickness_mm"]
+    low = [f for f in base.shape.faces() if f.geom_type == GeomType.PLANE
+           and f.normal_at().Z < -1.0 + 1e-9 and abs(f.center().Z - bb.min.Z) < 1e-6]
+    assert sum(f.area for f in low) > 0.25 * bb.size.X * bb.size.Y
+    assert bb.min.Z < -T / 2.0 - 1.0            # the boss hangs 1.9 mm below the palmar face
+    up = np.asarray(base.print_rotation)[2]
+    assert np.allclose(up, (0.0, 0.0, 1.0))
+    grooves = [b for b in base.blockers if b.label.startswith("groove")]
+    assert grooves and all(b.holds(up) for b in grooves)
+
+
+def test_cylinder_floor_against_closed_forms():
+    """``common.cylinder_floor``: a level cylinder's lowest line is r under its axis, an upright
+    one's its lower end; a tilted one against its tessellation (trimesh, 256 sides)."""
+    trimesh = pytest.importorskip("trimesh")
+    from phantom_cad.cad.parts.common import cylinder_floor
+
+    assert cylinder_floor((0, 0, 1.0), (5.0, 0, 1.0), 2.0) == pytest.approx(-1.0, abs=1e-12)
+    assert cylinder_floor((0, 0, 3.0), (0, 0, -2.0), 2.0) == pytest.approx(-2.0, abs=1e-12)
+    p0, p1, r = np.array([1.0, 2.0, 3.0]), np.array([4.0, -2.0, 1.0]), 1.5
+    u = (p1 - p0) / np.linalg.norm(p1 - p0)
+    m = trimesh.creation.cylinder(radius=r, segment=np.array([p0, p1]), sections=256)
+    # the lower end circle's lowest point: its centre's z less r sin(angle from z)
+    assert cylinder_floor(p0, p1, r) == pytest.approx(1.0 - r * math.sqrt(1.0 - u[2] ** 2), abs=1e-12)
+    assert cylinder_floor(p0, p1, r) == pytest.approx(m.bounds[0, 2], abs=1e-3)
+
+
 # ---------------------------------------------------------------------------
 # palm sockets and magnets
 # ---------------------------------------------------------------------------

@@ -48,6 +48,9 @@ SIDE_DOWN = F.rot_y(math.pi / 2.0)[:3, :3]
 #: a phalanx on its dorsal face (+z of the link down): its joint axes lie flat, its clevis slots
 #: and grooves stand in vertical planes
 DORSAL_DOWN = F.rot_x(math.pi)[:3, :3]
+#: on the palmar face (-z of the link down, the link's frame as it is): the thumb CMC base, its
+#: MP axis flat and its column upright
+PALMAR_DOWN = np.eye(3)
 #: a finger base on its magnet face (-y of the link down)
 MAGNET_DOWN = F.rot_x(math.pi / 2.0)[:3, :3]
 

@@ -334,6 +334,14 @@ def cylinder(p0, p1, r: float):
     return b.Solid.make_cylinder(r, h, b.Plane(origin=tuple(p0), x_dir=tuple(xdir), z_dir=tuple(axis)))
 
 
+def cylinder_floor(p0, p1, r: float) -> float:
+    """The lowest z (mm) of the solid cylinder of radius ``r`` on the axis p0 -> p1: an end
+    circle's lowest point, its centre's z less r times the sine of the axis's angle from z."""
+    p0, p1 = np.asarray(p0, float), np.asarray(p1, float)
+    u = (p1 - p0) / np.linalg.norm(p1 - p0)
+    return float(min(p0[2], p1[2]) - r * math.sqrt(max(0.0, 1.0 - u[2] * u[2])))
+
+
 def teardrop(p0, p1, r: float, up=None, roof: float = math.radians(45.0)):
     """A hole of radius r from p0 to p1 that prints without support when ``up`` (a unit vector in
     the same frame: the printer's +z) is given: a cylinder whose top is a roof of two planes at

@@ -7,13 +7,13 @@ palm's journal, hollow for the drive, its end keyed by a flat for the CMC pulley
 (``pulley.CMCPulley``);
 the metacarpal arm; the MP clevis (axle press bore, extension and flexion stops at the MP limit);
 the metacarpal-side MP guide eyelet at d1_th; the drive's path down the column and along the arm
-to the eyelet; the anchors of the two cable springs. The thumb phalanges are
+to the eyelet; the anchors of the two cable springs; a palmar pad under the hub and the arm, as
+deep as the eyelet's boss reaches below the palmar face, so the part prints on that face
+(``PALMAR_DOWN``: the MP axis flat, its hub groove bridged, the column upright). The thumb phalanges are
 phalanx.Phalanx("thumb", ...).
 """
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 
@@ -21,9 +21,9 @@ from ... import canon
 from ...kinematics import frames as F
 from ...kinematics.topology import CMC_Q, JOINTS, link
 from ..measure import cylinders, eyelet_centres, point_line_distance
-from .base import Part, child_joint, digit_table
-from .common import DigitSection, box, build, cylinder, mm, prism_x, sphere, transform
-from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, hub_grooves
+from .base import PALMAR_DOWN, Part, child_joint, digit_table
+from .common import DigitSection, box, build, cylinder, cylinder_floor, mm, prism_x, sphere, transform
+from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, eyelet_boss_axis, hub_grooves
 from .tendons import RoutedPart, link_tendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry, verify_grooves
 
 #: depth (mm) of the flat that keys the column's end to the CMC pulley [choice]
@@ -61,9 +61,27 @@ class ThumbCMCBase(RoutedPart, Part):
         return {**self.common_inputs(), "thumb": canon.plain(digit_table(doc, self.digit)),
                 "palm": canon.plain(doc["palm"])}
 
+    def guide_boss(self) -> tuple[np.ndarray, np.ndarray]:
+        """The metacarpal-side MP guide: (its centre (y, z), the point its hole points to), mm."""
+        G1 = self.sec.guide_points()[0] + np.array([self.length, 0.0])
+        return G1, link_tendons(self.params, self.link.name).eyelet_toward(G1)
+
+    @property
+    def palmar_floor(self) -> float:
+        """z (mm) of the face the part prints on: the palmar face (-thickness / 2), or lower, as
+        low as the MP guide's boss reaches below it (the MP guide sits inside the palmar face, its
+        boss does not); the pad fills the hub and the arm down to it as far as the MP clevis
+        slot's back."""
+        G1, toward = self.guide_boss()
+        return min(-self.sec.thickness / 2.0,
+                   cylinder_floor(*eyelet_boss_axis(self.sec, G1, toward), self.sec.eyelet_boss_radius))
+
     def verify(self, shape) -> list[str]:
-        """The metacarpal-side guide eyelet at d1 from the MP axis (at y = metacarpal)."""
+        """The metacarpal-side guide eyelet at d1 from the MP axis (at y = metacarpal); the solid's
+        lowest point on the palmar pad's face (``palmar_floor``: the part rests on it)."""
         out: list[str] = []
+        bb = shape.bounding_box(optimal=True)
+        self.expect(out, "lowest z", bb.min.Z, self.palmar_floor, 0.02)
         tol = self.sec.tol
         faces = cylinders(shape)       # once, for the grooves, the eyelet and the pockets
         verify_grooves(self, shape, link_tendons(self.params, self.link.name), out, faces)
@@ -80,9 +98,11 @@ class ThumbCMCBase(RoutedPart, Part):
 
     @property
     def print_rotation(self) -> np.ndarray:
-        """On its side (its +x face: the hub's and the arm's flat side), the column lying along the
-        bed (``export.orient`` measures it)."""
-        return F.rot_y(math.pi / 2.0)[:3, :3]
+        """On its palmar pad (``PALMAR_DOWN``): the MP axis lies flat, so the MP hub groove's
+        ceiling is a bridge between its flanks (its support blocker holds), the clevis slot is
+        open upward, the column stands up (``export.orient`` measures it). On its side, the MP
+        hub groove's inner flank was a 3.8 mm cantilever over the groove, and took support."""
+        return PALMAR_DOWN
 
     def T_pulley(self) -> np.ndarray:
         """The CMC pulley's frame in this part's (mm)."""
@@ -101,16 +121,19 @@ class ThumbCMCBase(RoutedPart, Part):
     def build(self):
         sec, t = self.sec, self.sec.tol
         W, T, L = sec.width, sec.thickness, self.length
-        body = [cylinder((0, 0, -T / 2.0), (0, 0, T / 2.0), self.hub_radius),
+        zp = self.palmar_floor
+        body = [cylinder((0, 0, zp), (0, 0, T / 2.0), self.hub_radius),
                 box(-W / 2.0, W / 2.0, 0.0, L, -T / 2.0, T / 2.0),
                 cylinder((0, 0, 0.0), (0, 0, self.thenar["top"]), self.thenar["column_r"])]
+        if zp < -T / 2.0:     # the pad, from the hub to the clevis slot's back
+            body.append(box(-W / 2.0, W / 2.0, 0.0, L - sec.slot_back, zp, -T / 2.0 + 0.01))
         lt = link_tendons(self.params, self.link.name)
         b, tools = clevis(sec, self.joint, L, lt.hubs().get(child_joint(self.link).name))
         body += b
         tools += hub_grooves(sec, lt)
         G1, G2 = sec.guide_points()
         shift = np.array([L, 0.0])
-        b3, guide, u, (s_near, s_far) = eyelet(sec, G1 + shift, lt.eyelet_toward(G1 + shift))
+        b3, guide, u, (s_near, s_far) = eyelet(sec, *self.guide_boss())
         body += b3
         guide += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - np.array([0.0, *(G1 + shift)]))))
         # the near relief leaves through the clevis slot's back along the chord at rest, as on the
@@ -122,8 +145,8 @@ class ThumbCMCBase(RoutedPart, Part):
         # as the bore would touch it along a circle, and the arm channel through that circle
         # leaves edges 1e-5 mm long that tessellate with holes)
         turn = np.array([0.0, 0.0, s_far[2]])
-        guide.append(sphere(turn, max(t.tendon_relief / 2.0 + t.clearance,
-                                      t.screw_clear / 2.0 + t.tendon_hole / 2.0)))
+        r_turn = max(t.tendon_relief / 2.0 + t.clearance, t.screw_clear / 2.0 + t.tendon_hole / 2.0)
+        guide.append(sphere(turn, r_turn))
         end = guide_entry(turn, np.array([0.0, *(G1 + shift)]), s_far)
         guide.append(cylinder(turn, end, t.tendon_hole / 2.0))
         # the arm channel runs half a tendon hole above the palmar face (the MP guide sits 0.4 mm
@@ -132,6 +155,9 @@ class ThumbCMCBase(RoutedPart, Part):
         r = t.tendon_hole / 2.0
         floor = -T / 2.0 - 2.0 * sec.eyelet_boss_radius - 1.0
         guide.append(prism_x([(turn[1], turn[2]), (end[1], end[2]), (end[1], floor), (turn[1], floor)], -r, r))
+        # and the turn opens through the palmar pad below it, as it opened through the palmar face
+        # (a skin of 0.73 mm stayed under its sphere); the cord bears on the bend's inner side
+        guide.append(cylinder(turn, (0.0, 0.0, floor), r_turn))
         # the column's keyed end, and the drive's bore down its axis to the turn
         tools.append(self.key_tool())
         tools.append(cylinder(turn, (0.0, 0.0, self.thenar["top"] + 1.0), t.tendon_hole / 2.0))
