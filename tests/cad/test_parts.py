@@ -375,7 +375,7 @@ def test_thumb_mp_guides_at_d1_d2_alpha(built, document):
     assert math.degrees(alpha) == pytest.approx(g["alpha_deg"], abs=0.1)
 
 
-def test_thumb_cmc_base_prints_on_its_palmar_pad(built, document):
+def test_thumb_cmc_base_prints_on_its_palmar_pad(built, document, params):
     """Issue 12: the CMC base rests on its palmar face, deepened to a pad as low as the MP guide's
     boss reaches (the guide sits inside the palmar face, its boss does not): the planar faces
     looking straight down at its lowest z cover more than a quarter of its footprint
@@ -394,6 +394,18 @@ def test_thumb_cmc_base_prints_on_its_palmar_pad(built, document):
     assert np.allclose(up, (0.0, 0.0, 1.0))
     grooves = [b for b in base.blockers if b.label.startswith("groove")]
     assert grooves and all(b.holds(up) for b in grooves)
+    # its verification measures the pad: the solid cut 0.5 mm off its palmar side fails it, by
+    # exactly that (the grooves, the guide and the rest untouched)
+    from build123d import Box, Pos
+
+    from phantom_cad.cad import registry
+
+    part = registry.part(params, "thumb_cmc_base")
+    size = bb.size.X + 2.0, bb.size.Y + 2.0, 1.0
+    shaved = base.shape - Pos(bb.center().X, bb.center().Y, bb.min.Z) * Box(*size)
+    assert part.verify(base.shape) == []
+    assert part.verify(shaved) == [f"thumb_cmc_base: lowest z measures {bb.min.Z + 0.5:.4f}, "
+                                   f"expected {bb.min.Z:.4f} mm"]
 
 
 def test_cylinder_floor_against_closed_forms():

@@ -15,12 +15,12 @@ import numpy as np
 from ... import canon
 from ...kinematics.frames import tendon_height
 from ...kinematics.topology import FINGERS, digit_links
-from ..measure import circular_pockets, cylinders, eyelet_centres, point_line_distance
+from ..measure import circular_pockets, eyelet_centres, point_line_distance
 from .base import MAGNET_DOWN, Part, child_joint, digit_table
 from .common import DigitSection, box, build, cylinder, mm
 from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, hub_grooves
-from .tendons import (RoutedPart, link_tendons, anchor_tools, channel_tools, clear_of_fans, drive_fan_tools, guide_entry,
-                      verify_grooves)
+from .tendons import (RoutedPart, link_tendons, anchor_tools, channel_tools, clear_of_fans, drive_fan_tools,
+                      guide_entry)
 
 class FingerBase(RoutedPart, Part):
     """The metacarpal module of ``finger``: a link fixed to the palm by two magnets."""
@@ -54,8 +54,7 @@ class FingerBase(RoutedPart, Part):
         """The metacarpal-side guide eyelet at d1 from the MCP axis; two magnet pockets."""
         out: list[str] = []
         tol = self.sec.tol
-        faces = cylinders(shape)       # once, for the grooves, the eyelet and the pockets
-        verify_grooves(self, shape, link_tendons(self.params, self.link.name), out, faces)
+        faces = self.verify_routing(shape, out)     # the grooves; the faces, for the eyelet and the pockets
         eyes = eyelet_centres(shape, tol.tendon_hole / 2.0, tol.eyelet_length, faces=faces)
         d = point_line_distance(eyes[0]["centre"], (0, 0, 0), (1, 0, 0)) if len(eyes) == 1 else None
         self.expect(out, "guide d1", d, mm(self.sec.guide.d1), 0.02)

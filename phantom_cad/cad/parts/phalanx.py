@@ -21,12 +21,12 @@ from ... import canon
 from ...kinematics import frames as F
 from ...kinematics.dimensions import FLANK
 from ...kinematics.topology import CMC_Q, LINKS, digit_links, joint
-from ..measure import cylinders, eyelet_centres, point_line_distance
+from ..measure import eyelet_centres, point_line_distance
 from .base import DORSAL_DOWN, Part, child_joint, digit_table, parent_joint
 from .common import DigitSection, box, build, cyl_x, cylinder, mm, prism_x, sphere
 from .tendons import (LinkTendons, RoutedPart, link_tendons, anchor_tools, channel_tools, drive_fan_tools, groove_outer,
                       groove_tool, knot_pocket_depth, sector_prism, cutter,
-                      parent_hub_x, verify_grooves)
+                      parent_hub_x)
 
 #: how far (rad) the drive's knot well behind G2 leans distally from the palmar normal (see
 #: Phalanx.build): straight down, it left a 0.45-0.75 mm web beside the eyelet's near relief
@@ -245,8 +245,7 @@ class Phalanx(RoutedPart, Part):
         eyelet at d2."""
         out: list[str] = []
         tol = self.sec.tol
-        faces = cylinders(shape)       # once, for the grooves, the eyelet and the pockets
-        verify_grooves(self, shape, link_tendons(self.params, self.link.name), out, faces)
+        faces = self.verify_routing(shape, out)     # the grooves; the faces, for the eyelet and the pockets
         if self.has_guide:
             eyes = eyelet_centres(shape, tol.tendon_hole / 2.0, tol.eyelet_length, faces=faces)
             d = point_line_distance(eyes[0]["centre"], (0, 0, 0), (1, 0, 0)) if len(eyes) == 1 else None

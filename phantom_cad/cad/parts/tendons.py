@@ -483,6 +483,14 @@ class RoutedPart:
     def support_blockers(self) -> list[Blocker]:
         return feature_blockers(link_tendons(self.params, self.link.name), self.sec)
 
+    def verify_routing(self, shape, out: list[str]) -> list:
+        """Measure the grooves of ``shape`` (:func:`verify_grooves`) into ``out``; returns the
+        solid's cylindrical faces, listed once, for the caller's eyelets and pockets."""
+        from ..measure import cylinders
+        faces = cylinders(shape)
+        verify_grooves(self, shape, link_tendons(self.params, self.link.name), out, faces)
+        return faces
+
 
 def knot_pocket_depth(sec, floor: float, cord: float) -> float:
     """Depth (mm) of a loop's knot pocket below its groove floor: two cord diameters, less where

@@ -20,11 +20,11 @@ import numpy as np
 from ... import canon
 from ...kinematics import frames as F
 from ...kinematics.topology import CMC_Q, JOINTS, link
-from ..measure import cylinders, eyelet_centres, point_line_distance
+from ..measure import eyelet_centres, point_line_distance
 from .base import PALMAR_DOWN, Part, child_joint, digit_table
 from .common import DigitSection, box, build, cylinder, cylinder_floor, mm, prism_x, sphere, transform
 from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, eyelet_boss_axis, hub_grooves
-from .tendons import RoutedPart, link_tendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry, verify_grooves
+from .tendons import RoutedPart, link_tendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry
 
 #: depth (mm) of the flat that keys the column's end to the CMC pulley [choice]
 KEY_DEPTH = 1.0
@@ -83,8 +83,7 @@ class ThumbCMCBase(RoutedPart, Part):
         bb = shape.bounding_box(optimal=True)
         self.expect(out, "lowest z", bb.min.Z, self.palmar_floor, 0.02)
         tol = self.sec.tol
-        faces = cylinders(shape)       # once, for the grooves, the eyelet and the pockets
-        verify_grooves(self, shape, link_tendons(self.params, self.link.name), out, faces)
+        faces = self.verify_routing(shape, out)     # the grooves; the faces, for the eyelet and the pockets
         eyes = eyelet_centres(shape, tol.tendon_hole / 2.0, tol.eyelet_length, faces=faces)
         d = (point_line_distance(eyes[0]["centre"], (0, self.length, 0), (1, 0, 0)) if len(eyes) == 1
              else None)
