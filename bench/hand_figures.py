@@ -16,13 +16,13 @@ from pathlib import Path
 
 import numpy as np
 
-from phantom_cad import make_hand
+from phantom_cad import make_hand, units
 from phantom_cad.cad import assembly, grasp, measure, registry
 from phantom_cad.export import render, step_stl
 from phantom_cad.export.hold import hold_cylinder
 from phantom_cad.export.pipeline import build_hand
 from phantom_cad.kinematics import frames, opposition
-from phantom_cad.kinematics.topology import FINGERS, JOINTS, SERVOS, digit_links, link
+from phantom_cad.kinematics.topology import CMC_Q, FINGERS, JOINTS, LINKS, SERVOS, digit_links, link
 from phantom_cad.params.io import DEFAULT_PARAMS, load_params
 
 
@@ -33,11 +33,16 @@ CYLINDER_MM = 35.0
 EXPLODE_DIGIT, EXPLODE_FOREARM, EXPLODE_PULLEY = 28.0, 45.0, 28.0
 
 
-def exploded(T: dict) -> dict:
+def exploded(T: dict, cmc_drop: float) -> dict:
     """{link: offset (mm, palm frame)}: each part moves with the one it mounts on, and further off it
-    along the way it goes on: a digit's links along its first link's y (the finger base off its socket,
-    each phalanx off the one before), the forearm module back from the wrist, a servo pulley up its
-    shaft. ``T`` in topology order (parents first)."""
+    along the way it goes on: a finger's links along its first link's y (the finger base off its
+    socket, each phalanx off the one before), the thumb's CMC base ``cmc_drop`` down its CMC axis
+    (its column out of the palm's journal) and its phalanges along its arm, the CMC pulley out of the
+    palm's cavity the way it slides in (in its plane, toward the CMC servo's pulley), the forearm
+    module back from the wrist, a servo pulley up its shaft. ``T`` in topology order (parents
+    first)."""
+    cmc = JOINTS[CMC_Q]
+    servo_pulley = next(ln.name for ln in LINKS if ln.segment == "servo_pulley" and ln.servo == cmc.servo)
     out = {}
     for name in T:
         ln = link(name)
@@ -45,6 +50,13 @@ def exploded(T: dict) -> dict:
             out[name] = np.zeros(3)
         elif ln.segment == "servo_pulley":
             out[name] = out[ln.parent] + EXPLODE_PULLEY * T[name][:3, 2]
+        elif name == cmc.child:
+            out[name] = out[ln.parent] - cmc_drop * T[name][:3, 2]
+        elif ln.parent == cmc.child and ln.parent_joint is None:      # the CMC pulley, in the palm
+            axis = T[name][:3, 2]
+            way = T[servo_pulley][:3, 3] - T[name][:3, 3]
+            way -= (way @ axis) * axis
+            out[name] = out[link(cmc.child).parent] + EXPLODE_PULLEY * way / np.linalg.norm(way)
         elif ln.digit is None:
             out[name] = out[ln.parent] + np.array([0.0, -EXPLODE_FOREARM, 0.0])
         else:
@@ -74,7 +86,8 @@ def main(out: Path) -> None:
         print(f"wrote {out / fname}")
     postures(p, meshes, solids, out)
     T = assembly.pose_transforms(p)
-    shift = exploded(T)
+    # the CMC base drops its column's length and a digit step below the palm's palmar face
+    shift = exploded(T, units.mm(frames.thenar(p)["top"]) + EXPLODE_DIGIT)
     items = []
     for name, (v, f, color, digit) in meshes.items():
         label = name if (digit is None and not name.startswith("servo_pulley_")) or name.endswith("_base") else None
@@ -82,7 +95,7 @@ def main(out: Path) -> None:
                                      label))
     render.render_png(items, out / "hand_exploded.png", title=f"{p.name} hand ({p.side}), exploded",
                       subtitle="each part moved off the one it mounts on, along the way it goes on (docs/assembly.md)",
-                      elev=62.0, azim=-75.0, size_px=1100)
+                      elev=50.0, azim=-150.0, size_px=1100)
     print(f"wrote {out / 'hand_exploded.png'}")
 
 
