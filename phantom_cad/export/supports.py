@@ -32,7 +32,7 @@ def in_features(params, link: str, points: np.ndarray, solid=None) -> dict[str, 
     """mm of support path inside each tendon groove and channel of ``link`` (``points``: link
     frame, mm, right hand): {"groove <role> <joint>": mm, "channel <k>": mm}. ``solid``: the part
     (a ``trimesh.Trimesh``, link frame), for where a channel lies in it."""
-    from ..cad.parts.tendons import link_tendons
+    from ..cad.parts.tendons import link_tendons, perpendicular_frame
     from ..kinematics.dimensions import FLANK
 
     lt = link_tendons(params, link)
@@ -51,9 +51,7 @@ def in_features(params, link: str, points: np.ndarray, solid=None) -> dict[str, 
         dist = np.linalg.norm(P - (p0 + np.clip(t, 0.0, L)[:, None] * u), axis=1)
         inside = (t >= 0.0) & (t <= L) & (dist <= d / 2.0)
         if solid is not None and inside.any():
-            e1 = np.cross(u, np.eye(3)[int(np.argmin(np.abs(u)))])
-            e1 /= np.linalg.norm(e1)
-            e2 = np.cross(u, e1)
+            e1, e2 = perpendicular_frame(u)
             ang = np.arange(8) * (np.pi / 4.0)
             ring = (d / 2.0 + units.mm(FLANK) / 2.0) * (np.cos(ang)[:, None] * e1 + np.sin(ang)[:, None] * e2)
             idx = np.flatnonzero(inside)

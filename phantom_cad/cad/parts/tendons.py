@@ -447,15 +447,21 @@ def sector_ring_mesh(y: float, z: float, x0: float, x1: float, r0: float, r1: fl
     return _outward(V, np.array(faces, np.int64))
 
 
+def perpendicular_frame(u) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors (v, w) that make (u, v, w) a right-handed orthonormal frame with the unit
+    vector ``u`` (v across u and the axis least along it)."""
+    u = np.asarray(u, float)
+    v = np.cross(u, np.eye(3)[int(np.argmin(np.abs(u)))])
+    v /= np.linalg.norm(v)
+    return v, np.cross(u, v)
+
+
 def cylinder_mesh(p0, p1, r: float, n: int = 24):
     """A closed mesh (vertices, faces; outward) of the cylinder of radius r (its polygon's chords
     outside it) from p0 to p1."""
     p0, p1 = np.asarray(p0, float), np.asarray(p1, float)
     u = (p1 - p0) / np.linalg.norm(p1 - p0)
-    e = np.eye(3)[int(np.argmin(np.abs(u)))]
-    v = np.cross(u, e)
-    v /= np.linalg.norm(v)
-    w = np.cross(u, v)
+    v, w = perpendicular_frame(u)
     ang = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
     rr = r / math.cos(math.pi / n)
     circle = rr * (np.cos(ang)[:, None] * v + np.sin(ang)[:, None] * w)
