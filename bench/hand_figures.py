@@ -22,7 +22,7 @@ from phantom_cad.export import render, step_stl
 from phantom_cad.export.hold import hold_cylinder
 from phantom_cad.export.pipeline import build_hand
 from phantom_cad.kinematics import frames, opposition
-from phantom_cad.kinematics.topology import CMC_Q, FINGERS, JOINTS, LINKS, SERVOS, digit_links, link
+from phantom_cad.kinematics.topology import CMC_PULLEY, CMC_Q, CMC_SERVO, FINGERS, JOINTS, SERVOS, digit_links, link
 from phantom_cad.params.io import DEFAULT_PARAMS, load_params
 
 
@@ -41,8 +41,7 @@ def exploded(T: dict, cmc_drop: float) -> dict:
     palm's cavity the way it slides in (in its plane, toward the CMC servo's pulley), the forearm
     module back from the wrist, a servo pulley up its shaft. ``T`` in topology order (parents
     first)."""
-    cmc = JOINTS[CMC_Q]
-    servo_pulley = next(ln.name for ln in LINKS if ln.segment == "servo_pulley" and ln.servo == cmc.servo)
+    base, servo_pulley = JOINTS[CMC_Q].child, SERVOS[CMC_SERVO].link
     out = {}
     for name in T:
         ln = link(name)
@@ -50,13 +49,13 @@ def exploded(T: dict, cmc_drop: float) -> dict:
             out[name] = np.zeros(3)
         elif ln.segment == "servo_pulley":
             out[name] = out[ln.parent] + EXPLODE_PULLEY * T[name][:3, 2]
-        elif name == cmc.child:
+        elif name == base:
             out[name] = out[ln.parent] - cmc_drop * T[name][:3, 2]
-        elif ln.parent == cmc.child and ln.parent_joint is None:      # the CMC pulley, in the palm
+        elif name == CMC_PULLEY:          # in the palm's cavity, not on the dropped CMC base
             axis = T[name][:3, 2]
             way = T[servo_pulley][:3, 3] - T[name][:3, 3]
             way -= (way @ axis) * axis
-            out[name] = out[link(cmc.child).parent] + EXPLODE_PULLEY * way / np.linalg.norm(way)
+            out[name] = out[link(base).parent] + EXPLODE_PULLEY * way / np.linalg.norm(way)
         elif ln.digit is None:
             out[name] = out[ln.parent] + np.array([0.0, -EXPLODE_FOREARM, 0.0])
         else:

@@ -71,16 +71,23 @@ def link_points(stl_path, print_transform, ini_text: str, project=None) -> np.nd
     return pts @ T[:3, :3].T + T[:3, 3] if len(pts) else pts
 
 
-def part_support(params, stl_path, print_transform, link: str, ini_text: str, project=None) -> dict:
+def part_support(params, stl_path, print_transform, link: str, ini_text: str, project=None,
+                 side: str = "right") -> dict:
     """Slice an exported part with automatic supports (as an STL, or its ``project``): {"total_mm":
     the support path, "features": :func:`in_features`, the part's STL as its solid}
-    (``print_transform`` as for :func:`link_points`)."""
+    (``print_transform`` as for :func:`link_points`). ``side``: the export's; a left hand's support
+    and solid are mirrored back into the right hand's link frame, where :func:`in_features`
+    finds the routing model's features."""
     import trimesh
 
+    from ..cad.assembly import MIRROR
     from .step_stl import read_stl
 
     pts = link_points(stl_path, print_transform, ini_text, project)
     v, f = read_stl(open(stl_path, "rb").read())
     T = np.linalg.inv(np.asarray(print_transform, float))
-    solid = trimesh.Trimesh(v @ T[:3, :3].T + T[:3, 3], f, process=False)
+    v = v @ T[:3, :3].T + T[:3, 3]
+    if side == "left":
+        pts, v, f = pts * MIRROR, v * MIRROR, f[:, ::-1]
+    solid = trimesh.Trimesh(v, f, process=False)
     return {"total_mm": float(len(pts)) * slicer.SUPPORT_SPACING, "features": in_features(params, link, pts, solid)}

@@ -237,9 +237,7 @@ def test_the_cmc_base_prints_without_support_in_its_tendon_features_on_the_other
     """Issue 12 on the left hand and the 170 mm hand: the thumb CMC base, sliced from its project,
     has no support path in a tendon groove or channel (the left hand's support and solid mirrored
     back into the right hand's link frame, where the routing model's features are)."""
-    from phantom_cad.cad.assembly import MIRROR
     from phantom_cad.export import slicer, supports
-    from phantom_cad.export.step_stl import read_stl
 
     if slicer.find_slicer() is None:
         pytest.skip("prusa-slicer is not installed (bash .ci/sysdeps installs Debian's prusa-slicer)")
@@ -250,13 +248,8 @@ def test_the_cmc_base_prints_without_support_in_its_tendon_features_on_the_other
     p = next(q for q in man["parts"] if q["name"] == "thumb_cmc_base")
     stl = result.out_dir / "stl" / "thumb_cmc_base.stl"
     assert p["support_blockers"] >= 2 and (result.out_dir / "print" / "thumb_cmc_base.3mf").is_file()
-    pts = supports.link_points(stl, p["print_transform"], slicer.config_ini(params.print),
-                               project=result.out_dir / "print" / "thumb_cmc_base.3mf")
-    v, f = read_stl(stl.read_bytes())
-    T = np.linalg.inv(np.asarray(p["print_transform"], float))
-    v = v @ T[:3, :3].T + T[:3, 3]
-    if result.side == "left":
-        pts, v, f = pts * MIRROR, v * MIRROR, f[:, ::-1]
-    assert len(pts) > 100          # the part takes support elsewhere (under the MP boss, the arm)
-    found = supports.in_features(params, "thumb_cmc_base", pts, trimesh.Trimesh(v, f, process=False))
+    r = supports.part_support(params, stl, p["print_transform"], "thumb_cmc_base", slicer.config_ini(params.print),
+                              project=result.out_dir / "print" / "thumb_cmc_base.3mf", side=result.side)
+    assert r["total_mm"] > 25.0    # the part takes support elsewhere (under the MP boss, the arm)
+    found = r["features"]
     assert found and all(x == 0.0 for x in found.values()), found

@@ -128,7 +128,8 @@ NEAR_RELIEF_RUN = 2.0
 
 def _eyelet_axis(sec: DigitSection, centre_yz, toward_yz):
     """(centre, unit axis, half the hole between the relief spheres' centres, how far the boss
-    reaches back) of an eyelet at ``centre`` (x = 0) toward ``toward``, mm."""
+    reaches back, the ends of the boss's axis) of an eyelet at ``centre`` (x = 0) toward
+    ``toward``, mm."""
     t = sec.tol
     c = np.array([0.0, *centre_yz])
     u = np.array([0.0, *toward_yz]) - c
@@ -138,13 +139,13 @@ def _eyelet_axis(sec: DigitSection, centre_yz, toward_yz):
     half = t.eyelet_length / 2.0 + math.sqrt(rr * rr - r * r)
     # the boss reaches back past the far relief sphere but only to the near sphere's centre
     # toward the other guide, so the two guides' bosses clear each other at full flexion
-    return c, u, half, half + rr + t.wall / 2.0
+    back = half + rr + t.wall / 2.0
+    return c, u, half, back, (c - back * u, c + half * u)
 
 
 def eyelet_boss_axis(sec: DigitSection, centre_yz, toward_yz) -> tuple[np.ndarray, np.ndarray]:
     """The ends (mm) of the axis of :func:`eyelet`'s boss (a cylinder of ``eyelet_boss_radius``)."""
-    c, u, half, back = _eyelet_axis(sec, centre_yz, toward_yz)
-    return c - back * u, c + half * u
+    return _eyelet_axis(sec, centre_yz, toward_yz)[4]
 
 
 def eyelet(sec: DigitSection, centre_yz, toward_yz, clip_palmar: bool = False, clip_y: float | None = None):
@@ -152,11 +153,11 @@ def eyelet(sec: DigitSection, centre_yz, toward_yz, clip_palmar: bool = False, c
     a boss of material, a hole of exactly eyelet_length between two relief spheres.
     Returns (body, tools, axis unit vector, the two relief-sphere centres)."""
     t = sec.tol
-    c, u, half, boss_back = _eyelet_axis(sec, centre_yz, toward_yz)
+    c, u, half, boss_back, ends = _eyelet_axis(sec, centre_yz, toward_yz)
     r = t.tendon_hole / 2.0
     rr = t.tendon_relief / 2.0
     s_near, s_far = c + half * u, c - half * u
-    boss = cylinder(*eyelet_boss_axis(sec, centre_yz, toward_yz), sec.eyelet_boss_radius)
+    boss = cylinder(*ends, sec.eyelet_boss_radius)
     if clip_palmar:   # a child's guide stays inside its palmar face (the flexion-stop face)
         T = sec.thickness
         boss = boss.cut(box(-T, T, c[1] - 2.0 * boss_back, c[1] + 2.0 * boss_back, -2.0 * T, -T / 2.0))

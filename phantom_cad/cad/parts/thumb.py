@@ -63,7 +63,7 @@ class ThumbCMCBase(RoutedPart, Part):
 
     def guide_boss(self) -> tuple[np.ndarray, np.ndarray]:
         """The metacarpal-side MP guide: (its centre (y, z), the point its hole points to), mm."""
-        G1 = self.sec.guide_points()[0] + np.array([self.length, 0.0])
+        G1 = self.guide_point()[1:]
         return G1, link_tendons(self.params, self.link.name).eyelet_toward(G1)
 
     @property
@@ -130,11 +130,11 @@ class ThumbCMCBase(RoutedPart, Part):
         b, tools = clevis(sec, self.joint, L, lt.hubs().get(child_joint(self.link).name))
         body += b
         tools += hub_grooves(sec, lt)
-        G1, G2 = sec.guide_points()
-        shift = np.array([L, 0.0])
-        b3, guide, u, (s_near, s_far) = eyelet(sec, *self.guide_boss())
+        G1, toward = self.guide_boss()
+        b3, guide, u, (s_near, s_far) = eyelet(sec, G1, toward)
+        G = np.array([0.0, *G1])
         body += b3
-        guide += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - np.array([0.0, *(G1 + shift)]))))
+        guide += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - G)))
         # the near relief leaves through the clevis slot's back along the chord at rest, as on the
         # finger bases
         guide.append(cylinder(s_near, s_near + NEAR_RELIEF_RUN * u, t.tendon_relief / 2.0))
@@ -146,7 +146,7 @@ class ThumbCMCBase(RoutedPart, Part):
         turn = np.array([0.0, 0.0, s_far[2]])
         r_turn = max(t.tendon_relief / 2.0 + t.clearance, t.screw_clear / 2.0 + t.tendon_hole / 2.0)
         guide.append(sphere(turn, r_turn))
-        end = guide_entry(turn, np.array([0.0, *(G1 + shift)]), s_far)
+        end = guide_entry(turn, G, s_far)
         guide.append(cylinder(turn, end, t.tendon_hole / 2.0))
         # the arm channel runs half a tendon hole above the palmar face (the MP guide sits 0.4 mm
         # inside it): a skin of 0.06 mm would stay under it, so the channel is a slot open to the
