@@ -53,6 +53,11 @@ def step_bytes(shape, label: str | None = None, color=None) -> bytes:
 
 
 _ENTITY = re.compile(rb"#(\d+)\s*=\s*((?:[^;']|'[^']*')*);")
+#: an assembly's occurrence: OCCT numbers their ids from a counter that lives as long as the
+#: process, so the same assembly written twice in one process gets other ids (and other line breaks)
+_NAUO = re.compile(rb"NEXT_ASSEMBLY_USAGE_OCCURRENCE\s*\((?:[^;']|'[^']*')*\);")
+_NAUO_ID = re.compile(rb"(NEXT_ASSEMBLY_USAGE_OCCURRENCE\s*\(\s*')\d+(')")
+_LINE_BREAK = re.compile(rb"\r?\n[ \t]*")
 _REF = re.compile(rb"#(\d+)")
 
 
@@ -100,6 +105,25 @@ def _split_presentation(data: bytes):
     return data[:line], tail, data[end:]
 
 
+def renumber_occurrences(data: bytes) -> bytes:
+    """The STEP text with its NEXT_ASSEMBLY_USAGE_OCCURRENCE ids ('3', '4', ... from OCCT's
+    process-wide counter: a part written after others in the same worker process got higher ones)
+    renumbered '1', '2', ... in the order they appear, each such entity on one line (OCCT breaks
+    its long lines where the id's width puts the break). Only the id string and the line breaks
+    outside quoted strings change (a STEP reader ignores line breaks; the entities refer to an
+    occurrence by its entity number, never by its id)."""
+    n = 0
+
+    def one(m):
+        nonlocal n
+        n += 1
+        parts = m.group(0).split(b"'")
+        parts[::2] = [_LINE_BREAK.sub(b"", p) for p in parts[::2]]        # outside quotes
+        return _NAUO_ID.sub(lambda k: k.group(1) + str(n).encode() + k.group(2), b"'".join(parts), count=1)
+
+    return _NAUO.sub(one, data)
+
+
 def canonicalize_step(data: bytes) -> bytes:
     """Renumber the presentation block at the end of an OCCT STEP file canonically.
 
@@ -108,9 +132,13 @@ def canonicalize_step(data: bytes) -> bytes:
     order of hash maps keyed by shape pointers, which changes from run to run for
     assemblies. Those entities are renumbered here in a depth-first order from their
     roots, the roots sorted by a structural hash, so the same model gives the same bytes.
-    Entity contents are unchanged; the file is returned as is if it has no such block."""
+    Entity contents are unchanged but for one thing: the ids of the assembly occurrences
+    (NEXT_ASSEMBLY_USAGE_OCCURRENCE), which OCCT counts per process, are renumbered 1, 2, ... in
+    the order the file writes them (:func:`renumber_occurrences`). The file is otherwise returned
+    as is if it has no presentation block."""
     import hashlib
 
+    data = renumber_occurrences(data)
     if _BLOCK not in data:
         return data
     # the block alone where the geometry before it is written as it is (renumbering nothing of

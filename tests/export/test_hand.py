@@ -213,3 +213,31 @@ def test_verify_part_problem_refuses_the_part(hand_build, monkeypatch, tmp_path)
     assert f["error"] == ("CheckError: part 'servo_pulley_1': check 'verify_part' failed: "
                           "servo_pulley_1: groove radius measures 6.0000, expected 7.0000 mm")
     assert not (tmp_path / "parts" / "k").exists()
+
+
+def test_the_same_parameters_give_the_same_bytes_whoever_built_the_parts(hand_build, tmp_path):
+    """The default hand built again from nothing with one process (every part, the coupon and the
+    assembly written one after another in this one: OpenCascade numbers a STEP file's assembly
+    occurrences from a counter that lives as long as the process) gives the same bytes, file by
+    file, as the session's build with two workers (which wrote the five servo pulleys, the CMC
+    pulley and the forearm, each one assembly occurrence, in whichever worker came free). The
+    slicer's estimates are carried over (PrusaSlicer is not run-to-run deterministic): they are
+    served only for STL files with the same SHA-256."""
+    import hashlib
+    import shutil
+
+    from phantom_cad.export.pipeline import build_hand
+
+    result, cache = hand_build
+    if (cache / "slice").is_dir():
+        shutil.copytree(cache / "slice", tmp_path / "cache" / "slice")
+    again = build_hand(None, tmp_path / "out", cache_dir=tmp_path / "cache", jobs=1, slice=None)
+    assert again.built == result.parts
+
+    def tree(out):
+        return {p.relative_to(out).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
+                for p in sorted(out.rglob("*")) if p.is_file()}
+
+    a, b = tree(result.out_dir), tree(again.out_dir)
+    assert sorted(a) == sorted(b)
+    assert [k for k in a if a[k] != b[k]] == []

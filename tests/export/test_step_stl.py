@@ -111,3 +111,39 @@ def test_print_pose_rests_on_bed():
     assert (vp.min(axis=0)[:2] + vp.max(axis=0)[:2]).tolist() == [0.0, 0.0]
     hom = np.c_[v, np.ones(4)] @ T.T
     assert hom[:, :3] == pytest.approx(vp)
+
+
+def test_occurrence_ids_are_numbered_from_one_in_file_order():
+    """OCCT's ids of assembly occurrences ('7', '9', '10' here: the counter of a process that wrote
+    others before) become '1', '2', '3' in the order written, each entity on one line (OCCT broke
+    the third's line where its two-digit id put the break); labels (a line break inside one
+    stays), references and the rest stay."""
+    nauo = (b"#20 = NEXT_ASSEMBLY_USAGE_OCCURRENCE('7','palm','',#1,#2,$);\n"
+            b"#21 = NEXT_ASSEMBLY_USAGE_OCCURRENCE( '9' ,'see #7','',#1,#3,$);\n"
+            b"#22 = NEXT_ASSEMBLY_USAGE_OCCURRENCE('10','a\n  b','',#1,\n  #4,$\n  );\n")
+    out = step_stl.canonicalize_step(HEAD + nauo + TAIL)
+    assert out == HEAD + (b"#20 = NEXT_ASSEMBLY_USAGE_OCCURRENCE('1','palm','',#1,#2,$);\n"
+                          b"#21 = NEXT_ASSEMBLY_USAGE_OCCURRENCE( '2' ,'see #7','',#1,#3,$);\n"
+                          b"#22 = NEXT_ASSEMBLY_USAGE_OCCURRENCE('3','a\n  b','',#1,#4,$);\n") + TAIL
+    assert step_stl.canonicalize_step(out) == out
+
+
+def test_an_assembly_written_twice_in_one_process_gives_the_same_bytes():
+    """OpenCascade's STEP writer counts assembly occurrences per process: before the ids were
+    renumbered, the second file of the same two-box assembly said '3', '4' where the first said
+    '1', '2' (a part's STEP depended on what its build worker had written before)."""
+    pytest.importorskip("build123d")
+    import re
+
+    from build123d import Box, Compound, Pos
+
+    def assembly():
+        a = Box(1, 1, 1)
+        a.label = "a"
+        b = Pos(3, 0, 0) * Box(1, 1, 1)
+        b.label = "b"
+        return Compound(children=[a, b], label="ab")
+
+    first, second = step_stl.step_bytes(assembly()), step_stl.step_bytes(assembly())
+    assert first == second
+    assert re.findall(rb"NEXT_ASSEMBLY_USAGE_OCCURRENCE\('(\d+)'", second) == [b"1", b"2"]
