@@ -94,10 +94,10 @@ def part_worker(task: dict) -> dict:
             raise step_stl.CheckError(name, "name", f"build_part returned a part named {built.name!r}")
         shape = built.shape
         verified = _check(asm, params, name, shape)
-        volume = float(shape.volume)
-        area = float(shape.area)
         from ..cad.measure import mass_properties
         mass_props = mass_properties(shape)     # link frame: the description's inertials
+        volume = mass_props["volume_mm3"]       # OpenCascade's volume properties, computed once
+        area = float(shape.area)
 
         cache = Cache(task["cache_root"])
         final = cache.part_dir(task["key"])
