@@ -99,14 +99,11 @@ def main(out: Path) -> None:
 
 
 def _items(meshes, T, named=()):
-    """The meshes placed by ``T``, each digit labelled once, and the parts in ``named``."""
-    items, labelled = [], set()
-    for name, (v, f, color, digit) in meshes.items():
-        key = digit or name
-        label = key if key not in labelled and (digit is not None or name in named) else None
-        labelled.add(key)
-        items.append(render.MeshItem(name, v @ T[name][:3, :3].T + T[name][:3, 3], f, tuple(color), label))
-    return items
+    """The meshes placed by ``T``, each digit labelled (once, over what shows of its parts), and
+    the parts in ``named``."""
+    return [render.MeshItem(name, v @ T[name][:3, :3].T + T[name][:3, 3], f, tuple(color),
+                            digit or (name if name in named else None))
+            for name, (v, f, color, digit) in meshes.items()]
 
 
 def postures(p, meshes, solids, out: Path) -> None:

@@ -258,16 +258,12 @@ def assembly_render_worker(task: dict) -> dict:
         from . import render
 
         items = []
-        labelled = set()
         for name, part_dir, T, color, digit in task["parts"]:
             d = np.load(Path(part_dir) / "mesh.npz")
             T = np.asarray(T)
             v = d["vertices"] @ T[:3, :3].T + T[:3, 3]
-            label = None
-            key = digit or name
-            if key not in labelled and (digit is not None or name == "palm"):
-                labelled.add(key)
-                label = key
+            # each digit's name on all its parts (drawn once, over what shows of them), the palm's
+            label = digit or ("palm" if name == "palm" else None)
             items.append(render.MeshItem(name, v, d["faces"], tuple(color), label, closed=True))
         render.render_png(items, task["out"], title=task["title"], subtitle=task["subtitle"],
                           elev=28.0, azim=-62.0, size_px=1000)

@@ -8,7 +8,8 @@ Lambert term for a light fixed to the viewer. Every pixel shows the triangle nea
 there (a z-buffer, so interpenetrating or badly ordered triangles are drawn as they lie), with
 ``SUPERSAMPLE`` x ``SUPERSAMPLE`` samples a pixel averaged; depth steps (silhouettes, occluding
 contours) are drawn as dark lines. ``bed``: the items rest on z = 0 (print orientation) on a
-grey bed with a 10 mm grid. A scale bar gives millimetres.
+grey bed with a 10 mm grid. A scale bar gives millimetres. A label is drawn once, over what
+shows of the items that carry it (``label_anchor``): never over another item that hides them.
 
 The PNG carries no timestamp and the sampling is fixed, so the same meshes give the same bytes.
 """
@@ -36,6 +37,9 @@ _BED_LINE = np.array([0.72, 0.72, 0.72])
 _OUTLINE = np.array([0.12, 0.12, 0.14])
 #: a depth step larger than this fraction of the view's size is an outline
 _OUTLINE_STEP = 0.01
+#: a label stays at its first item's projected top point when its items show within this many
+#: pixels (of the picture) beside or below it; else it moves over what shows of them
+LABEL_REACH = 6
 
 
 @dataclass
@@ -44,7 +48,9 @@ class MeshItem:
     vertices: np.ndarray    # (n, 3) mm, already placed in the render frame
     faces: np.ndarray       # (m, 3)
     color: tuple[float, float, float]
-    label: str | None = None  # text drawn above the item (None = no label)
+    #: text drawn once over what shows of the items that carry it (a digit's name on each of its
+    #: parts, say); None = no label; nothing is drawn when none of them shows
+    label: str | None = None
     #: a closed mesh with outward triangles (counter-clockwise seen from outside, as the STLs
     #: are, checked by ``step_stl.check_mesh``): the triangles facing away are never seen and
     #: are skipped; False draws every triangle
@@ -110,6 +116,29 @@ def rasterize(tri: np.ndarray, width: int, height: int) -> tuple[np.ndarray, np.
     index = np.full(width * height, -1, dtype=np.int64)
     index[k[win]] = t[win]              # equal depths: the later triangle (deterministic)
     return index.reshape(height, width), zbuf.reshape(height, width)
+
+
+def label_anchor(mine: np.ndarray, p: tuple[float, float], reach: float) -> tuple[float, float] | None:
+    """Where a label stands (its bottom centre, pixel coordinates (x right, y down) of ``mine``,
+    the pixels that show the label's items): at ``p`` (the projection of its first item's top
+    point) when they show within ``reach`` pixels of it, beside or below; else (the top point
+    is hidden behind another item) at the centroid of their pixels, or at the centre of their
+    pixel nearest that centroid when the centroid falls on another item; None when none of
+    them shows (a label there would name another item)."""
+    h, w = mine.shape
+    x, y = p
+    r0, r1 = int(max(math.floor(y), 0)), int(min(math.floor(y + reach) + 1, h))
+    c0, c1 = int(max(math.floor(x - reach), 0)), int(min(math.floor(x + reach) + 1, w))
+    if r0 < r1 and c0 < c1 and np.any(mine[r0:r1, c0:c1]):
+        return (x, y)
+    rows, cols = np.nonzero(mine)
+    if not len(rows):
+        return None
+    x, y = float(cols.mean()) + 0.5, float(rows.mean()) + 0.5
+    if mine[int(y), int(x)]:
+        return (x, y)
+    m = int(np.argmin((cols + 0.5 - x) ** 2 + (rows + 0.5 - y) ** 2))
+    return (float(cols[m]) + 0.5, float(rows[m]) + 0.5)
 
 
 def _shade(normals: np.ndarray, light: np.ndarray, color: np.ndarray) -> np.ndarray:
@@ -203,6 +232,21 @@ def render_png(items: list[MeshItem], path: str | os.PathLike, title: str, *,
     tri_px = np.concatenate(tris) if tris else np.zeros((0, 3, 3))
     color = np.concatenate(colors) if colors else np.zeros((0, 3))
     index, depth = rasterize(tri_px, W, H)
+    # where the labels go: over what shows of their items (before the window below crops index)
+    groups: dict[str, list[int]] = {}
+    for k, it in enumerate(items):
+        if it.label:
+            groups.setdefault(it.label, []).append(k)
+    anchors = {}
+    if groups:
+        ends = np.cumsum([len(t) for t in tris])
+        owner = np.where(index >= 0, np.searchsorted(ends, index, side="right"), -1)
+        for label, ks in groups.items():
+            c = np.asarray(items[ks[0]].vertices, float)
+            top_pt = c.mean(axis=0)
+            top_pt[2] = c[:, 2].max()
+            anchors[label] = label_anchor(np.isin(owner, ks), tuple(to_px(top_pt[None, :])[0, :2]),
+                                          LABEL_REACH * S)
     canvas = Image.new("RGB", (W, H), _rgb8(_BACKGROUND))
     if bed_sq is not None:
         pen = ImageDraw.Draw(canvas)
@@ -244,13 +288,10 @@ def render_png(items: list[MeshItem], path: str | os.PathLike, title: str, *,
     if subtitle:
         draw.text((size_px / 2, 0.065 * size_px), subtitle, fill=(80, 80, 80),
                   font=_fitting(subtitle, max(10, size_px // 70), 0.96 * size_px), anchor="mt")
-    for it in items:
-        if it.label:
-            c = np.asarray(it.vertices, float)
-            top_pt = c.mean(axis=0)
-            top_pt[2] = c[:, 2].max()
-            p = to_px(top_pt[None, :])[0] / S
-            draw.text((p[0], p[1] - 4), it.label, fill=ink, font=f_small, anchor="mb", stroke_width=2,
+    for label, at in anchors.items():
+        if at is not None:
+            p = np.asarray(at) / S
+            draw.text((p[0], p[1] - 4), label, fill=ink, font=f_small, anchor="mb", stroke_width=2,
                       stroke_fill=(255, 255, 255))
     # scale bar, bottom left: a round length near a fifth of the picture
     mm_px = scale / S

@@ -119,3 +119,97 @@ def test_a_closed_mesh_skips_its_far_side_unseen(tmp_path):
         pics[name] = p.read_bytes()
     assert pics["front"] == pics["all"]
     assert pics["inverted"] != pics["all"]
+
+
+def test_a_label_stands_over_what_shows_of_its_item():
+    """label_anchor on the pixels of items of an owner map drawn by hand (10 x 12 px, pixel (row r, column c) centred at
+    x = c + 0.5, y = r + 0.5): item 0 fills rows 2-3, columns 1-4; item 1 fills rows 6-8, columns
+    5-10, and item 2 hides its top at rows 4-5; item 4 is an L whose centroid falls outside it."""
+    owner = np.full((10, 12), -1)
+    owner[2:4, 1:5] = 0
+    owner[6:9, 5:11] = 1
+    owner[4:6, 3:11] = 2
+    # item 0 shows just below its top point (2.5, 1.6): the label stays there
+    assert render.label_anchor(owner == 0, (2.5, 1.6), 1.0) == (2.5, 1.6)
+    # item 1's top point (8.0, 4.2) lies on item 2 and item 1 shows only from row 6, two rows
+    # below: within 3 px it stays, within 1 px it moves to its pixels' centroid (columns 5-10,
+    # rows 6-8: x 8.0, y 7.5)
+    assert render.label_anchor(owner == 1, (8.0, 4.2), 3.0) == (8.0, 4.2)
+    assert render.label_anchor(owner == 1, (8.0, 4.2), 1.0) == (8.0, 7.5)
+    # an item nowhere to be seen has no label
+    assert render.label_anchor(owner == 3, (8.0, 4.2), 1.0) is None
+    # a top point off the picture: over what shows (item 0's centroid: x 3.0, y 3.0)
+    assert render.label_anchor(owner == 0, (-40.0, -40.0), 2.0) == (3.0, 3.0)
+    # an L (column 0, rows 0-9, and row 9, columns 1-5: 15 px): its centroid (x 1 + 0.5, y 90 / 15
+    # + 0.5 = 6.5) lies off it, on pixel (6, 1); the nearest pixel of the L is (6, 0), 1 px away
+    ell = np.full((10, 12), -1)
+    ell[:, 0] = 4
+    ell[9, 1:6] = 4
+    assert render.label_anchor(ell == 4, (50.0, -5.0), 1.0) == (0.5, 6.5)
+
+
+def test_a_hidden_item_gets_no_label_and_a_seen_one_does(tmp_path):
+    """Seen from +x (y right, z up): a small cube inside a big one (hidden) drawn with a label gives
+    the same picture as without it, while the big cube's label changes it. A 16 mm cube behind the
+    big one (y 9-25 mm against the big one's -20-20) shows only its strip y 20-25: its top point
+    (y 17, z 23) is hidden, and its label stands right of the big cube's edge, over the strip
+    (the text's pixels, found by difference with the unlabelled picture)."""
+    big_v, big_f = _cube(40.0, (0.0, 0.0, 20.0))
+    small_v, small_f = _cube(10.0, (0.0, 0.0, 20.0))
+
+    def pic(name, items):
+        path = tmp_path / f"{name}.png"
+        render.render_png(items, path, "cubes", elev=0.0, azim=0.0, size_px=300)
+        return path.read_bytes()
+
+    def rgb(data):
+        return np.asarray(Image.open(io.BytesIO(data)).convert("RGB")).astype(int)
+
+    big = render.MeshItem("big", big_v, big_f, (0.6, 0.6, 0.6), closed=True)
+    inside = render.MeshItem("small", small_v, small_f, (0.2, 0.4, 0.8), label="small", closed=True)
+    unlabelled = render.MeshItem("small", small_v, small_f, (0.2, 0.4, 0.8), closed=True)
+    assert pic("hidden", [big, inside]) == pic("plain", [big, unlabelled])
+    big_labelled = render.MeshItem("big", big_v, big_f, (0.6, 0.6, 0.6), label="big", closed=True)
+    assert pic("big", [big_labelled, unlabelled]) != pic("plain", [big, unlabelled])
+
+    side_v, side_f = _cube(16.0, (-40.0, 17.0, 15.0))
+    a = rgb(pic("seen", [big, render.MeshItem("side", side_v, side_f, (0.2, 0.4, 0.8), label="SIDE",
+                                               closed=True)]))
+    b = rgb(pic("unseen", [big, render.MeshItem("side", side_v, side_f, (0.2, 0.4, 0.8), closed=True)]))
+    grey = (np.abs(b[:, :, 0] - b[:, :, 2]) < 4) & (b[:, :, 0] > 60) & (b[:, :, 0] < 240)
+    blue = b[:, :, 2] > b[:, :, 0] + 40
+    edge = np.flatnonzero(grey.any(axis=0)).max()            # the big cube's right edge
+    strip = np.flatnonzero(blue.any(axis=0))
+    assert strip.min() >= edge - 2 and strip.max() > edge + 10    # only the strip shows
+    text = np.argwhere(np.abs(a - b).sum(axis=2) > 150)
+    assert len(text) > 20
+    assert text[:, 1].mean() > edge
+
+
+def test_a_label_on_several_items_is_drawn_once_over_what_shows(tmp_path):
+    """The same label on two items is drawn once: where its first item's top point shows, the
+    picture is the one with the label on the first item alone; where the first item is hidden
+    (inside the big cube), the label stands over the second (the strip right of the big cube),
+    as it would with the second alone."""
+    big_v, big_f = _cube(40.0, (0.0, 0.0, 20.0))
+    small_v, small_f = _cube(10.0, (0.0, 0.0, 20.0))
+    left_v, left_f = _cube(10.0, (30.0, -10.0, 5.0))
+    side_v, side_f = _cube(16.0, (-40.0, 17.0, 15.0))
+
+    def item(name, v, f, label=None):
+        return render.MeshItem(name, v, f, (0.2, 0.4, 0.8), label=label, closed=True)
+
+    def pic(name, items):
+        path = tmp_path / f"{name}.png"
+        render.render_png(items, path, "cubes", elev=0.0, azim=0.0, size_px=300)
+        return path.read_bytes()
+
+    big = render.MeshItem("big", big_v, big_f, (0.6, 0.6, 0.6), closed=True)
+    # both shown (the left cube in front of the big one): drawn once, at the first's top point
+    assert pic("both", [big, item("left", left_v, left_f, "D"), item("side", side_v, side_f, "D")]) == \
+        pic("first", [big, item("left", left_v, left_f, "D"), item("side", side_v, side_f)])
+    # the first hidden: over the second, as with the second alone
+    assert pic("hidden_first", [big, item("inside", small_v, small_f, "D"), item("side", side_v, side_f, "D")]) == \
+        pic("second", [big, item("inside", small_v, small_f), item("side", side_v, side_f, "D")])
+    assert pic("hidden_first2", [big, item("inside", small_v, small_f, "D"), item("side", side_v, side_f, "D")]) != \
+        pic("none", [big, item("inside", small_v, small_f), item("side", side_v, side_f)])
