@@ -20,7 +20,9 @@ Pipeline
    checks the mesh (watertight, manifold, volume) and renders it;
 3. the assembly STEP (parts placed with ``assembly.pose_transforms``), the assembly render
    and the interference check (:mod:`phantom_cad.export.interference`; only
-   ``assembly.designed_contacts`` may overlap) are cached under a key of all part keys and poses;
+   ``assembly.designed_contacts`` may overlap) are cached under a key of all part keys and poses
+   (the STEP and the render in the workers, which go on while steps 4 and 5 slice and write the
+   description, the BOM and the routing; the export waits for them before its manifest);
 4. every STL is sliced with PrusaSlicer (when installed) for print time and filament;
 5. everything is written into a temporary directory beside the target, which replaces
    the previous export only when the whole build succeeded.
@@ -195,7 +197,11 @@ class _Build:
 
     # 2. assembly: poses, STEP, render, interference -------------------------------------
     def assembly(self, metas, check_interference: bool):
-        """(poses, contacts, interference report, assembly cache dir)."""
+        """(poses, contacts, interference report, ``finish``): the assembly STEP and picture are
+        started in the workers, the interference measured here meanwhile; ``finish()`` waits for
+        them, commits the assembly's cache entry and returns its folder (called as late as the
+        export needs them: the robot description, the BOM and the routing are written first,
+        while the workers draw and write)."""
         params, names, keys, cache = self.params, self.names, self.keys, self.cache
         poses = {n: np.asarray(T, dtype=float) for n, T in self.asm.pose_transforms(params).items()}
         absent = [n for n in names if n not in poses]
@@ -216,42 +222,47 @@ class _Build:
         if problem not in (None, "missing"):
             self.log(f"cache: assembly entry {akey[:12]} not served ({problem}); rebuilding it")
             cache.discard(adir)
-        if problem is not None:
-            self.astage = astage = cache.staging(adir)
-            parts_arg = [(n, str(cache.part_dir(keys[n])), poses[n].tolist(), metas[n]["color"]) for n in names]
-            futures["step"] = self.get_pool().submit(pool_mod.assembly_step_worker, {
-                "parts": parts_arg, "label": f"{params.name}_{params.side}",
-                "out": str(astage / "hand_assembly.step")})
-            if self.render:
-                futures["render"] = self.get_pool().submit(pool_mod.assembly_render_worker, {
-                    "parts": [p + (metas[p[0]]["digit"],) for p in parts_arg],
-                    "out": str(astage / "render.png"),
-                    "title": f"{params.name} hand ({params.side}), rest pose, {len(names)} parts",
-                    "subtitle": f"parameters {params.digest[:12]}"})
-            if check_interference:
-                meshes = {}
-                for n in names:
-                    d = np.load(cache.part_dir(keys[n]) / "mesh.npz")
-                    meshes[n] = (d["vertices"], d["faces"])
-                inter = interference(meshes, poses, allowed)
-            else:
-                inter = {"skipped": True}
+        if problem is None:
+            inter = json.loads((adir / "interference.json").read_text())
+            return poses, contacts, inter, lambda: adir
+        self.astage = astage = cache.staging(adir)
+        parts_arg = [(n, str(cache.part_dir(keys[n])), poses[n].tolist(), metas[n]["color"]) for n in names]
+        futures["step"] = self.get_pool().submit(pool_mod.assembly_step_worker, {
+            "parts": parts_arg, "label": f"{params.name}_{params.side}",
+            "out": str(astage / "hand_assembly.step")})
+        if self.render:
+            futures["render"] = self.get_pool().submit(pool_mod.assembly_render_worker, {
+                "parts": [p + (metas[p[0]]["digit"],) for p in parts_arg],
+                "out": str(astage / "render.png"),
+                "title": f"{params.name} hand ({params.side}), rest pose, {len(names)} parts",
+                "subtitle": f"parameters {params.digest[:12]}"})
+        if check_interference:
+            meshes = {}
+            for n in names:
+                d = np.load(cache.part_dir(keys[n]) / "mesh.npz")
+                meshes[n] = (d["vertices"], d["faces"])
+            inter = interference(meshes, poses, allowed)
+        else:
+            inter = {"skipped": True}
+        inter = json.loads(json.dumps(inter, sort_keys=True))   # as a warm build reads it from the cache
+        if inter.get("collisions"):
+            lines = [f"  {c['parts'][0]} x {c['parts'][1]}: {c['volume_mm3']:.3f} mm^3"
+                     for c in inter["collisions"]]
+            raise BuildError(
+                f"parts intersect at the rest pose (overlap > {INTERFERENCE_TOL_MM3} mm^3, not in "
+                f"assembly.designed_contacts); {self.out} was left untouched:\n" + "\n".join(lines))
+
+        def finish() -> Path:
             for what, fut in futures.items():
                 r = fut.result()
                 if not r["ok"]:
                     raise BuildError(f"assembly {what} failed: {r['error']}\n{r['traceback']}")
-            if inter.get("collisions"):
-                lines = [f"  {c['parts'][0]} x {c['parts'][1]}: {c['volume_mm3']:.3f} mm^3"
-                         for c in inter["collisions"]]
-                raise BuildError(
-                    f"parts intersect at the rest pose (overlap > {INTERFERENCE_TOL_MM3} mm^3, not in "
-                    f"assembly.designed_contacts); {self.out} was left untouched:\n" + "\n".join(lines))
             cache.write_json(astage / "interference.json", inter)
             cache_mod.seal(astage)
             Cache.commit(astage, adir)
             self.astage = None
-        inter = json.loads((adir / "interference.json").read_text())
-        return poses, contacts, inter, adir
+            return adir
+        return poses, contacts, inter, finish
 
     # 3. slicing -------------------------------------------------------------------------
     def slice(self, slice, ini: str):
@@ -313,7 +324,10 @@ class _Build:
         return write_description(folder, model, {n: self.cache.part_dir(self.keys[n]) for n in self.names},
                                  self.cache, self.params.digest)
 
-    def write(self, metas, poses, contacts, inter, adir: Path, estimates, slicer_info, ini: str) -> dict:
+    def write(self, metas, poses, contacts, inter, finish_assembly, estimates, slicer_info, ini: str) -> dict:
+        """The export, staged and swapped in; ``finish_assembly()`` (from :meth:`assembly`) gives
+        the assembly's cache folder once its workers are done, after the description, the BOM and
+        the routing are written."""
         from . import manifest as manifest_mod
 
         names, keys, cache, out, render = self.names, self.keys, self.cache, self.out, self.render
@@ -338,15 +352,16 @@ class _Build:
             if render and (cdir / "render.png").is_file():
                 shutil.copyfile(cdir / "render.png", stage / "coupon" / "fit_coupon.png")
             coupon = json.loads((cdir / "meta.json").read_text(encoding="utf-8"))
-            shutil.copyfile(adir / "hand_assembly.step", stage / "step" / "hand_assembly.step")
-            if render and (adir / "render.png").is_file():
-                shutil.copyfile(adir / "render.png", stage / "renders" / "hand_assembly.png")
             (stage / "slicer" / "config.ini").write_text(ini)
             description = self.description(metas, estimates, stage / "description")
             bom = list(self.asm.bill_of_materials(self.params))
             (stage / "bom.csv").write_text(bom_csv(bom), encoding="utf-8")
             (stage / "routing.json").write_text(json.dumps(routing.document(self.params), indent=1) + "\n",
                                                 encoding="utf-8")
+            adir = finish_assembly()
+            shutil.copyfile(adir / "hand_assembly.step", stage / "step" / "hand_assembly.step")
+            if render and (adir / "render.png").is_file():
+                shutil.copyfile(adir / "render.png", stage / "renders" / "hand_assembly.png")
             man = manifest_mod.build_manifest(
                 stage=stage, params=self.params, params_path=self.path, names=names, keys=keys, metas=metas,
                 poses=poses, estimates=estimates, slicer_info=slicer_info, interference=inter,
@@ -396,8 +411,8 @@ def build_hand(params_path: str | os.PathLike | None = None, out_dir: str | os.P
         metas = {n: run.cache.part_meta(run.keys[n]) for n in run.names}
 
         t = time.perf_counter()
-        poses, contacts, inter, adir = run.assembly(metas, check_interference)
-        timings["assembly"] = time.perf_counter() - t
+        poses, contacts, inter, finish_assembly = run.assembly(metas, check_interference)
+        timings["assembly"] = time.perf_counter() - t     # its STEP and picture go on in the workers
 
         t = time.perf_counter()
         ini = config_ini(params.print)
@@ -405,7 +420,7 @@ def build_hand(params_path: str | os.PathLike | None = None, out_dir: str | os.P
         timings["slice"] = time.perf_counter() - t
 
         t = time.perf_counter()
-        man = run.write(metas, poses, contacts, inter, adir, estimates, slicer_info, ini)
+        man = run.write(metas, poses, contacts, inter, finish_assembly, estimates, slicer_info, ini)
         timings["write"] = time.perf_counter() - t
     finally:
         run.close()
