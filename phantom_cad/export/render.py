@@ -239,14 +239,17 @@ def render_png(items: list[MeshItem], path: str | os.PathLike, title: str, *,
             groups.setdefault(it.label, []).append(k)
     anchors = {}
     if groups:
-        ends = np.cumsum([len(t) for t in tris])
-        owner = np.where(index >= 0, np.searchsorted(ends, index, side="right"), -1)
-        for label, ks in groups.items():
+        item_group = np.full(len(items), -1)
+        for g, ks in enumerate(groups.values()):
+            item_group[ks] = g
+        shown = np.full(index.shape, -1)                 # the label group each pixel shows
+        hit = index >= 0
+        shown[hit] = np.repeat(item_group, [len(t) for t in tris])[index[hit]]
+        for g, (label, ks) in enumerate(groups.items()):
             c = np.asarray(items[ks[0]].vertices, float)
             top_pt = c.mean(axis=0)
             top_pt[2] = c[:, 2].max()
-            anchors[label] = label_anchor(np.isin(owner, ks), tuple(to_px(top_pt[None, :])[0, :2]),
-                                          LABEL_REACH * S)
+            anchors[label] = label_anchor(shown == g, tuple(to_px(top_pt[None, :])[0, :2]), LABEL_REACH * S)
     canvas = Image.new("RGB", (W, H), _rgb8(_BACKGROUND))
     if bed_sq is not None:
         pen = ImageDraw.Draw(canvas)
