@@ -9,7 +9,9 @@ there (a z-buffer, so interpenetrating or badly ordered triangles are drawn as t
 ``SUPERSAMPLE`` x ``SUPERSAMPLE`` samples a pixel averaged; depth steps (silhouettes, occluding
 contours) are drawn as dark lines. ``bed``: the items rest on z = 0 (print orientation) on a
 grey bed with a 10 mm grid. A scale bar gives millimetres. A label is drawn once, over what
-shows of the items that carry it (``label_anchor``): never over another item that hides them.
+shows of the items that carry it (``label_anchor``): never over another item that hides them;
+where two labels' texts would overlap, the later one moves to the nearest of its own items'
+pixels where it stands clear (``place_labels``).
 
 The PNG carries no timestamp and the sampling is fixed, so the same meshes give the same bytes.
 """
@@ -40,6 +42,8 @@ _OUTLINE_STEP = 0.01
 #: a label stays at its first item's projected top point when its items show within this many
 #: pixels (of the picture) beside or below it; else it moves over what shows of them
 LABEL_REACH = 6
+#: the pixels (of the picture) kept free around a label's text, apart from another label
+LABEL_GAP = 2
 
 
 @dataclass
@@ -141,6 +145,50 @@ def label_anchor(mine: np.ndarray, p: tuple[float, float], reach: float) -> tupl
     return (float(cols[m]) + 0.5, float(rows[m]) + 0.5)
 
 
+def place_labels(labels: list[tuple[tuple[float, float, float, float], tuple[float, float] | None,
+                                     np.ndarray | None]], stride: int = 4
+                 ) -> list[tuple[float, float] | None]:
+    """Where each label is drawn so that no two labels' boxes overlap, placed in turn (first
+    come, first placed). Each label is (box, anchor, mine): ``box`` its text's extent (left, top,
+    right, bottom) relative to the point it is drawn at, ``anchor`` where ``label_anchor`` puts
+    it (None: not drawn), ``mine`` the pixels that show its items. A label whose box at its
+    anchor overlaps no label placed before stays there; else it moves to the nearest (to its
+    anchor) of its items' pixels, taken every ``stride`` pixels along rows and columns, where its
+    box overlaps none and lies inside the picture; where there is none, it stays at its anchor
+    (the overlap is then drawn). Pixel coordinates (x right, y down) of ``mine``."""
+    placed: list[tuple[float, float, float, float]] = []
+    out: list[tuple[float, float] | None] = []
+
+    def clear(x, y, box, h, w):
+        """(n,) whether the box drawn at each (x, y) stays inside the picture and off every placed
+        box."""
+        l, t, r, b = box
+        ok = (x + l >= 0) & (x + r <= w) & (y + t >= 0) & (y + b <= h)
+        for pl, pt, pr, pb in placed:
+            ok &= (x + r <= pl) | (x + l >= pr) | (y + b <= pt) | (y + t >= pb)
+        return ok
+
+    for box, at, mine in labels:
+        if at is None:
+            out.append(None)
+            continue
+        where = at
+        h, w = mine.shape if mine is not None else (math.inf, math.inf)
+        if not clear(np.array([at[0]]), np.array([at[1]]), box, math.inf, math.inf)[0] and mine is not None:
+            rows, cols = np.nonzero(mine[::stride, ::stride])
+            x, y = cols * stride + 0.5, rows * stride + 0.5
+            ok = clear(x, y, box, h, w)
+            if ok.any():
+                d = (x - at[0]) ** 2 + (y - at[1]) ** 2
+                d[~ok] = np.inf
+                m = int(np.argmin(d))       # the first of equally near ones: deterministic
+                where = (float(x[m]), float(y[m]))
+        l, t, r, b = box
+        placed.append((where[0] + l, where[1] + t, where[0] + r, where[1] + b))
+        out.append(where)
+    return out
+
+
 def _shade(normals: np.ndarray, light: np.ndarray, color: np.ndarray) -> np.ndarray:
     """(m, 3) flat colours of triangles with these (unnormalised) normals under a unit ``light``
     direction (same frame): two-sided Lambert."""
@@ -237,7 +285,7 @@ def render_png(items: list[MeshItem], path: str | os.PathLike, title: str, *,
     for k, it in enumerate(items):
         if it.label:
             groups.setdefault(it.label, []).append(k)
-    anchors = {}
+    anchors, masks = {}, {}
     if groups:
         item_group = np.full(len(items), -1)
         for g, ks in enumerate(groups.values()):
@@ -249,7 +297,8 @@ def render_png(items: list[MeshItem], path: str | os.PathLike, title: str, *,
             c = np.asarray(items[ks[0]].vertices, float)
             top_pt = c.mean(axis=0)
             top_pt[2] = c[:, 2].max()
-            anchors[label] = label_anchor(shown == g, tuple(to_px(top_pt[None, :])[0, :2]), LABEL_REACH * S)
+            masks[label] = shown == g
+            anchors[label] = label_anchor(masks[label], tuple(to_px(top_pt[None, :])[0, :2]), LABEL_REACH * S)
     canvas = Image.new("RGB", (W, H), _rgb8(_BACKGROUND))
     if bed_sq is not None:
         pen = ImageDraw.Draw(canvas)
@@ -291,7 +340,14 @@ def render_png(items: list[MeshItem], path: str | os.PathLike, title: str, *,
     if subtitle:
         draw.text((size_px / 2, 0.065 * size_px), subtitle, fill=(80, 80, 80),
                   font=_fitting(subtitle, max(10, size_px // 70), 0.96 * size_px), anchor="mt")
-    for label, at in anchors.items():
+    # apart from one another: each text's box (drawn 4 px above its point, with its stroke) and
+    # LABEL_GAP pixels around it, in the supersampled pixels of the masks
+    boxes = [tuple(S * np.add(f_small.getbbox(label, anchor="mb", stroke_width=2),
+                              (-LABEL_GAP, -4 - LABEL_GAP, LABEL_GAP, -4 + LABEL_GAP)))
+             for label in anchors]
+    spots = place_labels([(box, at, masks[label]) for box, (label, at) in zip(boxes, anchors.items())],
+                         stride=2 * S)
+    for label, at in zip(anchors, spots):
         if at is not None:
             p = np.asarray(at) / S
             draw.text((p[0], p[1] - 4), label, fill=ink, font=f_small, anchor="mb", stroke_width=2,

@@ -148,6 +148,39 @@ def test_a_label_stands_over_what_shows_of_its_item():
     assert render.label_anchor(ell == 4, (50.0, -5.0), 1.0) == (0.5, 6.5)
 
 
+def test_labels_are_placed_apart_on_their_own_pixels():
+    """place_labels on masks drawn by hand (20 x 30 px, pixel (row r, column c) centred at
+    (c + 0.5, r + 0.5)), boxes (left, top, right, bottom) of a 6 x 2 px text about its point."""
+    box = (-3.0, -2.0, 3.0, 0.0)
+    a = np.zeros((20, 30), bool)
+    a[2:6, 4:16] = True                      # rows 2-5, columns 4-15
+    b = np.zeros((20, 30), bool)
+    b[2:12, 12:16] = True                    # rows 2-11, columns 12-15
+    # alone, or apart: each at its anchor
+    assert render.place_labels([(box, (8.0, 4.0), a)], stride=1) == [(8.0, 4.0)]
+    assert render.place_labels([(box, (8.0, 4.0), a), (box, (14.0, 10.0), b)], stride=1) == [(8.0, 4.0), (14.0, 10.0)]
+    # the second anchored where the first is: the first stays (its box x 5-11, y 2-4); the second
+    # goes to the nearest of its pixels where its box clears the first's: right of it (x - 3 >= 11:
+    # x 14.5 on row 3 or 4, distance^2 to (8, 4) 6.5^2 + 0.5^2 = 42.5) or below it (y - 2 >= 4:
+    # y 6.5, on column 12: 4.5^2 + 2.5^2 = 26.5, the nearer)
+    assert render.place_labels([(box, (8.0, 4.0), a), (box, (8.0, 4.0), b)], stride=1) == [(8.0, 4.0), (12.5, 6.5)]
+    # every pixel taken every 2: rows 2, 4, ..., columns 12, 14: the box clears at (12.5, 6.5)
+    assert render.place_labels([(box, (8.0, 4.0), a), (box, (8.0, 4.0), b)], stride=2) == [(8.0, 4.0), (12.5, 6.5)]
+    # nowhere clear (the second's pixels all under the first's box): it stays, overlapping
+    c = np.zeros((20, 30), bool)
+    c[3, 7:9] = True
+    assert render.place_labels([(box, (8.0, 4.0), a), (box, (8.0, 4.0), c)], stride=1) == [(8.0, 4.0), (8.0, 4.0)]
+    # a label not drawn takes no room
+    assert render.place_labels([(box, None, a), (box, (8.0, 4.0), b)], stride=1) == [None, (8.0, 4.0)]
+    # a box must stay inside the picture (30 x 20): on rows 0-1 its top (y - 2) is above it, on
+    # columns 27-29 its right (x + 3) beyond it; of d's pixels only row 9, column 20 is left
+    d = np.zeros((20, 30), bool)
+    d[0:2, :] = True
+    d[:, 27:] = True
+    d[9, 20] = True
+    assert render.place_labels([(box, (8.0, 4.0), a), (box, (8.0, 4.0), d)], stride=1) == [(8.0, 4.0), (20.5, 9.5)]
+
+
 def test_a_hidden_item_gets_no_label_and_a_seen_one_does(tmp_path):
     """Seen from +x (y right, z up): a small cube inside a big one (hidden) drawn with a label gives
     the same picture as without it, while the big cube's label changes it. A 16 mm cube behind the
