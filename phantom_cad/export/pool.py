@@ -21,7 +21,7 @@ from .. import units
 from ..atomic import write_atomic
 from ..canon import jsonable, sha256
 from ..params import parse
-from ..workers import die_with_parent
+from ..workers import die_with_parent, keep_freed_memory
 from . import interface, orient
 from .cache import Cache, seal
 from .manifest import mass_g
@@ -35,12 +35,14 @@ STL_VOLUME_RTOL = 1e-2
 
 def init_worker(parent_pid: int, occt_threads: int | None) -> None:
     """Pool initializer of the build's workers: die with the parent (``workers.die_with_parent``),
-    load build123d now, without scikit-learn (``cad.kernel.import_build123d``), and when
-    ``occt_threads`` is given run OpenCascade on that many threads (``cad.kernel.use_threads``:
-    the pipeline gives each worker its share of the CPUs when the workers fill them)."""
+    keep the memory they free for reuse (``workers.keep_freed_memory``), load build123d now,
+    without scikit-learn (``cad.kernel.import_build123d``), and when ``occt_threads`` is given
+    run OpenCascade on that many threads (``cad.kernel.use_threads``: the pipeline gives each
+    worker its share of the CPUs when the workers fill them)."""
     from ..cad import kernel
 
     die_with_parent(parent_pid)
+    keep_freed_memory()
     kernel.import_build123d()
     if occt_threads is not None:
         kernel.use_threads(occt_threads)

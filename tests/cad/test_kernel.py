@@ -126,16 +126,54 @@ def _worker_state() -> dict:
 
     return {"sklearn": any(m == "sklearn" or m.startswith("sklearn.") for m in sys.modules),
             "build123d": "build123d" in sys.modules, "occt": OSD_Parallel.ToUseOcctThreads_s(),
-            "threads": OSD_ThreadPool.DefaultPool_s().NbThreads()}
+            "threads": OSD_ThreadPool.DefaultPool_s().NbThreads(), "faults": _refaults() < 100}
+
+
+#: allocate and free 24 MB arrays, as a part's mesh and picture do, twice; count the page faults of
+#: the second round (the first one's memory reused, or faulted in again)
+_CYCLE = """
+import numpy as np, resource
+def cycle():
+    for _ in range(10):
+        a = np.ones(3_000_000)
+        b = np.ones(3_000_000)
+        c = a + b
+        del a, b, c
+def refaults():
+    cycle()
+    f0 = resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+    cycle()
+    return resource.getrusage(resource.RUSAGE_SELF).ru_minflt - f0
+"""
+
+
+def _refaults() -> int:
+    scope: dict = {}
+    exec(_CYCLE, scope)
+    return scope["refaults"]()
+
+
+def test_freed_memory_is_reused_without_page_faults():
+    """With glibc's defaults, arrays of 24 MB allocated and freed in turn fault their pages in
+    again each time (thousands of minor faults a round); after ``workers.keep_freed_memory``
+    the second round reuses the first's memory: (almost) no page faults. Each in a fresh
+    interpreter (the C library's state is what is measured)."""
+    default = _run(_CYCLE + "\nimport json\nprint(json.dumps({'faults': refaults()}))")["faults"]
+    kept = _run("import json\nfrom phantom_cad import workers\nok = workers.keep_freed_memory()\n"
+                + _CYCLE + "\nprint(json.dumps({'ok': ok, 'faults': refaults()}))")
+    if not kept["ok"]:
+        pytest.skip("this C library has no mallopt (not glibc)")
+    assert default > 1000, default
+    assert kept["faults"] < 100, kept
 
 
 def test_init_worker_sets_up_the_build_workers():
     """A pool started as the pipeline starts its own: build123d loaded, no scikit-learn, one
-    OpenCascade thread."""
+    OpenCascade thread, freed memory reused (no page faults in the second round of _CYCLE)."""
     from phantom_cad import workers
     from phantom_cad.export import pool
 
     with ProcessPoolExecutor(1, mp_context=workers.mp_context(), initializer=pool.init_worker,
                              initargs=(os.getpid(), 1)) as ex:
         state = ex.submit(_worker_state).result(timeout=300)
-    assert state == {"sklearn": False, "build123d": True, "occt": True, "threads": 1}
+    assert state == {"sklearn": False, "build123d": True, "occt": True, "threads": 1, "faults": True}
