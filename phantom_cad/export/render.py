@@ -85,24 +85,27 @@ def rasterize(tri: np.ndarray, width: int, height: int) -> tuple[np.ndarray, np.
     sd = np.where(ok, det, 1.0)
     gx = (e1z * e2y - e2z * e1y) / sd
     gy = (e2z * e1x - e1z * e2x) / sd
-    # rows whose centres (j + 0.5) lie in the triangle's y range
-    j0 = np.clip(np.ceil(y.min(axis=1) - 0.5), 0, height).astype(np.int64)
-    j1 = np.clip(np.ceil(y.max(axis=1) - 0.5), 0, height).astype(np.int64)     # exclusive
+    # the corners from the lowest to the highest y: each edge is then computed from its lower end
+    # by every triangle that has it (the same bits on both sides of a shared edge)
+    o = np.argsort(y, axis=1, kind="stable")
+    ys, xs = np.take_along_axis(y, o, axis=1), np.take_along_axis(x, o, axis=1)
+    # rows whose centres (j + 0.5) lie in the triangle's y range, half-open: y0 <= j + 0.5 < y2
+    j0 = np.clip(np.ceil(ys[:, 0] - 0.5), 0, height).astype(np.int64)
+    j1 = np.clip(np.ceil(ys[:, 2] - 0.5), 0, height).astype(np.int64)     # exclusive
     rows = np.where(ok, np.maximum(j1 - j0, 0), 0)
     t = np.repeat(np.arange(len(tri)), rows)
     start = np.cumsum(rows) - rows
     j = j0[t] + (np.arange(len(t)) - start[t])
     yc = j + 0.5
-    # the row's span: where it crosses the triangle's edges (each edge half-open in y)
-    xl = np.full(len(t), np.inf)
-    xr = np.full(len(t), -np.inf)
-    for a, b in ((0, 1), (1, 2), (2, 0)):
-        ya, yb, xa, xb = y[t, a], y[t, b], x[t, a], x[t, b]
-        cross = ((ya <= yc) & (yc < yb)) | ((yb <= yc) & (yc < ya))
-        dy = np.where(cross, yb - ya, 1.0)
-        xe = np.where(cross, xa + (yc - ya) * (xb - xa) / dy, np.nan)
-        xl = np.where(cross, np.minimum(xl, xe), xl)
-        xr = np.where(cross, np.maximum(xr, xe), xr)
+    # the row's span: between the long edge (lowest to highest corner), which every row crosses,
+    # and the short edge it crosses, below the middle corner (y0 <= yc < y1) or from it on
+    Y, X = ys[t], xs[t]
+    xlong = X[:, 0] + (yc - Y[:, 0]) * (X[:, 2] - X[:, 0]) / (Y[:, 2] - Y[:, 0])
+    low = yc < Y[:, 1]
+    ya, yb = np.where(low, Y[:, 0], Y[:, 1]), np.where(low, Y[:, 1], Y[:, 2])
+    xa, xb = np.where(low, X[:, 0], X[:, 1]), np.where(low, X[:, 1], X[:, 2])
+    xshort = xa + (yc - ya) * (xb - xa) / (yb - ya)
+    xl, xr = np.minimum(xlong, xshort), np.maximum(xlong, xshort)
     valid = xr > xl
     t, j, yc, xl, xr = t[valid], j[valid], yc[valid], xl[valid], xr[valid]
     i0 = np.clip(np.ceil(xl - 0.5), 0, width).astype(np.int64)
@@ -331,7 +334,7 @@ def render_png(items: list[MeshItem], path: str | os.PathLike, title: str, *,
             edge[b] |= diff < -step
         sub[edge] = _rgb8(_OUTLINE)
     # SUPERSAMPLE x SUPERSAMPLE samples per pixel
-    out = Image.fromarray(img, "RGB").resize((size_px, size_px), Image.Resampling.BOX)
+    out = Image.fromarray(img, "RGB").reduce(S)       # each pixel the mean of its S x S samples
     draw = ImageDraw.Draw(out)
     ink = (20, 20, 20)
     f_small = _font(max(10, size_px // 75))
