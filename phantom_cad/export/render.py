@@ -149,7 +149,7 @@ def label_anchor(mine: np.ndarray, p: tuple[float, float], reach: float) -> tupl
 
 
 def place_labels(labels: list[tuple[tuple[float, float, float, float], tuple[float, float] | None,
-                                     np.ndarray | None]], stride: int = 4
+                                     np.ndarray]], stride: int = 4
                  ) -> list[tuple[float, float] | None]:
     """Where each label is drawn so that no two labels' boxes overlap, placed in turn (first
     come, first placed). Each label is (box, anchor, mine): ``box`` its text's extent (left, top,
@@ -176,11 +176,10 @@ def place_labels(labels: list[tuple[tuple[float, float, float, float], tuple[flo
             out.append(None)
             continue
         where = at
-        h, w = mine.shape if mine is not None else (math.inf, math.inf)
-        if not clear(np.array([at[0]]), np.array([at[1]]), box, math.inf, math.inf)[0] and mine is not None:
+        if not clear(np.array([at[0]]), np.array([at[1]]), box, math.inf, math.inf)[0]:
             rows, cols = np.nonzero(mine[::stride, ::stride])
             x, y = cols * stride + 0.5, rows * stride + 0.5
-            ok = clear(x, y, box, h, w)
+            ok = clear(x, y, box, *mine.shape)
             if ok.any():
                 d = (x - at[0]) ** 2 + (y - at[1]) ** 2
                 d[~ok] = np.inf
