@@ -7,7 +7,8 @@ such sets file by file through their manifests.
 `build` runs this checkout's `phantom-cad build` with a part cache of
 its own, so nothing an earlier build cached is served. `compare` reads each manifest's ``files``
 table (path -> SHA-256) and the manifest itself with the fields that name the code left out (its
-``code_digest`` and the package's version string), and prints every difference.
+``code_digest``, the package's version string and each part's ``cache_key``, which hashes the code
+digest in), and prints every difference.
 """
 
 from __future__ import annotations
@@ -50,6 +51,8 @@ def _manifest(folder: Path) -> dict:
         for key in path[:-1]:
             node = node.get(key, {})
         node.pop(path[-1], None)
+    for part in man.get("parts", ()):
+        part.pop("cache_key", None)
     return man
 
 
