@@ -1,4 +1,4 @@
-"""Issue 12, no collisions: the hand posed over a grid of servo commands (0, 25, 50, 75, 90 and
+"""No collisions: the hand posed over a grid of servo commands (0, 25, 50, 75, 90 and
 100 % of each servo's travel; the fingers independently, the thumb's flexion across its CMC
 range), every pair of parts measured with manifold3d on the parts' meshes
 (``export.interference.command_sweep``). A joint's parent and child, and the designed contacts,

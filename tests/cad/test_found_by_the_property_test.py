@@ -1,5 +1,5 @@
 """Files the property test (tests/export/test_validation_builds.py) found validating and not
-building, kept as regressions: each builds now, or is refused by a rule (tests/test_params.py)."""
+building, kept as regression tests: each builds, or is refused by a rule (tests/test_params.py)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Issue 12, opposition on the solids: the thumb's pad reaches the index, middle and ring pads
+"""Opposition on the solids: the thumb's pad reaches the index, middle and ring pads
 (surface distance <= 1 mm, no interpenetration) at servo commands within the travel; default
 hand, left hand and the 170 mm hand (params/examples/small.toml).
 
@@ -27,7 +27,7 @@ from phantom_cad.kinematics import opposition
 
 from tests.cad.conftest import HANDS
 
-#: the surface distance (mm) the pads must come within (issue 12)
+#: the surface distance (mm) the pads must come within
 REACH_MM = 1.0
 #: manifold3d's overlap (mm^3) that counts as interpenetration: the command sweep's bar
 #: (``export.interference.SWEEP_TOL_MM3``, the meshes' chord error on parts that nearly touch)

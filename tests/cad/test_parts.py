@@ -54,9 +54,8 @@ def test_every_part_is_one_valid_solid(built):
 @pytest.mark.parametrize("kind", ["left", "hand_length_170"])
 def test_every_part_of_the_other_hands_is_one_valid_solid(hand_parts, kind):
     """The left and 170 mm hands' parts pass the check the build's workers make of each
-    (``cad.verify.verify_part``: one valid solid, measured against the parameters); until now only
-    their exports ran it (a change that made the 170 mm hand's thumb CMC base invalid passed every
-    test of tests/cad)."""
+    (``cad.verify.verify_part``: one valid solid, measured against the parameters), so tests/cad
+    catches an invalid part of these hands without an export."""
     p, shapes = hand_parts(kind)
     assert len(shapes) == 28
     bad = {name: problems for name, shape in shapes.items() if (problems := verify_part(p, name, shape))}
@@ -376,7 +375,7 @@ def test_thumb_mp_guides_at_d1_d2_alpha(built, document):
 
 
 def test_thumb_cmc_base_prints_on_its_palmar_pad(built, document, params):
-    """Issue 12: the CMC base rests on its palmar face, deepened to a pad as low as the MP guide's
+    """The CMC base rests on its palmar face, deepened to a pad as low as the MP guide's
     boss reaches (the guide sits inside the palmar face, its boss does not): the planar faces
     looking straight down at its lowest z cover more than a quarter of its footprint
     (``export.orient``'s rule); laid that way its MP axis is flat, so every blocker of its MP hub

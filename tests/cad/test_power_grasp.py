@@ -1,4 +1,4 @@
-"""Issue 12, power grasp, its first-contact half: a 35 mm cylinder across the palm, every finger
+"""Power grasp, its first-contact half: a 35 mm cylinder across the palm, every finger
 flexing onto it touches it past its equator; default hand, left hand and the 170 mm hand
 (params/examples/small.toml). Whether the closing hand then holds it is simulated in MuJoCo
 (tests/export/test_mjcf.py: it does, against the palm's heel).
@@ -31,7 +31,7 @@ from phantom_cad.kinematics.topology import FINGERS
 
 from tests.cad.conftest import HANDS
 
-#: issue 12: the cylinder across the palm (mm), and the distance its contacts must come within
+#: the power grasp's cylinder across the palm (mm), and the distance its contacts must come within
 DIAMETER_MM = 35.0
 REACH_MM = 1.0
 #: manifold3d's overlap (mm^3) that counts as interpenetration: the command sweep's bar
