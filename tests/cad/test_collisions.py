@@ -16,7 +16,7 @@ import pytest
 
 from phantom_cad import make_hand
 from phantom_cad.cad import assembly
-from phantom_cad.cad import measure as check
+from phantom_cad.cad import measure
 from phantom_cad.export import step_stl
 from phantom_cad.export.interference import command_sweep, may_touch
 from phantom_cad.kinematics.topology import SERVOS, link
@@ -41,7 +41,7 @@ def _occ_overlap(p, shapes: dict, pair, commands: dict) -> float:
             u[s.index] += commands[s.label] * (hand.u_max[s.index] - hand.u_min[s.index])
     T = assembly.pose_transforms(p, hand.forward(u))
     a, b = pair
-    return check.intersection_volume(check.placed(shapes[a], T[a]), check.placed(shapes[b], T[b]))
+    return measure.intersection_volume(measure.placed(shapes[a], T[a]), measure.placed(shapes[b], T[b]))
 
 
 @pytest.fixture(scope="module", params=HANDS)

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from phantom_cad.cad import assembly
-from phantom_cad.cad import measure as check
+from phantom_cad.cad import measure
 from phantom_cad.canon import plain
 from phantom_cad.kinematics import frames
 from phantom_cad.kinematics.topology import FINGERS, SERVO_MOUNT, SERVOS
@@ -26,7 +26,7 @@ def hand(request, hand_parts):
     p, shapes = hand_parts(request.param)
     T = assembly.pose_transforms(p)
     names = ("palm", "forearm") + tuple(f"{f}_base" for f in FINGERS)
-    solids = {n: check.placed(shapes[n], T[n]) for n in names}
+    solids = {n: measure.placed(shapes[n], T[n]) for n in names}
     return request.param, p, plain(p.document), solids
 
 
@@ -153,6 +153,6 @@ def test_fingertips_reach_the_palm_at_full_travel(hand):
     T = assembly.pose_transforms(p, h.forward(u))
     far = {}
     for f in FINGERS:
-        tip = check.placed(assembly.build_part(p, f"{f}_distal").shape, T[f"{f}_distal"])
+        tip = measure.placed(assembly.build_part(p, f"{f}_distal").shape, T[f"{f}_distal"])
         far[f] = tip.distance_to(solids["palm"])
     assert max(far.values()) <= 10.0, far
