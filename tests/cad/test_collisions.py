@@ -5,7 +5,7 @@ range), every pair of parts measured with manifold3d on the parts' meshes
 may touch; a thumb part against a finger part is a pinch contact (reported, with the commands).
 
 The reported overlaps are confirmed by OpenCascade's boolean on the solids themselves, and a hand
-with the old 19.5 mm finger pitch must show the flexed index and middle fingers running into
+with a 19.5 mm finger pitch (too narrow) must show the flexed index and middle fingers running into
 each other (the check can fail).
 """
 

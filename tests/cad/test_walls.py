@@ -117,8 +117,8 @@ def test_the_servo_pulleys_print(walls):
 
 def test_the_flanks_are_walls_of_two_perimeters(walls):
     """Points under the bar are few: the groove flanks of 0.8 mm (a tenth of a finger base's
-    surface) are walls, not thin ones; what is left is local (at most 0.4 % of any part on
-    2026-11-24: the bar keeps it under 0.6 %)."""
+    surface) are walls, not thin ones; what is left is local (the bar: under 0.6 % of any part's
+    points)."""
     for n, r in walls.items():
         assert r["fraction"] < 0.006, (n, r)
 
