@@ -1,4 +1,4 @@
-"""Benchmark: `diagnose` on a full bidirectional sweep of all six servos (about 2,000 samples) with every library effect as a candidate (nine: issue 11 added backlash, tendon_elasticity_per_finger, camera_scale and drive_friction), the verdict and the signature report included (`to_json`).
+"""Benchmark: `diagnose` on a full bidirectional sweep of all six servos (about 2,000 samples) with every library effect as a candidate, the verdict and the signature report included (`to_json`).
 
 Data sets: nothing hidden (one round, every candidate scored and rejected), one effect hidden,
 all five hidden (six rounds, the worst case), recording the swept finger's joints (simulate's

@@ -1,5 +1,5 @@
-"""Benchmark: the commands on a 1,000,000-row measurement file, run as a user runs them (issue 8,
-defect 10; targets: `model forward` < 5 s, `diagnose` < 30 s and < 1 GB).
+"""Benchmark: the commands on a 1,000,000-row measurement file, run as a user runs them (targets:
+`model forward` < 5 s, `diagnose` < 30 s and < 1 GB).
 
 The file: every servo swept both ways, 83,334 points per direction and servo (1,000,008 rows), the
 swept finger's joints recorded, hidden friction hysteresis and joint offsets, 0.1 deg noise.

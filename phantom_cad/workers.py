@@ -66,9 +66,9 @@ def keep_freed_memory() -> bool:
     of handing it back to the system and faulting fresh pages in again: arrays up to
     :data:`MMAP_THRESHOLD` come from the heap (not their own mmap), and up to
     :data:`TRIM_THRESHOLD` of freed heap stays mapped. For short-lived workers that allocate and
-    free large arrays over and over (the parts build's meshes and pictures: 2.75-2.89 -> 2.12-2.30 s
-    of system time in a cold build, docs/performance.md); the process keeps its peak memory until
-    it exits. Returns False, changing nothing, where the C library has no ``mallopt`` (not glibc)."""
+    free large arrays over and over (the parts build's meshes and pictures), it saves the system
+    time of those page faults (docs/performance.md); the process keeps its peak memory until it
+    exits. Returns False, changing nothing, where the C library has no ``mallopt`` (not glibc)."""
     import ctypes
 
     try:

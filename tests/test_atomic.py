@@ -65,8 +65,8 @@ def test_replace_dir_swaps_a_finished_folder(tmp_path):
 
 
 def test_replace_dir_finishes_an_interrupted_swap(tmp_path):
-    """Issue 8, defect 3: a kill between the two renames of a swap left nothing at the export path
-    and a hidden .out.old.* folder no later run cleaned up."""
+    """A kill between the two renames of a swap must leave the old or the new export: the next
+    swap finishes the interrupted one, and no hidden .out.old.* folder is left behind."""
     from phantom_cad.atomic import replace_dir
 
     target = tmp_path / "out"

@@ -147,7 +147,7 @@ def test_params_opposition_solves_a_placement_the_file_then_reaches(tmp_path):
     from phantom_cad.params import DEFAULT_PARAMS
 
     out = cli("params", "opposition", "--solve").stdout
-    assert "index   pads -" in out                  # the file's own placement (issue 12) already meets them
+    assert "index   pads -" in out                  # the file's own placement already meets them
     assert "the palm's thenar holds it within a palm of human breadth" in out
     lines = out[out.index("[palm]"):].splitlines()
     solved = tomllib.loads("\n".join(lines))["palm"]
@@ -195,8 +195,9 @@ def test_model_commands_never_import_cad(tmp_path):
 ])
 @pytest.mark.parametrize("victim", ["file", "folder"])
 def test_outputs_never_replace_user_data(tmp_path, command, victim):
-    """Issue 8, defect 1: `build -o params/phantom.toml` (a typo for -p) replaced the parameter file
-    with an export folder; `--out mydata` / `--report mydata` deleted what the folder held."""
+    """An output never replaces user data: `build -o params/phantom.toml` (a typo for -p) must not
+    replace the parameter file with an export folder, nor `--out mydata` / `--report mydata`
+    delete what the folder holds."""
     sweep = tmp_path / "sweep.csv"
     cli("simulate", "--points", "5", "--out", sweep)
     target = tmp_path / "mydata"
@@ -215,7 +216,7 @@ def test_outputs_never_replace_user_data(tmp_path, command, victim):
 
 
 def test_params_validate_goes_on_after_a_bad_file(tmp_path):
-    """Issue 8, defect 7: one crashing file aborted a multi-file `params validate`."""
+    """A multi-file `params validate` reports every file: one unreadable file does not abort it."""
     from phantom_cad.params import DEFAULT_PARAMS
 
     binary = tmp_path / "binary.toml"
@@ -229,9 +230,9 @@ def test_params_validate_goes_on_after_a_bad_file(tmp_path):
 
 
 def test_model_warns_outside_the_travel_and_strict_refuses(tmp_path):
-    """Issue 8, defect 8: `model forward` returned angles from -80 to 100 degrees for servo angles
-    far outside the travel without a word. 5 rad of servo 2 is beyond any travel (the cosine law
-    of the default index has its end at 1.62 rad); a joint target of -0.5 rad is below the joint's
+    """`model forward` warns about servo angles outside the travel (the model extrapolates there)
+    and --strict refuses them. 5 rad of servo 2 is beyond any travel (the cosine law of the
+    default index has its end at 1.62 rad); a joint target of -0.5 rad is below the joint's
     lower limit of 0 in the parameter file."""
     far = tmp_path / "far.csv"
     far.write_text("u1,u2,u3,u4,u5,u6\n0,0,0,0,0,0\n0,5,0,0,0,0\n")

@@ -1,5 +1,5 @@
 """Every command, every bad input: one line ``error: ...``, exit 2, no traceback, nothing written
-(issue 8, defect 7; the fuzz test its "Done when" asks for).
+(the fuzz test of that rule).
 
 The commands run in-process through the entry point ``phantom_cad.cli.main`` (what the
 ``phantom-cad`` script and ``python -m phantom_cad`` call), so a few hundred cases take seconds;
@@ -144,8 +144,8 @@ def test_bad_options_are_one_error_line(tmp_path, monkeypatch, capsys, argv, mes
 
 
 def test_a_newline_in_a_file_name_stays_one_line(tmp_path, monkeypatch, capsys):
-    """Issue 8, defect 8: `fit` with a newline in the data file name wrote an invalid TOML (the
-    header comment broke in two) over an earlier file."""
+    """`fit` with a newline in the data file name writes a valid TOML: the name in the header
+    comment stays on one line."""
     monkeypatch.chdir(tmp_path)
     _fixtures(tmp_path)
     data = "two\nlines.csv"

@@ -155,7 +155,7 @@ def test_reach_is_the_brute_force_minimum(hand, placement):
         want = O.PAD_CONE - square
         assert got[f].margin == pytest.approx(want, abs=math.radians(0.5)) if math.isfinite(want) \
             else not math.isfinite(got[f].margin)
-    # both the file's placement (solved within the thenar's room, issue 12) and the search's
+    # both the file's placement (solved within the thenar's room) and the search's
     # unconstrained one, on reach's own grid: the pads of index, middle and ring meet
     fine = O.reach(hand, T0=T0)
     assert all(fine[f].reaches and fine[f].margin > 0.0 for f in O.OPPOSED)

@@ -144,7 +144,7 @@ def test_cosine_law_argument_leaves_its_domain(document):
 
 
 def test_chord_negative_inside_the_travel(document):
-    # issue 8, defect 4: a 20 mm servo pulley keeps the argument inside [-1, 1] at both ends of
+    # a 20 mm servo pulley keeps the argument inside [-1, 1] at both ends of
     # the travel, but the chord L = L0 - r u is linear in u and changes sign inside it.
     # By hand: L0 = 16.902 mm (above), L(93 deg) = 16.902 - 20 * 1.62316 = -15.561 mm;
     # at the ends the argument is cos(100 deg) = -0.1736 and (244 - 242.15) / 240 = 0.0077, but at
@@ -268,7 +268,7 @@ def test_params_are_frozen():
 
 
 def test_unreadable_parameter_files(tmp_path):
-    """Issue 8, defect 7: a binary file, a folder and a symlink loop gave tracebacks."""
+    """A binary file, a folder and a symlink loop are refused with one error line, no traceback."""
     binary = tmp_path / "binary.toml"
     binary.write_bytes(b"\x89PNG\r\n\x1a\n\xff\xfe")
     loop = tmp_path / "loop.toml"
@@ -283,7 +283,7 @@ def test_unreadable_parameter_files(tmp_path):
 
 
 # ---------------------------------------------------------------------------
-# issue 8, defect 5: files that validated and did not build are refused, each by the rule
+# files that would validate and not build are refused, each by the rule
 # the build relied on (the property test, tests/test_validation_builds.py, checks the rest)
 # ---------------------------------------------------------------------------
 

@@ -39,7 +39,7 @@ from ..kinematics.topology import CMC_SERVO, FINGERS, N_SERVOS, THUMB_CHAIN, cha
 from .assembly import pose_transforms
 from .measure import placed
 
-#: the surface distance (mm) a grasp's contacts must come within (issue 12)
+#: the surface distance (mm) a grasp's contacts must come within to count as touching
 REACH_MM = 1.0
 #: how many of the model's contacts (distinct thumb commands, squarest first) are tried
 CANDIDATES = 8

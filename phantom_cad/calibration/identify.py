@@ -10,8 +10,8 @@ data cannot see: moving the parameters by
 
 changes the prediction over the recorded cells by only s_i eps (RMS s_i eps / sqrt(m)), against
 about eps for any single parameter. Such parameters get no standard deviation (the covariance
-along v is not bounded by these data; :func:`~.fitting._result` used to report +-0.0001 for an
-exactly collinear pair): they are reported as not identifiable, with the combination.
+along v is not bounded by these data: a standard deviation from it, e.g. +-0.0001 for an exactly
+collinear pair, would mean nothing): they are reported as not identifiable, with the combination.
 
 The separating recording is computed from the model, not looked up: for every servo whose joints
 a parameter of the combination moves, in each direction (flexing, extending) and over each third

@@ -67,7 +67,7 @@ def interference(meshes: dict[str, tuple[np.ndarray, np.ndarray]], poses: dict[s
             "largest_other_overlap": largest}
 
 
-#: fractions of each servo's travel the command sweep poses the hand at (issue 12's grid)
+#: fractions of each servo's travel the command sweep poses the hand at (the collision check's grid)
 SWEEP_FRACTIONS = (0.0, 0.25, 0.5, 0.75, 0.9, 1.0)
 #: overlap volume (mm^3) above which two posed parts count as interpenetrating in the sweep: the
 #: meshes' chord error (params.print.stl_tolerance) on parts that come close without touching

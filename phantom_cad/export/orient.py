@@ -1,4 +1,5 @@
-"""The print orientation of a part, chosen by a measured overhang criterion (issue 12).
+"""The print orientation of a part, chosen by a measured overhang criterion, so that the
+part prints with as little support as it can.
 
 Of the 24 rotations that lay a part's link-frame axes along the printer's axes, the one whose
 mesh has the least overhang: the area of the faces that look down more steeply than

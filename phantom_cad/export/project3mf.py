@@ -1,6 +1,6 @@
 """A part's PrusaSlicer project: ``print/<part>.3mf``, the part in its print orientation with
-support blockers over its tendon features (issue 12: the grooves and channels print without
-support).
+support blockers over its tendon features, so that the grooves and channels print without
+support.
 
 With its automatic supports on, PrusaSlicer stands support in every tendon groove of the exported
 STLs: a groove's floor is the pulley the cord bears on, and the half of it that faces down is a

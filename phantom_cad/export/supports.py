@@ -1,5 +1,5 @@
-"""Where PrusaSlicer puts support under the exported parts, by tendon feature (issue 12: the tendon
-grooves and channels must print without support in the exported orientation).
+"""Where PrusaSlicer puts support under the exported parts, by tendon feature (the requirement: the
+tendon grooves and channels must print without support in the exported orientation).
 
 PrusaSlicer slices a part's STL as exported (its automatic supports, :func:`slicer.slice_supports`);
 the support's extrusion paths, sampled every 0.25 mm, are moved back into the part's link frame

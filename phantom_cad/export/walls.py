@@ -1,5 +1,5 @@
-"""Wall thickness of a printed part, measured on its mesh by ray casting (issue 12: every wall at
-least two perimeters of the nozzle, 0.8 mm by default).
+"""Wall thickness of a printed part, measured on its mesh by ray casting (the requirement: every
+wall at least two perimeters of the nozzle, 0.8 mm by default).
 
 Points are sampled over the surface (area-weighted, seeded: the same mesh gives the same
 numbers). From each, rays go into the solid along the inward normal and six directions

@@ -33,11 +33,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import units
 from . import frames as F
 from .topology import CMC_Q, FINGERS, N_SERVOS, OPPOSED_FINGERS, SERVOS, THUMB_CHAIN, chain
 
 #: the half angle (rad) of the cone around a pad's normal in which a contact counts as pad to pad
-PAD_CONE = math.radians(45.0)
+PAD_CONE = units.rad(45.0)
 #: the fingers the thumb opposes (the paper's postures 1-3); the pinky is reported, not required
 OPPOSED = OPPOSED_FINGERS
 THUMB = THUMB_CHAIN.digit
@@ -264,11 +265,12 @@ def default_bounds(params) -> Bounds:
     search keeps the thumb's links out of :func:`palm_envelope`); the axis angles within
     +-90 deg roll, -90..30 deg pitch and +-90 deg yaw (docs/opposition.md)."""
     k = params.hand_length / 0.189
-    mm = 1e-3 * k
-    deg = math.radians
+    scaled_mm = units.m(k)          # one millimetre of the reference hand, scaled (m)
+    rad = units.rad
     x_edge = palm_envelope(params)[0][0]
-    return Bounds(offset=((x_edge - 35 * mm, x_edge), (-75 * mm, -20 * mm), (-35 * mm, 10 * mm)),
-                  axis=((deg(-90), deg(90)), (deg(-90), deg(30)), (deg(-90), deg(90))))
+    return Bounds(offset=((x_edge - 35 * scaled_mm, x_edge), (-75 * scaled_mm, -20 * scaled_mm),
+                          (-35 * scaled_mm, 10 * scaled_mm)),
+                  axis=((rad(-90), rad(90)), (rad(-90), rad(30)), (rad(-90), rad(90))))
 
 
 def palm_envelope(params) -> tuple[np.ndarray, np.ndarray]:

@@ -4,7 +4,7 @@
 * ``built``: {name: Built} of every part (right hand).
 * ``placed``: {name: solid} every part moved to its rest pose in the hand frame.
 * ``variant(edit)``: parse the default document after ``edit(doc)`` (a plain dict).
-* ``hand_parts(kind)``: (params, {name: shape}) of every part of one of issue 12's three hands
+* ``hand_parts(kind)``: (params, {name: shape}) of every part of one of the three reference hands
   (:data:`HANDS`), built once per session; ``hand_meshes(kind)``: their meshes at the export's
   STL tolerance.
 """
@@ -52,7 +52,7 @@ def placed(built):
     return {name: check.placed(b.shape, b.T_hand_link) for name, b in built.items()}
 
 
-#: issue 12's three hands: the default, its left twin, and a hand of hand_length 170 mm (a file of its
+#: the three reference hands: the default, its left twin, and a hand of hand_length 170 mm (a file of its
 #: own, params/examples/small.toml: the fingers narrower, the pitch shorter, its CMC placement solved
 #: for it)
 HANDS = ("default", "left", "hand_length_170")

@@ -10,7 +10,7 @@ import sys
 import numpy as np
 import pytest
 
-from phantom_cad.cad import measure as check
+from phantom_cad.cad import measure
 from phantom_cad.cad import assembly
 from phantom_cad.kinematics.topology import joint_index
 
@@ -196,12 +196,12 @@ def test_print_rotation_lays_each_part_on_a_flat_face(built):
     for n, b in built.items():
         T = np.eye(4)
         T[:3, :3] = b.print_rotation
-        s = check.placed(b.shape, T)
-        rep = check.solid_report(s)
+        s = measure.placed(b.shape, T)
+        rep = measure.solid_report(s)
         z0 = rep["bbox_min"][2]
         lo, hi = rep["bbox_min"], rep["bbox_max"]
         footprint = (hi[0] - lo[0]) * (hi[1] - lo[1])
-        down = sum(f["area"] for f in check.planar_faces(s)
+        down = sum(f["area"] for f in measure.planar_faces(s)
                    if f["normal"][2] < -0.999999 and abs(f["centre"][2] - z0) < 1e-6)
         assert down > 0.25 * footprint, (n, down, footprint)
 

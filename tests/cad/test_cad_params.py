@@ -109,8 +109,8 @@ def test_spring_channel_wider_than_the_cheek(document):
 
 
 def test_a_wide_servo_widens_the_forearm_row(document):
-    """No tendon passes under a neighbouring servo any more (they sit in one row in the forearm
-    module): a 14 mm wide body validates (it used to be refused: 14/2 + 2 x 0.2 + 0.3 > 7 mm). Two
+    """No tendon passes under a neighbouring servo (they sit in one row in the forearm module): a
+    14 mm wide body validates, though 14/2 + 2 x 0.2 + 0.3 > 7 mm. Two
     neighbours' least pitch is the wider of their two pulley cavities (radius r + 2 x 0.6 + 0.6 +
     0.2: 9.0 mm for a finger's 7 mm pulley, 10.0 mm for the CMC loop's 8 mm) and the body with its
     clearances, plus a palm wall: 20.4 mm between two tendon servos and 21.4 mm beside servo 6 for a
@@ -312,7 +312,8 @@ def test_a_loop_without_a_clamp_position_is_a_param_error(tmp_path, document):
     gamma = acos((R_PIP + R_DIP) / L_middle) from its axis, and a clamp on the DIP groove keeps both
     wraps inside (8, 172 deg) only while the DIP travel (limit + 3 deg) stays under 2 gamma - 16 deg.
     By hand: L_middle = 0.143 x 189 = 27.027 mm, gamma = acos(13.5 / 27.027) = 60.03 deg, so
-    104.07 deg < 119.75 + 3 deg. The file used to validate and the build to stop on a ValueError."""
+    104.07 deg < 119.75 + 3 deg. Validation refuses the file rather than the build stopping on a
+    ValueError."""
     import subprocess
     import sys
 

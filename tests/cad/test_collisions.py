@@ -1,11 +1,11 @@
-"""Issue 12, no collisions: the hand posed over a grid of servo commands (0, 25, 50, 75, 90 and
+"""No collisions: the hand posed over a grid of servo commands (0, 25, 50, 75, 90 and
 100 % of each servo's travel; the fingers independently, the thumb's flexion across its CMC
 range), every pair of parts measured with manifold3d on the parts' meshes
 (``export.interference.command_sweep``). A joint's parent and child, and the designed contacts,
 may touch; a thumb part against a finger part is a pinch contact (reported, with the commands).
 
 The reported overlaps are confirmed by OpenCascade's boolean on the solids themselves, and a hand
-with the old 19.5 mm finger pitch must show the flexed index and middle fingers running into
+with a 19.5 mm finger pitch (too narrow) must show the flexed index and middle fingers running into
 each other (the check can fail).
 """
 
@@ -16,7 +16,7 @@ import pytest
 
 from phantom_cad import make_hand
 from phantom_cad.cad import assembly
-from phantom_cad.cad import measure as check
+from phantom_cad.cad import measure
 from phantom_cad.export import step_stl
 from phantom_cad.export.interference import command_sweep, may_touch
 from phantom_cad.kinematics.topology import SERVOS, link
@@ -41,7 +41,7 @@ def _occ_overlap(p, shapes: dict, pair, commands: dict) -> float:
             u[s.index] += commands[s.label] * (hand.u_max[s.index] - hand.u_min[s.index])
     T = assembly.pose_transforms(p, hand.forward(u))
     a, b = pair
-    return check.intersection_volume(check.placed(shapes[a], T[a]), check.placed(shapes[b], T[b]))
+    return measure.intersection_volume(measure.placed(shapes[a], T[a]), measure.placed(shapes[b], T[b]))
 
 
 @pytest.fixture(scope="module", params=HANDS)

@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from phantom_cad.cad import measure as check
+from phantom_cad.cad import measure
 
 pytest.importorskip("build123d")
 
@@ -67,7 +67,7 @@ def coupon(params):
 def test_coupon_volume_and_size_by_hand(coupon, document):
     c, shape = coupon
     _, size, volume = _expected(document)
-    rep = check.solid_report(shape)
+    rep = measure.solid_report(shape)
     assert rep["n_solids"] == 1 and rep["valid"]
     assert shape.volume == pytest.approx(volume, rel=1e-9)
     assert rep["bbox_max"] - rep["bbox_min"] == pytest.approx(size, abs=1e-6)
@@ -77,19 +77,19 @@ def test_coupon_volume_and_size_by_hand(coupon, document):
 def test_every_hole_measured_on_the_coupon(coupon, document):
     c, shape = coupon
     holes, _, _ = _expected(document)
-    cyl = check.cylinders(shape)
+    cyl = measure.cylinders(shape)
     by_key = {f.key: f for f in c.features}
     assert set(by_key) == set(holes)
     for key, (d, depth, vertical) in holes.items():
         f = by_key[key]
-        hits = [x for x in cyl if abs(x["radius"] - d / 2) < 1e-6 and check.coaxial(x, f.opening, f.axis, 1e-6)]
+        hits = [x for x in cyl if abs(x["radius"] - d / 2) < 1e-6 and measure.coaxial(x, f.opening, f.axis, 1e-6)]
         assert hits, key
         axis = np.array([0, 0, 1.0]) if vertical else np.array([0, 1.0, 0])
         assert all(abs(abs(x["direction"] @ axis) - 1) < 1e-9 for x in hits), key
         assert max(x["s_max"] for x in hits) - min(x["s_min"] for x in hits) == pytest.approx(depth, abs=1e-6), key
     # the blind holes are pockets that open upward (vertical) or toward -y (horizontal)
     for key in ("magnet_pocket", "screw_pilot"):
-        pk = check.circular_pockets(shape, holes[key][0] / 2)
+        pk = measure.circular_pockets(shape, holes[key][0] / 2)
         assert [tuple(np.round(p["facing"], 9)) for p in pk] == [(0.0, 0.0, 1.0)], key
         assert pk[0]["depth"] == pytest.approx(holes[key][1], abs=1e-6)
     assert c.verify(shape) == []
@@ -98,7 +98,7 @@ def test_every_hole_measured_on_the_coupon(coupon, document):
 def test_the_coupon_holes_are_the_hands(coupon, built):
     """Every hole of the coupon is a hole of the hand: some part has a bore of that radius."""
     c, _ = coupon
-    radii = {round(x["radius"], 6) for b in built.values() for x in check.cylinders(b.shape)}
+    radii = {round(x["radius"], 6) for b in built.values() for x in measure.cylinders(b.shape)}
     missing = [f.key for f in c.features if round(f.diameter / 2, 6) not in radii]
     assert missing == []
 
@@ -114,9 +114,9 @@ def test_hole_compensation_moves_the_hand_and_the_coupon(variant, document):
     seat = (hw["bearing"]["outer_mm"] - pr["press_fit_interference_mm"] + 0.3) / 2
     clear = (hw["axle_diameter_mm"] + 2 * pr["hole_clearance_mm"] + 0.3) / 2
     tendon = (hw["tendon_diameter_mm"] + 2 * pr["hole_clearance_mm"]) / 2
-    phalanx = {round(x["radius"], 6) for x in check.cylinders(part(p, "index_proximal").build())}
+    phalanx = {round(x["radius"], 6) for x in measure.cylinders(part(p, "index_proximal").build())}
     assert round(seat, 6) in phalanx and round(clear, 6) in phalanx
-    cp = {round(x["radius"], 6) for x in check.cylinders(FitCoupon(p).build())}
+    cp = {round(x["radius"], 6) for x in measure.cylinders(FitCoupon(p).build())}
     assert {round(seat, 6), round(clear, 6), round(tendon, 6)} <= cp
     default_seat = (hw["bearing"]["outer_mm"] - pr["press_fit_interference_mm"] + 0.2) / 2
     assert round(default_seat, 6) not in cp

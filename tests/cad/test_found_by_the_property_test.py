@@ -1,5 +1,5 @@
 """Files the property test (tests/export/test_validation_builds.py) found validating and not
-building, kept as regressions: each builds now, or is refused by a rule (tests/test_params.py)."""
+building, kept as regression tests: each builds, or is refused by a rule (tests/test_params.py)."""
 
 from __future__ import annotations
 
@@ -50,8 +50,8 @@ def test_the_cmc_base_clears_the_palm_where_the_rule_accepts(variant):
     """The CMC axis along the palm's normal and the CMC base's top 0.01 mm inside what the thenar
     rule accepts (a clearance below the palmar face: centre at -12 - 0.2 - 7.5 - 0.01 mm): the
     palm and the CMC base, where the assembly places them, stay at least a clearance apart
-    (OpenCascade's distance: the base's top under the palmar face, the column in the journal).
-    The property test once found a placement the old hub rule accepted that the build refused."""
+    (OpenCascade's distance: the base's top under the palmar face, the column in the journal): a
+    placement the rule accepts is one the build makes."""
     from phantom_cad.cad import preflight
     from phantom_cad.cad.assembly import pose_transforms
     from phantom_cad.cad.measure import placed

@@ -1,4 +1,4 @@
-"""Issue 12, human scale, measured on the built solids of the default hand, its left twin and a
+"""Human scale, measured on the built solids of the default hand, its left twin and a
 hand of hand_length_mm 170 (params/examples/small.toml).
 
 A 95th-percentile adult palm is about 95 mm broad at the metacarpal heads (hand length 189 mm;
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from phantom_cad.cad import assembly
-from phantom_cad.cad import measure as check
+from phantom_cad.cad import measure
 from phantom_cad.canon import plain
 from phantom_cad.kinematics import frames
 from phantom_cad.kinematics.topology import FINGERS, SERVO_MOUNT, SERVOS
@@ -26,7 +26,7 @@ def hand(request, hand_parts):
     p, shapes = hand_parts(request.param)
     T = assembly.pose_transforms(p)
     names = ("palm", "forearm") + tuple(f"{f}_base" for f in FINGERS)
-    solids = {n: check.placed(shapes[n], T[n]) for n in names}
+    solids = {n: measure.placed(shapes[n], T[n]) for n in names}
     return request.param, p, plain(p.document), solids
 
 
@@ -140,7 +140,7 @@ def test_nothing_hangs_below_the_palm_face(hand):
 @pytest.mark.xfail(strict=True, reason="power grasp: at full travel the fingertips stay 23.2 / 28.8 / 20.3 / 14.2 mm "
                    "from the palm (default hand, its heel included): the travel maps to the paper's Table I limits "
                    "(index MCP <= 72.8, PIP <= 92.2, DIP <= 75.1 deg), where a curled finger's tip hangs 24-29 mm below "
-                   "the palmar face; issue 12 goes on")
+                   "the palmar face")
 def test_fingertips_reach_the_palm_at_full_travel(hand):
     """Power grasp: every finger servo at the end of its travel (the thumb's CMC at rest), each
     distal phalanx within 10 mm of the palm part (OpenCascade's shape distance on the solids)."""
@@ -153,6 +153,6 @@ def test_fingertips_reach_the_palm_at_full_travel(hand):
     T = assembly.pose_transforms(p, h.forward(u))
     far = {}
     for f in FINGERS:
-        tip = check.placed(assembly.build_part(p, f"{f}_distal").shape, T[f"{f}_distal"])
+        tip = measure.placed(assembly.build_part(p, f"{f}_distal").shape, T[f"{f}_distal"])
         far[f] = tip.distance_to(solids["palm"])
     assert max(far.values()) <= 10.0, far

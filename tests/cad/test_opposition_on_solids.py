@@ -1,4 +1,4 @@
-"""Issue 12, opposition on the solids: the thumb's pad reaches the index, middle and ring pads
+"""Opposition on the solids: the thumb's pad reaches the index, middle and ring pads
 (surface distance <= 1 mm, no interpenetration) at servo commands within the travel; default
 hand, left hand and the 170 mm hand (params/examples/small.toml).
 
@@ -21,13 +21,13 @@ import pytest
 
 from phantom_cad import make_hand
 from phantom_cad.cad import assembly, grasp
-from phantom_cad.cad import measure as check
+from phantom_cad.cad import measure
 from phantom_cad.export.interference import interference, may_touch
 from phantom_cad.kinematics import opposition
 
 from tests.cad.conftest import HANDS
 
-#: the surface distance (mm) the pads must come within (issue 12)
+#: the surface distance (mm) the pads must come within
 REACH_MM = 1.0
 #: manifold3d's overlap (mm^3) that counts as interpenetration: the command sweep's bar
 #: (``export.interference.SWEEP_TOL_MM3``, the meshes' chord error on parts that nearly touch)
@@ -63,14 +63,14 @@ def test_the_thumb_pad_reaches_the_fingertip_pad(hand, finger):
     assert np.all(c.u >= h.u_min - 1e-12) and np.all(c.u <= h.u_max + 1e-12)
     T = assembly.pose_transforms(p, h.forward(c.u, compensated=True))
     a_name, b_name = "thumb_distal", f"{finger}_distal"
-    a, b = check.placed(shapes[a_name], T[a_name]), check.placed(shapes[b_name], T[b_name])
+    a, b = measure.placed(shapes[a_name], T[a_name]), measure.placed(shapes[b_name], T[b_name])
     d = a.distance_to(b)
     assert 0.0 < d <= REACH_MM and d == pytest.approx(c.distance_mm, abs=1e-9), (kind, finger, d)
     for name, digit, point in ((a_name, "thumb", c.thumb_point), (b_name, finger, c.finger_point)):
-        assert check.placed(shapes[name], T[name]).distance_to(tuple(point)) == pytest.approx(0.0, abs=1e-6)
+        assert measure.placed(shapes[name], T[name]).distance_to(tuple(point)) == pytest.approx(0.0, abs=1e-6)
         x = _in_link(T[name], point)
         assert x[2] <= 0.0 and x[1] >= _tip_length_mm(p, digit) / 2.0, (kind, finger, name, x)
     # no interpenetration: the two tips share no volume, and no two parts of the hand overlap
-    assert check.intersection_volume(a, b) == 0.0
+    assert measure.intersection_volume(a, b) == 0.0
     r = interference(meshes, T, allowed, tol_mm3=OVERLAP_MM3)
     assert r["collisions"] == [], (kind, finger, r["collisions"])

@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pytest
 
-from phantom_cad.cad import measure as check
+from phantom_cad.cad import measure
 from phantom_cad.cad.verify import verify_part
 from phantom_cad.cad import assembly
 from phantom_cad.kinematics.topology import FINGERS
@@ -45,7 +45,7 @@ def tendon_hole(doc):
 def test_every_part_is_one_valid_solid(built):
     assert len(built) == 28
     for name, b in built.items():
-        rep = check.solid_report(b.shape)
+        rep = measure.solid_report(b.shape)
         assert rep["n_solids"] == 1, name
         assert rep["valid"], name
         assert rep["volume"] > 100.0, name
@@ -54,9 +54,8 @@ def test_every_part_is_one_valid_solid(built):
 @pytest.mark.parametrize("kind", ["left", "hand_length_170"])
 def test_every_part_of_the_other_hands_is_one_valid_solid(hand_parts, kind):
     """The left and 170 mm hands' parts pass the check the build's workers make of each
-    (``cad.verify.verify_part``: one valid solid, measured against the parameters); until now only
-    their exports ran it (a change that made the 170 mm hand's thumb CMC base invalid passed every
-    test of tests/cad)."""
+    (``cad.verify.verify_part``: one valid solid, measured against the parameters), so tests/cad
+    catches an invalid part of these hands without an export."""
     p, shapes = hand_parts(kind)
     assert len(shapes) == 28
     bad = {name: problems for name, shape in shapes.items() if (problems := verify_part(p, name, shape))}
@@ -70,7 +69,7 @@ def test_every_part_mirrors_to_a_valid_left_hand_solid(built):
     mirrored part is checked here, not only in the slow left-hand export."""
     import build123d as bd
 
-    bad = [name for name, b in built.items() if not check.solid_report(b.shape.mirror(bd.Plane.YZ))["valid"]]
+    bad = [name for name, b in built.items() if not measure.solid_report(b.shape.mirror(bd.Plane.YZ))["valid"]]
     assert bad == []
 
 
@@ -81,7 +80,7 @@ def test_phalanx_bounding_boxes_match_the_segment_lengths(built, document):
         W, T = fd["width_mm"], fd["thickness_mm"]
         for seg, far in (("proximal", True), ("middle", True), ("distal", False)):
             L = fd["length_fraction"][seg] * HL
-            rep = check.solid_report(built[f"{f}_{seg}"].shape)
+            rep = measure.solid_report(built[f"{f}_{seg}"].shape)
             lo, hi = rep["bbox_min"], rep["bbox_max"]
             assert hi[0] - lo[0] == pytest.approx(W, abs=1e-6)
             # the far end is the clevis boss (radius T/2) beyond the next axis, or the fingertip
@@ -93,7 +92,7 @@ def test_phalanx_bounding_boxes_match_the_segment_lengths(built, document):
 
 
 def test_palm_spans_the_four_sockets_from_the_wrist(built, document):
-    rep = check.solid_report(built["palm"].shape)
+    rep = measure.solid_report(built["palm"].shape)
     lo, hi = rep["bbox_min"], rep["bbox_max"]
     pitch = document["palm"]["finger_pitch_mm"]
     # at least three pitches plus the outer half widths across, and the dorsal face at +T/2
@@ -124,7 +123,7 @@ def test_forearm_servo_cavity_and_its_front_wall(built, params, document, k):
     T = np.linalg.inv(frames.T_palm_forearm(params)) @ frames.T_palm_servo(params, k - 1)   # forearm frame
     shaft, axis = T[:3, 3] * 1e3, T[:3, 2]
     shape = built["forearm"].shape
-    measured = [c["radius"] for c in check.cylinders(shape) if check.coaxial(c, shaft, axis)]
+    measured = [c["radius"] for c in measure.cylinders(shape) if measure.coaxial(c, shaft, axis)]
     assert measured and max(measured) == pytest.approx(cavity, abs=1e-6)
     if k == 6:
         # servo 6's shaft is parallel to the CMC axis and its pulley lies in the CMC pulley's plane
@@ -211,7 +210,7 @@ def _table(document, digit):
 
 def _band(shape, axis_point, width):
     """The groove floor about an x axis through axis_point: (radius, x of the band's middle)."""
-    cs = [c for c in check.cylinders(shape) if check.coaxial(c, axis_point, (1, 0, 0))
+    cs = [c for c in measure.cylinders(shape) if measure.coaxial(c, axis_point, (1, 0, 0))
           and abs(c["length"] - width) < 1e-3]
     c = min(cs, key=lambda c: c["radius"])
     return c["radius"], float(c["centre"][0])
@@ -275,7 +274,7 @@ def test_finger_grooves_are_5_4_5(built, document):
 
 @pytest.mark.parametrize("k", [1, 2, 3, 4, 5])
 def test_servo_pulley_groove_radius_is_r(built, document, k):
-    r = check.measure_groove_radius(built[f"servo_pulley_{k}"].shape, (0, 0, 0), (0, 0, 1), tendon_hole(document))
+    r = measure.measure_groove_radius(built[f"servo_pulley_{k}"].shape, (0, 0, 0), (0, 0, 1), tendon_hole(document))
     src = document["thumb"] if k == 1 else document["fingers"][FINGERS[k - 2]]
     # the tendon's centreline runs at r_j (eq. 5): the floor lies half a tendon inside
     assert r == pytest.approx(src["servo_pulley_radius_mm"] - document["hardware"]["tendon_diameter_mm"] / 2, abs=1e-6)
@@ -293,7 +292,7 @@ def test_servo_pulley_anchor_at_the_clamp_and_clear_of_the_horn_screws(built, do
     pr, hw = document["print"], document["hardware"]
     well_r = tendon_hole(document)
     screw_r = hw["screw_diameter_mm"] / 2 + pr["hole_clearance_mm"] + _comp(document)
-    axial = [c for c in check.cylinders(built[f"servo_pulley_{k}"].shape)
+    axial = [c for c in measure.cylinders(built[f"servo_pulley_{k}"].shape)
              if abs(abs(c["direction"][2]) - 1.0) < 1e-9 and np.hypot(*c["point"][:2]) > 1.0]
     wells = [c for c in axial if abs(c["radius"] - well_r) < 1e-6]
     screws = [c for c in axial if abs(c["radius"] - screw_r) < 1e-6]
@@ -313,7 +312,7 @@ def test_the_cmc_loop_pulleys_have_equal_grooves(built, document):
     d = document["hardware"]["tendon_diameter_mm"]
     hole = d + 2 * document["print"]["hole_clearance_mm"]
     for name, r in (("servo_pulley_6", r6), ("thumb_cmc_pulley", r6 / g)):
-        assert check.measure_groove_radius(built[name].shape, (0, 0, 0), (0, 0, 1), hole) == \
+        assert measure.measure_groove_radius(built[name].shape, (0, 0, 0), (0, 0, 1), hole) == \
             pytest.approx(r - d / 2, abs=1e-6)
 
 
@@ -324,14 +323,14 @@ def test_the_cmc_loop_pulleys_have_equal_grooves(built, document):
 def _axle_axis(shape, T, doc):
     """The press-fit axle bore of a clevis, in the hand frame (measured)."""
     r = (doc["hardware"]["axle_diameter_mm"] - doc["print"]["press_fit_interference_mm"]) / 2 + _comp(doc)
-    cs = [c for c in check.cylinders(shape) if abs(c["radius"] - r) < 1e-6]
+    cs = [c for c in measure.cylinders(shape) if abs(c["radius"] - r) < 1e-6]
     assert cs
     near = min(cs, key=lambda c: np.linalg.norm(c["point"] - np.dot(c["point"], c["direction"]) * c["direction"]))
     return _hand(T, near["point"]), _dir(T, near["direction"])
 
 
 def _eyelet(shape, T, doc):
-    hits = check.eyelet_centres(shape, tendon_hole(doc) / 2, doc["cad"]["eyelet_length_mm"])
+    hits = measure.eyelet_centres(shape, tendon_hole(doc) / 2, doc["cad"]["eyelet_length_mm"])
     assert len(hits) == 1
     return _hand(T, hits[0]["centre"])
 
@@ -376,7 +375,7 @@ def test_thumb_mp_guides_at_d1_d2_alpha(built, document):
 
 
 def test_thumb_cmc_base_prints_on_its_palmar_pad(built, document, params):
-    """Issue 12: the CMC base rests on its palmar face, deepened to a pad as low as the MP guide's
+    """The CMC base rests on its palmar face, deepened to a pad as low as the MP guide's
     boss reaches (the guide sits inside the palmar face, its boss does not): the planar faces
     looking straight down at its lowest z cover more than a quarter of its footprint
     (``export.orient``'s rule); laid that way its MP axis is flat, so every blocker of its MP hub
@@ -433,7 +432,7 @@ def _magnet_r(doc):
 
 
 def test_palm_sockets_are_arc_offset_apart(built, document):
-    pockets = check.circular_pockets(built["palm"].shape, _magnet_r(document))
+    pockets = measure.circular_pockets(built["palm"].shape, _magnet_r(document))
     assert len(pockets) == 8
     # group the pocket axes (the socket face normals) into the four sockets, ordered radial -> ulnar
     normals = []
@@ -455,7 +454,7 @@ def test_palm_socket_faces_step_with_the_metacarpals(built, document):
     socket's face, whose centre is the MCP (on the 5 deg arc, chords 20.5 mm at -5 / 0 / +5 deg,
     then stepped along its column, turned -7.5 / -2.5 / 2.5 / 7.5 deg, by its metacarpal less the
     index's) less a finger base length along the column: the knuckle line is not a symmetric arc."""
-    pockets = sorted(check.circular_pockets(built["palm"].shape, _magnet_r(document)), key=lambda p: p["centre"][0])
+    pockets = sorted(measure.circular_pockets(built["palm"].shape, _magnet_r(document)), key=lambda p: p["centre"][0])
     hl, base = document["hand"]["hand_length_mm"], document["cad"]["finger_base_length_mm"]
     pitch, d = document["palm"]["finger_pitch_mm"], math.radians
     meta = [document["fingers"][f]["length_fraction"]["metacarpal"] * hl for f in FINGERS]
@@ -483,15 +482,15 @@ def test_magnet_sockets_coincide_with_the_palm(built, document, finger):
     base = built[f"{finger}_base"]
     palm = built["palm"]
     mine = [(_hand(base.T_hand_link, p["centre"]), _dir(base.T_hand_link, p["facing"]))
-            for p in check.circular_pockets(base.shape, r)]
-    theirs = [(p["centre"], p["facing"]) for p in check.circular_pockets(palm.shape, r)]
+            for p in measure.circular_pockets(base.shape, r)]
+    theirs = [(p["centre"], p["facing"]) for p in measure.circular_pockets(palm.shape, r)]
     assert len(mine) == 2
     for c, n in mine:
         match = [(c2, n2) for c2, n2 in theirs if np.linalg.norm(c2 - c) < 1e-6]
         assert len(match) == 1, (finger, c)
         assert match[0][1] @ n == pytest.approx(-1.0, abs=1e-9)   # opposite facing
     # the depth holds the magnet plus its clearance
-    for p in check.circular_pockets(base.shape, r):
+    for p in measure.circular_pockets(base.shape, r):
         assert p["depth"] == pytest.approx(document["hardware"]["magnet"]["thickness_mm"]
                                            + document["print"]["magnet_clearance_mm"], abs=1e-6)
 
@@ -514,16 +513,16 @@ def test_axle_bore_and_bearing_seats_are_coaxial(built, document, parent, child)
     clear = (hw["axle_diameter_mm"] + 2 * pr["hole_clearance_mm"]) / 2 + _comp(document)
     # the child's bearing seat (one, where it fits beside the grooves) and clearance bore sit on
     # its own x axis
-    seats = [c for c in check.cylinders(Cb.shape) if abs(c["radius"] - seat) < 1e-6]
-    assert len(seats) <= 1 and all(check.coaxial(c, (0, 0, 0), (1, 0, 0)) for c in seats)
+    seats = [c for c in measure.cylinders(Cb.shape) if abs(c["radius"] - seat) < 1e-6]
+    assert len(seats) <= 1 and all(measure.coaxial(c, (0, 0, 0), (1, 0, 0)) for c in seats)
     assert all(c["length"] == pytest.approx(hw["bearing"]["width_mm"], abs=1e-6) for c in seats)
-    assert any(abs(c["radius"] - clear) < 1e-6 and check.coaxial(c, (0, 0, 0), (1, 0, 0))
-               for c in check.cylinders(Cb.shape))
+    assert any(abs(c["radius"] - clear) < 1e-6 and measure.coaxial(c, (0, 0, 0), (1, 0, 0))
+               for c in measure.cylinders(Cb.shape))
     # the parent's press-fit bore, taken to the hand frame, is the child's axis at rest
     a = _hand(Cb.T_hand_link, (0, 0, 0))
     d = _dir(Cb.T_hand_link, (1, 0, 0))
-    bores = [c for c in check.cylinders(P.shape) if abs(c["radius"] - press) < 1e-6]
-    assert any(check.point_line_distance(_hand(P.T_hand_link, c["point"]), a, d) < 1e-6
+    bores = [c for c in measure.cylinders(P.shape) if abs(c["radius"] - press) < 1e-6]
+    assert any(measure.point_line_distance(_hand(P.T_hand_link, c["point"]), a, d) < 1e-6
                and abs(abs(_dir(P.T_hand_link, c["direction"]) @ d) - 1) < 1e-9 for c in bores)
 
 
@@ -540,8 +539,8 @@ def test_the_cmc_pulley_sits_keyed_on_the_column_in_the_palms_journal(built, doc
     a, d = _hand(base.T_hand_link, (0, 0, 0)), _dir(base.T_hand_link, (0, 0, 1))
 
     def on_axis(part, r):
-        return [c for c in check.cylinders(part.shape) if abs(c["radius"] - r) < 1e-6
-                and check.point_line_distance(_hand(part.T_hand_link, c["point"]), a, d) < 1e-6
+        return [c for c in measure.cylinders(part.shape) if abs(c["radius"] - r) < 1e-6
+                and measure.point_line_distance(_hand(part.T_hand_link, c["point"]), a, d) < 1e-6
                 and abs(abs(_dir(part.T_hand_link, c["direction"]) @ d) - 1) < 1e-9]
 
     assert on_axis(base, rc)
@@ -549,10 +548,10 @@ def test_the_cmc_pulley_sits_keyed_on_the_column_in_the_palms_journal(built, doc
     assert on_axis(pul, rc + pr["hole_clearance_mm"] + _comp(document))
     flats = {}
     for name, part, want in (("column", base, rc - KEY_DEPTH), ("pulley", pul, rc - KEY_DEPTH)):
-        for f in check.planar_faces(part.shape):
+        for f in measure.planar_faces(part.shape):
             n = _dir(part.T_hand_link, f["normal"])
             p = _hand(part.T_hand_link, f["centre"])
-            if abs(n @ d) < 1e-9 and abs(check.point_line_distance(p, a, d) - want) < 1e-6:
+            if abs(n @ d) < 1e-9 and abs(measure.point_line_distance(p, a, d) - want) < 1e-6:
                 flats[name] = n
     # the column's flat faces out of the column, the pulley's into its bore: opposite normals
     assert set(flats) == {"column", "pulley"} and flats["column"] @ flats["pulley"] == pytest.approx(-1.0)
@@ -566,7 +565,7 @@ def test_no_two_parts_intersect_at_rest(placed, params):
     allowed = {frozenset((a, b)) for a, b, _ in assembly.designed_contacts(params)}
     bad = []
     for a, b in itertools.combinations(sorted(placed), 2):
-        v = check.intersection_volume(placed[a], placed[b])
+        v = measure.intersection_volume(placed[a], placed[b])
         tol = 1e-2 if frozenset((a, b)) in allowed else 1e-3
         if v > tol:
             bad.append((a, b, round(v, 4)))
@@ -592,8 +591,8 @@ def test_hard_stop_engages_at_the_limit(built, document, params, digit, joint, p
         qv = np.zeros(15)
         qv[joint_index(digit, joint)] = q
         T = assembly.pose_transforms(params, qv)
-        vols.append(check.intersection_volume(check.placed(P.shape, T[f"{digit}_{parent}"]),
-                                              check.placed(Cp.shape, T[f"{digit}_{child}"])))
+        vols.append(measure.intersection_volume(measure.placed(P.shape, T[f"{digit}_{parent}"]),
+                                              measure.placed(Cp.shape, T[f"{digit}_{child}"])))
     assert vols[0] < 1e-3
     assert vols[1] > 0.05
 
@@ -610,7 +609,7 @@ def test_palm_housing_limits_mcp_flexion(built, document, params, finger):
         qv = np.zeros(15)
         qv[joint_index(finger, "mcp")] = q
         T = assembly.pose_transforms(params, qv)
-        vols.append(check.intersection_volume(palm.shape, check.placed(prox.shape, T[f"{finger}_proximal"])))
+        vols.append(measure.intersection_volume(palm.shape, measure.placed(prox.shape, T[f"{finger}_proximal"])))
     assert vols[0] < 1e-3 and vols[1] < 1e-3
     assert vols[2] > 0.05
 
@@ -624,11 +623,11 @@ def test_half_flexed_hand_has_no_interference(built, params, document):
         table = document["thumb"] if digit == "thumb" else document["fingers"][digit]
         q[i] = 0.5 * table["limits_rad"][joint][1]
     T = assembly.pose_transforms(params, q)
-    placed = {n: check.placed(b.shape, T[n]) for n, b in built.items()}
+    placed = {n: measure.placed(b.shape, T[n]) for n, b in built.items()}
     allowed = {frozenset((a, b)) for a, b, _ in assembly.designed_contacts(params)}
     bad = []
     for a, b in itertools.combinations(sorted(placed), 2):
-        v = check.intersection_volume(placed[a], placed[b])
+        v = measure.intersection_volume(placed[a], placed[b])
         if v > (1e-2 if frozenset((a, b)) in allowed else 1e-3):
             bad.append((a, b, round(v, 4)))
     assert bad == []
@@ -643,7 +642,7 @@ def test_changed_pulley_radius_moves_the_groove(variant, document):
         doc["fingers"]["middle"]["pulley_radius_mm"]["pip"] = 4.6
     p = variant(edit)
     shape = assembly.build_part(p, "middle_middle").shape
-    assert check.measure_groove_radius(shape, (0, 0, 0), (1, 0, 0), tendon_hole(document)) == pytest.approx(4.6 - 0.3)
+    assert measure.measure_groove_radius(shape, (0, 0, 0), (1, 0, 0), tendon_hole(document)) == pytest.approx(4.6 - 0.3)
 
 
 def test_changed_d1_moves_the_base_guide(variant, document):
@@ -653,7 +652,7 @@ def test_changed_d1_moves_the_base_guide(variant, document):
     b = assembly.build_part(p, "ring_base")
     a, d = _axle_axis(b.shape, np.eye(4), document)
     G1 = _eyelet(b.shape, np.eye(4), document)
-    assert check.point_line_distance(G1, a, d) == pytest.approx(12.8, abs=0.02)
+    assert measure.point_line_distance(G1, a, d) == pytest.approx(12.8, abs=0.02)
 
 
 def test_changed_servo_radius_moves_the_servo_groove(variant, document):
@@ -662,7 +661,7 @@ def test_changed_servo_radius_moves_the_servo_groove(variant, document):
         doc["fingers"]["pinky"]["servo_travel_deg"] = [0.0, 80.0]
     p = variant(edit)
     shape = assembly.build_part(p, "servo_pulley_5").shape
-    assert check.measure_groove_radius(shape, (0, 0, 0), (0, 0, 1), tendon_hole(document)) == pytest.approx(7.5 - 0.3)
+    assert measure.measure_groove_radius(shape, (0, 0, 0), (0, 0, 1), tendon_hole(document)) == pytest.approx(7.5 - 0.3)
 
 
 def test_changed_arc_offset_turns_the_sockets(variant, document):
@@ -672,7 +671,7 @@ def test_changed_arc_offset_turns_the_sockets(variant, document):
     # the socket normals are the finger bases' y axes: measure on two bases' magnet pockets
     T = assembly.pose_transforms(p)
     shape = assembly.build_part(p, "ring_base").shape
-    pk = check.circular_pockets(shape, _magnet_r(document))
+    pk = measure.circular_pockets(shape, _magnet_r(document))
     n_ring = -_dir(T["ring_base"], pk[0]["facing"])
     n_middle = -_dir(T["middle_base"], pk[0]["facing"])
     assert math.degrees(math.acos(float(n_ring @ n_middle))) == pytest.approx(4.0, abs=1e-6)
@@ -689,15 +688,15 @@ def test_left_hand_is_the_mirror_image(built, variant, name):
     p = variant(edit)
     left = assembly.build_part(p, name)
     right = built[name]
-    rl, rr = check.solid_report(left.shape), check.solid_report(right.shape)
+    rl, rr = measure.solid_report(left.shape), measure.solid_report(right.shape)
     assert rl["valid"] and rl["n_solids"] == 1
     assert verify_part(p, name, left.shape) == []
     assert rl["volume"] == pytest.approx(rr["volume"], rel=1e-6)
     assert np.allclose(rl["bbox_min"], [-rr["bbox_max"][0], rr["bbox_min"][1], rr["bbox_min"][2]], atol=1e-6)
     assert np.allclose(rl["bbox_max"], [-rr["bbox_min"][0], rr["bbox_max"][1], rr["bbox_max"][2]], atol=1e-6)
     # placed in the hand: the mirror of the right hand's placed part in the palm's y-z plane
-    pl = check.solid_report(check.placed(left.shape, left.T_hand_link))
-    pr = check.solid_report(check.placed(right.shape, right.T_hand_link))
+    pl = measure.solid_report(measure.placed(left.shape, left.T_hand_link))
+    pr = measure.solid_report(measure.placed(right.shape, right.T_hand_link))
     assert np.allclose(pl["bbox_min"], [-pr["bbox_max"][0], pr["bbox_min"][1], pr["bbox_min"][2]], atol=1e-3)
     assert np.allclose(pl["bbox_max"], [-pr["bbox_min"][0], pr["bbox_max"][1], pr["bbox_max"][2]], atol=1e-3)
 
@@ -709,7 +708,7 @@ def test_left_hand_is_the_mirror_image(built, variant, name):
 def _line_distance(p1, d1, p2, d2):
     n = np.cross(d1, d2)
     if np.linalg.norm(n) < 1e-12:
-        return check.point_line_distance(p2, p1, d1)
+        return measure.point_line_distance(p2, p1, d1)
     return abs((p2 - p1) @ n) / np.linalg.norm(n)
 
 
@@ -718,24 +717,24 @@ def test_palm_tendon_channel_joins_base_and_pulley(built, document, k, finger):
     """The palm's tendon channel starts where the finger base's tendon channel crosses the
     magnet face and runs tangent to its servo pulley's groove (distance r_j from the axis)."""
     palm, base, pulley = built["palm"], built[f"{finger}_base"], built[f"servo_pulley_{k}"]
-    channels = [c for c in check.cylinders(palm.shape) if abs(c["radius"] - tendon_hole(document) / 2) < 1e-6]
+    channels = [c for c in measure.cylinders(palm.shape) if abs(c["radius"] - tendon_hole(document) / 2) < 1e-6]
     # the base's entry channel (a clearance hole) crosses the magnet face y = -base length
     Lb = document["cad"]["finger_base_length_mm"]
     entries = []
-    for c in check.cylinders(base.shape):
+    for c in measure.cylinders(base.shape):
         if abs(c["radius"] - tendon_hole(document) / 2) < 1e-6 and abs(c["direction"][1]) > 1e-6:
             t = (-Lb - c["point"][1]) / c["direction"][1]
             entries.append(_hand(base.T_hand_link, c["point"] + t * c["direction"]))
     # the pulley's groove axis, measured
     r = document["fingers"][finger]["servo_pulley_radius_mm"]
     floor = r - document["hardware"]["tendon_diameter_mm"] / 2       # the centreline runs at r
-    groove = [c for c in check.cylinders(pulley.shape) if abs(c["radius"] - floor) < 1e-6]
+    groove = [c for c in measure.cylinders(pulley.shape) if abs(c["radius"] - floor) < 1e-6]
     assert groove
     pa, pd = _hand(pulley.T_hand_link, groove[0]["point"]), _dir(pulley.T_hand_link, groove[0]["direction"])
     hits = 0
     for c in channels:
         p, d = c["point"], c["direction"]
-        through_entry = any(check.point_line_distance(e, p, d) < 1e-6 for e in entries)
+        through_entry = any(measure.point_line_distance(e, p, d) < 1e-6 for e in entries)
         if through_entry:
             hits += 1
             assert _line_distance(p, d, pa, pd) == pytest.approx(r, abs=1e-6)
@@ -774,12 +773,12 @@ def test_thumb_tendon_reaches_the_cmc_base_on_its_axis(built, document):
     leaves the tendon length alone."""
     palm, base = built["palm"], built["thumb_cmc_base"]
     rc = document["cad"].get("cmc_column_radius_mm", 3.5)
-    column = [c for c in check.cylinders(base.shape) if abs(c["radius"] - rc) < 1e-6]
+    column = [c for c in measure.cylinders(base.shape) if abs(c["radius"] - rc) < 1e-6]
     assert column
     a, d = _hand(base.T_hand_link, column[0]["point"]), _dir(base.T_hand_link, column[0]["direction"])
     for part in (palm, base):
-        holes = [c for c in check.cylinders(part.shape) if abs(c["radius"] - tendon_hole(document) / 2) < 1e-6]
-        on_axis = [c for c in holes if check.point_line_distance(_hand(part.T_hand_link, c["point"]), a, d) < 1e-6
+        holes = [c for c in measure.cylinders(part.shape) if abs(c["radius"] - tendon_hole(document) / 2) < 1e-6]
+        on_axis = [c for c in holes if measure.point_line_distance(_hand(part.T_hand_link, c["point"]), a, d) < 1e-6
                    and abs(abs(_dir(part.T_hand_link, c["direction"]) @ d) - 1) < 1e-9]
         assert len(on_axis) >= 1, part.name
 
@@ -787,7 +786,7 @@ def test_thumb_tendon_reaches_the_cmc_base_on_its_axis(built, document):
 def _pilots_and_pairs(shape, document):
     hw, sv = document["hardware"], document["servo"]
     pilot = 0.8 * hw["screw_diameter_mm"] / 2 + _comp(document)    # the pilot ratio's default: 1.6 mm for M2
-    holes = [c for c in check.cylinders(shape) if abs(c["radius"] - pilot) < 1e-6]
+    holes = [c for c in measure.cylinders(shape) if abs(c["radius"] - pilot) < 1e-6]
     # mid-ear on both ends: (body length / 2 + flange span / 2) apart, along the body length
     spacing = sv["body_mm"][0] / 2 + sv["flange_span_mm"] / 2
     pairs = 0
@@ -812,12 +811,12 @@ def test_two_flange_screw_pilots_per_servo(built, document, placed):
     assert len(holes) == 2 and pairs == 0
     # the tab's clearance holes (screw + 2 clearances) over the palm's two other pilots
     clear = hw["screw_diameter_mm"] / 2 + document["print"]["hole_clearance_mm"] + _comp(document)
-    tab = [c for c in check.cylinders(placed["forearm"]) if abs(c["radius"] - clear) < 1e-6]
-    pil = [c for c in check.cylinders(placed["palm"]) if abs(c["radius"] - 0.8 * hw["screw_diameter_mm"] / 2 - _comp(document)) < 1e-6
+    tab = [c for c in measure.cylinders(placed["forearm"]) if abs(c["radius"] - clear) < 1e-6]
+    pil = [c for c in measure.cylinders(placed["palm"]) if abs(c["radius"] - 0.8 * hw["screw_diameter_mm"] / 2 - _comp(document)) < 1e-6
            and abs(abs(c["direction"][2]) - 1) < 1e-9]
     assert len(tab) == 2 and len(pil) == 2
     for c in tab:
-        assert any(check.coaxial(c, p["point"], p["direction"]) for p in pil)
+        assert any(measure.coaxial(c, p["point"], p["direction"]) for p in pil)
 
 
 # ---------------------------------------------------------------------------

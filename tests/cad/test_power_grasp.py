@@ -1,4 +1,4 @@
-"""Issue 12, power grasp, its first-contact half: a 35 mm cylinder across the palm, every finger
+"""Power grasp, its first-contact half: a 35 mm cylinder across the palm, every finger
 flexing onto it touches it past its equator; default hand, left hand and the 170 mm hand
 (params/examples/small.toml). Whether the closing hand then holds it is simulated in MuJoCo
 (tests/export/test_mjcf.py: it does, against the palm's heel).
@@ -25,13 +25,13 @@ import pytest
 
 from phantom_cad import make_hand
 from phantom_cad.cad import assembly, grasp
-from phantom_cad.cad import measure as check
+from phantom_cad.cad import measure
 from phantom_cad.export.interference import interference, may_touch
 from phantom_cad.kinematics.topology import FINGERS
 
 from tests.cad.conftest import HANDS
 
-#: issue 12: the cylinder across the palm (mm), and the distance its contacts must come within
+#: the power grasp's cylinder across the palm (mm), and the distance its contacts must come within
 DIAMETER_MM = 35.0
 REACH_MM = 1.0
 #: manifold3d's overlap (mm^3) that counts as interpenetration: the command sweep's bar
@@ -54,10 +54,10 @@ def _cylinder(p, shapes, y: float):
 
     T0 = assembly.pose_transforms(p)
     palm = p.document["palm"]
-    heel_front = check.placed(shapes["palm"], T0["palm"]).bounding_box().min.Y + palm["heel_length_mm"]
+    heel_front = measure.placed(shapes["palm"], T0["palm"]).bounding_box().min.Y + palm["heel_length_mm"]
     assert heel_front < y - DIAMETER_MM / 2
     z = -palm["thickness_mm"] / 2 - 0.5 - DIAMETER_MM / 2
-    boxes = [check.placed(shapes[f"{f}_base"], T0[f"{f}_base"]).bounding_box() for f in FINGERS]
+    boxes = [measure.placed(shapes[f"{f}_base"], T0[f"{f}_base"]).bounding_box() for f in FINGERS]
     x0, x1 = min(b.min.X for b in boxes), max(b.max.X for b in boxes)
     return Pos((x0 + x1) / 2, y, z) * Rot(0, 90, 0) * Cylinder(DIAMETER_MM / 2, x1 - x0), z, (x0, x1)
 
@@ -79,10 +79,10 @@ def test_every_finger_wraps_the_cylinder(hand):
     assert np.all(g.u >= h.u_min - 1e-12) and np.all(g.u <= h.u_max + 1e-12)
     cyl, z, _ = _cylinder(p, shapes, g.axis_y_mm)
     T = assembly.pose_transforms(p, h.forward(g.u, compensated=True))
-    palm = check.placed(shapes["palm"], T["palm"]).distance_to(cyl)
+    palm = measure.placed(shapes["palm"], T["palm"]).distance_to(cyl)
     assert 0.0 < palm <= REACH_MM
     for f in FINGERS:
-        d, point = min(((*check.placed(shapes[n], T[n]).distance_to_with_closest_points(cyl)[:2],)
+        d, point = min(((*measure.placed(shapes[n], T[n]).distance_to_with_closest_points(cyl)[:2],)
                         for n in (f"{f}_proximal", f"{f}_middle", f"{f}_distal")), key=lambda r: r[0])
         assert 0.0 < d <= REACH_MM, (kind, f, d)
         # the angle about the axis from the palm's side (+z) toward the fingertips (+y)
@@ -118,7 +118,7 @@ def test_a_cylinder_reaching_over_the_heel_rests_on_its_edge(hand_parts):
     p, shapes = hand_parts("default")
     doc = p.document["palm"]
     T, H, L = doc["thickness_mm"], doc["heel_height_mm"], doc["heel_length_mm"]
-    palm = check.placed(shapes["palm"], assembly.pose_transforms(p)["palm"])
+    palm = measure.placed(shapes["palm"], assembly.pose_transforms(p)["palm"])
     bb = palm.bounding_box()
     y_f, z_h = bb.min.Y + L, -T / 2 - H
     x = (bb.min.X + 20.0, bb.max.X - 5.0)           # under the metacarpal block, across the heel

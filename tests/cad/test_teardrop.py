@@ -1,4 +1,4 @@
-"""Issue 12, tendon channels that print without support: a teardrop's roof (``common.teardrop``) at
+"""Tendon channels that print without support: a teardrop's roof (``common.teardrop``) at
 the angle the layer height allows (``dimensions.roof_angle``).
 
 Known answers by hand: the cross-section of a teardrop of radius r whose roof leans a from the

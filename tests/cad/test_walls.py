@@ -1,4 +1,4 @@
-"""Issue 12, printable walls: every wall at least two perimeters of the nozzle (0.8 mm), measured by
+"""Printable walls: every wall at least two perimeters of the nozzle (0.8 mm), measured by
 ray casting on the parts' meshes (``export.walls``).
 
 The measurement is checked first on shapes whose walls are known by hand: a plate, a tube, a
@@ -117,24 +117,23 @@ def test_the_servo_pulleys_print(walls):
 
 def test_the_flanks_are_walls_of_two_perimeters(walls):
     """Points under the bar are few: the groove flanks of 0.8 mm (a tenth of a finger base's
-    surface) are walls, not thin ones; what is left is local (at most 0.4 % of any part on
-    2026-11-24: the bar keeps it under 0.6 %)."""
+    surface) are walls, not thin ones; what is left is local (the bar: under 0.6 % of any part's
+    points)."""
     for n, r in walls.items():
         assert r["fraction"] < 0.006, (n, r)
 
 
 def test_every_wall_is_two_perimeters(walls, params):
-    """Issue 12's rule on every part of the default hand; a left hand's parts are its mirror
-    images (``assembly.build_part``), with the same walls. Met on 2026-11-24 after the last spots
-    were cut open (docs/parts.md)."""
+    """The rule on every part of the default hand; a left hand's parts are its mirror images
+    (``assembly.build_part``), with the same walls (docs/parts.md)."""
     bar = MIN_WALL - 2.0 * params.print.stl_tolerance * 1e3
     thin = {n: round(r["wall_thinnest"], 3) for n, r in walls.items() if r["wall_thinnest"] < bar}
     assert thin == {}
 
 
 def test_every_wall_of_a_170_mm_hand_is_two_perimeters(hand_parts):
-    """The same rule on every part of a hand of hand_length 170 mm (issue 12's third hand,
-    params/examples/small.toml): the digits shorter and narrower, the palm and forearm laid out
+    """The same rule on every part of a hand of hand_length 170 mm (the third reference
+    hand, params/examples/small.toml): the digits shorter and narrower, the palm and forearm laid out
     again."""
     p, shapes = hand_parts("hand_length_170")
     assert p.hand_length == pytest.approx(0.170)
@@ -150,9 +149,9 @@ def test_every_wall_of_a_170_mm_hand_is_two_perimeters(hand_parts):
 
 @pytest.mark.parametrize("kind", ["default", "hand_length_170"])
 def test_the_palms_walls_sampled_ten_times_as_densely(hand_parts, kind):
-    """The palm again, at 200,000 surface samples: at 20,000 the 170 mm hand's flat palm showed none,
-    at 200,000 a 0.52 mm skin between the thumb drive's channel and the CMC pulley cavity's back
-    opening, where the channel enters the back face (now cut open: ``Palm.thumb_channel_relief``)."""
+    """The palm again, at 200,000 surface samples: 20,000 can miss a small thin spot, such as a
+    skin between the thumb drive's channel and the CMC pulley cavity's back opening, where the
+    channel enters the back face (``Palm.thumb_channel_relief`` cuts it open)."""
     p, shapes = hand_parts(kind)
     tol = p.print.stl_tolerance * 1e3
     bar = MIN_WALL - 2.0 * tol

@@ -1,5 +1,5 @@
-"""A scale error of one joint's measurement (issue 11: "a measurement error became a change to the
-hand") is found as the measurement-side effect ``camera_scale``, and a calibrated file that carries
+"""A scale error of one joint's measurement (a measurement error must not become a change to the
+hand) is found as the measurement-side effect ``camera_scale``, and a calibrated file that carries
 it leaves the hand's model and its control law untouched.
 
 The data are written here (the paper's cosine law in closed form, test_noise_floor.analytic), with

@@ -166,7 +166,7 @@ def test_simulate_degrees_reads_back_as_the_radian_file(tmp_path):
 
 
 @pytest.mark.parametrize("args, message", [
-    # issue 8, defect 6: NaN noise wrote a file of empty cells; a negative seed and 1e8 points crashed
+    # NaN noise would write a file of empty cells; a negative seed and 1e8 points would crash
     (["simulate", "--noise-deg", "nan", "--out", "{dir}/x.csv"], "error: --noise-deg nan: must be a finite number >= 0"),
     (["simulate", "--seed", "-1", "--out", "{dir}/x.csv"], "error: --seed -1: must be >= 0"),
     (["simulate", "--points", "100000000", "--out", "{dir}/x.csv"],

@@ -160,7 +160,7 @@ def test_direction_is_per_sweep():
 
 @pytest.mark.parametrize("cell", ["0.0_1", "١٢", "1_000"])
 def test_numbers_are_plain_ascii_decimals(tmp_path, cell):
-    """Issue 8, defect 8: float() accepts underscores and non-ASCII digits; a CSV does not."""
+    """float() accepts underscores and non-ASCII digits; a CSV does not."""
     path = tmp_path / "m.csv"
     path.write_text(f"u1,u2,u3,u4,u5,u6\n0,0,0,0,0,0\n0,{cell},0,0,0,0\n", encoding="utf-8")
     with pytest.raises(DataError) as exc:
@@ -169,8 +169,8 @@ def test_numbers_are_plain_ascii_decimals(tmp_path, cell):
 
 
 def test_byte_order_mark_and_folders(tmp_path):
-    """Issue 8, defect 7: a UTF-8 BOM was reported as "column sweep: unknown column"; a folder
-    given as the file gave a traceback."""
+    """A UTF-8 BOM is read, not reported as an unknown column; a folder given as the file gives
+    one error line, no traceback."""
     path = tmp_path / "bom.csv"
     path.write_text("\ufeffu1,u2,u3,u4,u5,u6\n0,0,0,0,0,0\n0,0.5,0,0,0,0\n", encoding="utf-8")
     assert read_measurements(path).u[1, 1] == 0.5
@@ -179,7 +179,7 @@ def test_byte_order_mark_and_folders(tmp_path):
     assert str(exc.value) == f"{tmp_path}: is a folder, not a CSV file"
 
 
-# -- the column-wise reader and writer (issue 8, defect 10) ---------------------------------
+# -- the column-wise reader and writer (1,000,000-row files) ------------------------------
 
 def _exact(path, monkeypatch, **kw):
     """The table as the exact cell-by-cell reader reads it (the column-wise one switched off)."""

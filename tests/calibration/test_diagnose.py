@@ -122,10 +122,10 @@ def test_a_registered_toy_effect_is_diagnosed(hand, cmc_gain_error):
 
 
 def test_large_files_select_on_a_subsample_and_fit_on_every_row(hand, monkeypatch):
-    """Issue 8, defect 10: diagnose on 1,000,000 rows took 253 s and 2.3 GB. The selection now runs
-    on every k-th row (at most SELECTION_CELLS measured cells); the selected effects are fitted on
-    all rows. Here SELECTION_CELLS is lowered so a small file takes that path: the hidden effect is
-    still found, the final fit covers every measured cell, and the report says what was done."""
+    """Diagnose stays fast and small on 1,000,000 rows: the selection runs on every k-th row (at
+    most SELECTION_CELLS measured cells); the selected effects are fitted on all rows. Here
+    SELECTION_CELLS is lowered so a small file takes that path: the hidden effect is still found,
+    the final fit covers every measured cell, and the report says what was done."""
     import numpy as np
 
     from phantom_cad.calibration import diagnose as dg
@@ -172,7 +172,7 @@ def test_effective_size_known_answer(hand):
 # -- a selected effect must not make a joint worse -----------------------------------------------
 
 def test_an_effect_that_makes_joints_worse_is_dropped(hand, monkeypatch):
-    """Issue 11, "honest selection": the index tendon alone is compliant (k_s/EA 0.6 1/m, eq. 13
+    """Honest selection: the index tendon alone is compliant (k_s/EA 0.6 1/m, eq. 13
     written out in test_plugin.compliant); offered only a compliance for the whole hand, the fit
     bends every other finger's PIP/DIP by 0.3-1.4 deg to halve the index's error. That passes dIC and
     the held-out check, but it makes seven joints worse beyond noise, so it is dropped with the

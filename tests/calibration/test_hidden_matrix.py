@@ -3,7 +3,7 @@ library (tests/calibration/hidden.py: the cosine law, eq. 13 and the hidden phys
 play of test_backlash; the sweeps and the noise of test_noise_floor), 0.1 deg noise, magnitudes drawn
 per seed from each effect's typical range.
 
-Criteria (the project's issue): the hidden effect is selected (first, when alone), the final MAE is at
+Criteria: the hidden effect is selected (first, when alone), the final MAE is at
 most 1.5 x the noise floor estimated from the data, and the fitted model is within 0.5 x that floor
 of the noise-free truth (MAE over the measured cells). Physics outside the library is either left
 unexplained, on the joints it touches, or explained by a model that matches the truth as closely."""
@@ -216,8 +216,8 @@ def check_fit(out, floor, vs_truth):
     assert vs_truth <= 0.5 * floor, info
 
 
-#: the library as the matrix was first measured; an effect added later appends its cases, so the
-#: earlier ones keep their seeds (the seeds follow the position in these lists)
+#: the library's first seven hand effects, then the rest: an effect added to the library appends
+#: its cases, so the existing ones keep their seeds (the seeds follow the position in these lists)
 FIRST, LATER = HAND_EFFECTS[:7], HAND_EFFECTS[7:]
 SINGLES = [*FIRST, "camera_scale", *LATER]
 SEEDS = (0, 1, 2)
@@ -272,10 +272,10 @@ PAIRS = [*itertools.combinations(FIRST, 2), *((h, "camera_scale") for h in FIRST
 #: one compliance per finger on top of a common one is one compliance per finger: the variant
 #: contains its simpler form (effects.TendonElasticityPerFinger.simpler), so only it can be selected
 NESTED = {("tendon_elasticity", "tendon_elasticity_per_finger"): ["tendon_elasticity_per_finger"]}
-#: n_eff of a round has a floor: that of the whole hand family fitted at once (diagnose.py). Before it,
-#: n_eff came from the best candidate's residual alone, which the other hidden effect kept near the
-#: clip of rho at 0.95 (900 cells counted as 23-43), and nothing passed in the three backlash pairs
-#: and friction + camera_scale (measured: selected [], MAE after 1.1-1.5 deg against a 0.085 floor)
+#: n_eff of a round has a floor: that of the whole hand family fitted at once (diagnose.py). From
+#: the best candidate's residual alone, which the other hidden effect keeps near the clip of rho at
+#: 0.95, n_eff would be so small that nothing passed in the three backlash pairs and friction +
+#: camera_scale
 PAIR_XFAIL: dict[tuple[str, str], str] = {}
 
 
@@ -292,15 +292,14 @@ def pair_cases():
 #: camera_scale", and that a calibrated control law lacks X) and that the fit meets the criteria.
 #: Measured: the backward step after camera_scale drops the hidden compliance (dIC -6.8 / -34.0),
 #: MAE after 0.0816 / 0.0797 against floors 0.0809 / 0.0776, model-vs-truth 0.0068 / 0.0095 deg.
-#: (Strict xfails until the report named the ambiguity.)
 DUPLICATED_BY_CAMERA = {"tendon_elasticity", "tendon_elasticity_per_finger"}
 #: and one it duplicates nearly: a drive pulley's radius error scales its chain's angles as per-joint
 #: scales do but for the cosine law's curvature. Measured (seed 100 + k): selected ['camera_scale']
 #: only, the backward step dropped the hidden radius errors (dIC -15.6) and a spurious joint offset;
 #: with the scales in the fit the radius errors' variance grows 1,750-3,270-fold (the offset's 2-4);
-#: MAE after 0.0766 vs floor 0.0782, model-vs-truth 0.0148. (A strict xfail until the report named
-#: it: refitted with the scales the radius errors stood at |z| <= 3.0, where spurious ones on
-#: camera-only data reach 2.4, so no selection rule can attribute them.)
+#: MAE after 0.0766 vs floor 0.0782, model-vs-truth 0.0148. Refitted with the scales the radius
+#: errors stand at |z| <= 3.0, where spurious ones on camera-only data reach 2.4, so no selection
+#: rule can attribute them: the report names the near-duplication instead.
 NEARLY_DUPLICATED_BY_CAMERA = {"pulley_radius_error"}
 
 
@@ -381,8 +380,8 @@ def test_gravity_sag_is_left_or_matched(hand):
     camera_scale bring the MAE to 0.092 deg against a 0.082 floor, within the MAE tolerance, but
     that model is 0.045 deg from the truth (the criterion is 0.041) and the residual it leaves is
     correlated from sample to sample (lag-1 autocorrelation 0.17, z 5.0): the whiteness test of the
-    verdict (residual.py) says `explained: false`, left q8 and q9 (before it, this was a strict
-    xfail: explained true on a model off the truth)."""
+    verdict (residual.py) says `explained: false`, left q8 and q9, rather than explained on a
+    model off the truth."""
     d, out, floor, vs_truth = run_hidden(hand, {}, noise_seed=3000, extra=gravity_sag(hand))
     info = summary(out, floor, vs_truth)
     assert abs(floor - EXPECTED_FLOOR) <= 0.25 * EXPECTED_FLOOR, info
@@ -404,7 +403,7 @@ def test_gravity_sag_is_left_or_matched(hand):
 
 def test_soft_stop_is_left_on_its_joint(hand):
     """The ring MCP meets a compliant stop at 85 % of its travel and turns only 80 % of the rest
-    (2.4 deg short at full travel). What happened (measured): no library effect passes (the best,
+    (2.4 deg short at full travel). What happens (measured): no library effect passes (the best,
     friction_hysteresis / tendon_elasticity, score dIC +5; pulley_radius_error +13), explained is False
     and the verdict names the ring MCP alone (structured RMS 0.56 deg); the analytic model, all
     diagnose keeps, is off the truth only on the last samples of that one joint."""

@@ -1,4 +1,4 @@
-"""Plots that do not mislead (issue 11, item 7), read from the matplotlib figures the report
+"""Plots that do not mislead, read from the matplotlib figures the report
 functions return: the MAE bars carry the noise floor and flag joints made worse; a few outliers do
 not set the residual plot's y range (they are clipped to its edge and marked); one-direction data
 say so on the hysteresis plot. The data: the closed-form cosine law of test_noise_floor, Gaussian

@@ -1,6 +1,6 @@
 """A user's own effect end to end: --plugin on the four commands, a calibrated file that names its
 plugin and is read by load_hand, params validate / show and compare -p; the fitted file reproduces
-the fit (tendon_elasticity = 0 no longer zeroes a user's tension-stage effect); an effect the
+the fit (tendon_elasticity = 0 does not zero a user's tension-stage effect); an effect the
 control law cannot invert is refused by fit; broken plugin files are named with their line.
 
 The data: per-finger tendon compliance, written out here (eq. 13 by hand on the closed-form cosine
@@ -127,8 +127,8 @@ def test_the_plugin_path_end_to_end(hand, files):
     assert r.returncode == 0, r.stderr
     overall = re.search(r"overall\s+([0-9.]+)\s+[0-9.]+\s+[0-9.]+\s+([0-9.]+)", r.stdout)
     applied_before, applied_after = map(float, overall.groups())
-    # what the calibrated file applies is what fit reported (it was 0.754 -> 0.754 when
-    # tendon_elasticity = 0 overrode the user's tension-stage effect)
+    # what the calibrated file applies is what fit reported (tendon_elasticity = 0 must not
+    # override the user's tension-stage effect)
     assert applied_after == pytest.approx(after, abs=0.0015)
     assert applied_before == pytest.approx(before, abs=0.0015)
     assert "calibrated (finger_compliance + tendon_elasticity)" in r.stdout
@@ -199,7 +199,7 @@ def test_a_broken_plugin_is_one_error_line(files, command, body, message, tmp_pa
 
 def test_hand_inverse_refuses_an_effect_it_cannot_invert(files, tmp_path):
     """A hand-written file with a joint-stage effect without invert(): forward uses it, the control
-    law raises (it used to drop the effect silently)."""
+    law raises rather than drop the effect silently."""
     from phantom_cad import load_hand
     from phantom_cad.calibration.effects import unload_plugin
     from phantom_cad.params import ParamError, load_document

@@ -6,7 +6,7 @@
 * ``standin_build``: the stand-in hand built once per session into a tmp dir.
 * ``hand_build``: the real default hand (phantom_cad.cad's parts) built once per session.
 * ``pkg``: its robot description package (``description/``).
-* ``hand_export``: ``hand_export(kind)`` -> the export of one of issue 12's three hands
+* ``hand_export``: ``hand_export(kind)`` -> the export of one of the three reference hands
   (tests/cad/conftest.py ``HANDS``), built once per session with ``hand_build``'s part cache.
 """
 
@@ -83,7 +83,7 @@ def pkg(hand_build):
     return result.out_dir / "description"
 
 
-#: issue 12's three hands (tests/cad/conftest.py HANDS): (name, parameter file, side)
+#: the three reference hands (tests/cad/conftest.py HANDS): (name, parameter file, side)
 EXPORT_HANDS = [("default", None, None), ("left", None, "left"),
                 ("hand_length_170", HERE.parents[1] / "params" / "examples" / "small.toml", None)]
 

@@ -404,12 +404,13 @@ def test_compiled_mjcf_is_served_from_the_cache_only_when_it_matches(hand_build,
 
 #: the mass (kg) of the cylinder the closed hand must hold with the palm facing down
 CYLINDER_KG = 0.1
-#: the cylinders (diameter, mm) across the palm: issue 12's 35 mm. Without the palm's heel the
-#: fingertips squeezed it 11.3 mm toward the wrist and it fell out palm down (docs/parts.md)
+#: the cylinders (diameter, mm) across the palm: the power grasp's 35 mm. The palm's heel holds it:
+#: without it the fingertips would squeeze it toward the wrist and it would fall out palm down
+#: (docs/parts.md)
 CYLINDERS = [35.0]
 
 
-#: issue 12's three hands (tests/cad/conftest.py): (name, parameter file, side); the default hand's
+#: the three reference hands (tests/cad/conftest.py): (name, parameter file, side); the default hand's
 #: export is the session's
 GRASP_HANDS = [("default", PARAMS, None), ("left", PARAMS, "left"), ("hand_length_170", SMALL, None)]
 assert [h[0] for h in GRASP_HANDS] == list(HANDS)
@@ -447,11 +448,10 @@ def test_the_closed_hand_holds_a_cylinder_palm_down(cylinder_grasp):
     ``cad.grasp`` puts it, the thumb at its commands there (the cylinder's contacts off while the
     thumb turns, gravity off); then every finger servo commanded to the end of its travel for 2 s;
     then gravity toward the palm's palmar side (the palm facing down) for 3 s: the closing fingers
-    squeeze it less than 5 mm toward the wrist (without the palm's heel they squeezed it 11.3 mm
-    and it fell out), then it moves less than 5 mm and has come to rest, no warning, and the palm
-    touches it. Where: the default and 170 mm hands' heels touch it behind its axis (15-16 mm
-    behind it); the left hand's palm at its axis only (squeezed 3.0 mm, moved 0.8 mm; at the
-    STL's 0.1 rad it was squeezed 3.4 mm and its heel touched it too): docs/parts.md."""
+    squeeze it less than 5 mm toward the wrist (the palm's heel holds it there), then it moves
+    less than 5 mm and has come to rest, no warning, and the palm touches it. Where: the default
+    and 170 mm hands' heels touch it behind its axis (15-16 mm behind it); the left hand's palm at
+    its axis only (squeezed 3.0 mm, moved 0.8 mm): docs/parts.md."""
     from phantom_cad.export.hold import hold_cylinder
     from phantom_cad.kinematics.topology import SERVOS
 

@@ -369,8 +369,9 @@ def test_demo_without_prusa_slicer(hand_build, tmp_path, monkeypatch):
 
 
 def test_cache_serves_only_what_it_verified(standin_build, standin, tmp_path):
-    """Issue 8, defect 2: a truncated part.stl was exported and certified watertight; a truncated
-    meta.json gave a traceback; a --no-render build left entries a later build served without renders."""
+    """The cache serves only entries it verified: a truncated part.stl is not exported nor certified
+    watertight, a truncated meta.json gives no traceback, and entries a --no-render build left are
+    not served to a build that wants renders."""
     from phantom_cad.export.pipeline import build_hand
 
     result, cache = standin_build
@@ -402,7 +403,7 @@ def test_cache_serves_only_what_it_verified(standin_build, standin, tmp_path):
 
 
 def test_assembly_entry_served_only_when_verified(standin_build, standin, tmp_path):
-    """Issue 8: the assembly entry (assembly STEP, render, interference report) is verified like
+    """The assembly entry (assembly STEP, render, interference report) is verified like
     a part entry: a truncated STEP or an edited report is not served; the entry is rebuilt, the
     log says why, and the export is the same bytes as before."""
     from phantom_cad.export.pipeline import build_hand
@@ -431,7 +432,7 @@ def test_assembly_entry_served_only_when_verified(standin_build, standin, tmp_pa
 
 
 def test_slicer_estimates_served_only_when_verified(standin_build, standin, tmp_path):
-    """Issue 8: a cached PrusaSlicer estimate carries the SHA-256 of its numbers; an edited or
+    """A cached PrusaSlicer estimate carries the SHA-256 of its numbers; an edited or
     truncated one is sliced again (the log says so) and the manifest holds the true estimate."""
     from phantom_cad.export import slicer
     from phantom_cad.export.pipeline import build_hand
@@ -467,7 +468,7 @@ def test_slicer_estimates_served_only_when_verified(standin_build, standin, tmp_
 
 
 def test_concurrent_builds_share_one_cache(tmp_path):
-    """Issue 8: builds sharing one part cache at once (three processes, two workers each, on an
+    """Builds sharing one part cache at once (three processes, two workers each, on an
     empty cache: every part is built by several of them and committed by the first). Each
     succeeds with the same bytes; the cache ends with one verified entry per part and assembly
     and no staging folder left."""
@@ -496,8 +497,8 @@ def test_concurrent_builds_share_one_cache(tmp_path):
 
 
 def test_workers_die_with_a_killed_build(tmp_path):
-    """Issue 8, defect 3: killing a build left its workers running forever (parent PID 1, ~550 MB
-    each). Kill the build while its workers import the CAD stack and build parts: they exit."""
+    """A killed build's workers exit with it (left running, each would hold ~550 MB under parent
+    PID 1). Kill the build while its workers import the CAD stack and build parts: they exit."""
     import signal
     import subprocess
     import time

@@ -1,7 +1,7 @@
 """The parts' PrusaSlicer projects (``print/<part>.3mf``, export/project3mf.py), read back with
 zipfile and ElementTree (not the writer), measured with trimesh's ray casting, and sliced by
 PrusaSlicer: the support blockers over the tendon features cover only overhangs that bridge
-between close walls, and with them no support stands in a groove or channel (issue 12)."""
+between close walls, and with them no support stands in a groove or channel."""
 
 from __future__ import annotations
 
@@ -164,8 +164,9 @@ def test_bridge_spans_known_answers():
 def test_blockers_cover_only_bridges(kind, hand_export):
     """Every overhang inside a blocker of a part's project spans at most BRIDGE_MM of air between
     walls, in some horizontal direction: it prints as a bridge, and blocking support there takes
-    none away that the part needs. Measured on the projects' own meshes, for issue 12's three
-    hands (the left one's blockers are mirrored with its parts)."""
+    none away that the part needs. Measured on the projects' own meshes, for the three
+    reference hands: the default, its left twin and the 170 mm hand (the left one's blockers are
+    mirrored with its parts)."""
     result = hand_export(kind)
     man = json.loads((result.out_dir / "manifest.json").read_text())
     assert sum(p["support_blockers"] > 0 for p in man["parts"]) == 4 * 4 + 3
@@ -224,17 +225,17 @@ def test_blockers_keep_support_out_of_the_thumb_phalanges(sliced):
 
 
 def test_tendon_grooves_and_channels_print_without_support(sliced):
-    """Issue 12: sliced from its project, with PrusaSlicer's automatic supports, no support path
-    lies in a tendon groove or channel (``export.supports``) of the index finger's and the thumb's
-    parts: the thumb CMC base too, on its palmar pad (on its side, its MP hub groove's inner flank
-    was a 3.8 mm cantilever over the groove: 72.8 mm of support stood in it, 3 mm in channel 0)."""
+    """Sliced from its project, with PrusaSlicer's automatic supports, no support path lies in a
+    tendon groove or channel (``export.supports``) of the index finger's and the thumb's parts:
+    the thumb CMC base too, on its palmar pad (laid on its side instead, its MP hub groove's inner
+    flank would be a 3.8 mm cantilever over the groove, with support standing in it)."""
     found, _ = sliced
     assert len(found) == 7 and "thumb_cmc_base" in found and all(v == {} for v in found.values()), found
 
 
 @pytest.mark.parametrize("kind", ["left", "hand_length_170"])
 def test_the_cmc_base_prints_without_support_in_its_tendon_features_on_the_other_hands(kind, hand_export):
-    """Issue 12 on the left hand and the 170 mm hand: the thumb CMC base, sliced from its project,
+    """The same on the left hand and the 170 mm hand: the thumb CMC base, sliced from its project,
     has no support path in a tendon groove or channel (the left hand's support and solid mirrored
     back into the right hand's link frame, where the routing model's features are)."""
     from phantom_cad.export import slicer, supports

@@ -1,4 +1,4 @@
-"""Property: every parameter file that validates builds (issue 8, "validation is complete").
+"""Property: every parameter file that validates builds (validation is complete).
 
 Files are the default file with one to three numeric fields moved by a factor between 1/4 and 4
 (tests/support/param_space.py; zeros move by up to +-10 in their unit). Each one that
