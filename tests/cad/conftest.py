@@ -48,8 +48,8 @@ def built(params):
 
 @pytest.fixture(scope="session")
 def placed(built):
-    from phantom_cad.cad import measure as check
-    return {name: check.placed(b.shape, b.T_hand_link) for name, b in built.items()}
+    from phantom_cad.cad import measure
+    return {name: measure.placed(b.shape, b.T_hand_link) for name, b in built.items()}
 
 
 #: the three reference hands: the default, its left twin, and a hand of hand_length 170 mm (a file of its
