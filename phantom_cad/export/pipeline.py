@@ -24,8 +24,9 @@ Pipeline
    (the STEP and the render in the workers, which go on while steps 4 and 5 slice and write the
    description, the BOM and the routing; the export waits for them before its manifest);
 4. every STL is sliced with PrusaSlicer (when installed) for print time and filament;
-5. everything is written into a temporary directory beside the target, which replaces
-   the previous export only when the whole build succeeded.
+5. every output is written by its exporter (:data:`phantom_cad.export.exporters.EXPORTERS`, in
+   order) into a temporary directory beside the target, which replaces the previous export only
+   when the whole build succeeded.
 
 The parts come from the assembly interface (:mod:`phantom_cad.export.interface`). The module
 imports numpy only; build123d/OCP are imported inside the workers.
@@ -48,13 +49,11 @@ import numpy as np
 from ..atomic import check_replaceable, replace_dir
 from ..cad import preflight
 from ..canon import canonical, plain, sha256
-from ..kinematics import routing
 from ..params import ParamError, load_document, parse
 from ..params.io import DEFAULT_PARAMS
 from .. import workers
 from . import cache as cache_mod
 from . import interface, pool as pool_mod
-from .bom import bom_csv
 from .cache import Cache
 from .interference import INTERFERENCE_TOL_MM3, interference
 from .results import BuildError, BuildResult, PartFailure, failure_from
@@ -312,72 +311,37 @@ class _Build:
         return estimates, info
 
     # 4. write the export into a staging directory, then replace the target ---------------
-    def description(self, metas, estimates, folder: Path) -> dict | None:
-        """The robot description package (export/description.py) when the assembly interface
-        gives the fingertip frames (the stand-in of the pipeline tests does not)."""
-        if not hasattr(self.asm, "tip_frames"):
-            return None
-        from .description import write_description
-        from .robot import robot_model
-
-        model = robot_model(self.params, metas, self.asm.tip_frames(self.params), estimates)
-        return write_description(folder, model, {n: self.cache.part_dir(self.keys[n]) for n in self.names},
-                                 self.cache, self.params.digest)
-
     def write(self, metas, poses, contacts, inter, finish_assembly, estimates, slicer_info, ini: str) -> dict:
-        """The export, staged and swapped in; ``finish_assembly()`` (from :meth:`assembly`) gives
-        the assembly's cache folder once its workers are done, after the description, the BOM and
-        the routing are written."""
-        from . import manifest as manifest_mod
+        """The export, staged (every exporter of :data:`exporters.EXPORTERS`, in order) and swapped
+        in; ``finish_assembly()`` (from :meth:`assembly`) gives the assembly's cache folder once its
+        workers are done: the exporters before the first that needs it (the description, the BOM,
+        the routing) are written meanwhile."""
+        from .exporters import EXPORTERS, ExportContext
 
-        names, keys, cache, out, render = self.names, self.keys, self.cache, self.out, self.render
+        out = self.out
+        ctx = ExportContext(
+            params=self.params, params_path=self.path, asm=self.asm, names=self.names, keys=self.keys,
+            cache=self.cache, render=self.render, metas=metas, poses=poses, contacts=contacts, interference=inter,
+            estimates=estimates, slicer_info=slicer_info, ini=ini, coupon_key=self.coupon_key,
+            coupon_estimate=self.coupon_estimate, finish_assembly=finish_assembly)
         out.parent.mkdir(parents=True, exist_ok=True)
         stage = out.parent / f".{out.name}.{os.getpid()}.tmp"
         if stage.exists():
             shutil.rmtree(stage)
         try:
-            for sub in ("step", "stl", "print", "renders", "slicer"):
-                (stage / sub).mkdir(parents=True)
-            for n in names:
-                pdir = cache.part_dir(keys[n])
-                shutil.copyfile(pdir / "part.step", stage / "step" / f"{n}.step")
-                shutil.copyfile(pdir / "part.stl", stage / "stl" / f"{n}.stl")
-                shutil.copyfile(pdir / "part.3mf", stage / "print" / f"{n}.3mf")
-                if render and (pdir / "render.png").is_file():
-                    shutil.copyfile(pdir / "render.png", stage / "renders" / f"{n}.png")
-            cdir = cache.coupon_dir(self.coupon_key)
-            (stage / "coupon").mkdir()
-            for f in cache_mod.COUPON_FILES:
-                shutil.copyfile(cdir / f, stage / "coupon" / f)
-            if render and (cdir / "render.png").is_file():
-                shutil.copyfile(cdir / "render.png", stage / "coupon" / "fit_coupon.png")
-            coupon = json.loads((cdir / "meta.json").read_text(encoding="utf-8"))
-            (stage / "slicer" / "config.ini").write_text(ini)
-            description = self.description(metas, estimates, stage / "description")
-            bom = list(self.asm.bill_of_materials(self.params))
-            (stage / "bom.csv").write_text(bom_csv(bom), encoding="utf-8")
-            (stage / "routing.json").write_text(json.dumps(routing.document(self.params), indent=1) + "\n",
-                                                encoding="utf-8")
-            adir = finish_assembly()
-            shutil.copyfile(adir / "hand_assembly.step", stage / "step" / "hand_assembly.step")
-            if render and (adir / "render.png").is_file():
-                shutil.copyfile(adir / "render.png", stage / "renders" / "hand_assembly.png")
-            man = manifest_mod.build_manifest(
-                stage=stage, params=self.params, params_path=self.path, names=names, keys=keys, metas=metas,
-                poses=poses, estimates=estimates, slicer_info=slicer_info, interference=inter,
-                contacts=contacts, bom=bom)
-            man["coupon"] = {"step": "coupon/fit_coupon.step", "stl": "coupon/fit_coupon.stl",
-                             "sheet": "coupon/fit_coupon.md",
-                             **{k: coupon[k] for k in ("volume_mm3", "mass_g", "bbox_mm", "features")},
-                             "print": self.coupon_estimate}
-            if description is not None:
-                man["description"] = description
-            (stage / "manifest.json").write_text(json.dumps(man, indent=1, sort_keys=False) + "\n")
+            stage.mkdir()
+            for exporter in EXPORTERS:
+                exporter.write(ctx, stage)
+            declared = {rel for exporter in EXPORTERS for rel in exporter.writes(ctx)}
+            written = {p.relative_to(stage).as_posix() for p in stage.rglob("*") if p.is_file()}
+            if declared != written:     # the exporters' writes() is what docs and tests rely on
+                raise BuildError(f"the exporters wrote {sorted(written - declared)} they do not declare, and not "
+                                 f"{sorted(declared - written)} they declare; {out} was left untouched")
             replace_dir(stage, out)
         except BaseException:
             shutil.rmtree(stage, ignore_errors=True)
             raise
-        return man
+        return ctx.manifest
 
 
 def build_hand(params_path: str | os.PathLike | None = None, out_dir: str | os.PathLike | None = None,

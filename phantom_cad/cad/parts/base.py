@@ -16,9 +16,15 @@ imports build123d lazily. A family declares:
   not put support, because every overhang in them bridges between close walls (the tendon
   grooves, pilots and channels); the export writes them into the part's PrusaSlicer project;
 * ``inputs()``: the plain parameter values the solid depends on (a superset, never a
-  subset): the part cache's key;
+  subset): the part cache's key; ``tests/cad/test_part_contract.py`` checks that every
+  parameter a part reads while it is made, measured and built is in it;
 * ``verify(shape)``: what a built solid must measure (groove radius, guides, pockets...),
-  as a list of problems; an empty list means the part is sound.
+  as a list of problems; an empty list means the part is sound (default: none);
+* ``pad()``: a fingertip's contact pad frame (the robot description's tip frames); only a family
+  that makes a digit's last link has one, the others refuse.
+
+:class:`Part` is an abstract base class: ``for_link``, ``build`` and ``inputs`` are abstract, so a
+family that lacks one cannot be made (TypeError when the registry makes one of its parts).
 
 The registry of families is :mod:`phantom_cad.cad.registry`: adding a part is one class here
 and one entry there.
@@ -26,6 +32,7 @@ and one entry there.
 
 from __future__ import annotations
 
+import abc
 import math
 
 import numpy as np
@@ -70,7 +77,7 @@ def digit_table(document, digit: str):
     return document["fingers"][digit] if digit in document["fingers"] else document["thumb"]
 
 
-class Part:
+class Part(abc.ABC):
     """Base of the part families (see the module doc)."""
 
     #: topology link segments this family makes
@@ -87,8 +94,9 @@ class Part:
         return tuple(ln for ln in LINKS if ln.segment in cls.SEGMENTS)
 
     @classmethod
+    @abc.abstractmethod
     def for_link(cls, params, link: Link) -> "Part":
-        raise NotImplementedError
+        """The part of ``link`` (one of the family's ``links()``) of the hand ``params``."""
 
     # -- what a part declares ------------------------------------------------
     @property
@@ -115,8 +123,9 @@ class Part:
         roof must point to print without support (``common.teardrop``)."""
         return np.asarray(self.print_rotation, float)[2].copy()
 
+    @abc.abstractmethod
     def build(self):
-        raise NotImplementedError
+        """The right-hand solid (build123d) in the link frame, mm."""
 
     def collision_solids(self) -> list:
         """Convex solids (link frame, mm) whose union is the part's collision shape in the robot
@@ -130,11 +139,17 @@ class Part:
         default none."""
         return []
 
+    @abc.abstractmethod
     def inputs(self) -> dict:
-        raise NotImplementedError
+        """The plain parameter values the solid depends on (the part cache's key)."""
 
     def verify(self, shape) -> list[str]:
+        """Problems of a built solid (one line each); default: none to measure."""
         return []
+
+    def pad(self) -> np.ndarray:
+        """T_link_pad (mm) of a fingertip's contact pad: only a digit's last link has one."""
+        raise ValueError(f"{self.name} is not a fingertip")
 
     # -- helpers ---------------------------------------------------------------
     def common_inputs(self) -> dict:
