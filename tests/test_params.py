@@ -76,12 +76,13 @@ def test_plugins_must_be_a_list_of_paths(document):
 
 
 def test_a_missing_plugin_is_named(document, tmp_path):
-    import phantom_cad  # noqa: F401  (installs the effect library's plugin loader)
+    from phantom_cad.calibration.effects import PARAMS_EFFECTS
 
     document["plugins"] = ["nowhere/my_effect.py"]
     source = str(tmp_path / "hand.toml")
+    parse(document, source)   # without an effect library the params layer loads no plugin
     with pytest.raises(ParamError) as info:
-        parse(document, source)
+        parse(document, source, effects=PARAMS_EFFECTS)
     assert str(info.value) == (f"{source}: plugins[0]: plugin {tmp_path / 'nowhere' / 'my_effect.py'}: "
                                "no such file")
 

@@ -31,7 +31,7 @@ import numpy as np
 
 from ..kinematics.topology import Q_COLUMNS
 from .data import Measurements
-from .effects import MEASUREMENT, REGISTRY, get_effect
+from .framework import MEASUREMENT, REGISTRY, get_effect
 from .identify import combinations, experiment_text, near_duplicate
 from .residual import (MAE_PER_SIGMA, NoiseFloor, made_worse, measured_features, noise_floor, signature,
                        signature_report, verdict)

@@ -27,7 +27,7 @@ import numpy as np
 from ..kinematics.topology import JOINT_NAMES, Q_COLUMNS, U_COLUMNS
 from ..units import DEG_PER_RAD
 from .data import Measurements
-from .effects import JOINT_SERVO
+from .framework import JOINT_SERVO
 
 FLEX, EXTEND = "tab:red", "tab:blue"
 

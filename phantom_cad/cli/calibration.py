@@ -400,7 +400,7 @@ def fit(
     from ..canon import plain
     from ..calibration.data import read_measurements
     from ..calibration.diagnose import mae
-    from ..calibration.effects import History, get_effect, has_invert, validate_effects
+    from ..calibration.effects import PARAMS_EFFECTS, History, get_effect, has_invert, validate_effects
     from ..errors import one_line
     from ..calibration.fitting import Model, Problem, fit as run_fit
 
@@ -468,7 +468,7 @@ def fit(
     if robust or found:
         header.append(f"# {'Robust fit (soft_l1, scale ' + format(ROBUST_SCALE, 'g') + ' noise sd); ' if robust else ''}"
                       f"{len(found)} cells beyond the outlier limit ({OUTLIER_SIGMAS:g} noise sd).")
-    dump_params(doc, out, header="\n".join(header) + "\n\n")
+    dump_params(doc, out, header="\n".join(header) + "\n\n", effects=PARAMS_EFFECTS)
     # the written file must load and reproduce the fit: no written effect may override another
     written = load_hand(out)
     q_fit = res.model.predict_measurements(res.theta, m)
