@@ -274,19 +274,6 @@ def outliers(fr: FitResult, m: Measurements, noise: NoiseFloor, cells: np.ndarra
     return out
 
 
-def outlier_text(found: list[dict], robust: bool, count: int | None = None, shown: int = 10,
-                 robust_note: str = "left out of the verdict") -> str:
-    """One line naming the outliers (sweep, row, file line, joint, residual); ``count``: how many
-    there are when ``found`` lists only the first ones; ``robust_note``: what a robust fit did with them."""
-    count = len(found) if count is None else count
-    items = ", ".join(f"sweep {o['sweep']} row {o['row']} (line {o['line']}) {o['joint']} {o['residual_deg']:+.2f}"
-                      for o in found[:shown])
-    more = f" and {count - min(shown, len(found))} more" if count > min(shown, len(found)) else ""
-    return (f"outliers ({count} cells beyond {OUTLIER_SIGMAS:g} noise sd"
-            f"{', ' + robust_note if robust else '; --robust keeps them from bending the fit'}): "
-            f"{items}{more}")
-
-
 def mae(fr: FitResult) -> float:
     return float(np.mean(np.abs(fr.residual))) if fr.m else float("nan")
 
