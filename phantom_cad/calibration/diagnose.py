@@ -33,8 +33,8 @@ from ..kinematics.topology import Q_COLUMNS
 from .data import Measurements
 from .framework import MEASUREMENT, REGISTRY, get_effect
 from .identify import combinations, experiment_text, near_duplicate
-from .residual import (MAE_PER_SIGMA, NoiseFloor, made_worse, measured_features, noise_floor, signature,
-                       signature_report, verdict)
+from .residual import MAE_PER_SIGMA, NoiseFloor, made_worse, noise_floor, verdict
+from .signature import measured_features, signature, signature_report
 from .parallel import FitPool
 from .fitting import (FitResult, Model, Problem, fit, fit_streamed, folds, robust_active, robust_loss,
                       single_threaded_blas)

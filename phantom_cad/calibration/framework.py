@@ -65,7 +65,7 @@ SIGNATURE_FEATURES = {
 @dataclass(frozen=True)
 class Signature:
     """The residual an effect leaves when the model lacks it, feature by feature, in the words of
-    the measured signature (calibration/residual.py, :func:`~.residual.measured_features`):
+    the measured signature (calibration/signature.py, :func:`~.signature.measured_features`):
 
     ``direction``  "flips": the residual changes sign with the direction of motion (a band between
                    the flexing and the extending branch); "same": no direction dependence.
