@@ -5,8 +5,9 @@
     q = hand.forward(u, compensated=True)   # (..., 6) rad -> (..., 15) rad
     u = hand.inverse(q_d)                   # (..., 15) rad -> (..., 6) rad
 
-This module is where the layers meet (docs/architecture.md): it loads the parameters, builds the
-effect library's stack for a calibrated file and hands both to the model. Importing it imports
+This module is where the layers meet (docs/architecture.md): it loads the parameters with the
+effect library handed to the params layer (which checks a file's [effects.*] tables and loads its
+plugins), builds the library's stack for a calibrated file and hands both to the model. Importing it imports
 numpy only; CAD (OCP) is imported by the commands that build geometry.
 """
 
@@ -14,16 +15,23 @@ from __future__ import annotations
 
 import os
 
-from .calibration import effects as _effects   # installs the [effects] check of the params layer
+from .calibration.pipeline import PARAMS_EFFECTS, build_effect_stack
 from .kinematics.model import Hand
-from .params import HandParams, ParamError, load_params
+from .params import HandParams, ParamError
+from .params import load_params as _load_params
 
 __version__ = "0.1.0"
 
 
 def make_hand(params: HandParams) -> Hand:
     """The kinematic model of validated parameters, with the fitted effects they carry (if any)."""
-    return Hand(params, _effects.build_effect_stack(params) if params.effects else None)
+    return Hand(params, build_effect_stack(params) if params.effects else None)
+
+
+def load_params(path: str | os.PathLike | None = None) -> HandParams:
+    """Read and validate a parameter file (default: params/phantom.toml), its plugins and
+    ``[effects.*]`` tables included (checked by the calibration layer's effect library)."""
+    return _load_params(path, effects=PARAMS_EFFECTS)
 
 
 def load_hand(path: str | os.PathLike | None = None) -> Hand:

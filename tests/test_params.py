@@ -76,14 +76,39 @@ def test_plugins_must_be_a_list_of_paths(document):
 
 
 def test_a_missing_plugin_is_named(document, tmp_path):
-    import phantom_cad  # noqa: F401  (installs the effect library's plugin loader)
+    from phantom_cad.calibration.effects import PARAMS_EFFECTS
 
     document["plugins"] = ["nowhere/my_effect.py"]
     source = str(tmp_path / "hand.toml")
+    parse(document, source)   # without an effect library the params layer loads no plugin
     with pytest.raises(ParamError) as info:
-        parse(document, source)
+        parse(document, source, effects=PARAMS_EFFECTS)
     assert str(info.value) == (f"{source}: plugins[0]: plugin {tmp_path / 'nowhere' / 'my_effect.py'}: "
                                "no such file")
+
+
+def test_the_effect_library_is_handed_in(document, tmp_path):
+    """The params layer keeps no registry of its own: it loads plugins and checks [effects.*]
+    tables through the library the caller passes, and only through it."""
+    calls = []
+
+    class Library:
+        def load_plugin(self, path, field_name, source):
+            calls.append(("plugin", path, field_name, source))
+
+        def check(self, effects, source):
+            calls.append(("check", effects, source))
+            raise ParamError("effects.toy", "x", "refused by the library", source)
+
+    document["plugins"] = ["sub/toy.py"]
+    document["effects"] = {"toy": {"x": 1.0}}
+    source = str(tmp_path / "hand.toml")
+    p = parse(document, source)   # without a library: the shape only, kept as written
+    assert p.plugins == ("sub/toy.py",) and dict(p.effects["toy"]) == {"x": 1.0} and not calls
+    with pytest.raises(ParamError, match="refused by the library"):
+        parse(document, source, effects=Library())
+    assert calls == [("plugin", str(tmp_path / "sub" / "toy.py"), "plugins[0]", source),
+                     ("check", {"toy": {"x": 1.0}}, source)]
 
 
 def test_finger_name_typo(document):

@@ -31,10 +31,10 @@ import numpy as np
 
 from ..kinematics.topology import Q_COLUMNS
 from .data import Measurements
-from .effects import MEASUREMENT, REGISTRY, get_effect
+from .framework import MEASUREMENT, REGISTRY, get_effect
 from .identify import combinations, experiment_text, near_duplicate
-from .residual import (MAE_PER_SIGMA, NoiseFloor, made_worse, measured_features, noise_floor, signature,
-                       signature_report, verdict)
+from .residual import MAE_PER_SIGMA, NoiseFloor, made_worse, noise_floor, verdict
+from .signature import measured_features, signature, signature_report
 from .parallel import FitPool
 from .fitting import (FitResult, Model, Problem, fit, fit_streamed, folds, robust_active, robust_loss,
                       single_threaded_blas)
@@ -272,19 +272,6 @@ def outliers(fr: FitResult, m: Measurements, noise: NoiseFloor, cells: np.ndarra
         out.append({"sweep": m.sweep_ids[int(m.sweep[row])], "row": row, "line": int(m.lines[row]),
                     "joint": Q_COLUMNS[int(p.j_idx[k])], "residual_deg": round(float(r[k]), 4)})
     return out
-
-
-def outlier_text(found: list[dict], robust: bool, count: int | None = None, shown: int = 10,
-                 robust_note: str = "left out of the verdict") -> str:
-    """One line naming the outliers (sweep, row, file line, joint, residual); ``count``: how many
-    there are when ``found`` lists only the first ones; ``robust_note``: what a robust fit did with them."""
-    count = len(found) if count is None else count
-    items = ", ".join(f"sweep {o['sweep']} row {o['row']} (line {o['line']}) {o['joint']} {o['residual_deg']:+.2f}"
-                      for o in found[:shown])
-    more = f" and {count - min(shown, len(found))} more" if count > min(shown, len(found)) else ""
-    return (f"outliers ({count} cells beyond {OUTLIER_SIGMAS:g} noise sd"
-            f"{', ' + robust_note if robust else '; --robust keeps them from bending the fit'}): "
-            f"{items}{more}")
 
 
 def mae(fr: FitResult) -> float:

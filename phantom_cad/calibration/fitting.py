@@ -21,7 +21,8 @@ from scipy.optimize import least_squares
 
 from ..units import DEG_PER_RAD
 from .data import Measurements
-from .effects import JOINT_SERVO, Effect, History, Param, get_effect, run_pipeline
+from .framework import JOINT_SERVO, Effect, History, Param, get_effect
+from .pipeline import run_pipeline
 from .identify import not_identifiable
 
 
@@ -414,7 +415,7 @@ def fit_effects(hand, m: Measurements, names) -> FitResult:
 def predict(hand, m: Measurements, effects: dict | None = None) -> np.ndarray:
     """q (N, 15) the analytic model + ``effects`` ({name: {key: value}}, file units) predicts for the
     rows of ``m``, with the direction of motion derived from the sweeps."""
-    from .effects import effect_values
+    from .pipeline import effect_values
 
     items = [(get_effect(n), effect_values(n, v, hand)) for n, v in (effects or {}).items()]
     return run_pipeline(hand, items, m.u, m.direction, 0.0, History.of(m))

@@ -31,7 +31,7 @@ import numpy as np
 
 from ..kinematics.topology import JOINTS, Q_COLUMNS, SERVOS
 from .data import motion_direction
-from .effects import JOINT_SERVO, History
+from .framework import JOINT_SERVO, History
 
 #: a combination is not identifiable when its scaled singular value is below 1 / KAPPA of the largest
 KAPPA = 1e4

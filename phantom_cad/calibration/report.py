@@ -1,4 +1,5 @@
-"""Metrics, pictures (matplotlib, Agg) and markdown reports of compare and diagnose.
+"""Metrics, pictures (matplotlib, Agg) and markdown reports of compare and diagnose (the text they
+carry is composed by diagnosis_text.py).
 
 Reports are written into a temporary folder next to the target and moved into place when
 complete. Pictures:
@@ -27,7 +28,7 @@ import numpy as np
 from ..kinematics.topology import JOINT_NAMES, Q_COLUMNS, U_COLUMNS
 from ..units import DEG_PER_RAD
 from .data import Measurements
-from .effects import JOINT_SERVO
+from .framework import JOINT_SERVO
 
 FLEX, EXTEND = "tab:red", "tab:blue"
 
@@ -282,3 +283,27 @@ def mae_table(before: dict, after: dict | None, labels=("before", "after")) -> l
             row += f" {after[c]:.3f} |"
         lines.append(row)
     return lines
+
+
+def compare_markdown(m: Measurements, digest: str, lines: list[str], before: dict, after: dict | None,
+                     label: str | None) -> str:
+    """report.md of ``compare``: the printed ``lines``, the MAE table (``before``/``after`` per joint,
+    deg) and the pictures (residual_after.png only with a model ``after``)."""
+    md = ["# phantom-cad compare", "", f"data: `{m.source}`, {len(m)} rows, params digest "
+          f"{digest[:12]}", "", "```", *lines, "```", "",
+          *mae_table(before, after, ("analytic", label or "")), "",
+          "![residual before](residual_before.png)", ""]
+    if after is not None:
+        md += ["![residual after](residual_after.png)", ""]
+    md += ["![MAE](mae.png)", "", "![hysteresis](hysteresis.png)", ""]
+    return "\n".join(md)
+
+
+def diagnose_markdown(m: Measurements, digest: str, text: list[str], before: dict, after: dict, label: str) -> str:
+    """report.md of ``diagnose``: the printed ``text``, the MAE table and the pictures."""
+    md = ["# phantom-cad diagnose", "", f"data: `{m.source}`, {len(m)} rows, params digest "
+          f"{digest[:12]}", "", "```", *text, "```", "",
+          *mae_table(before, after, ("analytic", f"with {label}")), "",
+          "![residual before](residual_before.png)", "", "![residual after](residual_after.png)", "",
+          "![MAE](mae.png)", "", "![hysteresis](hysteresis.png)", ""]
+    return "\n".join(md)

@@ -18,7 +18,8 @@ import numpy as np
 from ..kinematics.topology import N_JOINTS, N_SERVOS, Q_COLUMNS, U_COLUMNS, servo_joints
 from ..units import DEG
 from .data import Measurements
-from .effects import REGISTRY, History, effect_values, get_effect, run_pipeline
+from .framework import REGISTRY, History, get_effect
+from .pipeline import effect_values, run_pipeline
 
 
 #: most samples per direction per servo: 12 x 100,000 rows of 21 columns is about 0.2 GB in memory

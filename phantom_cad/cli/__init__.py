@@ -61,8 +61,9 @@ def params_validate(files: list[Path] = typer.Argument(None, help="Parameter fil
                     params: list[Path] = typer.Option(None, "--params", "-p", help="More parameter files.")):
     """Validate parameter files (every rule the build relies on); print OK or, as an error line, the first
     broken rule of each."""
+    from .. import load_params
     from ..cad import preflight
-    from ..params import ParamError, load_params
+    from ..params import ParamError
 
     failed = 0
     for f in [*(files or []), *(params or [])] or [None]:

@@ -138,6 +138,7 @@ def compare(
     from .. import load_hand
     from ..calibration.data import read_measurements
     from ..calibration.effects import History, run_pipeline
+    from ..calibration.diagnosis_text import compare_text
     from ..calibration.fitting import fit_effects
     from ..calibration.report import metrics
 
@@ -162,10 +163,10 @@ def compare(
         label = "compensated (eq. 11-14)"
     mb = metrics(m, q_before)
     ma = metrics(m, q_after) if q_after is not None else None
-    lines = _compare_text(m, mb, ma, label, fitted)
+    lines = compare_text(m, mb, ma, label, fitted)
     typer.echo("\n".join(lines))
     if report:
-        from ..calibration.report import ReportDir, mae_table, plot_hysteresis, plot_mae, plot_residuals
+        from ..calibration.report import ReportDir, compare_markdown, plot_hysteresis, plot_mae, plot_residuals
         from ..calibration.residual import made_worse, noise_floor
 
         with ReportDir(report) as tmp:
@@ -182,44 +183,9 @@ def compare(
             else:
                 plot_hysteresis(tmp / "hysteresis.png", m, q_before, q_before, "deviation from the analytic model")
             _write_json(tmp / "metrics.json", {"before": mb, "after": ma, "after_model": label})
-            md = ["# phantom-cad compare", "", f"data: `{m.source}`, {len(m)} rows, params digest "
-                  f"{hand.params.digest[:12]}", "", "```", *lines, "```", "",
-                  *mae_table(bm, am, ("analytic", label or "")), "",
-                  "![residual before](residual_before.png)", ""]
-            if q_after is not None:
-                md += ["![residual after](residual_after.png)", ""]
-            md += ["![MAE](mae.png)", "", "![hysteresis](hysteresis.png)", ""]
-            (tmp / "report.md").write_text("\n".join(md), encoding="utf-8")
+            (tmp / "report.md").write_text(compare_markdown(m, hand.params.digest, lines, bm, am, label),
+                                           encoding="utf-8")
         typer.echo(f"report in {report}")
-
-
-def _compare_text(m, mb, ma, label, fitted) -> list[str]:
-    from ..kinematics.topology import JOINT_NAMES, Q_COLUMNS
-
-    out = [f"{len(m)} rows, {mb['overall']['n']} measured angles; residual = measured - model, degrees",
-           f"{'joint':18s} {'analytic MAE':>12s} {'RMS':>7s} {'max':>7s}" +
-           (f"   {'after MAE':>10s} {'RMS':>7s} {'max':>7s}" if ma else "")]
-    for c, v in mb["per_joint"].items():
-        name = f"{c} {JOINT_NAMES[Q_COLUMNS.index(c)]}"
-        row = f"{name:18s} {v['mae']:12.3f} {v['rms']:7.3f} {v['max']:7.3f}"
-        if ma:
-            a = ma["per_joint"][c]
-            row += f"   {a['mae']:10.3f} {a['rms']:7.3f} {a['max']:7.3f}"
-        out.append(row)
-    o = mb["overall"]
-    row = f"{'overall':18s} {o['mae']:12.3f} {o['rms']:7.3f} {o['max']:7.3f}"
-    if ma:
-        a = ma["overall"]
-        row += f"   {a['mae']:10.3f} {a['rms']:7.3f} {a['max']:7.3f}"
-    out.append(row)
-    if ma:
-        out.append(f"after = {label}")
-    if fitted is not None:
-        vals, errs = fitted.values(), fitted.uncertainties()
-        for n in vals:
-            for k, v in vals[n].items():
-                out.append(f"  {n}.{k} = {v:.5g} {plus_minus(errs[n][k])}")
-    return out
 
 
 # -- diagnose ---------------------------------------------------------------------
@@ -242,6 +208,7 @@ def diagnose(
     from .. import load_hand
     from ..calibration.data import read_measurements
     from ..calibration.diagnose import diagnose as run
+    from ..calibration.diagnosis_text import diagnosis_text
 
     check_output(json_out, JSON_MARKER, "a JSON written by phantom-cad diagnose")
     _load_plugins(plugin)
@@ -256,7 +223,7 @@ def diagnose(
         _write_json(json_out, result)
         typer.echo(f"wrote {json_out}")
     if report:
-        from ..calibration.report import ReportDir, mae_table, plot_hysteresis, plot_mae, plot_residuals
+        from ..calibration.report import ReportDir, diagnose_markdown, plot_hysteresis, plot_mae, plot_residuals
 
         before = {c: v["before"] for c, v in result["per_joint"].items()}
         after = {c: v["after"] for c, v in result["per_joint"].items()}
@@ -271,105 +238,9 @@ def diagnose(
             plot_hysteresis(tmp / "hysteresis.png", m, q_after, q_before,
                             f"deviation from the analytic model: measured, and modelled with {label}")
             _write_json(tmp / "diagnosis.json", result)
-            md = ["# phantom-cad diagnose", "", f"data: `{m.source}`, {len(m)} rows, params digest "
-                  f"{hand.params.digest[:12]}", "", "```", *text, "```", "",
-                  *mae_table(before, after, ("analytic", f"with {label}")), "",
-                  "![residual before](residual_before.png)", "", "![residual after](residual_after.png)", "",
-                  "![MAE](mae.png)", "", "![hysteresis](hysteresis.png)", ""]
-            (tmp / "report.md").write_text("\n".join(md), encoding="utf-8")
+            (tmp / "report.md").write_text(diagnose_markdown(m, hand.params.digest, text, before, after, label),
+                                           encoding="utf-8")
         typer.echo(f"report in {report}")
-
-
-def plus_minus(std: float) -> str:
-    """``+- 0.012``, or what a NaN standard deviation means (calibration/identify.py)."""
-    return f"+- {std:.2g}" if std == std else "(not identifiable alone: see the combination below)"
-
-
-def diagnosis_text(d, result) -> list[str]:
-    from ..kinematics.topology import JOINT_NAMES, Q_COLUMNS
-    from ..calibration.effects import get_effect
-
-    out = [f"{result['rows']} rows, {result['measured_cells']} measured angles",
-           f"MAE of the analytic model: {result['mae_deg_before']:.3f} deg; with the selected effects: "
-           f"{result['mae_deg_after']:.3f} deg", ""]
-    out.append("candidates, first round (dIC < 0 and held-out ratio < 0.99 pass):")
-    out.append(f"  {'effect':22s} {'dIC':>10s} {'RSS ratio':>10s} {'held-out':>9s} {'n_eff':>8s} {'pass':>5s}")
-    for c in d.ranking:
-        held = f"{c.heldout_ratio:9.4f}" if c.heldout_ratio == c.heldout_ratio else f"{'-':>9s}"
-        out.append(f"  {c.effect:22s} {c.delta_ic:10.1f} {c.rss_ratio:10.4f} {held} "
-                   f"{c.n_eff:8.0f} {'yes' if c.passes else 'no':>5s}")
-    out.append("")
-    if not d.selected:
-        out.append("selected: nothing (no library effect passes)")
-    for name in d.selected:
-        eff = get_effect(name)
-        side = result["effects"][name]["side"]
-        out.append(f"selected: {name}" + (" (measurement side: an error of the data, not of the hand; the "
-                                          "control law never uses it)" if side == "measurement" else ""))
-        out.append(f"  why: {eff.explanation}")
-        for k, v in result["effects"][name]["parameters"].items():
-            out.append(f"  {name}.{k} = {v['value']:.5g} " + (f"+- {v['std']:.2g}" if v["identifiable"]
-                                                             else "(not identifiable alone: see below)"))
-    for a in d.ambiguities:
-        out.append(f"ambiguous (round {a['round']}): {a['effects'][0]} and {a['effects'][1]} explain the residual "
-                   f"equally well (dIC {a['delta_ic'][0]:.1f} vs {a['delta_ic'][1]:.1f}); kept {a['effects'][0]}. "
-                   f"To separate them: {a['experiment']}")
-    for c in result["identifiability"]:
-        out.append(c["text"])
-    for n in d.notes:
-        out.append(f"note: {n}")
-    out.append("")
-    out.append(f"{'joint':18s} {'MAE before':>10s} {'after':>8s} {'noise floor':>11s} {'tolerance':>9s}  (deg)")
-    verdict = result["verdict"]["per_joint"]
-    for c, v in result["per_joint"].items():
-        row = f"{c + ' ' + JOINT_NAMES[Q_COLUMNS.index(c)]:18s} {v['before']:10.3f} {v['after']:8.3f}"
-        if c in verdict:
-            row += (f" {result['noise_floor_per_joint_deg'][c]:11.3f} {verdict[c]['tolerance_deg']:9.3f}"
-                    f"{'' if verdict[c]['consistent'] else '  structure left'}")
-        if c in result["made_worse"]:
-            row += "  made worse"
-        out.append(row)
-    out.append("")
-    out.extend(verdict_lines(result))
-    if result["outliers_count"]:
-        from ..calibration.diagnose import outlier_text
-
-        out.append(outlier_text(result["outliers"], result["robust"], result["outliers_count"]))
-    return out
-
-
-def verdict_lines(result) -> list[str]:
-    """The measured verdict and the residual's signature in plain sentences."""
-    noise = result["noise"]
-    model = " + ".join(result["selected"]) or "the analytic model"
-    out = [f"noise floor estimated from the data (neighbouring samples, sample spacing "
-           f"{noise['sample_spacing_deg']:.2f} deg of servo angle): {result['noise_floor_deg']:.3f} deg MAE"]
-    if result["explained"]:
-        out.append(f"explained: yes - the residual of {model} ({result['verdict']['overall']['mae_deg']:.3f} deg MAE"
-                   f"{' without the outliers' if result['robust'] else ''}) is consistent "
-                   f"with that noise overall and on every joint")
-    else:
-        left = result["left"]
-        worst = sorted(left, key=lambda c: -left[c]["structured_rms_deg"])
-        joints = ", ".join(f"{c} {left[c]['structured_rms_deg']:.2f}" for c in worst)
-        overall = result["verdict"]["overall"]
-        white = ("" if overall["white"] else
-                 f"; neighbouring residuals are correlated: lag-1 autocorrelation {overall['autocorrelation']:.2f}, "
-                 f"{overall['whiteness_z']:.1f} standard errors above white noise's 0")
-        out.append(f"explained: no - {model} leaves structure beyond the noise "
-                   f"(overall {overall['mae_deg']:.3f} deg MAE, consistent up to {overall['tolerance_deg']:.3f}{white}); "
-                   f"RMS beyond the noise, deg: {joints or 'none per joint'}")
-    for when, key in (("the analytic model's residual", "before"), ("what is left", "after")):
-        sentences = result["signature"][key]["sentences"]
-        if sentences and (key == "before" or (result["selected"] and not result["explained"])):
-            out.append(f"signature of {when}: " + "; ".join(sentences))
-        match = result["signature_match"].get(key)
-        if match and (key == "before" or not result["explained"]):
-            best = match.get("best_candidate")
-            out.append(f"{when} against the signatures the effects declare"
-                       f"{f' (best candidate: {best})' if best else ''}:")
-            out.extend(f"  {t}" for t in match["sentences"])
-    return out
 
 
 # -- fit --------------------------------------------------------------------------
@@ -399,8 +270,8 @@ def fit(
     from ..params.schema import plugin_paths
     from ..canon import plain
     from ..calibration.data import read_measurements
-    from ..calibration.diagnose import mae
-    from ..calibration.effects import History, get_effect, has_invert, validate_effects
+    from ..calibration.diagnosis_text import fit_header, outlier_text
+    from ..calibration.effects import PARAMS_EFFECTS, History, get_effect, has_invert, validate_effects
     from ..errors import one_line
     from ..calibration.fitting import Model, Problem, fit as run_fit
 
@@ -419,7 +290,7 @@ def fit(
     m = read_measurements(data, degrees=degrees).require_joints()
     problem = Problem(hand, m)
     before = run_fit(Model(hand, [], problem), problem)
-    from ..calibration.diagnose import OUTLIER_SIGMAS, ROBUST_SCALE, outlier_text, outliers
+    from ..calibration.diagnose import ROBUST_SCALE, outliers
     from ..calibration.residual import MAE_PER_SIGMA, noise_floor
 
     noise = noise_floor(m)
@@ -431,7 +302,7 @@ def fit(
     else:
         res = run_fit(Model(hand, names, problem), problem)
     found = outliers(res, m, noise)
-    vals, errs = res.values(), res.uncertainties()
+    vals = res.values()
     table = {n: {k: round(v, 9) for k, v in vals[n].items()} for n in names}
     if "tendon_elasticity" not in table:
         # the fit starts from the analytic model: a zero compliance keeps compensated=True consistent
@@ -448,27 +319,8 @@ def fit(
         doc.pop("plugins", None)
     command = (f"{one_line(data)} --effects {','.join(names)}" + (" --robust" if robust else "")
                + "".join(f" --plugin {one_line(p)}" for p in plugin or []))
-    header = [f"{FIT_MARKER} {command}`",
-              f"# from {one_line(hand.params.source)} (digest {hand.params.digest[:12]}), {len(m)} rows.",
-              f"# MAE {mae(before):.4f} deg (analytic) -> {mae(res):.4f} deg (with the effects).",
-              "# Fitted on the analytic model; [effects.tendon_elasticity] compliance_per_m replaces k_s/EA",
-              "# in the compensated model (0 when not fitted). Uncertainties (1 sd):"]
-    for n in names:
-        for k, v in vals[n].items():
-            header.append(f"#   {n}.{k} = {v:.6g} {plus_minus(errs[n][k])}")
-    from ..calibration.effects import MEASUREMENT
-    from ..calibration.identify import combinations
-
-    for n in names:
-        if get_effect(n).stage == MEASUREMENT:
-            header.append(f"# {n} describes the measurement, not the hand: Hand.forward and the control law "
-                          "never apply it (compare -p does).")
-    for c in combinations(res):
-        header.append(f"# {c.text()}")
-    if robust or found:
-        header.append(f"# {'Robust fit (soft_l1, scale ' + format(ROBUST_SCALE, 'g') + ' noise sd); ' if robust else ''}"
-                      f"{len(found)} cells beyond the outlier limit ({OUTLIER_SIGMAS:g} noise sd).")
-    dump_params(doc, out, header="\n".join(header) + "\n\n")
+    header = fit_header(f"{FIT_MARKER} {command}`", hand.params, len(m), before, res, names, robust, found)
+    dump_params(doc, out, header="\n".join(header) + "\n\n", effects=PARAMS_EFFECTS)
     # the written file must load and reproduce the fit: no written effect may override another
     written = load_hand(out)
     q_fit = res.model.predict_measurements(res.theta, m)

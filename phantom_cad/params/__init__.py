@@ -2,7 +2,7 @@
 
 from .errors import ParamError
 from .io import DEFAULT_PARAMS, dump_params, dumps, load_document, load_params
-from .schema import HandParams, parse
+from .schema import EffectLibrary, HandParams, parse
 
-__all__ = ["ParamError", "HandParams", "parse", "load_params", "load_document",
+__all__ = ["ParamError", "EffectLibrary", "HandParams", "parse", "load_params", "load_document",
            "dump_params", "dumps", "DEFAULT_PARAMS"]

@@ -14,7 +14,7 @@ except ModuleNotFoundError:  # Python < 3.11
 from ..atomic import write_atomic
 from .errors import ParamError
 from ..canon import plain
-from .schema import HandParams, parse
+from .schema import EffectLibrary, HandParams, parse
 
 #: the default hand shipped with the package's source tree
 DEFAULT_PARAMS = Path(__file__).resolve().parents[2] / "params" / "phantom.toml"
@@ -38,10 +38,11 @@ def load_document(path: str | os.PathLike) -> dict[str, Any]:
         raise ParamError("<file>", str(path), f"is not valid TOML: {exc}", str(path)) from None
 
 
-def load_params(path: str | os.PathLike | None = None) -> HandParams:
-    """Read and validate a parameter file (default: params/phantom.toml)."""
+def load_params(path: str | os.PathLike | None = None, effects: EffectLibrary | None = None) -> HandParams:
+    """Read and validate a parameter file (default: params/phantom.toml); ``effects`` as in
+    :func:`~.schema.parse` (``phantom_cad.load_params`` passes the calibration layer's)."""
     path = Path(path) if path is not None else DEFAULT_PARAMS
-    return parse(load_document(path), source=str(path))
+    return parse(load_document(path), source=str(path), effects=effects)
 
 
 def dumps(document: Mapping[str, Any]) -> str:
@@ -50,9 +51,11 @@ def dumps(document: Mapping[str, Any]) -> str:
     return tomli_w.dumps(plain(document))
 
 
-def dump_params(document: Mapping[str, Any], path: str | os.PathLike, header: str = "") -> None:
-    """Validate ``document`` and write it atomically to ``path`` (nothing is written if invalid)."""
-    parse(document, source=str(path))
+def dump_params(document: Mapping[str, Any], path: str | os.PathLike, header: str = "",
+                effects: EffectLibrary | None = None) -> None:
+    """Validate ``document`` (``effects`` as in :func:`~.schema.parse`) and write it atomically to
+    ``path`` (nothing is written if invalid)."""
+    parse(document, source=str(path), effects=effects)
     text = header + dumps(document)
     if any(line.strip() and not line.lstrip().startswith("#") for line in header.splitlines()):
         raise ValueError(f"dump_params: the header must be comment lines, got {header!r}")

@@ -12,7 +12,7 @@ import functools
 import math
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Any, Callable, Mapping
+from typing import Any, Mapping, Protocol
 
 import numpy as np
 
@@ -27,26 +27,17 @@ from .reader import TomlTable
 
 SCHEMA_VERSION = 1
 
-#: checks of the ``[effects.*]`` tables, ``check(effects, source)`` raising ParamError. The effect
-#: library (phantom_cad.calibration.effects) installs its own on import; the package's
-#: ``__init__`` imports it, so every load sees it (the params layer never imports calibration).
-EFFECT_CHECKS: list[Callable[[Mapping[str, Any], str | None], None]] = []
+class EffectLibrary(Protocol):
+    """What :func:`parse` needs from an effect library to read a file's ``plugins`` and
+    ``[effects.*]`` tables; the caller hands one in (the calibration layer's is
+    ``phantom_cad.calibration.effects.PARAMS_EFFECTS``: ``phantom_cad.load_params``,
+    ``load_hand`` and the CLI pass it). The params layer never imports calibration."""
 
+    def load_plugin(self, path: str, field_name: str, source: str | None) -> None:
+        """Load one plugin file the parameter file names (ParamError naming the field on failure)."""
 
-def register_effect_check(check: Callable[[Mapping[str, Any], str | None], None]) -> None:
-    if check not in EFFECT_CHECKS:
-        EFFECT_CHECKS.append(check)
-
-
-#: loaders of the effect plugins a parameter file names (``plugins = ["my_effect.py"]``, paths
-#: relative to the file), ``load(path, field, source)`` raising ParamError; installed, like the
-#: effect checks, by the effect library (the params layer never imports calibration)
-PLUGIN_LOADERS: list[Callable[[str, str, str | None], None]] = []
-
-
-def register_plugin_loader(load: Callable[[str, str, str | None], None]) -> None:
-    if load not in PLUGIN_LOADERS:
-        PLUGIN_LOADERS.append(load)
+    def check(self, effects: Mapping[str, Mapping[str, Any]], source: str | None) -> None:
+        """Raise ParamError naming the field if an ``[effects.*]`` table is not valid."""
 
 
 def plugin_paths(plugins: tuple[str, ...], source: str | None) -> tuple[str, ...]:
@@ -457,8 +448,14 @@ def _cad(c: TomlTable, hand_length, fingers, thumb, palm, servo, hardware, print
     return cad
 
 
-def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
-    """Validate a parsed parameter document and build the frozen :class:`HandParams`."""
+def parse(document: Mapping[str, Any], source: str | None = None,
+          effects: EffectLibrary | None = None) -> HandParams:
+    """Validate a parsed parameter document and build the frozen :class:`HandParams`.
+
+    ``effects``: the effect library that loads the file's ``plugins`` and checks its
+    ``[effects.*]`` tables (:class:`EffectLibrary`). Without one they are checked for their shape
+    only (a list of paths, tables) and kept as written: what builds geometry never reads them, and
+    ``phantom_cad.make_hand`` checks them again when it builds the model."""
     root = TomlTable(dict(document), "", source)
     version = root.number("schema_version")
     if version != SCHEMA_VERSION:
@@ -581,25 +578,14 @@ def parse(document: Mapping[str, Any], source: str | None = None) -> HandParams:
         raise root.error("plugins", plugins, "must be a list of file paths (Python files that register effects, "
                          "relative to this parameter file)")
     plugins = tuple(plugins)
-    if plugins:
-        if not PLUGIN_LOADERS:
-            raise ParamError("plugins", ", ".join(plugins), "no effect library is loaded to load them", source)
+    if effects is not None:
         for i, path in enumerate(plugin_paths(plugins, source)):
-            for load in PLUGIN_LOADERS:
-                load(path, f"plugins[{i}]", source)
-    effects = root.table("effects", default={})
-    effect_params = {}
-    for key in effects.keys():
-        et = effects.table(key)
-        effect_params[key] = dict(et.data)
-    effects.done()
-    if effect_params:
-        # the effect library knows each effect's parameters and bounds (EFFECT_CHECKS)
-        if not EFFECT_CHECKS:
-            raise ParamError("effects", ", ".join(effect_params), "no effect library is loaded to check them",
-                             source)
-        for check in EFFECT_CHECKS:
-            check(effect_params, source)
+            effects.load_plugin(path, f"plugins[{i}]", source)
+    et = root.table("effects", default={})
+    effect_params = {key: dict(et.table(key).data) for key in et.keys()}
+    et.done()
+    if effect_params and effects is not None:
+        effects.check(effect_params, source)   # the library knows each effect's parameters and bounds
 
     root.done()
     return HandParams(

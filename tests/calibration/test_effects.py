@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from phantom_cad import ParamError, make_hand
-from phantom_cad.calibration.effects import get_effect, run_pipeline
-from phantom_cad.params import dump_params, load_params, parse
+from phantom_cad import ParamError, load_params, make_hand
+from phantom_cad.calibration.effects import PARAMS_EFFECTS, get_effect, run_pipeline
+from phantom_cad.params import dump_params, parse
 from phantom_cad.canon import plain as _plain
 
 # the default index finger, read off params/phantom.toml by hand (mm, degrees)
@@ -128,7 +128,7 @@ def test_friction_known_answer(hand):
 def with_effects(effects):
     doc = _plain(load_params().document)
     doc["effects"] = effects
-    return make_hand(parse(doc, "test.toml"))
+    return make_hand(parse(doc, "test.toml", effects=PARAMS_EFFECTS))
 
 
 def test_no_effects_no_stack(hand):
@@ -191,5 +191,12 @@ def test_bad_effects_refused_at_load(tmp_path, effects, message):
         assert str(exc.value) == f"{path}: {message}"
         assert exc.value.field.startswith("effects.")
     with pytest.raises(ParamError):           # and never written by dump_params
-        dump_params(doc, tmp_path / "never.toml")
+        dump_params(doc, tmp_path / "never.toml", effects=PARAMS_EFFECTS)
     assert not (tmp_path / "never.toml").exists()
+    # the params layer alone checks the tables' shape, not their meaning: the library is handed in
+    from phantom_cad.params import load_params as params_layer_load
+
+    assert dict(params_layer_load(path).effects) == effects
+    with pytest.raises(ParamError) as exc:
+        params_layer_load(path, effects=PARAMS_EFFECTS)
+    assert str(exc.value) == f"{path}: {message}"

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from phantom_cad.calibration.diagnose import diagnose
-from phantom_cad.cli.calibration import diagnosis_text
+from phantom_cad.calibration.diagnosis_text import diagnosis_text
 
 from .hidden import (HAND_EFFECTS, chain_coupling, directions, gravity_sag, hidden_values, ideal_ratios, mcp_angles,
                      slack, soft_stop, truth)

@@ -121,7 +121,7 @@ def test_servo_eccentricity_is_not_explained(hand):
     for c in affected:
         # 1.5 deg amplitude: RMS 1.06 deg, less what offsets / radius errors absorb
         assert out["left"][c]["structured_rms_deg"] > 0.5
-    from phantom_cad.cli.calibration import diagnosis_text
+    from phantom_cad.calibration.diagnosis_text import diagnosis_text
 
     text = "\n".join(diagnosis_text(d, out))
     assert "explained: no" in text and "down to their noise" not in text

@@ -10,8 +10,8 @@ import pytest
 
 from phantom_cad.calibration.diagnose import diagnose
 from phantom_cad.calibration.effects import REGISTRY, Signature
-from phantom_cad.calibration.residual import compare_features
-from phantom_cad.cli.calibration import diagnosis_text
+from phantom_cad.calibration.signature import compare_features
+from phantom_cad.calibration.diagnosis_text import diagnosis_text
 
 from .test_noise_floor import OFFSETS, analytic, eccentric_data, measure, sweeps
 from .test_plugin import compliant
