@@ -20,9 +20,11 @@ def _cords(params) -> list[dict]:
     """One row per routed tendon (``kinematics.routing``): its cut length, from the routing model's
     rest length of its strands (plus, for a drive, what its servo winds over the travel) and a
     knot allowance per end, and how it is anchored and tensioned."""
+    from ..kinematics import couplers
     from ..kinematics import routing
-    rest = routing.lengths(params)
-    split = routing.couplers(params)
+    from ..kinematics import routing_paths
+    rest = routing_paths.lengths(params)
+    split = couplers.couplers(params)
     hw = params.hardware
     g = lambda v: f"{units.mm(v):g}"  # noqa: E731
     rows = []
@@ -134,6 +136,7 @@ def bill_of_materials(params) -> list[dict]:
     bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} horn screw (servo accessory)",
                 "quantity": 2 * N_SERVOS, "used_in": "servo pulleys 1-6 to their horns"})
     n_loops = sum(n - 1 for n in n_joints.values())
+    from ..kinematics import couplers
     from ..kinematics import routing
     # the hub clamp's pilot: from the cheek's outer face across the loop's groove (parts.tendons)
     pilot = min(params.digit(d).width / 2.0 - abs(routing.layout(params, d).loop_x[0]) + routing.layout(params, d).groove / 2.0
@@ -141,7 +144,7 @@ def bill_of_materials(params) -> list[dict]:
     bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} x {int(units.mm(pilot))} set screw (grub screw)",
                 "quantity": n_loops, "used_in": "one per coupling loop: clamps and tensions it in its hub"})
     bom += _cords(params)
-    split = routing.couplers(params)
+    split = couplers.couplers(params)
     bom.append({"item": "crimp stop", "spec": f"crimp sleeve {g(hw.stop_diameter)} x {g(hw.stop_length)} mm "
                 f"for {g(hw.tendon_diameter)} mm cord", "quantity": len(split),
                 "used_in": "ends the palm strand of each finger drive at the magnet face: "

@@ -34,8 +34,8 @@ import numpy as np
 
 from .. import units
 from ..errors import UserError
+from ..kinematics import thenar as TH
 from ..kinematics.model import Hand
-from ..kinematics import frames as F
 from ..kinematics.topology import CMC_Q, JOINTS, LINK_NAMES, SERVOS, joint
 from .pipeline import export_problem
 
@@ -326,7 +326,7 @@ def axis_rows(robot, params, solids: dict) -> list[Row]:
 
     tol = Tolerances(params)        # the modelled (compensated) bores, mm
     press, seat, clear = tol.axle_press / 2.0, tol.bearing_seat / 2.0, tol.axle_clear / 2.0
-    th = F.thenar(params)
+    th = TH.thenar(params)
     journal, column = th["journal_r"] / units.MM, th["column_r"] / units.MM
     robot.update_cfg(np.zeros(len(robot.actuated_joint_names)))
     names = {j.name: j for j in robot.robot.joints}

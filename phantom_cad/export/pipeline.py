@@ -48,7 +48,7 @@ import numpy as np
 from ..atomic import check_replaceable, replace_dir
 from ..cad import preflight
 from ..canon import canonical, plain, sha256
-from ..kinematics import routing
+from ..kinematics import routing_json
 from ..params import ParamError, load_document, parse
 from ..params.io import DEFAULT_PARAMS
 from .. import workers
@@ -356,7 +356,7 @@ class _Build:
             description = self.description(metas, estimates, stage / "description")
             bom = list(self.asm.bill_of_materials(self.params))
             (stage / "bom.csv").write_text(bom_csv(bom), encoding="utf-8")
-            (stage / "routing.json").write_text(json.dumps(routing.document(self.params), indent=1) + "\n",
+            (stage / "routing.json").write_text(json.dumps(routing_json.document(self.params), indent=1) + "\n",
                                                 encoding="utf-8")
             adir = finish_assembly()
             shutil.copyfile(adir / "hand_assembly.step", stage / "step" / "hand_assembly.step")

@@ -34,6 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import frames as F
+from . import forearm_layout as FL
+from . import thenar as TH
 from .topology import CMC_Q, FINGERS, N_SERVOS, OPPOSED_FINGERS, SERVOS, THUMB_CHAIN, chain
 
 #: the half angle (rad) of the cone around a pad's normal in which a contact counts as pad to pad
@@ -313,7 +315,7 @@ def human_edge(params) -> float:
     (:data:`HUMAN_BREADTH`, scaled with the hand length) that ends at the palm's ulnar face
     (``frames.metacarpal_x``: the pinky socket's outer side, or a wall ulnar of a drive's channel
     where the file's servo row draws one further)."""
-    return F.metacarpal_x(params)[1] - HUMAN_BREADTH * params.hand_length / 0.189
+    return FL.metacarpal_x(params)[1] - HUMAN_BREADTH * params.hand_length / 0.189
 
 
 def carpus(params) -> float:
@@ -336,11 +338,11 @@ def thenar_constraint(params, human: bool = True):
     lever = params.thumb.width / 2.0
 
     def violation(T0: np.ndarray) -> float:
-        m = F.thenar_margins(params, T0)
+        m = TH.thenar_margins(params, T0)
         v = max(-m["tilt"], 0.0) * lever + max(-m["base"], 0.0) + max(-m["turn"], 0.0)
         if m["tilt"] < 0.0 or not human:
             return v
-        pts = F.thenar_points(params, T0)
+        pts = TH.thenar_points(params, T0)
         x = min(float(pts["journal"][:, 0].min()), float(pts["turn"][:, 0].min()))
         y = min(float(p[:, 1].min()) for p in pts.values())
         return v + max(edge - x, 0.0) + max(back - y, 0.0)

@@ -202,7 +202,7 @@ class Print:
     #: screw holes, magnet pockets): FDM prints holes this much small (kinematics.dimensions.printed_hole)
     hole_compensation: float = 0.2e-3
     #: the slicer's layer height (m): the build's slicing, and the roofs of the tendon channels
-    #: (kinematics.dimensions.roof_angle)
+    #: (cad.print_rules.roof_angle)
     layer_height: float = 0.2e-3
 
 

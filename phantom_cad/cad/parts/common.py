@@ -345,7 +345,7 @@ def cylinder_floor(p0, p1, r: float) -> float:
 def teardrop(p0, p1, r: float, up=None, roof: float = math.radians(45.0)):
     """A hole of radius r from p0 to p1 that prints without support when ``up`` (a unit vector in
     the same frame: the printer's +z) is given: a cylinder whose top is a roof of two planes at
-    ``roof`` (rad, ``dimensions.roof_angle``) from the vertical, meeting r / sin(roof) above the
+    ``roof`` (rad, ``print_rules.roof_angle``) from the vertical, meeting r / sin(roof) above the
     axis (a teardrop). A hole that stands steeper than that, or no ``up``: the plain cylinder."""
     p0 = np.asarray(p0, float)
     p1 = np.asarray(p1, float)

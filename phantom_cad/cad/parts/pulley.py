@@ -9,7 +9,7 @@ groove into an axial knot well: a drive's clamp, or each of the CMC loop's two s
 and the horn interface: a central clearance bore for the spline screw and two horn screw holes on
 the cad.horn_hole_radius circle.
 
-The CMC pulley (link ``thumb_cmc_pulley``, frame ``frames.T_cmc_base_pulley``): the same groove
+The CMC pulley (link ``thumb_cmc_pulley``, frame ``thenar.T_cmc_base_pulley``): the same groove
 radius r6 / cmc_gain and width, the loop's two clamps, and a keyed bore on the CMC base's column.
 """
 
@@ -34,8 +34,8 @@ DRIVE_HORN_ANGLES = (0.0, math.pi)
 
 def _anchor_angles(params, link_name: str) -> tuple[float, ...]:
     """Polar angles (rad, the link's frame at rest, right hand) of the clamps the routing model puts
-    on a pulley link: a drive's (``routing.servo_clamp_wrap``: every wrap inside the travel) or
-    the CMC loop's two (``routing.cmc_loop_clamps``)."""
+    on a pulley link: a drive's (``routing_rules.servo_clamp_wrap``: every wrap inside the travel) or
+    the CMC loop's two (``routing_rules.cmc_loop_clamps``)."""
     from ...kinematics import routing
     clamps = [e for r in routing.routes(params, right_handed=True) for st in r.strands for e in st.elements
               if isinstance(e, routing.Point) and e.role == "clamp" and e.link == link_name]
@@ -149,7 +149,7 @@ class ServoPulley(GroovedPulley):
             th = doc["thumb"]
             src = {k: canon.plain(th[k]) for k in ("cmc_pulley_radius_mm", "cmc_servo_travel_deg", "cmc_gain")}
         else:
-            # the radius, and the travel that places the drive's clamp (routing.servo_clamp_wrap)
+            # the radius, and the travel that places the drive's clamp (routing_rules.servo_clamp_wrap)
             table = digit_table(doc, self.servo.digit)
             src = {k: canon.plain(table[k]) for k in ("servo_pulley_radius_mm", "servo_travel_deg")}
         return {**self.common_inputs(), "servo": self.servo.label, **src}

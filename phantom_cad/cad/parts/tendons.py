@@ -2,13 +2,13 @@
 
 Nothing here retypes a tendon's path: every groove, channel, clamp and knot well is read from the
 right-handed routes (``routing.routes(params, right_handed=True)``) and their straight runs
-(``routing.runs``), in the link's frame, in mm. docs/transmission.md describes the mechanism and
+(``routing_paths.runs``), in the link's frame, in mm. docs/transmission.md describes the mechanism and
 docs/parts.md the features:
 
 * a **pulley** element on this link is a groove whose floor lies half a cord inside the pulley's
   centreline radius (the moment arm R): a full ring for a loop's hub and groove (their strands
   touch nearly all the way round over the travel), a sector for the return cord (the arc it ever
-  touches, ``routing.arc_range``, plus ``SECTOR_MARGIN``);
+  touches, ``routing_paths.arc_range``, plus ``SECTOR_MARGIN``);
 * a **hub** (a loop's pulley on the link before its first joint) is material the clevis slot
   leaves standing beside that side's cheek (``routing.Layout.hub_width``); the child's tongue is
   cut back there;
@@ -30,9 +30,11 @@ import numpy as np
 
 from ... import units
 from ...kinematics import routing
-from ...kinematics.dimensions import FLANK, roof_angle
+from ...kinematics import routing_paths
+from ...kinematics.dimensions import FLANK
 from ...kinematics.memo import memoised
 from ...kinematics.topology import TENDONS, joint
+from ..print_rules import roof_angle
 
 #: a return groove's sector reaches this far beyond the arc its cord ever touches (rad)
 SECTOR_MARGIN = math.radians(15.0)
@@ -109,7 +111,7 @@ class LinkTendons:
                         if e.role == "return":
                             # the arc it touches, and behind it the parent's run, which turns into
                             # this link's frame as the joint flexes (up to a quarter turn beyond)
-                            a0, a1 = routing.arc_range(params, st, i)
+                            a0, a1 = routing_paths.arc_range(params, st, i)
                             sector = (a0 - SECTOR_MARGIN, a1 + math.pi / 2.0)
                         if key in seen:
                             continue
@@ -130,7 +132,7 @@ class LinkTendons:
                             self.anchors.append(Anchor("knot", _mm(e.pos), None, None, cord))
         #: (p0, p1, channel diameter) of every loop and return run fixed to this link, mm
         self.channels = []
-        for run in routing.runs(params, right_handed=True):
+        for run in routing_paths.runs(params, right_handed=True):
             if _KIND[run.tendon] in KINDS and link_name in run.links:
                 p0, p1 = run.ends[link_name]
                 self.channels.append((_mm(p0), _mm(p1), float(units.mm(run.diameter)) + 2.0 * cl))
@@ -139,20 +141,20 @@ class LinkTendons:
         #: fixed here, the other end's positions over the travel), mm
         self.drive_sweeps = []
         strands = {st.name: st for r in routing.routes(params, right_handed=True) for st in r.strands}
-        for run in routing.runs(params, right_handed=True):
+        for run in routing_paths.runs(params, right_handed=True):
             if _KIND[run.tendon] != "drive" or run.links:
                 continue
             els = strands[run.strand].elements
             ends = (els[run.index].link, els[run.index + 1].link)
             if link_name not in ends:
                 continue
-            sweep = routing.run_sweep(params, run, link_name, right_handed=True)
+            sweep = routing_paths.run_sweep(params, run, link_name, right_handed=True)
             k = ends.index(link_name)
             self.drive_sweeps.append((_mm(sweep[0][k]), [_mm(pr[1 - k]) for pr in sweep]))
 
     @property
     def roof(self) -> float:
-        """The roof angle (rad) of this hand's teardrop channels: ``dimensions.roof_angle`` of its
+        """The roof angle (rad) of this hand's teardrop channels: ``print_rules.roof_angle`` of its
         layer height."""
         return roof_angle(self.params.print.layer_height)
 
@@ -269,7 +271,7 @@ def channel_tools(lt: LinkTendons, extend: float | None = None, faces=(), up=Non
     reaching half a diameter past each end (into the groove or well it meets); and where two
     strands cross (a figure-eight), the reliefs of :func:`crossing_tools` (``faces`` passed on).
     ``up``: the printer's +z in the link frame (the part's ``print_up``): a channel that lies
-    flatter than its round wall prints gets a teardrop's roof at ``dimensions.roof_angle`` of the
+    flatter than its round wall prints gets a teardrop's roof at ``print_rules.roof_angle`` of the
     layer height (``common.teardrop``), which prints without support; the cord runs on its round
     floor, so its path does not change."""
     from .common import teardrop
