@@ -9,8 +9,7 @@ parameter file for building or validating (``params validate``, ``build``, ``dem
 
 from __future__ import annotations
 
-import math
-
+from .. import units
 from ..params import ParamError
 from .parts.common import mm
 
@@ -34,10 +33,10 @@ def check(params) -> None:
     T0 = F.T_palm_thumb_cmc_base(params)
     fit = TH.thenar_margins(params, T0)
     if fit["tilt"] < 0.0:
-        tilt = math.degrees(TH.MAX_CMC_TILT - fit["tilt"])
-        raise ParamError("palm.thumb_cmc_axis_deg", [round(math.degrees(v), 6) for v in params.palm.thumb_cmc_axis],
+        tilt = units.deg(TH.MAX_CMC_TILT - fit["tilt"])
+        raise ParamError("palm.thumb_cmc_axis_deg", [round(units.deg(v), 6) for v in params.palm.thumb_cmc_axis],
                          f"tilts the CMC axis {tilt:.1f} deg from the palm's normal: the palm holds the CMC on a "
-                         f"column along it, which must climb into the palm within {math.degrees(TH.MAX_CMC_TILT):g} deg "
+                         f"column along it, which must climb into the palm within {units.deg(TH.MAX_CMC_TILT):g} deg "
                          "of its normal", src)
     Tp = params.palm.thickness
     if fit["base"] < -1e-12:

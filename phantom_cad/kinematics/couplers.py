@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import units
 from ..errors import ParamError
 from . import frames as F
 from .memo import memoised
@@ -102,13 +103,13 @@ def _couplers(params) -> dict[str, Coupler]:
         travel = r * ch.travel[1]
         full = (s0 + travel, s0 + Lc + travel)
         field = "hardware.tendon_stop.length_mm"
-        value = round(hw.stop_length * 1e3, 6)
+        value = round(units.mm(hw.stop_length), 6)
         if full[1] + c > channel + 1e-12:
-            raise ParamError(field, value, f"the {digit} drive's coupler (stop, loop and knot: {Lc * 1e3:.2f} mm) "
-                             f"travels {travel * 1e3:.2f} mm into the palm from {s0 * 1e3:.2f} mm behind the socket "
+            raise ParamError(field, value, f"the {digit} drive's coupler (stop, loop and knot: {units.mm(Lc):.2f} mm) "
+                             f"travels {units.mm(travel):.2f} mm into the palm from {units.mm(s0):.2f} mm behind the socket "
                              "face; "
-                             f"with a clearance it needs {(full[1] + c) * 1e3:.2f} mm of channel, it has "
-                             f"{channel * 1e3:.2f} mm before servo {servo.index + 1}'s pulley cavity", params.source)
+                             f"with a clearance it needs {units.mm(full[1] + c):.2f} mm of channel, it has "
+                             f"{units.mm(channel):.2f} mm before {servo.title}'s pulley cavity", params.source)
         # the clamp sits for the largest wrap the travel allows (servo_clamp_wrap): unwinding to the
         # smallest (WRAP_MARGIN) pays the palm strand out
         service = WRAP_MARGIN - servo_clamp_wrap(params, servo.index)
@@ -117,10 +118,10 @@ def _couplers(params) -> dict[str, Coupler]:
         cp = Coupler(digit, D, Lc, D + 2.0 * c, run, channel, (s0, s0 + Lc), full, service, payout,
                      bearing, to_face - bearing, from_face + bearing)
         if cp.emergence < hw.stop_diameter - 1e-12:
-            raise ParamError(field, value, f"at the service angle ({math.degrees(cp.service_angle):.1f} deg) servo "
-                             f"{servo.index + 1} pays out {payout * 1e3:.2f} mm: the {digit} coupler "
-                             f"({Lc * 1e3:.2f} mm) "
-                             f"comes {cp.emergence * 1e3:.2f} mm out of the socket, it must come at least the stop's "
-                             f"diameter ({hw.stop_diameter * 1e3:g} mm) out to slip the loop off", params.source)
+            raise ParamError(field, value, f"at the service angle ({units.deg(cp.service_angle):.1f} deg) "
+                             f"{servo.title} pays out {units.mm(payout):.2f} mm: the {digit} coupler "
+                             f"({units.mm(Lc):.2f} mm) "
+                             f"comes {units.mm(cp.emergence):.2f} mm out of the socket, it must come at least the stop's "
+                             f"diameter ({units.mm(hw.stop_diameter):g} mm) out to slip the loop off", params.source)
         out[digit] = cp
     return out

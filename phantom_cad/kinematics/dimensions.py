@@ -7,15 +7,31 @@ numbers (SI), no parameter objects, so ``params.rules`` validates with exactly t
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 #: two perimeters of a 0.4 mm nozzle: the thinnest flank beside a tendon groove (m); the routing
 #: model (``kinematics.routing.layout``) spaces the grooves by it
 FLANK = 0.8e-3
 
 
+def digit_path(digit: str) -> tuple[str, ...]:
+    """Where a digit's table sits in the parameter file, the one place: ``("thumb",)`` or
+    ``("fingers", <name>)``."""
+    return ("thumb",) if digit == "thumb" else ("fingers", digit)
+
+
 def digit_field(digit: str) -> str:
     """The parameter file's table of a digit: ``thumb`` or ``fingers.<name>``."""
-    return "thumb" if digit == "thumb" else f"fingers.{digit}"
+    return ".".join(digit_path(digit))
+
+
+def digit_entry(tree, digit: str):
+    """A digit's entry in a tree laid out like the parameter file (:func:`digit_path`): a mapping's
+    ``tree["thumb"]`` / ``tree["fingers"][<name>]``, or an object's ``tree.thumb`` /
+    ``tree.fingers[<name>]``."""
+    head, *rest = digit_path(digit)
+    node = tree[head] if isinstance(tree, Mapping) else getattr(tree, head)
+    return node[rest[0]] if rest else node
 
 
 def printed_hole(fit: float, compensation: float) -> float:

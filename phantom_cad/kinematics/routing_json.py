@@ -3,8 +3,7 @@ frames, millimetres, their rest lengths, and each split drive's coupler). Determ
 
 from __future__ import annotations
 
-import math
-
+from .. import units
 from .couplers import Coupler, couplers
 from .routing import Point, routes
 from .routing_paths import lengths
@@ -13,10 +12,10 @@ from .topology import SERVOS
 
 def _element_doc(e) -> dict:
     if isinstance(e, Point):
-        return {"type": e.kind, "role": e.role, "link": e.link, "pos_mm": [round(v * 1e3, 6) for v in e.pos]}
+        return {"type": e.kind, "role": e.role, "link": e.link, "pos_mm": [round(units.mm(v), 6) for v in e.pos]}
     return {"type": "pulley", "role": e.role, "link": e.link, "joint": e.joint,
-            "centre_mm": [round(v * 1e3, 6) for v in e.centre], "axis": [round(v, 9) for v in e.axis],
-            "radius_mm": round(e.radius * 1e3, 6), "width_mm": round(e.width * 1e3, 6)}
+            "centre_mm": [round(units.mm(v), 6) for v in e.centre], "axis": [round(v, 9) for v in e.axis],
+            "radius_mm": round(units.mm(e.radius), 6), "width_mm": round(units.mm(e.width), 6)}
 
 
 
@@ -34,8 +33,8 @@ def document(params) -> dict:
         tendons.append({
             "name": t.name, "kind": t.kind, "digit": t.digit, "links": list(t.links), "joints": list(t.joints),
             "servo": None if t.servo is None else SERVOS[t.servo].name,
-            "cord": {"diameter_mm": round(r.diameter * 1e3, 6), "stiffness": r.stiffness},
-            "strands": [{"name": s.name, "rest_length_mm": round(rest[s.name] * 1e3, 6),
+            "cord": {"diameter_mm": round(units.mm(r.diameter), 6), "stiffness": r.stiffness},
+            "strands": [{"name": s.name, "rest_length_mm": round(units.mm(rest[s.name]), 6),
                          "elements": [_element_doc(e) for e in s.elements]} for s in r.strands],
             **extra,
         })
@@ -47,7 +46,7 @@ def document(params) -> dict:
 
 def coupler_document(params, cp: Coupler) -> dict:
     """A split drive in ``routing.json`` (millimetres, degrees; s from the socket face into the palm)."""
-    mm = lambda v: round(v * 1e3, 6)  # noqa: E731
+    mm = lambda v: round(units.mm(v), 6)  # noqa: E731
     return {"at": "socket face", "coupler": {"stop_diameter_mm": mm(params.hardware.stop_diameter),
                                               "stop_length_mm": mm(params.hardware.stop_length),
                                               "envelope_diameter_mm": mm(cp.diameter),
@@ -56,5 +55,5 @@ def coupler_document(params, cp: Coupler) -> dict:
             "s_rest_mm": [mm(v) for v in cp.rest], "s_full_travel_mm": [mm(v) for v in cp.full],
             "channel_mm": mm(cp.channel), "run_mm": mm(cp.run),
             "palm_strand_mm": mm(cp.palm_strand), "finger_strand_mm": mm(cp.finger_strand),
-            "service_angle_deg": round(math.degrees(cp.service_angle), 6), "service_payout_mm": mm(cp.payout),
+            "service_angle_deg": round(units.deg(cp.service_angle), 6), "service_payout_mm": mm(cp.payout),
             "service_emergence_mm": mm(cp.emergence)}

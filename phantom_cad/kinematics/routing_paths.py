@@ -9,12 +9,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import units
 from . import frames as F
 from . import link_frames as LF
 from .memo import memoised
 from .routing import Point, Pulley, Strand, routes
 from .routing_rules import joint_travel
 from .topology import CMC_Q, JOINTS, N_JOINTS, SERVOS
+from .vectors import clipped_acos
 
 
 def servo_axis(params) -> np.ndarray:
@@ -55,6 +57,8 @@ def _wrap(P, N, centre, axis, rho):
     (length, list of points along it). The cord lifts off (straight P-N) when the arc would
     exceed 180 degrees (a wrap the routes never ask for) or vanish."""
     a = axis / np.linalg.norm(axis)
+    # not vectors.perpendicular_frame: another frame in the pulley's plane moves the tangent points
+    # by rounding, and with them the grooves cut into the parts
     e1 = np.cross(a, [1.0, 0.0, 0.0])
     if np.linalg.norm(e1) < 1e-6:
         e1 = np.cross(a, [0.0, 1.0, 0.0])
@@ -65,8 +69,8 @@ def _wrap(P, N, centre, axis, rho):
     dp, dn = math.hypot(p[0], p[1]), math.hypot(n[0], n[1])
     if dp < rho * (1.0 - 1e-9) or dn < rho * (1.0 - 1e-9):
         raise ValueError("a route point lies inside its pulley")
-    t_in = math.atan2(p[1], p[0]) + math.acos(min(1.0, rho / dp))
-    t_out = math.atan2(n[1], n[0]) - math.acos(min(1.0, rho / dn))
+    t_in = math.atan2(p[1], p[0]) + clipped_acos(rho / dp)
+    t_out = math.atan2(n[1], n[0]) - clipped_acos(rho / dn)
     arc = (t_out - t_in) % (2.0 * math.pi)
     if arc > 2.0 * math.pi - 1e-9:      # a tangent run (no wrap) that rounding put a turn away
         arc = 0.0
@@ -79,7 +83,7 @@ def _wrap(P, N, centre, axis, rho):
     length = math.hypot(planar, dz)
     # points: the two tangent points and the arc, heights interpolated along the planar length
     pts = [P]
-    k = max(2, int(arc / math.radians(5.0)) + 1)
+    k = max(2, int(arc / units.rad(5.0)) + 1)
     for i, t in enumerate(np.linspace(t_in, t_in + arc, k)):
         s = (l1 + rho * (t - t_in)) / planar if planar > 0 else 0.0
         h = p[2] + s * dz

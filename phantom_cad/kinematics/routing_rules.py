@@ -6,18 +6,19 @@ from __future__ import annotations
 
 import math
 
+from .. import units
 from ..errors import ParamError
 from .dimensions import digit_field
-from .topology import SERVOS, joint, link
+from .topology import CMC_SERVO, SERVOS, joint, link
 
 
 #: every wrap stays this far inside (0, 180 deg) over the joint's whole travel (rad)
-WRAP_MARGIN = math.radians(8.0)
+WRAP_MARGIN = units.rad(8.0)
 
 
 
 #: a loop's clamps are placed for a travel this far past the joint's upper limit (rad)
-TRAVEL_MARGIN = math.radians(3.0)
+TRAVEL_MARGIN = units.rad(3.0)
 
 
 
@@ -27,7 +28,7 @@ def clamp_angle(lo: float, hi: float, what: str, params, field: str, value, why:
     (``why``: what that asks of the parameters, in their words)."""
     if hi - lo < 0.0:
         raise ParamError(field, value, f"no clamp position on the {what} keeps every wrap inside "
-                         f"({math.degrees(WRAP_MARGIN):g}, {180 - math.degrees(WRAP_MARGIN):g} deg) over the "
+                         f"({units.deg(WRAP_MARGIN):g}, {180 - units.deg(WRAP_MARGIN):g} deg) over the "
                          f"travel: {why}", params.source)
     return (lo + hi) / 2.0
 
@@ -54,11 +55,11 @@ def loop_travel_rule(ja: str, jb: str, carrier: str, jname: str, q: float, gamma
     margins) stays under 2 gamma - 2 WRAP_MARGIN, gamma = acos((R_a + R_b) / L)."""
     m = WRAP_MARGIN
     stop = " + cad.module_stop_margin_deg" if link(joint(jname).parent).segment == "base" else ""
-    return (f"the {joint(jname).key.upper()} travel ({math.degrees(q):.2f} deg: the upper limit + "
-            f"{math.degrees(TRAVEL_MARGIN):g} deg{stop}) must stay under 2 acos((R_{joint(ja).key} + "
-            f"R_{joint(jb).key}) / L_{link(carrier).segment}) - {2 * math.degrees(m):g} deg = "
-            f"{math.degrees(2 * gamma - 2 * m):.2f} deg (L = {L * 1e3:.2f} mm, R = {Ra * 1e3:g} and "
-            f"{Rb * 1e3:g} mm: smaller pulley radii or a longer phalanx allow more)")
+    return (f"the {joint(jname).key.upper()} travel ({units.deg(q):.2f} deg: the upper limit + "
+            f"{units.deg(TRAVEL_MARGIN):g} deg{stop}) must stay under 2 acos((R_{joint(ja).key} + "
+            f"R_{joint(jb).key}) / L_{link(carrier).segment}) - {2 * units.deg(m):g} deg = "
+            f"{units.deg(2 * gamma - 2 * m):.2f} deg (L = {units.mm(L):.2f} mm, R = {units.mm(Ra):g} and "
+            f"{units.mm(Rb):g} mm: smaller pulley radii or a longer phalanx allow more)")
 
 
 
@@ -68,17 +69,17 @@ def servo_clamp_wrap(params, servo: int) -> float:
     service angle pays the most cord out (:class:`Coupler`)."""
     digit = SERVOS[servo].digit
     lo, travel = params.digit(digit).chain.travel
-    m = math.degrees(WRAP_MARGIN)
+    m = units.deg(WRAP_MARGIN)
     hi = math.pi - WRAP_MARGIN - travel
-    clamp_angle(WRAP_MARGIN, hi, f"servo {servo + 1} pulley", params,
-                 f"{digit_field(digit)}.servo_travel_deg", [round(math.degrees(lo), 6), round(math.degrees(travel), 6)],
+    clamp_angle(WRAP_MARGIN, hi, f"{SERVOS[servo].title} pulley", params,
+                 f"{digit_field(digit)}.servo_travel_deg", [round(units.deg(lo), 6), round(units.deg(travel), 6)],
                  f"the servo's travel must be at most {180 - 2 * m:g} deg (a wrap is modelled up to 180 deg)")
     return hi
 
 
 
 #: how far (rad) each of the CMC loop's clamps sits inside the wraps the travel allows
-LOOP_CLAMP_MARGIN = math.radians(2.0)
+LOOP_CLAMP_MARGIN = units.rad(2.0)
 
 
 
@@ -94,11 +95,11 @@ def cmc_loop_clamps(params) -> tuple[tuple[float, float], tuple[float, float]]:
     lo, hi = params.thumb.cmc_travel
     m, d = WRAP_MARGIN, LOOP_CLAMP_MARGIN
     out = []
-    for what, travel in (("servo 6's pulley", hi - lo), ("CMC pulley", params.thumb.cmc_gain * (hi - lo))):
+    for what, travel in ((f"{SERVOS[CMC_SERVO].title}'s pulley", hi - lo), ("CMC pulley", params.thumb.cmc_gain * (hi - lo))):
         clamp_angle(m + d, math.pi - m - d - travel, f"CMC loop's {what}", params,
-                     "thumb.cmc_servo_travel_deg", [round(math.degrees(lo), 6), round(math.degrees(hi), 6)],
-                     f"the pulley's travel must be at most {180 - 2 * math.degrees(m + d):g} deg (a wrap is "
-                     f"modelled up to 180 deg, each clamp {math.degrees(d):g} deg inside it)")
+                     "thumb.cmc_servo_travel_deg", [round(units.deg(lo), 6), round(units.deg(hi), 6)],
+                     f"the pulley's travel must be at most {180 - 2 * units.deg(m + d):g} deg (a wrap is "
+                     f"modelled up to 180 deg, each clamp {units.deg(d):g} deg inside it)")
         out.append(travel)
     ts, tq = out
     # servo 6: a winds (wrap m + d at rest, clamp at pi + wrap), b unwinds (m + d + T, clamp at -wrap)

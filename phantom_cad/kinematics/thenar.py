@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from .. import units
 from .frames import T_palm_thumb_cmc_base, cmc_pulley_radius, pulley_cavity_margin, tendon_relief, trans
 from .memo import memoised
 
@@ -57,7 +58,7 @@ def thenar_layout(params, T0: np.ndarray) -> dict[str, float]:
 
 
 #: the CMC axis's largest tilt from the palm's normal (rad): the column along it climbs into the palm
-MAX_CMC_TILT = math.radians(60.0)
+MAX_CMC_TILT = units.rad(60.0)
 
 
 

@@ -39,6 +39,7 @@ from ...kinematics import forearm_layout as FL
 from ...kinematics import frames as F
 from ...kinematics import thenar as TH
 from ...kinematics.topology import FINGERS, LINKS, chain
+from ...kinematics.vectors import clipped_acos
 from ..measure import circular_pockets
 from .base import Part
 from .common import DigitSection, Tolerances, box, build, cylinder, mm, prism_x, sphere, transform
@@ -92,7 +93,7 @@ class Palm(ServoMount, Part):
                 normals.append(p["facing"])
         want = units.deg(self.params.palm.arc_offset)
         for a, b in zip(normals, normals[1:]):
-            ang = units.deg(math.acos(float(np.clip(a @ b, -1.0, 1.0))))
+            ang = units.deg(clipped_acos(a @ b))
             if abs(ang - want) > 1e-6:
                 out.append(f"{self.name}: socket normals {ang:.6f} deg apart, expected {want:g}")
         return out
@@ -137,7 +138,7 @@ class Palm(ServoMount, Part):
         turn's walls across x (the pulley's cavity is cut open where it reaches past), of everything it holds
         (``thenar.thenar_points``) along y, from the palm's palmar to its dorsal face, reaching a
         wall into the metacarpal block. Empty (lo not below hi) where it all lies inside the block."""
-        pts = {k: v * 1e3 for k, v in TH.thenar_points(self.params).items()}
+        pts = {k: units.mm(v) for k, v in TH.thenar_points(self.params).items()}
         allp = np.vstack(list(pts.values()))
         x0 = self.extents()[0]
         xs = np.vstack([pts["journal"], pts["turn"]])[:, 0]

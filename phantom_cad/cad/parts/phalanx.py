@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from ... import canon
+from ... import canon, units
 from ...kinematics import frames as F
 from ...kinematics.dimensions import FLANK
 from ...kinematics.topology import CMC_Q, LINKS, digit_links, joint
@@ -30,7 +30,7 @@ from .tendons import (LinkTendons, RoutedPart, link_tendons, anchor_tools, chann
 
 #: how far (rad) the drive's knot well behind G2 leans distally from the palmar normal (see
 #: Phalanx.build): straight down, it left a 0.45-0.75 mm web beside the eyelet's near relief
-KNOT_WELL_LEAN = math.radians(35.0)
+KNOT_WELL_LEAN = units.rad(35.0)
 
 # ---------------------------------------------------------------------------
 # shared joint features: each returns (body_parts, cutting_tools), link frame, mm

@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from ... import canon
+from ... import canon, units
 
 from ...kinematics import frames
 from ...kinematics.topology import CMC_PULLEY, N_SERVOS, SERVOS, link
@@ -119,7 +119,7 @@ class GroovedPulley(Part):
             tools += [cylinder(d * self.well_radius - np.array([0, 0, w / 2.0 + 1.0]),
                                d * self.well_radius + np.array([0, 0, w / 2.0 + 1.0]), t.tendon_relief / 2.0)]
         from build123d import Axis
-        return build(body, tools).rotate(Axis.Z, math.degrees(self.anchor_angle) - 90.0)
+        return build(body, tools).rotate(Axis.Z, units.deg(self.anchor_angle) - 90.0)
 
 
 class ServoPulley(GroovedPulley):
@@ -130,7 +130,7 @@ class ServoPulley(GroovedPulley):
 
     def __init__(self, params, servo: int):
         if servo not in range(N_SERVOS):
-            raise ValueError(f"servo must be 0..{N_SERVOS - 1} (u1..u{N_SERVOS}), got {servo!r}")
+            raise ValueError(f"servo must be 0..{N_SERVOS - 1} ({SERVOS[0].label}..{SERVOS[-1].label}), got {servo!r}")
         self.params, self.servo = params, SERVOS[servo]
         self.link = link(self.servo.link)
         self.tol = Tolerances(params)
@@ -205,4 +205,4 @@ class CMCPulley(GroovedPulley):
         bore = cylinder((0, 0, -w / 2.0 - 1.0), (0, 0, w / 2.0 + 1.0), r)
         flat = box(-r - 1.0, r + 1.0, self.column_radius - KEY_DEPTH, r + 1.0, -w / 2.0 - 2.0, w / 2.0 + 2.0)
         from build123d import Axis
-        return [bore.cut(flat).rotate(Axis.Z, 90.0 - math.degrees(self.anchor_angle))]
+        return [bore.cut(flat).rotate(Axis.Z, 90.0 - units.deg(self.anchor_angle))]

@@ -34,12 +34,13 @@ from ...kinematics import routing_paths
 from ...kinematics.dimensions import FLANK
 from ...kinematics.memo import memoised
 from ...kinematics.topology import TENDONS, joint
+from ...kinematics.vectors import clipped_acos, perpendicular_frame
 from ..print_rules import roof_angle
 
 #: a return groove's sector reaches this far beyond the arc its cord ever touches (rad)
-SECTOR_MARGIN = math.radians(15.0)
+SECTOR_MARGIN = units.rad(15.0)
 #: a drive chord's fan reaches this far (rad) beyond the extreme chords it holds
-FAN_PAD = math.radians(4.0)
+FAN_PAD = units.rad(4.0)
 #: the widest gap (mm) a support blocker may cover: an overhang between walls no further apart
 #: prints as a bridge (the widest groove is 1.9 mm; tests/export/test_project3mf.py measures it)
 BRIDGE_MM = 2.0
@@ -225,7 +226,7 @@ def sector_prism(g: Groove, outer: float):
     if g.sector is None:
         return None
     a0, a1 = g.sector
-    n = max(2, int(math.ceil((a1 - a0) / math.radians(10.0))))
+    n = max(2, int(math.ceil((a1 - a0) / units.rad(10.0))))
     big = outer / math.cos(math.pi / (2 * n)) + 1.0     # the polygon's chords stay outside the ring
     poly = [(g.y, g.z)] + [(g.y + big * math.cos(a), g.z + big * math.sin(a)) for a in np.linspace(a0, a1, n + 1)]
     return prism_x(poly, g.x - g.width, g.x + g.width)
@@ -313,7 +314,7 @@ def crossing_tools(lt: LinkTendons, faces=(), up=None) -> list:
                 ua, ub = va / la, vb / lb
                 if abs(ua[0]) > 1e-9 or abs(ub[0]) > 1e-9:
                     continue
-                theta = math.acos(max(-1.0, min(1.0, float(ua @ ub))))
+                theta = clipped_acos(float(ua @ ub))
                 if not 1e-6 < theta < math.pi / 2.0:
                     continue
                 d = max(da, db)
@@ -421,7 +422,7 @@ def feature_blockers(lt: LinkTendons, sec) -> list[Blocker]:
 
 
 def sector_ring_mesh(y: float, z: float, x0: float, x1: float, r0: float, r1: float,
-                     sector: tuple[float, float] | None = None, step: float = math.radians(5.0)):
+                     sector: tuple[float, float] | None = None, step: float = units.rad(5.0)):
     """A closed mesh (vertices, faces; outward) of the ring r0 <= r <= r1 about the x-parallel axis
     through (y, z), x0 <= x <= x1, over the polar ``sector`` (rad; None: all round). Its polygon's
     outer chords lie outside r1 and its inner ones inside r0."""
@@ -447,15 +448,6 @@ def sector_ring_mesh(y: float, z: float, x0: float, x1: float, r0: float, r1: fl
             tri = [(q[0], q[1], q[2]), (q[0], q[2], q[3])]
             faces += [t[::-1] for t in tri] if flip else tri
     return _outward(V, np.array(faces, np.int64))
-
-
-def perpendicular_frame(u) -> tuple[np.ndarray, np.ndarray]:
-    """Two unit vectors (v, w) that make (u, v, w) a right-handed orthonormal frame with the unit
-    vector ``u`` (v across u and the axis least along it)."""
-    u = np.asarray(u, float)
-    v = np.cross(u, np.eye(3)[int(np.argmin(np.abs(u)))])
-    v /= np.linalg.norm(v)
-    return v, np.cross(u, v)
 
 
 def cylinder_mesh(p0, p1, r: float, n: int = 24):
