@@ -25,7 +25,8 @@ from ..measure import eyelet_centres, point_line_distance
 from .base import PALMAR_DOWN, Part, child_joint, digit_table
 from .common import DigitSection, box, build, cylinder, cylinder_floor, mm, prism_x, sphere, transform
 from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, eyelet_boss_axis, hub_grooves
-from .tendons import RoutedPart, link_tendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry
+from .drive_fans import drive_fan_tools, guide_entry
+from .tendons import RoutedPart, link_tendons, anchor_tools, channel_tools
 
 #: depth (mm) of the flat that keys the column's end to the CMC pulley [choice]
 KEY_DEPTH = 1.0
