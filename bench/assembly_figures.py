@@ -6,7 +6,7 @@ cord and drive). Run from the repository's root:
 
 The parts are the real built solids (``cad.registry.part(params, name).build()``, right-handed,
 in their link frames, mm), tessellated (``export.step_stl.tessellate``) and placed with the
-routing model's rest transforms (``routing.pose``: T_palm_link, metres); everything is drawn in
+routing model's rest transforms (``routing_paths.pose``: T_palm_link, metres); everything is drawn in
 the digit's first link's frame (the index base, the thumb's CMC base: x ulnar, y along the digit,
 z dorsal; mm), in two views:
 
@@ -14,7 +14,7 @@ z dorsal; mm), in two views:
 * top: seen from the dorsal side (+z), y to the right, x (ulnar) down.
 
 The parts are light grey shaded silhouettes (Lambert shading, painter's order, back faces
-culled); the tendons (``routing.routes`` / ``routing.strand_path``) are drawn on top of them, as
+culled); the tendons (``routing.routes`` / ``routing_paths.strand_path``) are drawn on top of them, as
 if the parts were glass: the step's tendon in colour, the others faint. The anchors are the
 routing model's strand ends, with their roles read from ``cad.parts.tendons.link_tendons`` (hub
 clamp: M2 set screw; groove clamp: knot pocket; knot: knot well); the drive's are its servo
@@ -40,7 +40,9 @@ from matplotlib.lines import Line2D  # noqa: E402
 from phantom_cad.cad import registry  # noqa: E402
 from phantom_cad.cad.parts.tendons import link_tendons  # noqa: E402
 from phantom_cad.export.step_stl import tessellate  # noqa: E402
+from phantom_cad.kinematics import couplers
 from phantom_cad.kinematics import routing  # noqa: E402
+from phantom_cad.kinematics import routing_paths
 from phantom_cad.kinematics.topology import SERVOS, chain, digit_links  # noqa: E402
 from phantom_cad.params.io import DEFAULT_PARAMS, load_params  # noqa: E402
 
@@ -93,7 +95,7 @@ class Scene:
     def __init__(self, p, digit: str, parts):
         self.p, self.digit, self.frame = p, digit, parts[0]
         u = np.zeros(len(SERVOS))
-        self.Ts = routing.pose(p, None, u)
+        self.Ts = routing_paths.pose(p, None, u)
         self.inv = np.linalg.inv(self.Ts[self.frame])
         self.meshes, self.T_mm = {}, {}
         for name in parts:
@@ -105,7 +107,7 @@ class Scene:
         self.paths = {}
         for r in self.routes:
             for st in r.strands:
-                _, pts = routing.strand_path(p, st, self.Ts)
+                _, pts = routing_paths.strand_path(p, st, self.Ts)
                 self.paths[st.name] = self.base(pts)
 
     def base(self, P_palm_m) -> np.ndarray:
@@ -230,10 +232,10 @@ def marks(scene: Scene, tendon: str) -> list[tuple[np.ndarray, str | None, str]]
                 out.append((P, f"{where}:\n{DOES[role]}", "o"))
             elif isinstance(e, routing.Point) and e.role == "crossing":
                 out.append((P, f"{e.link}: the ends cross once\n(its two crossing channels)", "X"))
-            elif isinstance(e, routing.Point) and e.role == "interface" and scene.digit in routing.couplers(scene.p):
+            elif isinstance(e, routing.Point) and e.role == "interface" and scene.digit in couplers.couplers(scene.p):
                 # the drive's split: the crimp stop at rest in the palm's bore, the loop behind it
-                cp = routing.couplers(scene.p)[scene.digit]
-                back = scene.base(routing._nodes(st, scene.Ts)[i - 1][1])[0]
+                cp = couplers.couplers(scene.p)[scene.digit]
+                back = scene.base(routing_paths.strand_nodes(st, scene.Ts)[i - 1][1])[0]
                 u = (back - P) / np.linalg.norm(back - P)
                 mid = (cp.bearing - scene.p.hardware.stop_length / 2.0) * 1e3
                 out.append((P + mid * u, "palm bore: the crimp stop, the finger\nstrand's loop hooked behind it", "D"))

@@ -21,7 +21,9 @@ from phantom_cad.cad import assembly, grasp, measure, registry
 from phantom_cad.export import render, step_stl
 from phantom_cad.export.hold import hold_cylinder
 from phantom_cad.export.pipeline import build_hand
-from phantom_cad.kinematics import frames, opposition
+from phantom_cad.kinematics import link_frames
+from phantom_cad.kinematics import opposition
+from phantom_cad.kinematics import thenar
 from phantom_cad.kinematics.topology import CMC_PULLEY, CMC_Q, CMC_SERVO, FINGERS, JOINTS, SERVOS, digit_links, link
 from phantom_cad.params.io import DEFAULT_PARAMS, load_params
 
@@ -71,7 +73,7 @@ def main(out: Path) -> None:
         solids[name] = part.build()
         v, f = step_stl.tessellate(solids[name], 0.05)
         meshes[name] = (v, f, part.color, part.digit)
-    limits = {j["name"]: j["limits"] for j in frames.joints(p)}
+    limits = {j["name"]: j["limits"] for j in link_frames.joints(p)}
     q60 = np.array([0.6 * limits[j.name][1] for j in JOINTS])
     out.mkdir(parents=True, exist_ok=True)
     shots = (("hand_rest.png", None, "rest pose", (28.0, -62.0)),
@@ -86,7 +88,7 @@ def main(out: Path) -> None:
     postures(p, meshes, solids, out)
     T = assembly.pose_transforms(p)
     # the CMC base drops its column's length and a digit step below the palm's palmar face
-    shift = exploded(T, units.mm(frames.thenar(p)["top"]) + EXPLODE_DIGIT)
+    shift = exploded(T, units.mm(thenar.thenar(p)["top"]) + EXPLODE_DIGIT)
     items = []
     for name, (v, f, color, digit) in meshes.items():
         label = name if (digit is None and not name.startswith("servo_pulley_")) or name.endswith("_base") else None

@@ -1,5 +1,5 @@
 """Pictures of the thumb's opposition (docs/opposition.md): the hand's digits as their link axes
-(frames.link_transforms), the fingertip capsules of kinematics.opposition and the palm envelope,
+(link_frames.link_transforms), the fingertip capsules of kinematics.opposition and the palm envelope,
 at rest and at the commands where the thumb's pad meets each opposed fingertip's most squarely,
 for the file's CMC placement (solved within the palm's thenar, docs/opposition.md).
 Run: .venv/bin/python bench/opposition_figures.py [OUT_DIR]
@@ -19,6 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from phantom_cad.kinematics import frames as F, opposition as O  # noqa: E402
+from phantom_cad.kinematics import link_frames as LF
 from phantom_cad.kinematics.model import Hand  # noqa: E402
 from phantom_cad.kinematics.topology import CHAINS, FINGERS, N_SERVOS, chain, digit_links  # noqa: E402
 from phantom_cad.params.io import DEFAULT_PARAMS, load_params  # noqa: E402
@@ -30,7 +31,7 @@ def _with_thumb(p, offset, axis):
 
 def draw(ax, hand, p, u, title, highlight, view):
     q = hand.forward(u, compensated=True)
-    Ts = F.link_transforms(p, q)
+    Ts = LF.link_transforms(p, q)
     lo, hi = O.palm_envelope(p)
     # the palm envelope's edges
     c = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]) * 1e3

@@ -19,6 +19,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from phantom_cad.kinematics import routing  # noqa: E402
+from phantom_cad.kinematics import routing_paths
 from phantom_cad.kinematics.frames import segment_length  # noqa: E402
 from phantom_cad.kinematics.model import Hand  # noqa: E402
 from phantom_cad.kinematics.topology import SERVOS, chain, digit_links, joint  # noqa: E402
@@ -34,7 +35,7 @@ def draw(ax, p, digit: str, frac: float, title: str) -> None:
     lo, hi = p.digit(digit).chain.travel
     u[s] = lo + frac * (hi - lo)
     q = hand.forward(u, compensated=False)
-    Ts = routing.pose(p, q, u)
+    Ts = routing_paths.pose(p, q, u)
     first = digit_links(digit)[0].name
     inv = np.linalg.inv(Ts[first])
     to2d = lambda P: (inv @ np.c_[P, np.ones(len(P))].T)[1:3].T * 1e3  # noqa: E731
@@ -57,7 +58,7 @@ def draw(ax, p, digit: str, frac: float, title: str) -> None:
         if r.tendon.digit != digit:
             continue
         for st in r.strands:
-            _, pts = routing.strand_path(p, st, Ts)
+            _, pts = routing_paths.strand_path(p, st, Ts)
             xy = to2d(pts)
             key = r.tendon.kind if r.tendon.kind != "coupling" else st.name[-1]
             label = {"drive": "drive", "a": "coupling loops, strand a", "b": "coupling loops, strand b",

@@ -1,6 +1,6 @@
 """Thumb opposition (kinematics/opposition.py), against answers computed another way: the
 closest points of segments by dense sampling, the fingertips by the per-pose transforms of
-``frames.link_transforms`` (the chain the descriptions are written from), distances to a box by
+``link_frames.link_transforms`` (the chain the descriptions are written from), distances to a box by
 enumeration, and the reach by brute force over sampled capsule axes."""
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from phantom_cad.kinematics import frames as F, opposition as O
+from phantom_cad.kinematics import link_frames as LF
 from phantom_cad.kinematics.model import Hand
 from phantom_cad.kinematics.topology import CMC_Q, FINGERS, N_SERVOS
 from phantom_cad.params.io import load_params
@@ -61,8 +62,8 @@ def test_box_distance_by_hand():
 
 def _per_pose_tip(params, digit, q):
     """The tip capsule's ends and pad normal of ``digit`` at joint angles q, palm frame, through
-    frames.link_transforms (right hand) and the tip's geometry worked out here."""
-    T = F.link_transforms(params, q)[f"{digit}_distal"]
+    link_frames.link_transforms (right hand) and the tip's geometry worked out here."""
+    T = LF.link_transforms(params, q)[f"{digit}_distal"]
     d = params.digit(digit)
     back = d.thickness / 2.0 + params.print.hole_clearance           # the clevis slot behind the tip
     r = min(d.thickness / 2.0, d.distal - back)

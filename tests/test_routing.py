@@ -17,7 +17,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from phantom_cad.kinematics import couplers
 from phantom_cad.kinematics import routing
+from phantom_cad.kinematics import routing_json
+from phantom_cad.kinematics import routing_paths
 from phantom_cad.kinematics.model import Hand
 from phantom_cad.kinematics.topology import JOINT_NAMES, SERVOS, TENDONS
 from phantom_cad.params.io import load_params
@@ -48,13 +51,13 @@ CASES = [(path, side) for path in FILES for side in ("right", "left")]
 def test_lengths_are_the_mechanism(path, side):
     p = _params(path, side)
     doc = tomllib.loads(path.read_text())
-    rest = routing.lengths(p)
+    rest = routing_paths.lengths(p)
     assert {s for r in routing.routes(p) for s in [r.name]} == {t.name for t in TENDONS}
     rng = np.random.default_rng(11)
     for _ in range(8):
         q = rng.uniform(0.0, 1.3, len(JOINT_NAMES))
         u = rng.uniform(0.0, 1.4, len(SERVOS))
-        got = routing.lengths(p, q, u)
+        got = routing_paths.lengths(p, q, u)
         qn = dict(zip(JOINT_NAMES, q))
         for k, digit in enumerate(DIGITS):
             t = _table(doc, digit)
@@ -82,13 +85,13 @@ def test_over_the_travel_the_loops_hold_and_the_drive_winds(path):
     the coupling by 1 degree changes its loops by >= 0.05 mm."""
     p = load_params(path)
     hand = Hand(p)
-    rest = routing.lengths(p)
+    rest = routing_paths.lengths(p)
     loops = [n for n in rest if n.endswith(("_a", "_b"))]
     for frac in np.linspace(0.0, 1.0, 20):
         u = np.array([lo + frac * (hi - lo) for lo, hi in
                       [p.digit(s.digit).chain.travel if s.drive == "tendon" else p.thumb.cmc_travel for s in SERVOS]])
         q = hand.forward(u, compensated=False)
-        got = routing.lengths(p, q, u)
+        got = routing_paths.lengths(p, q, u)
         assert max(abs(got[n] - rest[n]) for n in loops) < 2e-5
         assert max(abs(got[f"{d}_drive"] - rest[f"{d}_drive"]) for d in DIGITS) < 2e-5
         for j, name in enumerate(JOINT_NAMES):
@@ -96,7 +99,7 @@ def test_over_the_travel_the_loops_hold_and_the_drive_winds(path):
                 continue
             q2 = q.copy()
             q2[j] += math.radians(1.0)
-            moved = routing.lengths(p, q2, u)
+            moved = routing_paths.lengths(p, q2, u)
             digit = name.split("_")[0]
             assert max(abs(moved[n] - got[n]) for n in loops if n.startswith(digit)) >= 5e-5, name
 
@@ -126,11 +129,11 @@ def test_layout_keeps_the_planes_apart(path):
 
 def test_routing_document_round_trips(tmp_path):
     p = load_params(FILES[0])
-    doc = routing.document(p)
+    doc = routing_json.document(p)
     text = json.dumps(doc)
     back = json.loads(text)
     assert [t["name"] for t in back["tendons"]] == [t.name for t in TENDONS]
-    rest = routing.lengths(p)
+    rest = routing_paths.lengths(p)
     for t in back["tendons"]:
         assert t["kind"] in ("drive", "coupling", "return", "loop")
         assert len(t["strands"]) == (2 if t["kind"] in ("coupling", "loop") else 1)
@@ -151,6 +154,7 @@ def test_the_finger_drives_are_split_at_the_socket(path, side):
     from 172 deg at u_max to 8 deg, paying out r (164 deg - travel); its run is the distance from
     the socket's tendon point to the servo pulley's tangent point (frames), its channel that less
     the pulley cavity's reach sqrt((r + m)^2 - r^2); the two strands add up to the drive."""
+    from phantom_cad.kinematics import forearm_layout as FL
     from phantom_cad.kinematics import frames as Fr
     from phantom_cad.kinematics.topology import chain
 
@@ -159,9 +163,9 @@ def test_the_finger_drives_are_split_at_the_socket(path, side):
     hw, c = doc["hardware"], doc["print"]["hole_clearance_mm"]
     stop = hw.get("tendon_stop", {"diameter_mm": 2.0, "length_mm": 3.0})
     d = hw["tendon_diameter_mm"]
-    cps = routing.couplers(p)
+    cps = couplers.couplers(p)
     assert sorted(cps) == ["index", "middle", "pinky", "ring"]          # the thumb is not detachable
-    rest = routing.lengths(p)
+    rest = routing_paths.lengths(p)
     for f, cp in cps.items():
         src = doc["fingers"][f]
         r, travel = src["servo_pulley_radius_mm"], src["servo_travel_deg"][1]
@@ -174,7 +178,7 @@ def test_the_finger_drives_are_split_at_the_socket(path, side):
         assert cp.payout * 1e3 == pytest.approx(r * math.radians(164.0 - travel))
         k = chain(f).servo
         exit_ = Fr.socket_tendon_point(p, f)
-        tangent = (Fr.T_palm_servo(p, k) @ np.array([-r * 1e-3, 0.0, 0.0, 1.0]))[:3]
+        tangent = (FL.T_palm_servo(p, k) @ np.array([-r * 1e-3, 0.0, 0.0, 1.0]))[:3]
         if side == "left":
             exit_ = np.diag([-1.0, 1.0, 1.0]) @ exit_
             tangent = np.diag([-1.0, 1.0, 1.0]) @ tangent
@@ -195,27 +199,28 @@ def test_a_coupler_without_room_is_refused(monkeypatch):
     to fill the run: the channel is the run (the tangent length from the socket's tendon exit to
     the pulley circle, both at the tendon height: sqrt(|E - C|^2 - r^2)) less the cavity's
     sqrt((r + m)^2 - r^2)."""
+    from phantom_cad.kinematics import forearm_layout as FL
     from phantom_cad.kinematics import frames as F
     from phantom_cad.params import ParamError, load_document, parse
 
     doc = load_document(FILES[0])
     doc["hardware"]["tendon_stop"] = {"diameter_mm": 2.0, "length_mm": 4.0}
     with pytest.raises(ParamError) as e:
-        routing.couplers(parse(doc))
+        couplers.couplers(parse(doc))
     assert e.value.field == "hardware.tendon_stop.length_mm"
     assert "the index coupler (6.40 mm) comes 1.87 mm out of the socket" in str(e.value)
-    for memo in ("_ROUTES", "_RUNS", "_COUPLERS"):
-        monkeypatch.setattr(routing, memo, {})
+    for module, memo in ((routing, "_ROUTES"), (routing_paths, "_RUNS"), (couplers, "_COUPLERS")):
+        monkeypatch.setattr(module, memo, {})
     p = parse(load_document(FILES[0]))
     E = F.socket_tendon_point(p, "index") * 1e3
-    C = F.T_palm_servo(p, 1)[:3, 3] * 1e3
+    C = FL.T_palm_servo(p, 1)[:3, 3] * 1e3
     r = 7.0
     run = math.sqrt(float((E - C) @ (E - C)) - r * r)
     m = run                                      # a cavity margin as long as the run
-    monkeypatch.setattr(routing.F, "pulley_cavity_margin", lambda params: m * 1e-3)
+    monkeypatch.setattr(couplers.F, "pulley_cavity_margin", lambda params: m * 1e-3)
     channel = run - math.sqrt((r + m) ** 2 - r * r)
     with pytest.raises(ParamError) as e:
-        routing.couplers(p)
+        couplers.couplers(p)
     assert e.value.field == "hardware.tendon_stop.length_mm"
     travel = 7.0 * math.radians(93.0)
     need = 0.4 + (0.6 + 3.0 + 1.8) + travel + 0.2
@@ -226,6 +231,7 @@ def test_a_coupler_without_room_is_refused(monkeypatch):
 def test_servo_boxes_and_wrist_by_hand():
     """The servo's body and flange-ear boxes (the one description the palm's pockets and the coming
     forearm layout use) and the wrist crease, from the file's numbers."""
+    from phantom_cad.kinematics import forearm_layout as FL
     from phantom_cad.kinematics import frames as F
 
     path = ROOT / "params" / "phantom.toml"
@@ -235,7 +241,7 @@ def test_servo_boxes_and_wrist_by_hand():
     cad, c = doc["cad"], doc["print"]["hole_clearance_mm"]
     top = -(cad["servo_pulley_width_mm"] / 2 + c)                  # the output face under the pulley
     off = cad["servo_shaft_offset_mm"]
-    boxes = {k: (np.array(lo) * 1e3, np.array(hi) * 1e3) for k, (lo, hi) in F.servo_boxes(p).items()}
+    boxes = {k: (np.array(lo) * 1e3, np.array(hi) * 1e3) for k, (lo, hi) in FL.servo_boxes(p).items()}
     np.testing.assert_allclose(boxes["body"][0], [-W / 2, -off - L / 2, top - H], atol=1e-9)
     np.testing.assert_allclose(boxes["body"][1], [W / 2, -off + L / 2, top], atol=1e-9)
     ear_top = top - cad["servo_ear_offset_mm"]
@@ -256,14 +262,14 @@ def test_the_cmc_loop_holds_q15_at_cmc_gain_u6(path, side):
     p = _params(path, side)
     doc = tomllib.loads(Path(path).read_text())
     r6, g = doc["thumb"]["cmc_pulley_radius_mm"] * 1e-3, doc["thumb"]["cmc_gain"]
-    rest = routing.lengths(p)
+    rest = routing_paths.lengths(p)
     for u6 in np.linspace(0.0, math.radians(doc["thumb"]["cmc_servo_travel_deg"][1]), 7):
         q, u = np.zeros(15), np.zeros(6)
         u[5] = u6
-        L = routing.lengths(p, q, u)
+        L = routing_paths.lengths(p, q, u)
         assert L["thumb_cmc_loop_a"] - rest["thumb_cmc_loop_a"] == pytest.approx(r6 * u6, abs=1e-12)
         assert L["thumb_cmc_loop_b"] - rest["thumb_cmc_loop_b"] == pytest.approx(-r6 * u6, abs=1e-12)
         q[14] = g * u6
-        L = routing.lengths(p, q, u)
+        L = routing_paths.lengths(p, q, u)
         for s in ("a", "b"):
             assert L[f"thumb_cmc_loop_{s}"] == pytest.approx(rest[f"thumb_cmc_loop_{s}"], abs=1e-12)

@@ -32,6 +32,7 @@ def test_joints_follow_table_one():
 def test_servos_and_labels():
     assert [s.label for s in T.SERVOS] == ["u1", "u2", "u3", "u4", "u5", "u6"]
     assert [s.link for s in T.SERVOS] == [f"servo_pulley_{k}" for k in (1, 2, 3, 4, 5, 6)]
+    assert [s.title for s in T.SERVOS] == [f"servo {k}" for k in (1, 2, 3, 4, 5, 6)]
     assert T.CMC_SERVO == 5 and T.CMC_Q == 14
     assert T.U_COLUMNS[T.TENDON_SERVOS] == ("u1", "u2", "u3", "u4", "u5")
 

@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from ..kinematics import frames as F
+from ..kinematics import link_frames as LF
 from ..kinematics.topology import CMC_PULLEY, CMC_Q, DIGITS, JOINTS, LINKS, N_JOINTS, digit_links
 from . import registry, verify
 from .materials import bill_of_materials  # noqa: F401  (part of the interface)
@@ -72,7 +73,7 @@ def pose_transforms(params, q=None) -> dict[str, np.ndarray]:
         q = np.asarray(q, float)
         if q.shape != (N_JOINTS,):
             raise ValueError(f"q must have shape ({N_JOINTS},), got {q.shape}")
-    links = F.link_transforms(params, q)
+    links = LF.link_transforms(params, q)
     return {n: F.to_mm(links[n]) for n in part_names(params)}
 
 

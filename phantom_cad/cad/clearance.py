@@ -1,7 +1,7 @@
 """Do the tendons pass through material? Measured on the built solids, not on the routing model.
 
-Points are sampled along every strand's path (``routing.strand_path``) with the hand posed at
-fractions of every joint's and servo's travel (``routing.travel_poses``), carried into each
+Points are sampled along every strand's path (``routing_paths.strand_path``) with the hand posed at
+fractions of every joint's and servo's travel (``routing_paths.travel_poses``), carried into each
 part's own frame (the frame the part is built in: right-handed, mm; a left hand's points are
 mirrored back) and classified against the part's solid by OpenCascade
 (``BRepClass3d_SolidClassifier``, after a fast pass on the tessellation). A point inside a solid is a tendon passing through material;
@@ -18,6 +18,7 @@ import numpy as np
 from .. import units
 from ..kinematics import frames as F
 from ..kinematics import routing
+from ..kinematics import routing_paths
 
 #: fractions of the travel the check poses the hand at
 FRACTIONS = (0.0, 0.25, 0.5, 0.75, 1.0)
@@ -71,11 +72,11 @@ def tendon_hits(params, shapes: dict, fractions=FRACTIONS, step_mm: float = STEP
         classifiers[name] = BRepClass3d_SolidClassifier(sh.wrapped)
     step = units.m(step_mm)
     hits = []
-    for f, Ts in zip(fractions, routing.travel_poses(params, fractions)):
+    for f, Ts in zip(fractions, routing_paths.travel_poses(params, fractions)):
         inv = {name: np.linalg.inv(Ts[name]) for name in shapes if name in Ts}
         for r in routing.routes(params):
             for st in r.strands:
-                _, pts = routing.strand_path(params, st, Ts)
+                _, pts = routing_paths.strand_path(params, st, Ts)
                 pts = _resample(pts, step)
                 homo = np.c_[pts, np.ones(len(pts))]
                 for name, Ti in inv.items():

@@ -145,7 +145,7 @@ def solid_contact(hand, solids: dict, finger: str, reach_mm: float = REACH_MM,
             d, pa, pb = a.distance_to_with_closest_points(b)
             return d, u, T, np.array(tuple(pa)), np.array(tuple(pb))
 
-        where = f"{np.degrees(u_end).round(2).tolist()} deg"
+        where = f"{units.deg(u_end).round(2).tolist()} deg"
         found = close_onto(measure, reach_mm)
         if found is None:
             tried.append(f"{where}: not within (0, {reach_mm}] mm from rest to the contact, or already at rest")

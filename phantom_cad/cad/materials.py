@@ -6,10 +6,8 @@ bom.csv, ``phantom_cad.export.bom``).
 
 from __future__ import annotations
 
-import numpy as np
-
 from .. import units
-from ..kinematics.topology import DIGITS, FINGER_CHAINS, FINGERS, N_SERVOS, SERVOS, THUMB_CHAIN, joint
+from ..kinematics.topology import CMC_SERVO, DIGITS, FINGER_CHAINS, FINGERS, N_SERVOS, SERVOS, THUMB_CHAIN, joint
 
 
 #: cord added to a cut length for each knot or clamp it ends in (mm): enough to tie and trim
@@ -20,9 +18,11 @@ def _cords(params) -> list[dict]:
     """One row per routed tendon (``kinematics.routing``): its cut length, from the routing model's
     rest length of its strands (plus, for a drive, what its servo winds over the travel) and a
     knot allowance per end, and how it is anchored and tensioned."""
+    from ..kinematics import couplers
     from ..kinematics import routing
-    rest = routing.lengths(params)
-    split = routing.couplers(params)
+    from ..kinematics import routing_paths
+    rest = routing_paths.lengths(params)
+    split = couplers.couplers(params)
     hw = params.hardware
     g = lambda v: f"{units.mm(v):g}"  # noqa: E731
     rows = []
@@ -51,7 +51,7 @@ def _cords(params) -> list[dict]:
                              f"ahead of the stop) hooked round the palm strand behind its stop, through the finger "
                              f"base's entry, G1 and G2, knotted behind G2 {units.mm(finger):.1f} mm from the loop's "
                              "bight (working length); detach at the service angle "
-                             f"{np.degrees(cp.service_angle):.1f} deg (docs/assembly.md)")})
+                             f"{units.deg(cp.service_angle):.1f} deg (docs/assembly.md)")})
             continue
         if t.kind == "drive":
             ch = params.digit(t.digit).chain
@@ -62,9 +62,11 @@ def _cords(params) -> list[dict]:
             spec = f"{g(hw.tendon_diameter)} mm braided UHMWPE, {cut:.0f} mm"
         elif t.kind == "loop":
             cut = units.mm(run) + 4 * KNOT_ALLOWANCE_MM
-            how = ("closed loop: one end knotted in servo 6's pulley's strand-a anchor hole, through the forearm "
+            loop_servo = SERVOS[CMC_SERVO].title
+            how = (f"closed loop: one end knotted in {loop_servo}'s pulley's strand-a anchor hole, through the forearm "
                    "module's channel and the thenar's slot, round the CMC pulley through both of its anchor holes "
-                   "(a knot in each well), back to servo 6's pulley and knotted in its strand-b anchor hole, with the "
+                   f"(a knot in each well), back to {loop_servo}'s pulley and knotted in its strand-b anchor hole, "
+                   "with the "
                    "servo and the CMC both at 0; pulled taut before the last knot")
             spec = f"{g(hw.tendon_diameter)} mm braided UHMWPE, {cut:.0f} mm"
         elif t.kind == "coupling":
@@ -134,6 +136,7 @@ def bill_of_materials(params) -> list[dict]:
     bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} horn screw (servo accessory)",
                 "quantity": 2 * N_SERVOS, "used_in": "servo pulleys 1-6 to their horns"})
     n_loops = sum(n - 1 for n in n_joints.values())
+    from ..kinematics import couplers
     from ..kinematics import routing
     # the hub clamp's pilot: from the cheek's outer face across the loop's groove (parts.tendons)
     pilot = min(params.digit(d).width / 2.0 - abs(routing.layout(params, d).loop_x[0]) + routing.layout(params, d).groove / 2.0
@@ -141,7 +144,7 @@ def bill_of_materials(params) -> list[dict]:
     bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} x {int(units.mm(pilot))} set screw (grub screw)",
                 "quantity": n_loops, "used_in": "one per coupling loop: clamps and tensions it in its hub"})
     bom += _cords(params)
-    split = routing.couplers(params)
+    split = couplers.couplers(params)
     bom.append({"item": "crimp stop", "spec": f"crimp sleeve {g(hw.stop_diameter)} x {g(hw.stop_length)} mm "
                 f"for {g(hw.tendon_diameter)} mm cord", "quantity": len(split),
                 "used_in": "ends the palm strand of each finger drive at the magnet face: "
@@ -150,5 +153,7 @@ def bill_of_materials(params) -> list[dict]:
     bom.append({"item": "servo",
                 "spec": "micro servo, body " + " x ".join(g(v) for v in sv.body) + " mm (SCS0009 class)",
                 "quantity": N_SERVOS,
-                "used_in": "forearm module: u1 thumb flexion, u2-u5 fingers, u6 thumb CMC (through the CMC loop)"})
+                "used_in": f"forearm module: {SERVOS[THUMB_CHAIN.servo].label} thumb flexion, "
+                           f"{SERVOS[FINGER_CHAINS[0].servo].label}-{SERVOS[FINGER_CHAINS[-1].servo].label} fingers, "
+                           f"{SERVOS[CMC_SERVO].label} thumb CMC (through the CMC loop)"})
     return bom

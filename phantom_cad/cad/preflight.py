@@ -1,7 +1,7 @@
 """Rules of the palm's layout, checked when a parameter file loads (before any solid is built).
 
 The palm's thenar holds the CMC where the frames place it: whether it can is measured by
-``kinematics.frames.thenar_margins`` (numpy), which the placement search keeps to as well; this
+``kinematics.thenar.thenar_margins`` (numpy), which the placement search keeps to as well; this
 module turns a miss into the same :class:`ParamError` as the schema, naming the field, and runs the
 routing model's own refusals (no OpenCascade). ``check`` is called by every command that loads a
 parameter file for building or validating (``params validate``, ``build``, ``demo``).
@@ -9,33 +9,34 @@ parameter file for building or validating (``params validate``, ``build``, ``dem
 
 from __future__ import annotations
 
-import math
-
+from .. import units
 from ..params import ParamError
 from .parts.common import mm
 
 
 def check(params) -> None:
-    """Raise ParamError if the palm's thenar cannot hold the CMC (``frames.thenar``): the CMC axis
+    """Raise ParamError if the palm's thenar cannot hold the CMC (``thenar.thenar``): the CMC axis
     must climb into the palm within 60 deg of its normal (the column along it enters the palm's
     journal), the CMC base (a hub of half the thumb's width, the thumb's thickness, turning with the
     thumb) must stay a clearance below the palm's palmar face, and the thumb drive's turn above the
     CMC pulley's cavity a wall under the dorsal face; and if the routing model finds no clamp
     position for a loop or a drive (``routing.routes`` raises the ParamError: a joint's travel too
     large for its loop's pulleys and carrier), or a finger drive's coupler has no room in its palm
-    channel or does not come out at the service angle (``routing.couplers``), or if the palm's heel
+    channel or does not come out at the service angle (``couplers.couplers``), or if the palm's heel
     reaches past the metacarpal block's front."""
+    from ..kinematics import couplers
     from ..kinematics import frames as F
     from ..kinematics import routing
+    from ..kinematics import thenar as TH
 
     src = params.source
     T0 = F.T_palm_thumb_cmc_base(params)
-    fit = F.thenar_margins(params, T0)
+    fit = TH.thenar_margins(params, T0)
     if fit["tilt"] < 0.0:
-        tilt = math.degrees(F.MAX_CMC_TILT - fit["tilt"])
-        raise ParamError("palm.thumb_cmc_axis_deg", [round(math.degrees(v), 6) for v in params.palm.thumb_cmc_axis],
+        tilt = units.deg(TH.MAX_CMC_TILT - fit["tilt"])
+        raise ParamError("palm.thumb_cmc_axis_deg", [round(units.deg(v), 6) for v in params.palm.thumb_cmc_axis],
                          f"tilts the CMC axis {tilt:.1f} deg from the palm's normal: the palm holds the CMC on a "
-                         f"column along it, which must climb into the palm within {math.degrees(F.MAX_CMC_TILT):g} deg "
+                         f"column along it, which must climb into the palm within {units.deg(TH.MAX_CMC_TILT):g} deg "
                          "of its normal", src)
     Tp = params.palm.thickness
     if fit["base"] < -1e-12:
@@ -60,4 +61,4 @@ def check(params) -> None:
                              "face to at most the block's front (behind the finger sockets and their flexion "
                              "limiters)", src)
     routing.routes(params)
-    routing.couplers(params)
+    couplers.couplers(params)

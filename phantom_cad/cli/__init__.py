@@ -121,15 +121,19 @@ def opposition_lines(hand, reach=None) -> list[str]:
     import math
 
     from ..kinematics import opposition
+    from ..kinematics.topology import CMC_SERVO, SERVOS, THUMB_CHAIN
     from ..units import deg, mm
 
     reach = opposition.reach(hand) if reach is None else reach
+    # the thumb's two servos, in the order of reach()'s u_thumb
+    u1, u6 = SERVOS[THUMB_CHAIN.servo].label, SERVOS[CMC_SERVO].label
     out = ["opposition (thumb pad to fingertip pad over the travel; pads <= 0 mm: they meet; margin: how far "
            f"inside the {deg(opposition.PAD_CONE):g} deg pad cone the contact direction stays):"]
     for f, r in reach.items():
-        pad = (f"pads {mm(r.gap):+.1f} mm at u1 {deg(r.u_thumb[0]):.1f}, u6 {deg(r.u_thumb[1]):.1f}, "
+        pad = (f"pads {mm(r.gap):+.1f} mm at {u1} {deg(r.u_thumb[0]):.1f}, {u6} {deg(r.u_thumb[1]):.1f}, "
                f"{f} {deg(r.u_finger):.1f} deg" if math.isfinite(r.gap) else "the pads never face each other")
-        squarely = (f"; margin {deg(r.margin):+.1f} deg at u1 {deg(r.u_contact[0]):.1f}, u6 {deg(r.u_contact[1]):.1f}, "
+        squarely = (f"; margin {deg(r.margin):+.1f} deg at {u1} {deg(r.u_contact[0]):.1f}, "
+                    f"{u6} {deg(r.u_contact[1]):.1f}, "
                     f"{f} {deg(r.u_contact[2]):.1f} deg" if math.isfinite(r.margin) else "")
         need = "" if f in opposition.OPPOSED else " (not required)"
         out.append(f"  {f:7s} {pad}{squarely}; tips on any side {mm(r.surface_gap):+.1f} mm{need}")

@@ -29,6 +29,7 @@ from typing import Any, Callable, Optional
 
 import typer
 
+from .. import units
 from ..errors import UserError, one_line
 from ..kinematics.topology import JOINTS, SERVOS
 from ..params.io import DEFAULT_PARAMS
@@ -165,7 +166,7 @@ class Viewer:
         lo, hi = np.asarray(self.urdf.scene.bounds, dtype=float)
         center = (lo + hi) / 2
         radius = float(np.linalg.norm(hi - lo)) / 2
-        fov = np.radians(CAMERA_FOV_DEG)
+        fov = units.rad(CAMERA_FOV_DEG)
         direction = np.asarray(CAMERA_DIRECTION, dtype=float)
         if self.params.side == "left":   # mirrored hand: its thumb is at +x
             direction[0] = -direction[0]

@@ -34,9 +34,10 @@ import numpy as np
 
 from .. import units
 from ..errors import UserError
+from ..kinematics import thenar as TH
 from ..kinematics.model import Hand
-from ..kinematics import frames as F
 from ..kinematics.topology import CMC_Q, JOINTS, LINK_NAMES, SERVOS, joint
+from ..kinematics.vectors import clipped_acos
 from .pipeline import export_problem
 
 #: poses: position (mm) and rotation (deg) tolerances of the issue
@@ -44,7 +45,7 @@ TOL_MM, TOL_DEG = 0.01, 0.01
 #: joint angles read back from the URDF (rad): arithmetic only
 TOL_Q = 1e-6
 #: the MJCF twin's static equilibrium (near-rigid tendons) against the analytic model (rad): 0.1 deg
-TOL_EQUILIBRIUM = math.radians(0.1)
+TOL_EQUILIBRIUM = units.rad(0.1)
 #: near-rigid: every tendon strand but the return cord this many times stiffer (and damped), the
 #: simulation step shortened to stay stable, the settling time
 NEAR_RIGID, NEAR_RIGID_STEP, SETTLE_S = 200.0, 2e-5, 1.0
@@ -105,7 +106,7 @@ def _row(check: str, errors: dict[str, float], tol: float, unit: str, fmt: str =
 
 def _rotation_deg(Ra: np.ndarray, Rb: np.ndarray) -> float:
     c = (np.trace(Ra.T @ Rb) - 1.0) / 2.0
-    return math.degrees(math.acos(max(-1.0, min(1.0, c))))
+    return units.deg(clipped_acos(c))
 
 
 def _pose_errors(poses: dict[str, np.ndarray], posed_mm: dict[str, np.ndarray], pos: dict, rot: dict) -> None:
@@ -326,7 +327,7 @@ def axis_rows(robot, params, solids: dict) -> list[Row]:
 
     tol = Tolerances(params)        # the modelled (compensated) bores, mm
     press, seat, clear = tol.axle_press / 2.0, tol.bearing_seat / 2.0, tol.axle_clear / 2.0
-    th = F.thenar(params)
+    th = TH.thenar(params)
     journal, column = th["journal_r"] / units.MM, th["column_r"] / units.MM
     robot.update_cfg(np.zeros(len(robot.actuated_joint_names)))
     names = {j.name: j for j in robot.robot.joints}
@@ -348,7 +349,7 @@ def axis_rows(robot, params, solids: dict) -> list[Row]:
                 cyl[part] = cylinders(solids[part])
             Tp = rest[part]
             found = [(np.linalg.norm(np.cross(Tp[:3, :3] @ c["point"] + Tp[:3, 3] - p, a)),
-                      math.degrees(math.acos(min(1.0, abs(float((Tp[:3, :3] @ c["direction"]) @ a))))))
+                      units.deg(clipped_acos(abs(float((Tp[:3, :3] @ c["direction"]) @ a)))))
                      for c in cyl[part] if any(abs(c["radius"] - r) < 1e-6 for r in radii)]
             key = f"{j.name} / {part} {what}"
             if not found:

@@ -286,7 +286,7 @@ class Bom(Exporter):
 
 
 class Routing(Exporter):
-    """kinematics.routing.document: every tendon's strands and path elements."""
+    """kinematics.routing_json.document: every tendon's strands and path elements."""
 
     name = "routing"
 
@@ -294,9 +294,9 @@ class Routing(Exporter):
         return ["routing.json"]
 
     def write(self, ctx, stage):
-        from ..kinematics import routing
+        from ..kinematics import routing_json
 
-        (stage / "routing.json").write_text(json.dumps(routing.document(ctx.params), indent=1) + "\n",
+        (stage / "routing.json").write_text(json.dumps(routing_json.document(ctx.params), indent=1) + "\n",
                                             encoding="utf-8")
 
 

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import units
 from ..kinematics.topology import CMC_SERVO, JOINTS, SERVOS, THUMB_CHAIN, chain, FINGERS
 
 #: the simulated phases (s): the thumb turning, the fingers closing, the palm facing down
@@ -58,9 +59,9 @@ def hold_cylinder(scene: str | Path, grasp, mass_kg: float = 0.1) -> Hold:
 
     g = grasp
     spec = mujoco.MjSpec.from_file(str(scene))
-    r, length = g.diameter_mm / 2e3, (g.x_mm[1] - g.x_mm[0]) / 1e3
-    body = spec.worldbody.add_body(name="cylinder", pos=[(g.x_mm[0] + g.x_mm[1]) / 2e3, g.axis_y_mm / 1e3,
-                                                         g.axis_z_mm / 1e3],
+    r, length = units.m(g.diameter_mm / 2.0), units.m(g.x_mm[1] - g.x_mm[0])
+    body = spec.worldbody.add_body(name="cylinder", pos=[units.m((g.x_mm[0] + g.x_mm[1]) / 2.0), units.m(g.axis_y_mm),
+                                                         units.m(g.axis_z_mm)],
                                    quat=[math.cos(math.pi / 4), 0.0, math.sin(math.pi / 4), 0.0])   # z -> x
     body.add_freejoint(name="cylinder")
     body.add_geom(name="cylinder", type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[r, length / 2, 0.0])
@@ -72,7 +73,7 @@ def hold_cylinder(scene: str | Path, grasp, mass_kg: float = 0.1) -> Hold:
 
     def pose(b: int) -> np.ndarray:
         T = np.eye(4)
-        T[:3, :3], T[:3, 3] = d.xmat[b].reshape(3, 3), d.xpos[b] * 1e3
+        T[:3, :3], T[:3, 3] = d.xmat[b].reshape(3, 3), units.mm(d.xpos[b])
         return T
 
     gid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "cylinder")
@@ -104,11 +105,11 @@ def hold_cylinder(scene: str | Path, grasp, mass_kg: float = 0.1) -> Hold:
     run(HOLD_S)
     free = m.jnt_dofadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, "cylinder")]
     palm = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "palm")
-    contacts = tuple(float(c.pos[1]) * 1e3 for c in d.contact[:d.ncon]
+    contacts = tuple(units.mm(float(c.pos[1])) for c in d.contact[:d.ncon]
                      if gid in (c.geom1, c.geom2) and palm in (m.geom_bodyid[c.geom1], m.geom_bodyid[c.geom2]))
     q = np.array([d.qpos[m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j.name)]] for j in JOINTS])
-    return Hold(diameter_mm=g.diameter_mm, mass_kg=mass_kg, start_mm=start * 1e3, closed_mm=closed * 1e3,
-                end_mm=d.xpos[bid] * 1e3, speed_mm_s=float(np.linalg.norm(d.qvel[free:free + 3])) * 1e3,
+    return Hold(diameter_mm=g.diameter_mm, mass_kg=mass_kg, start_mm=units.mm(start), closed_mm=units.mm(closed),
+                end_mm=units.mm(d.xpos[bid]), speed_mm_s=units.mm(float(np.linalg.norm(d.qvel[free:free + 3]))),
                 warnings={mujoco.mjtWarning(i).name: int(d.warning[i].number) for i in range(len(d.warning))
                           if d.warning[i].number},
                 palm_contacts_y_mm=contacts,

@@ -16,6 +16,8 @@ import itertools
 
 import numpy as np
 
+from .. import units
+
 #: a face looking down more steeply than this from the vertical needs support (degrees)
 OVERHANG_DEG = 45.0
 #: faces within this of the bed rest on it (mm)
@@ -55,7 +57,7 @@ def _overhang(mesh, R: np.ndarray) -> tuple[float, float, float]:
     z = v @ R[2]
     z -= z.min()
     on_bed = z[f].max(axis=1) <= BED_MM
-    down = n @ R[2] < -np.cos(np.radians(OVERHANG_DEG))
+    down = n @ R[2] < -np.cos(units.rad(OVERHANG_DEG))
     x, y = v @ R[0], v @ R[1]
     return (float(area[down & ~on_bed].sum()), float(area[down & on_bed].sum()),
             float(np.ptp(x) * np.ptp(y)))

@@ -26,6 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import units
+
 #: light direction in the viewer's frame (right, up, toward the viewer), normalised below
 _LIGHT = np.array([-0.4, 0.6, 0.7])
 _AMBIENT = 0.35
@@ -63,7 +65,7 @@ class MeshItem:
 
 def view_basis(elev: float, azim: float) -> np.ndarray:
     """Rows (right, up, toward the viewer) of the orthographic view (world frame, unit)."""
-    e, a = math.radians(elev), math.radians(azim)
+    e, a = units.rad(elev), units.rad(azim)
     toward = np.array([math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e)])
     right = np.array([-math.sin(a), math.cos(a), 0.0])
     return np.vstack([right, np.cross(toward, right), toward])

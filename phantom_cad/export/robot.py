@@ -28,8 +28,9 @@ import numpy as np
 
 from .. import units
 from ..kinematics import closed_form as cf
-from ..kinematics import frames as F
+from ..kinematics import link_frames as LF
 from ..kinematics import routing
+from ..kinematics import routing_paths
 from ..kinematics.topology import CHAINS, CMC_PULLEY, CMC_Q, JOINTS, LINK_NAMES, LINKS, SERVOS
 from .manifest import mass_g
 
@@ -183,17 +184,17 @@ def transmissions(params) -> tuple[tuple[ServoDrive, ...], tuple[Strand, ...]]:
         # every servo turns its pulley: a drive's tendon, or (servo 6) the CMC's closed loop
         travel = params.thumb.cmc_travel if servo.drive == "loop" else params.digit(servo.digit).chain.travel
         drives.append(ServoDrive(servo.actuator, servo.name, servo.link,
-                                 tuple(float(v) for v in routing.servo_axis(params)), travel, tau, kp, kv,
+                                 tuple(float(v) for v in routing_paths.servo_axis(params)), travel, tau, kp, kv,
                                  kv * kv / (4.0 * kp)))
-    rest = routing.lengths(params)
-    mid = routing.mid_travel_pose(params)
+    rest = routing_paths.lengths(params)
+    mid = routing_paths.mid_travel_pose(params)
     strands = []
     for r in routing.routes(params):
         for st in r.strands:
             L = rest[st.name]
             k = params.mechanics.spring_k if r.stiffness == "k_s" else params.mechanics.tendon_EA / L
             strands.append(Strand(st.name, r.name, r.tendon.kind, st.elements,
-                                  tuple(routing.side_sites(params, st, mid)), L, k, k * STRAND_TAU))
+                                  tuple(routing_paths.side_sites(params, st, mid)), L, k, k * STRAND_TAU))
     return tuple(drives), tuple(strands)
 
 
@@ -206,8 +207,8 @@ def robot_model(params, metas: dict[str, dict], tips: dict[str, tuple[str, np.nd
                        tuple(float(c) for c in metas[ln.name]["color"]),
                        collision_stems(ln.name, int(metas[ln.name]["collision_pieces"])))
              for ln in LINKS]
-    rest = F.link_transforms(params, None)              # T_palm_link, mirrored for a left hand
-    revolute = {j["name"]: j for j in F.joints(params)}
+    rest = LF.link_transforms(params, None)              # T_palm_link, mirrored for a left hand
+    revolute = {j["name"]: j for j in LF.joints(params)}
     drives = _drives(params)
     joints = []
     for ln in LINKS[1:]:

@@ -32,8 +32,9 @@ def in_features(params, link: str, points: np.ndarray, solid=None) -> dict[str, 
     """mm of support path inside each tendon groove and channel of ``link`` (``points``: link
     frame, mm, right hand): {"groove <role> <joint>": mm, "channel <k>": mm}. ``solid``: the part
     (a ``trimesh.Trimesh``, link frame), for where a channel lies in it."""
-    from ..cad.parts.tendons import link_tendons, perpendicular_frame
+    from ..cad.parts.tendons import link_tendons
     from ..kinematics.dimensions import FLANK
+    from ..kinematics.vectors import perpendicular_frame
 
     lt = link_tendons(params, link)
     P = np.asarray(points, float).reshape(-1, 3)

@@ -24,6 +24,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import units
+from ..kinematics.vectors import clipped_acos
+
 #: half-angle of the cone of rays around the inward normal (degrees)
 CONE_DEG = 15.0
 #: rays per point besides the normal
@@ -45,7 +48,7 @@ def _cone(n: np.ndarray) -> np.ndarray:
     u = np.cross(n, a)
     u /= np.linalg.norm(u, axis=1, keepdims=True)
     w = np.cross(n, u)
-    c, s = np.cos(np.radians(CONE_DEG)), np.sin(np.radians(CONE_DEG))
+    c, s = np.cos(units.rad(CONE_DEG)), np.sin(units.rad(CONE_DEG))
     dirs = [n] + [c * n + s * (np.cos(phi) * u + np.sin(phi) * w)
                   for phi in 2.0 * np.pi * np.arange(CONE_RAYS) / CONE_RAYS]
     return np.stack(dirs, axis=1)
@@ -55,7 +58,7 @@ def _edge_distance(mesh, points: np.ndarray) -> np.ndarray:
     """Distance of each point to the nearest sharp edge of the mesh (inf without one)."""
     from scipy.spatial import cKDTree
 
-    sharp = mesh.face_adjacency_angles > np.radians(SHARP_DEG)
+    sharp = mesh.face_adjacency_angles > units.rad(SHARP_DEG)
     if not sharp.any():
         return np.full(len(points), np.inf)
     seg = mesh.vertices[mesh.face_adjacency_edges[sharp]]                    # (k, 2, 3)
@@ -90,7 +93,7 @@ def wall_samples(vertices: np.ndarray, faces: np.ndarray, samples: int = SAMPLES
     dist = np.full(m * k, np.inf)
     dist[ray] = np.linalg.norm(hit - origins[ray], axis=1) + eps
     # each exit distance along the normal: a flat wall measures its thickness on every ray
-    along = dist.reshape(m, k) * np.r_[1.0, np.full(k - 1, np.cos(np.radians(CONE_DEG)))]
+    along = dist.reshape(m, k) * np.r_[1.0, np.full(k - 1, np.cos(units.rad(CONE_DEG)))]
     exit_normal = np.full((m * k, 3), np.nan)
     exit_normal[ray] = mesh.face_normals[tri]
     # the wall is the median ray's (k is odd): the face it leaves through says wall or edge (near
@@ -99,7 +102,7 @@ def wall_samples(vertices: np.ndarray, faces: np.ndarray, samples: int = SAMPLES
     median = np.argsort(along, axis=1, kind="stable")[:, k // 2]
     leaves = exit_normal.reshape(m, k, 3)[np.arange(m), median]
     cos = -np.einsum("ij,ij->i", normals, leaves)
-    off = np.degrees(np.arccos(np.clip(np.nan_to_num(cos, nan=-1.0), -1.0, 1.0)))
+    off = units.deg(clipped_acos(np.nan_to_num(cos, nan=-1.0)))
     return points, along[np.arange(m), median], off
 
 

@@ -7,33 +7,31 @@ numbers (SI), no parameter objects, so ``params.rules`` validates with exactly t
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 #: two perimeters of a 0.4 mm nozzle: the thinnest flank beside a tendon groove (m); the routing
 #: model (``kinematics.routing.layout``) spaces the grooves by it
 FLANK = 0.8e-3
 
 
-#: the extrusion width of a 0.4 mm nozzle (PrusaSlicer's automatic width, 1.125 x the nozzle), m
-EXTRUSION_WIDTH = 0.45e-3
-#: how much steeper than the printer's limit a roof is made (rad): PrusaSlicer supports a 45 deg
-#: roof at 0.2 mm layers (its limit there, 48.4 deg) where the roof's ridge climbs across layers
-#: in a channel that is not level (tests/cad/test_teardrop.py)
-ROOF_MARGIN = math.radians(8.0)
-#: the steepest roof made (rad)
-ROOF_MAX = math.radians(40.0)
-
-
-def roof_angle(layer_height: float) -> float:
-    """The angle (rad) from the vertical at which a hole's roof prints without support at
-    ``layer_height`` (m): a layer may reach past the one below by half an extrusion width
-    (PrusaSlicer's automatic support threshold), atan(w / 2h), less :data:`ROOF_MARGIN`, at most
-    :data:`ROOF_MAX`. 40 deg at 0.2 mm layers, 28.9 deg at 0.3 mm."""
-    return min(ROOF_MAX, math.atan(EXTRUSION_WIDTH / (2.0 * layer_height)) - ROOF_MARGIN)
+def digit_path(digit: str) -> tuple[str, ...]:
+    """Where a digit's table sits in the parameter file, the one place: ``("thumb",)`` or
+    ``("fingers", <name>)``."""
+    return ("thumb",) if digit == "thumb" else ("fingers", digit)
 
 
 def digit_field(digit: str) -> str:
     """The parameter file's table of a digit: ``thumb`` or ``fingers.<name>``."""
-    return "thumb" if digit == "thumb" else f"fingers.{digit}"
+    return ".".join(digit_path(digit))
+
+
+def digit_entry(tree, digit: str):
+    """A digit's entry in a tree laid out like the parameter file (:func:`digit_path`): a mapping's
+    ``tree["thumb"]`` / ``tree["fingers"][<name>]``, or an object's ``tree.thumb`` /
+    ``tree.fingers[<name>]``."""
+    head, *rest = digit_path(digit)
+    node = tree[head] if isinstance(tree, Mapping) else getattr(tree, head)
+    return node[rest[0]] if rest else node
 
 
 def printed_hole(fit: float, compensation: float) -> float:

@@ -35,6 +35,8 @@ import numpy as np
 
 from .. import units
 from . import frames as F
+from . import forearm_layout as FL
+from . import thenar as TH
 from .topology import CMC_Q, FINGERS, N_SERVOS, OPPOSED_FINGERS, SERVOS, THUMB_CHAIN, chain
 
 #: the half angle (rad) of the cone around a pad's normal in which a contact counts as pad to pad
@@ -261,7 +263,7 @@ def default_bounds(params) -> Bounds:
     """The thenar region of a palm of human breadth, scaled with the hand length (189 mm: the
     reference hand): the CMC centre up to 35 mm radial of the palm's radial edge
     (:func:`palm_envelope`), 20-75 mm proximal of the index MCP and 35 mm palmar to 10 mm dorsal
-    of it (the CMC base hangs below the palm, its column climbing into it: ``frames.thenar``; the
+    of it (the CMC base hangs below the palm, its column climbing into it: ``thenar.thenar``; the
     search keeps the thumb's links out of :func:`palm_envelope`); the axis angles within
     +-90 deg roll, -90..30 deg pitch and +-90 deg yaw (docs/opposition.md)."""
     k = params.hand_length / 0.189
@@ -313,9 +315,9 @@ HUMAN_BREADTH = 0.095
 def human_edge(params) -> float:
     """x (m, palm frame, right hand) of the radial edge of a palm of human breadth
     (:data:`HUMAN_BREADTH`, scaled with the hand length) that ends at the palm's ulnar face
-    (``frames.metacarpal_x``: the pinky socket's outer side, or a wall ulnar of a drive's channel
+    (``forearm_layout.metacarpal_x``: the pinky socket's outer side, or a wall ulnar of a drive's channel
     where the file's servo row draws one further)."""
-    return F.metacarpal_x(params)[1] - HUMAN_BREADTH * params.hand_length / 0.189
+    return FL.metacarpal_x(params)[1] - HUMAN_BREADTH * params.hand_length / 0.189
 
 
 def carpus(params) -> float:
@@ -328,7 +330,7 @@ def carpus(params) -> float:
 
 
 def thenar_constraint(params, human: bool = True):
-    """The placement search's ``constraint`` for the palm's thenar (``frames.thenar``): metres by
+    """The placement search's ``constraint`` for the palm's thenar (``thenar.thenar``): metres by
     which a placement T0 misses ``frames.thenar_margins`` (the CMC axis's tilt priced at the thumb's
     half width per radian) and, with ``human``, by which the journal's and the turn's walls reach
     radial of a palm of human breadth (:func:`human_edge`; the pulley's cavity may open there) and
@@ -338,11 +340,11 @@ def thenar_constraint(params, human: bool = True):
     lever = params.thumb.width / 2.0
 
     def violation(T0: np.ndarray) -> float:
-        m = F.thenar_margins(params, T0)
+        m = TH.thenar_margins(params, T0)
         v = max(-m["tilt"], 0.0) * lever + max(-m["base"], 0.0) + max(-m["turn"], 0.0)
         if m["tilt"] < 0.0 or not human:
             return v
-        pts = F.thenar_points(params, T0)
+        pts = TH.thenar_points(params, T0)
         x = min(float(pts["journal"][:, 0].min()), float(pts["turn"][:, 0].min()))
         y = min(float(p[:, 1].min()) for p in pts.values())
         return v + max(edge - x, 0.0) + max(back - y, 0.0)

@@ -56,6 +56,11 @@ class Servo:
         """``servo1``..``servo6``: the actuator's name in the MJCF."""
         return f"servo{self.index + 1}"
 
+    @property
+    def title(self) -> str:
+        """``servo 1``..``servo 6``: how messages and documents name the servo."""
+        return f"servo {self.index + 1}"
+
 
 @dataclass(frozen=True)
 class Joint:

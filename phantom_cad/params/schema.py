@@ -19,6 +19,7 @@ import numpy as np
 from .. import canon
 from ..kinematics import closed_form as cf
 from ..kinematics import topology
+from ..kinematics.dimensions import digit_entry
 from ..kinematics.topology import FINGERS
 from ..units import DEG, G_PER_CM3, MM
 from .errors import ParamError
@@ -160,7 +161,7 @@ class ServoBody:
     speed: float
     #: position error (rad) at which the servo's controller gives its stall torque: the
     #: simulation's position gain kp = stall_torque / stall_error
-    stall_error: float = 1.0 * math.pi / 180.0
+    stall_error: float = 1.0 * DEG
 
 
 @dataclass(frozen=True)
@@ -193,7 +194,7 @@ class Print:
     #: screw holes, magnet pockets): FDM prints holes this much small (kinematics.dimensions.printed_hole)
     hole_compensation: float = 0.2e-3
     #: the slicer's layer height (m): the build's slicing, and the roofs of the tendon channels
-    #: (kinematics.dimensions.roof_angle)
+    #: (cad.print_rules.roof_angle)
     layer_height: float = 0.2e-3
 
 
@@ -242,7 +243,7 @@ class HandParams:
 
     def digit(self, name: str):
         """The :class:`Thumb` or the :class:`Finger` named ``name``."""
-        return self.thumb if name == "thumb" else self.fingers[name]
+        return digit_entry(self, name)
 
     @functools.cached_property
     def digest(self) -> str:
@@ -413,15 +414,17 @@ def _thumb(t: TomlTable, hand_length: float) -> Thumb:
     cmc_travel = tuple(v * DEG for v in t.interval("cmc_servo_travel_deg"))
     if isinstance(t.data, dict) and "cmc_horn_radius_mm" in t.data:
         raise t.error("cmc_horn_radius_mm", t.data["cmc_horn_radius_mm"],
-                      "servo 6 no longer sits under the CMC (it turns it through a cable loop from the "
+                      f"{topology.SERVOS[topology.CMC_SERVO].title} no longer sits under the CMC (it turns it "
+                      "through a cable loop from the "
                       "forearm module): name the loop's pulley radius cmc_pulley_radius_mm instead "
                       "(docs/parameters.md)")
     horn = t.number("cmc_pulley_radius_mm", gt=0) * MM
     lo, hi = limits[cmc]
+    q15, u6 = topology.JOINTS[topology.CMC_Q].label, topology.SERVOS[topology.CMC_SERVO].label
     for u in cmc_travel:
         if not lo - 1e-12 <= gain * u <= hi + 1e-12:
             raise t.error("cmc_servo_travel_deg", [round(v / DEG, 6) for v in cmc_travel],
-                          f"q15 = cmc_gain * u6 = {gain * u:.4f} rad at u6 = {u / DEG:g} deg is outside "
+                          f"{q15} = cmc_gain * {u6} = {gain * u:.4f} rad at {u6} = {u / DEG:g} deg is outside "
                           f"the CMC limits [{lo:g}, {hi:g}]: the servo travel must map inside the workspace")
     t.done()
     return Thumb(seg["metacarpal"], seg["proximal"], seg["distal"], width, thickness, chain,

@@ -147,9 +147,9 @@ def test_bill_of_materials(params):
     assert qty["tendon"] == 5 + 4 + 9 + 1
     assert qty["cable spring"] == 5
     assert qty["crimp stop"] == 4
-    # every tendon's cut length is its routed length (routing.lengths) plus what its ends need
-    from phantom_cad.kinematics import routing
-    rest = routing.lengths(params)
+    # every tendon's cut length is its routed length (routing_paths.lengths) plus what its ends need
+    from phantom_cad.kinematics import routing_paths
+    rest = routing_paths.lengths(params)
     working = {}
     for row in bom:
         if row["item"] == "tendon" and " strand" in row["used_in"].split(":", 1)[0]:
@@ -208,11 +208,11 @@ def test_print_rotation_lays_each_part_on_a_flat_face(built):
 
 @pytest.mark.parametrize("side", ["right", "left"])
 def test_joint_table_reproduces_the_posed_links(params, variant, side):
-    """Chaining origin * rotation(axis, q) over frames.joints() gives pose_transforms(q)."""
-    from phantom_cad.kinematics import frames as F
+    """Chaining origin * rotation(axis, q) over link_frames.joints() gives pose_transforms(q)."""
+    from phantom_cad.kinematics import link_frames as LF
     p = params if side == "right" else variant(lambda d: d["hand"].__setitem__("side", "left"))
     q = np.linspace(0.1, 0.9, 15)
-    table = F.joints(p)
+    table = LF.joints(p)
     assert [j["name"] for j in table][:3] == ["thumb_ip", "thumb_mp", "index_dip"]
 
     def rot(axis, a):   # Rodrigues, written out here
@@ -223,14 +223,14 @@ def test_joint_table_reproduces_the_posed_links(params, variant, side):
         return T
 
     links = {"palm": np.eye(4)}
-    fixed = {f"{f}_base": F.link_transforms(p)[f"{f}_base"] for f in FINGERS}
+    fixed = {f"{f}_base": LF.link_transforms(p)[f"{f}_base"] for f in FINGERS}
     links.update(fixed)
     pending = sorted(table, key=lambda j: 0 if j["parent"] in links else 1)
     while pending:
         j = next(j for j in pending if j["parent"] in links)
         pending.remove(j)
         links[j["child"]] = links[j["parent"]] @ j["origin"] @ rot(j["axis"], q[j["q_index"]])
-    posed = {n: F.link_transforms(p, q)[n] for n in links}
+    posed = {n: LF.link_transforms(p, q)[n] for n in links}
     for n, T in links.items():
         assert np.allclose(T, posed[n], atol=1e-12), n
     # limits come from the parameter file

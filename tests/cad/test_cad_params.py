@@ -119,7 +119,7 @@ def test_a_wide_servo_widens_the_forearm_row(document):
     of neighbours' body and ear rectangles (grown by the clearance, at the servo's mid-plane) at
     least a wall apart, sampled densely on their outlines."""
     from phantom_cad.cad import preflight
-    from phantom_cad.kinematics import frames as F
+    from phantom_cad.kinematics import forearm_layout as FL, frames as F
     from phantom_cad.kinematics.topology import SERVOS
     from phantom_cad.params import parse
 
@@ -136,13 +136,13 @@ def test_a_wide_servo_widens_the_forearm_row(document):
         doc["servo"]["body_mm"] = [23.2, width, 25.3]
         p = parse(doc)
         preflight.check(p)
-        ks = sorted(F.forearm_servos(p), key=lambda k: F.forearm_servos(p)[k][0, 3])
-        row = [F.forearm_servos(p)[k] for k in ks]
+        ks = sorted(FL.forearm_servos(p), key=lambda k: FL.forearm_servos(p)[k][0, 3])
+        row = [FL.forearm_servos(p)[k] for k in ks]
         for (ka, Ta), (kb, Tb) in zip(zip(ks, row), zip(ks[1:], row[1:])):
             loop = {SERVOS[ka].drive == "loop", SERVOS[kb].drive == "loop"}
             pitch = max(cavity[True in loop] + cavity[False], width + 0.4) + 2.4
             assert (Tb[0, 3] - Ta[0, 3]) * 1e3 >= pitch - 1e-9, (width, ka, kb)
-        assert F.forearm_pitch(p) * 1e3 == pytest.approx(max(cavity[True] + cavity[False], width + 0.4) + 2.4)
+        assert FL.forearm_pitch(p) * 1e3 == pytest.approx(max(cavity[True] + cavity[False], width + 0.4) + 2.4)
         c, L, span, off = 0.2, 23.2, doc["servo"]["flange_span_mm"], doc["cad"]["servo_shaft_offset_mm"]
         boxes = [((-width / 2 - c, -off - L / 2 - c), (width / 2 + c, -off + L / 2 + c)),
                  ((-width / 2 - c, -off - span / 2 - c), (width / 2 + c, -off + span / 2 + c))]
@@ -155,12 +155,12 @@ def test_a_wide_servo_widens_the_forearm_row(document):
 
 
 def test_convex_hull_2d_is_qhulls():
-    """``frames.convex_hull_2d`` (the servo row's outlines) against scipy's Qhull: the same vertices in
+    """``forearm_layout.convex_hull_2d`` (the servo row's outlines) against scipy's Qhull: the same vertices in
     the same counter-clockwise cycle, on random clouds, the servo pulley's 24-gon with its swept copy,
     a square with points on its edges and corners repeated; no area is an error."""
     from scipy.spatial import ConvexHull
 
-    from phantom_cad.kinematics import frames as F
+    from phantom_cad.kinematics import forearm_layout as FL
 
     def cycle(P, idx):                # the hull's points as a cycle from its lowest (x, y): a point
         pts = [tuple(P[int(i)]) for i in idx]       # repeated may be either index
@@ -175,9 +175,9 @@ def test_convex_hull_2d_is_qhulls():
     clouds = [rng.normal(size=(n, 2)) * rng.uniform(1e-3, 10.0) for n in (3, 4, 10, 50, 400)]
     clouds += [np.vstack([gon, gon + [3.0, -1.5]]), square]
     for P in clouds:
-        assert cycle(P, F.convex_hull_2d(P)) == cycle(P, ConvexHull(P).vertices), P[:4]
+        assert cycle(P, FL.convex_hull_2d(P)) == cycle(P, ConvexHull(P).vertices), P[:4]
     with pytest.raises(ValueError, match="no area"):
-        F.convex_hull_2d(np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]))
+        FL.convex_hull_2d(np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]))
 
 
 def test_shaft_offset_beyond_the_body(document):
@@ -220,22 +220,22 @@ def test_long_flange_ears_move_the_forearm_row_back(document):
     front is where the servos' envelopes (ears grown by a clearance, ahead of the shaft by
     flange_span / 2 - shaft_offset) end, one palm wall behind the module's front face: by hand,
     4 mm more span moves the row 2 mm further back from that face."""
-    from phantom_cad.kinematics import frames as F
+    from phantom_cad.kinematics import forearm_layout as FL
     from phantom_cad.params import parse
 
     doc = copy.deepcopy(document)
     p0 = parse(doc)
     doc["servo"]["flange_span_mm"] = document["servo"]["flange_span_mm"] + 4.0
     p1 = parse(doc)
-    y0 = {k: T[1, 3] * 1e3 for k, T in F.forearm_servos(p0).items()}
-    y1 = {k: T[1, 3] * 1e3 for k, T in F.forearm_servos(p1).items()}
+    y0 = {k: T[1, 3] * 1e3 for k, T in FL.forearm_servos(p0).items()}
+    y1 = {k: T[1, 3] * 1e3 for k, T in FL.forearm_servos(p1).items()}
     ahead = document["servo"]["flange_span_mm"] / 2 - document["cad"]["servo_shaft_offset_mm"]
     cavity = 8.0 + 2 * 0.6 + 0.6 + 0.2                # the largest pulley (the CMC loop's): r + lip + cord + clearance
     assert ahead > cavity                              # the ears set the row's front today
     # the module's front face stands behind the palm (no servo at the CMC any more): it stays; the
     # row moves back by what the ears grew ahead along the servo that reaches furthest forward: at
     # most 2 mm (less along a turned or tilted servo's y), the same for every servo
-    assert F.forearm_front(p1) == F.forearm_front(p0)
+    assert FL.forearm_front(p1) == FL.forearm_front(p0)
     dy = [y1[k] - y0[k] for k in y0]
     assert -2.0 - 1e-9 <= dy[0] < -1.0 and all(v == pytest.approx(dy[0], abs=1e-9) for v in dy)
 
@@ -283,7 +283,7 @@ def test_a_cmc_base_into_the_palm_is_refused(variant):
 
 
 def test_a_thin_palm_under_a_tilted_cmc_is_refused(variant):
-    """The CMC axis rolled 45 deg, the palm 18 mm thick: by hand (frames.thenar) the CMC pulley's
+    """The CMC axis rolled 45 deg, the palm 18 mm thick: by hand (thenar.thenar) the CMC pulley's
     cavity (radius 8 + 1.2 + 0.6 + 0.2 = 10 mm, half height 3 + 0.2 mm, tilted 45 deg) has its lowest
     rim a wall (2.4 mm) above the palmar face: its centre at -9 + 2.4 + 10 sin 45 + 3.2 cos 45; the
     drive turns 3.2 + 2.4 + 1.0 mm further up the axis, at -9 + 2.4 + 13.2 sin 45 + 6.6 cos 45 +

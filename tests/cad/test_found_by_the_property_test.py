@@ -33,7 +33,7 @@ def test_small_mcp_pulley_keeps_one_guide_eyelet(variant):
 def test_parallel_fingers_palm(variant):
     """arc_offset_deg = 0: the palm builds with four parallel sockets (normals 0 degrees apart).
     Without the arc the ring's drive run shortens (its channel 16.6 mm): the default 3 mm crimp
-    stop's coupler would need 17.1 mm there and is refused (routing.couplers), a 2.4 mm stop fits."""
+    stop's coupler would need 17.1 mm there and is refused (couplers.couplers), a 2.4 mm stop fits."""
     def edit(d):
         d["palm"]["arc_offset_deg"] = 0.0
         d["hardware"]["tendon_stop"] = {"diameter_mm": 2.0, "length_mm": 2.4}

@@ -15,7 +15,10 @@ import pytest
 from phantom_cad.cad import assembly
 from phantom_cad.cad import measure
 from phantom_cad.canon import plain
+from phantom_cad.kinematics import forearm_layout
 from phantom_cad.kinematics import frames
+from phantom_cad.kinematics import link_frames
+from phantom_cad.kinematics import thenar
 from phantom_cad.kinematics.topology import FINGERS, SERVO_MOUNT, SERVOS
 
 from tests.cad.conftest import HANDS
@@ -78,7 +81,7 @@ def test_the_metacarpal_block_is_the_palms_thickness(hand):
     assert T + H <= 35.0 and H > 0.0
     heel_front = palm.bounding_box().min.Y + L      # the palm's back face is its most proximal point
     x0, x1 = W.socket_x(p)
-    x0 = max(x0, max(v[:, 0].max() for v in frames.thenar_points(p).values()) * 1e3)   # ulnar of the thenar
+    x0 = max(x0, max(v[:, 0].max() for v in thenar.thenar_points(p).values()) * 1e3)   # ulnar of the thenar
     if kind == "left":
         x0, x1 = -x1, -x0
     wrist = -doc["fingers"]["index"]["length_fraction"]["metacarpal"] * doc["hand"]["hand_length_mm"]
@@ -101,7 +104,7 @@ def test_the_palm_is_human_broad(hand):
     assert bb.max.X - bb.min.X <= _limit(doc)
     # its ulnar face is the one the placement search's human edge starts from
     ulnar = bb.max.X if kind != "left" else -bb.min.X
-    assert ulnar == pytest.approx(frames.metacarpal_x(p)[1] * 1e3, abs=1e-6)
+    assert ulnar == pytest.approx(forearm_layout.metacarpal_x(p)[1] * 1e3, abs=1e-6)
 
 
 def test_the_servos_sit_behind_the_palm(hand):
@@ -114,7 +117,7 @@ def test_the_servos_sit_behind_the_palm(hand):
     carpus = hl * (1 - sum(doc["fingers"]["middle"]["length_fraction"].values()))
     back = solids["palm"].bounding_box().min.Y
     assert wrist - carpus - 1e-6 <= back <= wrist
-    Ts = frames.link_transforms(p)
+    Ts = link_frames.link_transforms(p)
     assert all(SERVO_MOUNT[s.drive] == "forearm" for s in SERVOS)
     for s in SERVOS:
         assert Ts[s.link][1, 3] * 1e3 < back
@@ -122,7 +125,7 @@ def test_the_servos_sit_behind_the_palm(hand):
     ahead = _section(fa, back + 1.0)
     assert ahead is not None
     assert ahead[0][2] == pytest.approx(doc["palm"]["thickness_mm"] / 2, abs=1e-6)     # on the dorsal face
-    behind = _section(fa, frames.forearm_front(p) * 1e3 - 2.0)
+    behind = _section(fa, forearm_layout.forearm_front(p) * 1e3 - 2.0)
     assert behind[0][2] < -doc["palm"]["thickness_mm"] / 2                               # the module's body
 
 

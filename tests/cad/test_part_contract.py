@@ -15,7 +15,7 @@ from phantom_cad.canon import plain
 from phantom_cad.cad import assembly, registry
 from phantom_cad.cad.parts import pulley, tendons
 from phantom_cad.cad.parts.base import Part
-from phantom_cad.kinematics import routing, topology
+from phantom_cad.kinematics import routing, routing_paths, topology
 from phantom_cad.params import parse
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "support"))
@@ -81,9 +81,9 @@ def _routing_ahead(params) -> None:
     charge every part with the whole hand; what a part takes of them is checked on its own
     (``test_what_a_part_takes_of_the_routing_moves_only_with_its_key``)."""
     routing.routes(params, right_handed=True)
-    routing.runs(params, right_handed=True)
-    for n in (11, 21):      # the fractions of routing.arc_range and routing.run_sweep
-        routing.travel_poses(params, np.linspace(0.0, 1.0, n))
+    routing_paths.runs(params, right_handed=True)
+    for n in (11, 21):      # the fractions of routing_paths.arc_range and run_sweep
+        routing_paths.travel_poses(params, np.linspace(0.0, 1.0, n))
 
 
 def _reads(params, name: str, build: bool) -> param_reads.Reads:

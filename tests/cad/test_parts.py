@@ -112,7 +112,9 @@ def _is_inside(shape, p) -> bool:
 
 @pytest.mark.parametrize("k", [1, 2, 3, 4, 5, 6])
 def test_forearm_servo_cavity_and_its_front_wall(built, params, document, k):
+    from phantom_cad.kinematics import forearm_layout
     from phantom_cad.kinematics import frames, routing
+    from phantom_cad.kinematics import thenar
 
     hw, pr = document["hardware"], document["print"]
     r = (document["thumb"]["cmc_pulley_radius_mm"] if k == 6 else
@@ -120,15 +122,15 @@ def test_forearm_servo_cavity_and_its_front_wall(built, params, document, k):
     # by hand: the pulley's flanges stand two tendon diameters above its groove, plus one tendon
     # diameter of running room and a hole clearance: 7 + 2 * 0.6 + 0.6 + 0.2 = 9.0 mm by default
     cavity = r + 3 * hw["tendon_diameter_mm"] + pr["hole_clearance_mm"]
-    T = np.linalg.inv(frames.T_palm_forearm(params)) @ frames.T_palm_servo(params, k - 1)   # forearm frame
+    T = np.linalg.inv(forearm_layout.T_palm_forearm(params)) @ forearm_layout.T_palm_servo(params, k - 1)   # forearm frame
     shaft, axis = T[:3, 3] * 1e3, T[:3, 2]
     shape = built["forearm"].shape
     measured = [c["radius"] for c in measure.cylinders(shape) if measure.coaxial(c, shaft, axis)]
     assert measured and max(measured) == pytest.approx(cavity, abs=1e-6)
     if k == 6:
         # servo 6's shaft is parallel to the CMC axis and its pulley lies in the CMC pulley's plane
-        Tc = frames.T_palm_thumb_cmc_base(params) @ frames.T_cmc_base_pulley(params)
-        Ts = frames.T_palm_servo(params, k - 1)
+        Tc = frames.T_palm_thumb_cmc_base(params) @ thenar.T_cmc_base_pulley(params)
+        Ts = forearm_layout.T_palm_servo(params, k - 1)
         assert Ts[:3, 2] == pytest.approx(Tc[:3, 2], abs=1e-12)
         assert (Ts[:3, 3] - Tc[:3, 3]) @ Tc[:3, 2] == pytest.approx(0.0, abs=1e-12)
     elif k == 1:
@@ -137,7 +139,7 @@ def test_forearm_servo_cavity_and_its_front_wall(built, params, document, k):
         assert axis == pytest.approx([0.0, 0.0, 1.0])
         turn = next(e for r_ in routing.routes(params) for st in r_.strands if st.name == "thumb_drive"
                     for e in st.elements if getattr(e, "role", "") == "over the CMC axis")
-        assert frames.T_palm_servo(params, 0)[2, 3] == pytest.approx(turn.pos[2], abs=1e-12)
+        assert forearm_layout.T_palm_servo(params, 0)[2, 3] == pytest.approx(turn.pos[2], abs=1e-12)
     else:
         # a finger's shaft is dorsal (palm z) and its pulley's mid-plane at the tendon height, one
         # wall above the thinnest finger's palmar face
@@ -161,10 +163,11 @@ def test_forearm_drives_leave_straight_for_their_sockets(built, params):
     """Each finger's drive leaves its pulley along the servo's y at the tangent point (-r, 0, 0):
     the line from there along y passes the socket's tendon exit (both at the tendon height), so
     the distance from the pulley centre to that line is r, and the exit lies ahead."""
+    from phantom_cad.kinematics import forearm_layout
     from phantom_cad.kinematics import frames
 
     for k, f in enumerate(FINGERS, start=1):
-        T = frames.T_palm_servo(params, k)
+        T = forearm_layout.T_palm_servo(params, k)
         C, y = T[:3, 3] * 1e3, T[:3, 1]
         E = frames.socket_tendon_point(params, f) * 1e3
         r = params.fingers[f].chain.servo_radius * 1e3
@@ -181,16 +184,17 @@ def test_forearm_front_wall_holes_only_where_a_drive_runs(built, params, documen
     module's front wall: a drive's channel is open there on the servo's -x (the CMC loop's on both
     sides); on a tendon servo's +x, where no cable leaves, the wall is solid (no hole that carries
     no tendon)."""
+    from phantom_cad.kinematics import forearm_layout
     from phantom_cad.kinematics import frames
     from phantom_cad.kinematics.topology import SERVO_MOUNT, SERVOS
 
-    T_fp = np.linalg.inv(frames.T_palm_forearm(params))
-    mid_wall = frames.forearm_front(params) * 1e3 - document["palm"]["wall_mm"] / 2     # palm y (mm)
+    T_fp = np.linalg.inv(forearm_layout.T_palm_forearm(params))
+    mid_wall = forearm_layout.forearm_front(params) * 1e3 - document["palm"]["wall_mm"] / 2     # palm y (mm)
     shape = built["forearm"].shape
     held = [s.index for s in SERVOS if SERVO_MOUNT[s.drive] == "forearm"]
     assert len(held) == 6
     for k in held:
-        T = frames.T_palm_servo(params, k)
+        T = forearm_layout.T_palm_servo(params, k)
         for side in (-1.0, 1.0):
             tangent = T[:3, 3] * 1e3 + side * frames.servo_radius(params, k) * 1e3 * T[:3, 0]
             y = T[:3, 1]

@@ -1,5 +1,5 @@
 """Tendon channels that print without support: a teardrop's roof (``common.teardrop``) at
-the angle the layer height allows (``dimensions.roof_angle``).
+the angle the layer height allows (``cad.print_rules.roof_angle``).
 
 Known answers by hand: the cross-section of a teardrop of radius r whose roof leans a from the
 vertical is the circle less the sector the roof spans (2 phi, phi = 90 deg - a) plus the two right
@@ -16,7 +16,7 @@ import math
 import numpy as np
 import pytest
 
-from phantom_cad.kinematics.dimensions import roof_angle
+from phantom_cad.cad.print_rules import roof_angle
 
 pytest.importorskip("build123d")
 

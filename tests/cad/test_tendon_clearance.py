@@ -110,6 +110,7 @@ def _couplers_travel_in_the_bore(params, document, palm):
     material of the palm (measured on the solid). At the service angle it lies wholly outside the
     palm, beyond the socket face. The bore is no wider than it must be: a ring 0.2 mm outside it
     is in material."""
+    from phantom_cad.kinematics import forearm_layout as FL
     from phantom_cad.kinematics import frames as Fr
     from phantom_cad.kinematics.topology import chain
 
@@ -123,7 +124,7 @@ def _couplers_travel_in_the_bore(params, document, palm):
         r, travel = src["servo_pulley_radius_mm"], src["servo_travel_deg"][1]
         k = chain(f).servo
         exit_ = Fr.socket_tendon_point(params, f) * 1e3
-        tangent = (Fr.T_palm_servo(params, k) @ np.array([-r * 1e-3, 0.0, 0.0, 1.0]))[:3] * 1e3
+        tangent = (FL.T_palm_servo(params, k) @ np.array([-r * 1e-3, 0.0, 0.0, 1.0]))[:3] * 1e3
         u = (tangent - exit_) / np.linalg.norm(tangent - exit_)
         sweep = r * math.radians(travel)
         inside = _classify(palm, _envelope(exit_, u, s0, s0 + sweep + L, D / 2 - 0.01))

@@ -160,13 +160,13 @@ def test_the_palms_walls_sampled_ten_times_as_densely(hand_parts, kind):
 
 
 def test_a_stop_wedge_is_cut_back_a_flank_above_the_drive_fan(monkeypatch):
-    """``tendons.clear_of_fans`` by hand, with a fan of our own (``drive_fan_outlines`` replaced): the
+    """``drive_fans.clear_of_fans`` by hand, with a fan of our own (``drive_fan_outlines`` replaced): the
     wedge (y, z) = (0, 0) back at the face, (10, 0) its edge, (0, 5) back at its top; a fan reaching
     z = 1.2 under it. Cut back square to the face where the slope stands a flank (0.8 mm) above the
     fan's top: z = 1.2 + 0.8 = 2.0, on the slope y = 10 - 10 * 2.0 / 5 = 6.0. A fan under the face,
     one beyond the wedge's y, one whose top plus a flank passes the wedge's top: the wedge unchanged;
     a polygon that is not a triangle: unchanged."""
-    from phantom_cad.cad.parts import tendons
+    from phantom_cad.cad.parts import drive_fans
     from phantom_cad.kinematics.dimensions import FLANK
 
     assert FLANK == pytest.approx(0.8e-3)
@@ -174,8 +174,8 @@ def test_a_stop_wedge_is_cut_back_a_flank_above_the_drive_fan(monkeypatch):
 
     def fans(*rects):
         outlines = [([(y0, z0), (y1, z0), (y1, z1), (y0, z1)], 0.0, 1.0) for y0, y1, z0, z1 in rects]
-        monkeypatch.setattr(tendons, "drive_fan_outlines", lambda lt, sec, start: outlines)
-        return tendons.clear_of_fans(None, None, 0.0, wedge)
+        monkeypatch.setattr(drive_fans, "drive_fan_outlines", lambda lt, sec, start: outlines)
+        return drive_fans.clear_of_fans(None, None, 0.0, wedge)
 
     assert np.array(fans((2.0, 6.0, -1.0, 1.2))) == pytest.approx(np.array([(0.0, 0.0), (6.0, 0.0), (6.0, 2.0), (0.0, 5.0)]))
     # two fans: the higher top counts (1.7 + 0.8 = 2.5: y = 10 - 10 * 2.5 / 5 = 5.0)
@@ -184,5 +184,5 @@ def test_a_stop_wedge_is_cut_back_a_flank_above_the_drive_fan(monkeypatch):
     assert fans((2.0, 6.0, -3.0, -0.5)) == wedge             # under the face
     assert fans((12.0, 15.0, -1.0, 3.0)) == wedge            # past the wedge's edge
     assert fans((2.0, 6.0, -1.0, 4.5)) == wedge              # 4.5 + 0.8 >= 5: nothing left to keep
-    monkeypatch.setattr(tendons, "drive_fan_outlines", lambda lt, sec, start: [])
-    assert tendons.clear_of_fans(None, None, 0.0, wedge[:2]) == wedge[:2]
+    monkeypatch.setattr(drive_fans, "drive_fan_outlines", lambda lt, sec, start: [])
+    assert drive_fans.clear_of_fans(None, None, 0.0, wedge[:2]) == wedge[:2]

@@ -342,10 +342,10 @@ def cylinder_floor(p0, p1, r: float) -> float:
     return float(min(p0[2], p1[2]) - r * math.sqrt(max(0.0, 1.0 - u[2] * u[2])))
 
 
-def teardrop(p0, p1, r: float, up=None, roof: float = math.radians(45.0)):
+def teardrop(p0, p1, r: float, up=None, roof: float = units.rad(45.0)):
     """A hole of radius r from p0 to p1 that prints without support when ``up`` (a unit vector in
     the same frame: the printer's +z) is given: a cylinder whose top is a roof of two planes at
-    ``roof`` (rad, ``dimensions.roof_angle``) from the vertical, meeting r / sin(roof) above the
+    ``roof`` (rad, ``print_rules.roof_angle``) from the vertical, meeting r / sin(roof) above the
     axis (a teardrop). A hole that stands steeper than that, or no ``up``: the plain cylinder."""
     p0 = np.asarray(p0, float)
     p1 = np.asarray(p1, float)
@@ -361,7 +361,7 @@ def teardrop(p0, p1, r: float, up=None, roof: float = math.radians(45.0)):
     b = bd()
     e1 = across / np.linalg.norm(across)
     plane = b.Plane(origin=tuple(p0), x_dir=tuple(e1), z_dir=tuple(axis))
-    t = math.degrees(math.pi / 2.0 - roof)      # the roof touches the circle at +-(90 deg - roof)
+    t = units.deg(math.pi / 2.0 - roof)      # the roof touches the circle at +-(90 deg - roof)
     arc = b.Edge.make_circle(r, plane, start_angle=t, end_angle=360.0 - t)
     apex = plane.from_local_coords((r / math.sin(roof), 0.0, 0.0))
     wire = b.Wire([arc, b.Edge.make_line(arc.position_at(1.0), apex), b.Edge.make_line(apex, arc.position_at(0.0))])

@@ -19,8 +19,8 @@ from ..measure import circular_pockets, eyelet_centres, point_line_distance
 from .base import MAGNET_DOWN, Part, child_joint, digit_table
 from .common import DigitSection, box, build, cylinder, mm
 from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, hub_grooves
-from .tendons import (RoutedPart, link_tendons, anchor_tools, channel_tools, clear_of_fans, drive_fan_tools,
-                      guide_entry)
+from .drive_fans import clear_of_fans, drive_fan_tools, guide_entry
+from .tendons import RoutedPart, link_tendons, anchor_tools, channel_tools
 
 class FingerBase(RoutedPart, Part):
     """The metacarpal module of ``finger``: a link fixed to the palm by two magnets."""

@@ -1,6 +1,6 @@
 """Forearm module: the six servos behind the wrist.
 
-Frame: the forearm link frame (``kinematics.frames.T_palm_forearm``: palm axes, origin on the
+Frame: the forearm link frame (``kinematics.forearm_layout.T_palm_forearm``: palm axes, origin on the
 wrist crease at the middle of the servo row); the part is built in the palm frame and placed
 back into its own. Why the servos are here and not in the palm: docs/parts.md.
 
@@ -8,7 +8,7 @@ back into its own. Why the servos are here and not in the palm: docs/parts.md.
   thumb flexion, the pinky ulnar): the tendon servos' shafts dorsal, each turned about its shaft
   so that its drive leaves the pulley straight toward its finger's socket (the thumb's toward its
   turn onto the CMC axis); servo 6's shaft parallel to the CMC axis, its pulley in the CMC
-  pulley's plane (``frames.coplanar_servo``); pockets and ear slots open along the shafts (the
+  pulley's plane (``forearm_layout.coplanar_servo``); pockets and ear slots open along the shafts (the
   servos drop in, then their pulleys go on), pulley cavities, M2 pilot holes under the flange ears;
 * each drive's channel (the loop's two) from its pulley through the front wall, on to the palm,
   joined by a slot to its servo's drop-in pocket where it runs beside it closer than a flank
@@ -23,6 +23,7 @@ import math
 
 import numpy as np
 
+from ...kinematics import forearm_layout as FL
 from ...kinematics import frames as F
 from ...kinematics.topology import FOREARM, SERVO_MOUNT, SERVOS, link
 from ..measure import circular_pockets
@@ -71,7 +72,7 @@ class Forearm(ServoMount, Part):
 
     # -- placements (palm frame, mm) -------------------------------------------
     def T_palm_part(self) -> np.ndarray:
-        return F.to_mm(F.T_palm_forearm(self.params))
+        return F.to_mm(FL.T_palm_forearm(self.params))
 
     def pilot_points(self) -> list[np.ndarray]:
         return [(self.T_servo(k) @ np.array([*p, 1.0]))[:3] for k in FOREARM_SERVOS for p in self.screw_points(k)]

@@ -8,16 +8,16 @@ y distal, z dorsal. Built from:
   the finger column's y), each with two magnet pockets facing the finger base's pockets
   and the tendon exit at the palm's tendon height;
 * the metacarpal block: from its back face (the wrist crease, or the thenar's back,
-  ``frames.palm_back``) to the sockets, across the four fingers (the servos sit in the forearm
+  ``forearm_layout.palm_back``) to the sockets, across the four fingers (the servos sit in the forearm
   module behind it, ``forearm.py``);
 * the thenar block, radial of the metacarpal block: the journal that holds the CMC base's column
   (from the palmar face up along the CMC axis), the cavity of the CMC pulley on that column with
   its slot toward servo 6 (the loop runs in it; the pulley slides in through it, the column up
   through the journal into it) and, above it, the thumb drive's turn onto the CMC axis
-  (``frames.thenar``);
+  (``thenar.thenar``);
 * tendon channels from each socket's tendon exit straight back toward its servo pulley in the
   forearm, each with the bore its drive's coupler (the crimp stop and the finger strand's
-  loop, ``routing.couplers``) travels in; the thumb drive's channel from the back face to its
+  loop, ``couplers.couplers``) travels in; the thumb drive's channel from the back face to its
   turn and down the CMC axis (turning the thumb about the CMC leaves its length alone);
 * two pilot holes on the dorsal face at the back for the forearm module's tab;
 * the flexion-limiting housing (rails under each finger base, at the Table I MCP limit);
@@ -34,9 +34,12 @@ import math
 import numpy as np
 
 from ... import units
+from ...kinematics import couplers
+from ...kinematics import forearm_layout as FL
 from ...kinematics import frames as F
-from ...kinematics import routing
+from ...kinematics import thenar as TH
 from ...kinematics.topology import FINGERS, LINKS, chain
+from ...kinematics.vectors import clipped_acos
 from ..measure import circular_pockets
 from .base import Part
 from .common import DigitSection, Tolerances, box, build, cylinder, mm, prism_x, sphere, transform
@@ -90,7 +93,7 @@ class Palm(ServoMount, Part):
                 normals.append(p["facing"])
         want = units.deg(self.params.palm.arc_offset)
         for a, b in zip(normals, normals[1:]):
-            ang = units.deg(math.acos(float(np.clip(a @ b, -1.0, 1.0))))
+            ang = units.deg(clipped_acos(a @ b))
             if abs(ang - want) > 1e-6:
                 out.append(f"{self.name}: socket normals {ang:.6f} deg apart, expected {want:g}")
         return out
@@ -108,15 +111,15 @@ class Palm(ServoMount, Part):
 
     @property
     def couplers(self) -> dict:
-        """The finger drives' couplers (``routing.couplers``: metres, s from the socket face)."""
-        return routing.couplers(self.params)
+        """The finger drives' couplers (``couplers.couplers``: metres, s from the socket face)."""
+        return couplers.couplers(self.params)
 
     def extents(self):
         """x0, x1, y0, y1 (mm) of the metacarpal block: across the sockets and ulnar far enough for
-        the finger drives' channels (``frames.metacarpal_x``), from the palm's back face to behind
+        the finger drives' channels (``forearm_layout.metacarpal_x``), from the palm's back face to behind
         the socket faces."""
-        x0, x1 = (mm(v) for v in F.metacarpal_x(self.params))
-        return x0, x1, mm(F.palm_back(self.params)), self.slab_front()
+        x0, x1 = (mm(v) for v in FL.metacarpal_x(self.params))
+        return x0, x1, mm(FL.palm_back(self.params)), self.slab_front()
 
     def heel(self) -> tuple[np.ndarray, np.ndarray] | None:
         """(lo, hi) palm frame (mm) of the heel, under the metacarpal block from its back face, or None
@@ -128,14 +131,14 @@ class Palm(ServoMount, Part):
                 np.array([x1, y0 + self.heel_length, -self.thickness / 2.0]))
 
     def _placed_box(self, T, lo, hi) -> np.ndarray:
-        return F.box_corners(lo, hi) @ T[:3, :3].T + T[:3, 3]
+        return FL.box_corners(lo, hi) @ T[:3, :3].T + T[:3, 3]
 
     def thenar_block(self) -> tuple[np.ndarray, np.ndarray]:
         """(lo, hi) palm frame (mm) of the thenar block: the bounding box of the journal's and the
         turn's walls across x (the pulley's cavity is cut open where it reaches past), of everything it holds
-        (``frames.thenar_points``) along y, from the palm's palmar to its dorsal face, reaching a
+        (``thenar.thenar_points``) along y, from the palm's palmar to its dorsal face, reaching a
         wall into the metacarpal block. Empty (lo not below hi) where it all lies inside the block."""
-        pts = {k: v * 1e3 for k, v in F.thenar_points(self.params).items()}
+        pts = {k: units.mm(v) for k, v in TH.thenar_points(self.params).items()}
         allp = np.vstack(list(pts.values()))
         x0 = self.extents()[0]
         xs = np.vstack([pts["journal"], pts["turn"]])[:, 0]
@@ -158,8 +161,8 @@ class Palm(ServoMount, Part):
         return _mm(F.T_palm_thumb_cmc_base(self.params))
 
     def thenar(self) -> dict:
-        """``frames.thenar`` in mm (CMC base frame: distances along the CMC axis)."""
-        return {k: mm(v) for k, v in F.thenar(self.params).items()}
+        """``thenar.thenar`` in mm (CMC base frame: distances along the CMC axis)."""
+        return {k: mm(v) for k, v in TH.thenar(self.params).items()}
 
     def thumb_tendon_path(self) -> list[np.ndarray]:
         """Palm-frame points (mm) of the thumb drive on the palm (``wrist.thumb_drive_path``)."""
@@ -185,15 +188,15 @@ class Palm(ServoMount, Part):
 
         # the slot: the cavity swept toward servo 6 (in the pulley's plane, servo 6's pulley lies in
         # it) out of the palm
-        phi = F.cmc_loop_direction(self.params) + math.pi
+        phi = FL.cmc_loop_direction(self.params) + math.pi
         tools = [journal, cavity, swept(np.array([math.cos(phi), math.sin(phi), 0.0]), 4.0 * R + 60.0)]
-        # the back: the cavity reaches the palm's back face (frames.palm_back is its back), so it
+        # the back: the cavity reaches the palm's back face (forearm_layout.palm_back is its back), so it
         # is swept on out through that face, in the pulley's plane (a cylinder tangent to the face,
         # or one sampled a hair inside it, left a skin of 0 to 0.55 mm)
         back = self.back_sweep()
         if back is not None:
             v, n = back
-            depth = ((T0 @ np.array([0.0, 0.0, q, 1.0]))[1] - mm(F.palm_back(self.params)) + 2.0 * (R + h)) / n
+            depth = ((T0 @ np.array([0.0, 0.0, q, 1.0]))[1] - mm(FL.palm_back(self.params)) + 2.0 * (R + h)) / n
             tools.append(swept(v, depth))
         return tools
 
@@ -228,7 +231,7 @@ class Palm(ServoMount, Part):
         r = self.tol.tendon_hole / 2.0
         p0, p1 = path[:2]
         Ti = np.linalg.inv(T0)
-        y_back = mm(F.palm_back(self.params))
+        y_back = mm(FL.palm_back(self.params))
         ss = np.linspace(0.0, 1.0, 401)
         thin = []
         for s in ss:
@@ -316,7 +319,7 @@ class Palm(ServoMount, Part):
             u = (tangent - exit_) / np.linalg.norm(tangent - exit_)
             tools.append(cylinder(exit_ - u, tangent + u, t.tendon_hole / 2.0))
             # the drive's coupler (crimp stop and loop): a bore from the socket face to a clearance
-            # past where it is at full travel (routing.couplers)
+            # past where it is at full travel (couplers.couplers)
             cp = self.couplers[f]
             tools.append(cylinder(exit_ - u, exit_ + u * mm(cp.bore_end), mm(cp.bore) / 2.0))
         # flexion-limiting housing: two rails under each finger base whose sloped fronts are

@@ -17,20 +17,21 @@ import math
 
 import numpy as np
 
-from ... import canon
+from ... import canon, units
 from ...kinematics import frames as F
 from ...kinematics.dimensions import FLANK
 from ...kinematics.topology import CMC_Q, LINKS, digit_links, joint
 from ..measure import eyelet_centres, point_line_distance
 from .base import DORSAL_DOWN, Part, child_joint, digit_table, parent_joint
 from .common import DigitSection, box, build, cyl_x, cylinder, mm, prism_x, sphere
-from .tendons import (LinkTendons, RoutedPart, link_tendons, anchor_tools, channel_tools, drive_fan_tools, groove_outer,
+from .drive_fans import drive_fan_tools
+from .tendons import (LinkTendons, RoutedPart, link_tendons, anchor_tools, channel_tools, groove_outer,
                       groove_tool, knot_pocket_depth, sector_prism, cutter,
                       parent_hub_x)
 
 #: how far (rad) the drive's knot well behind G2 leans distally from the palmar normal (see
 #: Phalanx.build): straight down, it left a 0.45-0.75 mm web beside the eyelet's near relief
-KNOT_WELL_LEAN = math.radians(35.0)
+KNOT_WELL_LEAN = units.rad(35.0)
 
 # ---------------------------------------------------------------------------
 # shared joint features: each returns (body_parts, cutting_tools), link frame, mm
@@ -93,7 +94,7 @@ def clevis(sec: DigitSection, joint: str, y: float, hub_x: float | None = None, 
     """Parent side of a joint whose axis is parallel to x through (y, 0); a loop's hub (groove
     plane ``hub_x``) is the material the slot leaves beside that side's cheek. ``stop_clear``: a
     function that takes the flexion stop's (y, z) outline (joint frame) and returns the outline the
-    slot leaves standing (``tendons.clear_of_fans``); default: the whole outline."""
+    slot leaves standing (``drive_fans.clear_of_fans``); default: the whole outline."""
     t = sec.tol
     rb, W, T, sw = sec.boss_radius, sec.width, sec.thickness, sec.slot_width
     body = [cyl_x(rb, -W / 2.0, W / 2.0, y, 0.0)]

@@ -9,7 +9,7 @@ groove into an axial knot well: a drive's clamp, or each of the CMC loop's two s
 and the horn interface: a central clearance bore for the spline screw and two horn screw holes on
 the cad.horn_hole_radius circle.
 
-The CMC pulley (link ``thumb_cmc_pulley``, frame ``frames.T_cmc_base_pulley``): the same groove
+The CMC pulley (link ``thumb_cmc_pulley``, frame ``thenar.T_cmc_base_pulley``): the same groove
 radius r6 / cmc_gain and width, the loop's two clamps, and a keyed bore on the CMC base's column.
 """
 
@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from ... import canon
+from ... import canon, units
 
 from ...kinematics import frames
 from ...kinematics.topology import CMC_PULLEY, N_SERVOS, SERVOS, link
@@ -34,8 +34,8 @@ DRIVE_HORN_ANGLES = (0.0, math.pi)
 
 def _anchor_angles(params, link_name: str) -> tuple[float, ...]:
     """Polar angles (rad, the link's frame at rest, right hand) of the clamps the routing model puts
-    on a pulley link: a drive's (``routing.servo_clamp_wrap``: every wrap inside the travel) or
-    the CMC loop's two (``routing.cmc_loop_clamps``)."""
+    on a pulley link: a drive's (``routing_rules.servo_clamp_wrap``: every wrap inside the travel) or
+    the CMC loop's two (``routing_rules.cmc_loop_clamps``)."""
     from ...kinematics import routing
     clamps = [e for r in routing.routes(params, right_handed=True) for st in r.strands for e in st.elements
               if isinstance(e, routing.Point) and e.role == "clamp" and e.link == link_name]
@@ -119,7 +119,7 @@ class GroovedPulley(Part):
             tools += [cylinder(d * self.well_radius - np.array([0, 0, w / 2.0 + 1.0]),
                                d * self.well_radius + np.array([0, 0, w / 2.0 + 1.0]), t.tendon_relief / 2.0)]
         from build123d import Axis
-        return build(body, tools).rotate(Axis.Z, math.degrees(self.anchor_angle) - 90.0)
+        return build(body, tools).rotate(Axis.Z, units.deg(self.anchor_angle) - 90.0)
 
 
 class ServoPulley(GroovedPulley):
@@ -130,7 +130,7 @@ class ServoPulley(GroovedPulley):
 
     def __init__(self, params, servo: int):
         if servo not in range(N_SERVOS):
-            raise ValueError(f"servo must be 0..{N_SERVOS - 1} (u1..u{N_SERVOS}), got {servo!r}")
+            raise ValueError(f"servo must be 0..{N_SERVOS - 1} ({SERVOS[0].label}..{SERVOS[-1].label}), got {servo!r}")
         self.params, self.servo = params, SERVOS[servo]
         self.link = link(self.servo.link)
         self.tol = Tolerances(params)
@@ -149,7 +149,7 @@ class ServoPulley(GroovedPulley):
             th = doc["thumb"]
             src = {k: canon.plain(th[k]) for k in ("cmc_pulley_radius_mm", "cmc_servo_travel_deg", "cmc_gain")}
         else:
-            # the radius, and the travel that places the drive's clamp (routing.servo_clamp_wrap)
+            # the radius, and the travel that places the drive's clamp (routing_rules.servo_clamp_wrap)
             table = digit_table(doc, self.servo.digit)
             src = {k: canon.plain(table[k]) for k in ("servo_pulley_radius_mm", "servo_travel_deg")}
         return {**self.common_inputs(), "servo": self.servo.label, **src}
@@ -205,4 +205,4 @@ class CMCPulley(GroovedPulley):
         bore = cylinder((0, 0, -w / 2.0 - 1.0), (0, 0, w / 2.0 + 1.0), r)
         flat = box(-r - 1.0, r + 1.0, self.column_radius - KEY_DEPTH, r + 1.0, -w / 2.0 - 2.0, w / 2.0 + 2.0)
         from build123d import Axis
-        return [bore.cut(flat).rotate(Axis.Z, 90.0 - math.degrees(self.anchor_angle))]
+        return [bore.cut(flat).rotate(Axis.Z, 90.0 - units.deg(self.anchor_angle))]

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...kinematics import forearm_layout as FL
 from ...kinematics import frames as F
 from ...kinematics.dimensions import FLANK
 from ...kinematics.topology import SERVOS
@@ -21,7 +22,7 @@ class ServoMount:
 
     def T_servo(self, servo: int) -> np.ndarray:
         """Servo frame of servo ``servo`` (0-based index, topology.SERVOS), palm frame (mm)."""
-        return F.to_mm(F.T_palm_servo(self.params, servo))
+        return F.to_mm(FL.T_palm_servo(self.params, servo))
 
     def pulley_radius(self, servo: int) -> float:
         return mm(F.servo_radius(self.params, servo))
@@ -42,7 +43,7 @@ class ServoMount:
         return self.pulley_radius(servo) + mm(F.pulley_cavity_margin(self.params))
 
     def _box(self, what: str, grow: float):
-        lo, hi = F.servo_boxes(self.params)[what]
+        lo, hi = FL.servo_boxes(self.params)[what]
         return np.array([mm(v) for v in lo]) - grow, np.array([mm(v) for v in hi]) + grow
 
     def body_box(self, servo: int, grow: float = 0.0):

@@ -2,13 +2,13 @@
 
 Nothing here retypes a tendon's path: every groove, channel, clamp and knot well is read from the
 right-handed routes (``routing.routes(params, right_handed=True)``) and their straight runs
-(``routing.runs``), in the link's frame, in mm. docs/transmission.md describes the mechanism and
+(``routing_paths.runs``), in the link's frame, in mm. docs/transmission.md describes the mechanism and
 docs/parts.md the features:
 
 * a **pulley** element on this link is a groove whose floor lies half a cord inside the pulley's
   centreline radius (the moment arm R): a full ring for a loop's hub and groove (their strands
   touch nearly all the way round over the travel), a sector for the return cord (the arc it ever
-  touches, ``routing.arc_range``, plus ``SECTOR_MARGIN``);
+  touches, ``routing_paths.arc_range``, plus ``SECTOR_MARGIN``);
 * a **hub** (a loop's pulley on the link before its first joint) is material the clevis slot
   leaves standing beside that side's cheek (``routing.Layout.hub_width``); the child's tongue is
   cut back there;
@@ -30,14 +30,15 @@ import numpy as np
 
 from ... import units
 from ...kinematics import routing
-from ...kinematics.dimensions import FLANK, roof_angle
+from ...kinematics import routing_paths
+from ...kinematics.dimensions import FLANK
 from ...kinematics.memo import memoised
 from ...kinematics.topology import TENDONS, joint
+from ...kinematics.vectors import clipped_acos, perpendicular_frame
+from ..print_rules import roof_angle
 
 #: a return groove's sector reaches this far beyond the arc its cord ever touches (rad)
-SECTOR_MARGIN = math.radians(15.0)
-#: a drive chord's fan reaches this far (rad) beyond the extreme chords it holds
-FAN_PAD = math.radians(4.0)
+SECTOR_MARGIN = units.rad(15.0)
 #: the widest gap (mm) a support blocker may cover: an overhang between walls no further apart
 #: prints as a bridge (the widest groove is 1.9 mm; tests/export/test_project3mf.py measures it)
 BRIDGE_MM = 2.0
@@ -109,7 +110,7 @@ class LinkTendons:
                         if e.role == "return":
                             # the arc it touches, and behind it the parent's run, which turns into
                             # this link's frame as the joint flexes (up to a quarter turn beyond)
-                            a0, a1 = routing.arc_range(params, st, i)
+                            a0, a1 = routing_paths.arc_range(params, st, i)
                             sector = (a0 - SECTOR_MARGIN, a1 + math.pi / 2.0)
                         if key in seen:
                             continue
@@ -130,7 +131,7 @@ class LinkTendons:
                             self.anchors.append(Anchor("knot", _mm(e.pos), None, None, cord))
         #: (p0, p1, channel diameter) of every loop and return run fixed to this link, mm
         self.channels = []
-        for run in routing.runs(params, right_handed=True):
+        for run in routing_paths.runs(params, right_handed=True):
             if _KIND[run.tendon] in KINDS and link_name in run.links:
                 p0, p1 = run.ends[link_name]
                 self.channels.append((_mm(p0), _mm(p1), float(units.mm(run.diameter)) + 2.0 * cl))
@@ -139,20 +140,20 @@ class LinkTendons:
         #: fixed here, the other end's positions over the travel), mm
         self.drive_sweeps = []
         strands = {st.name: st for r in routing.routes(params, right_handed=True) for st in r.strands}
-        for run in routing.runs(params, right_handed=True):
+        for run in routing_paths.runs(params, right_handed=True):
             if _KIND[run.tendon] != "drive" or run.links:
                 continue
             els = strands[run.strand].elements
             ends = (els[run.index].link, els[run.index + 1].link)
             if link_name not in ends:
                 continue
-            sweep = routing.run_sweep(params, run, link_name, right_handed=True)
+            sweep = routing_paths.run_sweep(params, run, link_name, right_handed=True)
             k = ends.index(link_name)
             self.drive_sweeps.append((_mm(sweep[0][k]), [_mm(pr[1 - k]) for pr in sweep]))
 
     @property
     def roof(self) -> float:
-        """The roof angle (rad) of this hand's teardrop channels: ``dimensions.roof_angle`` of its
+        """The roof angle (rad) of this hand's teardrop channels: ``print_rules.roof_angle`` of its
         layer height."""
         return roof_angle(self.params.print.layer_height)
 
@@ -223,7 +224,7 @@ def sector_prism(g: Groove, outer: float):
     if g.sector is None:
         return None
     a0, a1 = g.sector
-    n = max(2, int(math.ceil((a1 - a0) / math.radians(10.0))))
+    n = max(2, int(math.ceil((a1 - a0) / units.rad(10.0))))
     big = outer / math.cos(math.pi / (2 * n)) + 1.0     # the polygon's chords stay outside the ring
     poly = [(g.y, g.z)] + [(g.y + big * math.cos(a), g.z + big * math.sin(a)) for a in np.linspace(a0, a1, n + 1)]
     return prism_x(poly, g.x - g.width, g.x + g.width)
@@ -269,7 +270,7 @@ def channel_tools(lt: LinkTendons, extend: float | None = None, faces=(), up=Non
     reaching half a diameter past each end (into the groove or well it meets); and where two
     strands cross (a figure-eight), the reliefs of :func:`crossing_tools` (``faces`` passed on).
     ``up``: the printer's +z in the link frame (the part's ``print_up``): a channel that lies
-    flatter than its round wall prints gets a teardrop's roof at ``dimensions.roof_angle`` of the
+    flatter than its round wall prints gets a teardrop's roof at ``print_rules.roof_angle`` of the
     layer height (``common.teardrop``), which prints without support; the cord runs on its round
     floor, so its path does not change."""
     from .common import teardrop
@@ -311,7 +312,7 @@ def crossing_tools(lt: LinkTendons, faces=(), up=None) -> list:
                 ua, ub = va / la, vb / lb
                 if abs(ua[0]) > 1e-9 or abs(ub[0]) > 1e-9:
                     continue
-                theta = math.acos(max(-1.0, min(1.0, float(ua @ ub))))
+                theta = clipped_acos(float(ua @ ub))
                 if not 1e-6 < theta < math.pi / 2.0:
                     continue
                 d = max(da, db)
@@ -419,7 +420,7 @@ def feature_blockers(lt: LinkTendons, sec) -> list[Blocker]:
 
 
 def sector_ring_mesh(y: float, z: float, x0: float, x1: float, r0: float, r1: float,
-                     sector: tuple[float, float] | None = None, step: float = math.radians(5.0)):
+                     sector: tuple[float, float] | None = None, step: float = units.rad(5.0)):
     """A closed mesh (vertices, faces; outward) of the ring r0 <= r <= r1 about the x-parallel axis
     through (y, z), x0 <= x <= x1, over the polar ``sector`` (rad; None: all round). Its polygon's
     outer chords lie outside r1 and its inner ones inside r0."""
@@ -445,15 +446,6 @@ def sector_ring_mesh(y: float, z: float, x0: float, x1: float, r0: float, r1: fl
             tri = [(q[0], q[1], q[2]), (q[0], q[2], q[3])]
             faces += [t[::-1] for t in tri] if flip else tri
     return _outward(V, np.array(faces, np.int64))
-
-
-def perpendicular_frame(u) -> tuple[np.ndarray, np.ndarray]:
-    """Two unit vectors (v, w) that make (u, v, w) a right-handed orthonormal frame with the unit
-    vector ``u`` (v across u and the axis least along it)."""
-    u = np.asarray(u, float)
-    v = np.cross(u, np.eye(3)[int(np.argmin(np.abs(u)))])
-    v /= np.linalg.norm(v)
-    return v, np.cross(u, v)
 
 
 def cylinder_mesh(p0, p1, r: float, n: int = 24):
@@ -502,104 +494,3 @@ def knot_pocket_depth(sec, floor: float, cord: float) -> float:
     """Depth (mm) of a loop's knot pocket below its groove floor: two cord diameters, less where
     the axle's clearance bore would come within a flank."""
     return max(0.0, min(2.0 * cord, floor - sec.tol.axle_clear / 2.0 - units.mm(FLANK)))
-
-
-def drive_fan_outlines(lt: LinkTendons, sec, start: float) -> list[tuple[list, float, float]]:
-    """(y-z outline, x0, x1) of each slot a drive chord sweeps through this link over the travel:
-    a fan from the end fixed here (from ``start`` mm along the chord, past the eyelet) to the other
-    end's positions, a clearance diameter wide about the chord's plane."""
-    out = []
-    w = sec.tol.tendon_hole
-    for fixed, moving in lt.drive_sweeps:
-        rays = {}
-        for m in moving:
-            v = (m - fixed)[1:]
-            L = float(np.linalg.norm(v))
-            if L <= start:
-                continue
-            u = v / L
-            a = round(math.atan2(u[1], u[0]), 9)
-            rays[a] = max(rays.get(a, 0.0), L + 1.0)
-        if len(rays) < 2:
-            continue
-        # star-shaped about the fixed end: the rays in angular order (unwrapped about the first)
-        a0 = next(iter(rays))
-        order = sorted(rays, key=lambda a: ((a - a0 + math.pi) % (2 * math.pi)))
-        # a clearance's worth of angle beyond the two extreme chords, which would lie on its edges
-        first, last = order[0], order[-1]
-        pad = FAN_PAD
-        rays[first - pad], rays[last + pad] = rays[first], rays[last]
-        order = [first - pad] + order + [last + pad]
-        c = fixed[1:]
-        near = [c + start * np.array([math.cos(a), math.sin(a)]) for a in order]
-        far = [c + rays[a] * np.array([math.cos(a), math.sin(a)]) for a in order]
-        poly = _simple([tuple(p) for p in near] + [tuple(p) for p in reversed(far)])
-        out.append((poly, fixed[0] - w / 2.0, fixed[0] + w / 2.0))
-    return out
-
-
-def drive_fan_tools(lt: LinkTendons, sec, start: float, flanks: tuple = (), span: tuple | None = None) -> list:
-    """The drive's fans (:func:`drive_fan_outlines`) as cutting tools. ``flanks``: the x of the
-    faces of grooves the fan passes beside within ``span`` = (y0, y1) (a joint's tongue); where one
-    lies less than a flank (``dimensions.FLANK``) beside the fan, the fan is widened to it there (a
-    0.4 mm fin stood between the drive's fan and the return cord's groove on the proximal
-    phalanges)."""
-    from .common import box, prism_x
-    out = []
-    for poly, x0, x1 in drive_fan_outlines(lt, sec, start):
-        out.append(prism_x(poly, x0, x1))
-        for face in flanks:
-            for edge, side in ((x0, -1.0), (x1, 1.0)):
-                if 0.0 < side * (face - edge) < units.mm(FLANK):
-                    # to the face and 0.05 mm into the groove beyond it (no coplanar faces)
-                    a, b = sorted((edge, face + side * 0.05))
-                    big = max(abs(v) for p in poly for v in p) + 1.0
-                    out.append(cutter(prism_x(poly, a, b).intersect(box(a - 1.0, b + 1.0, *span, -big, big))))
-    return out
-
-
-def clear_of_fans(lt: LinkTendons, sec, start: float, wedge) -> list:
-    """A flexion stop's wedge (``DigitSection.stop_polygon``: a (y, z) triangle on the palmar face,
-    its edge at the face) where a drive's fan (:func:`drive_fan_outlines`) passes under it: cut
-    back, square to the face, to where the wedge stands a flank (``dimensions.FLANK``) above the
-    fan's top. Its edge left a web over the fan (0.14 mm on a 170 mm hand's middle finger base)."""
-    if len(wedge) != 3:
-        return list(wedge)
-    (y0, z0), (y1, _), (_, z2) = wedge          # (back, face), (edge, face), (back, top)
-    top = None
-    t = np.linspace(0.0, 1.0, 9)[:, None]
-    for poly, _, _ in drive_fan_outlines(lt, sec, start):
-        ring = np.asarray(poly, float)
-        pts = np.vstack([a + t * (b - a) for a, b in zip(ring, np.roll(ring, -1, axis=0))])
-        zs = [z for y, z in pts if min(y0, y1) <= y <= max(y0, y1)]
-        if zs and max(zs) > z0:
-            top = max(zs) if top is None else max(top, max(zs))
-    if top is None:
-        return list(wedge)
-    z = top + units.mm(FLANK)
-    if z >= z2:
-        return list(wedge)
-    y = y1 + (y0 - y1) * (z - z0) / (z2 - z0)   # on the wedge's slope at height z
-    if (y - y1) * (y0 - y1) <= 0.0:
-        return list(wedge)
-    return [(y0, z0), (y, z0), (y, z), (y0, z2)]
-
-
-def guide_entry(start, guide, relief_centre) -> np.ndarray:
-    """Where a channel along the line from ``start`` through a guide point should end: the point of
-    that line nearest the eyelet's far relief sphere's centre (inside the sphere, so the channel's
-    rim never reaches the eyelet's hole)."""
-    a, g, c = (np.asarray(v, float) for v in (start, guide, relief_centre))
-    u = (g - a) / np.linalg.norm(g - a)
-    return a + float((c - a) @ u) * u
-
-
-def _simple(poly):
-    """Drop consecutive duplicates (a fan whose near edge has not moved)."""
-    out = []
-    for p in poly:
-        if not out or math.hypot(p[0] - out[-1][0], p[1] - out[-1][1]) > 1e-6:
-            out.append(p)
-    if math.hypot(out[0][0] - out[-1][0], out[0][1] - out[-1][1]) < 1e-6:
-        out.pop()
-    return out

@@ -19,12 +19,14 @@ import numpy as np
 
 from ... import canon
 from ...kinematics import frames as F
+from ...kinematics import thenar as TH
 from ...kinematics.topology import CMC_Q, JOINTS, link
 from ..measure import eyelet_centres, point_line_distance
 from .base import PALMAR_DOWN, Part, child_joint, digit_table
 from .common import DigitSection, box, build, cylinder, cylinder_floor, mm, prism_x, sphere, transform
 from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, eyelet_boss_axis, hub_grooves
-from .tendons import RoutedPart, link_tendons, anchor_tools, channel_tools, drive_fan_tools, guide_entry
+from .drive_fans import drive_fan_tools, guide_entry
+from .tendons import RoutedPart, link_tendons, anchor_tools, channel_tools
 
 #: depth (mm) of the flat that keys the column's end to the CMC pulley [choice]
 KEY_DEPTH = 1.0
@@ -42,8 +44,8 @@ class ThumbCMCBase(RoutedPart, Part):
         self.sec = DigitSection(params, self.link.digit)
         self.length = mm(getattr(params.digit(self.link.digit), self.link.length_key))
         self.hub_radius = mm(params.thumb.width) / 2.0
-        #: the column and the CMC pulley (frames.thenar, mm along the axis)
-        self.thenar = {k: mm(v) for k, v in F.thenar(params).items()}
+        #: the column and the CMC pulley (thenar.thenar, mm along the axis)
+        self.thenar = {k: mm(v) for k, v in TH.thenar(params).items()}
         #: the joint at its distal end (the thumb MP): its clevis
         self.joint = child_joint(self.link).key
         if self.length <= self.hub_radius + self.sec.slot_back:
@@ -56,7 +58,7 @@ class ThumbCMCBase(RoutedPart, Part):
 
     def inputs(self) -> dict:
         """The thumb's table and the palm's (its thickness and the CMC placement set the column's
-        length, ``frames.thenar``)."""
+        length, ``thenar.thenar``)."""
         doc = self.params.document
         return {**self.common_inputs(), "thumb": canon.plain(digit_table(doc, self.digit)),
                 "palm": canon.plain(doc["palm"])}
@@ -105,7 +107,7 @@ class ThumbCMCBase(RoutedPart, Part):
 
     def T_pulley(self) -> np.ndarray:
         """The CMC pulley's frame in this part's (mm)."""
-        return F.to_mm(F.T_cmc_base_pulley(self.params))
+        return F.to_mm(TH.T_cmc_base_pulley(self.params))
 
     def key_tool(self):
         """The flat on the column's end (pulley frame: on its +y), over the pulley and a clearance

@@ -1,8 +1,8 @@
 """The wrist joint between the palm and the forearm module (numpy only, palm frame, mm).
 
 The palm ends at its back face (the wrist crease, or the back of the thenar where the CMC's
-column sits further back, ``frames.palm_back``); the forearm module's front face stands a
-clearance behind it (``frames.forearm_front``). A tab of the module lies on the palm's dorsal face
+column sits further back, ``forearm_layout.palm_back``); the forearm module's front face stands a
+clearance behind it (``forearm_layout.forearm_front``). A tab of the module lies on the palm's dorsal face
 there and two M2 screws hold it: the palm drills their pilots, the module their clearance holes.
 Both parts read this one description.
 """
@@ -12,8 +12,10 @@ from __future__ import annotations
 import numpy as np
 
 from ... import units
+from ...kinematics import forearm_layout as FL
 from ...kinematics import frames as F
 from ...kinematics import routing
+from ...kinematics import routing_paths
 from ...kinematics.topology import THUMB_CHAIN
 from .common import mm
 
@@ -29,15 +31,15 @@ def socket_x(params) -> tuple[float, float]:
 
 def forearm_block(params) -> tuple[float, float, float, float, float, float]:
     """x0, x1, y0, y1, z0, z1 (palm frame, mm) of the forearm module's block: one palm wall around
-    every one of its servos' envelopes (``frames.servo_envelope``), its front face
-    ``frames.forearm_front``, its top a wall above the palm's dorsal face (flush with the tab)."""
+    every one of its servos' envelopes (``forearm_layout.servo_envelope``), its front face
+    ``forearm_layout.forearm_front``, its top a wall above the palm's dorsal face (flush with the tab)."""
     w = mm(params.palm.wall)
     pts = []
-    for k, T in F.forearm_servos(params).items():
-        env = F.servo_envelope(params, k)
+    for k, T in FL.forearm_servos(params).items():
+        env = FL.servo_envelope(params, k)
         pts.append(np.array([mm(v) for v in ((T[:3, :3] @ env.T).T + T[:3, 3]).ravel()]).reshape(-1, 3))
     pts = np.vstack(pts)
-    return (pts[:, 0].min() - w, pts[:, 0].max() + w, pts[:, 1].min() - w, mm(F.forearm_front(params)),
+    return (pts[:, 0].min() - w, pts[:, 0].max() + w, pts[:, 1].min() - w, mm(FL.forearm_front(params)),
             pts[:, 2].min() - w, mm(params.palm.thickness) / 2.0 + w)
 
 
@@ -48,15 +50,15 @@ def tab(params) -> tuple[np.ndarray, np.ndarray]:
     forearm_x = forearm_block(params)[:2]
     px0, px1 = socket_x(params)
     top = mm(params.palm.thickness) / 2.0
-    return (np.array([max(forearm_x[0], px0), mm(F.forearm_front(params)), top]),
-            np.array([min(forearm_x[1], px1), mm(F.palm_back(params)) + TAB_LENGTH, top + mm(params.palm.wall)]))
+    return (np.array([max(forearm_x[0], px0), mm(FL.forearm_front(params)), top]),
+            np.array([min(forearm_x[1], px1), mm(FL.palm_back(params)) + TAB_LENGTH, top + mm(params.palm.wall)]))
 
 
 def tab_screws(params) -> list[np.ndarray]:
     """Centres of the tab's two screws on the palm's dorsal face, half a tab length in from its
     ends, halfway along its length over the palm."""
     lo, hi = tab(params)
-    y = (mm(F.palm_back(params)) + hi[1]) / 2.0
+    y = (mm(FL.palm_back(params)) + hi[1]) / 2.0
     inset = TAB_LENGTH / 2.0
     return [np.array([lo[0] + inset, y, lo[2]]), np.array([hi[0] - inset, y, lo[2]])]
 
@@ -68,7 +70,7 @@ def thumb_drive_path(params) -> list[np.ndarray]:
     Both parts cut its channel."""
     st = next(s for r in routing.routes(params, right_handed=True)
               if r.tendon.kind == "drive" and r.tendon.digit == THUMB_CHAIN.digit for s in r.strands)
-    run = next(r for r in routing.runs(params, right_handed=True) if r.strand == st.name and "palm" in r.links)
+    run = next(r for r in routing_paths.runs(params, right_handed=True) if r.strand == st.name and "palm" in r.links)
     tangent = np.asarray(units.mm(np.array(run.ends["palm"][0])), float)
     pts = [np.asarray(units.mm(np.array(e.pos)), float) for e in st.elements
            if isinstance(e, routing.Point) and e.link == "palm"]

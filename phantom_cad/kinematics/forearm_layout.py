@@ -1,0 +1,320 @@
+"""The forearm module's servo row: where each of the six servos sits (the iterative row solver),
+their bodies, envelopes and the gaps between them, and the palm's back and ulnar faces the row
+sets. numpy only; frames as in :mod:`.frames`."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .frames import (T_palm_socket, T_palm_thumb_cmc_base, pulley_cavity_margin, servo_radius, socket_tendon_point,
+                     socket_x, tendon_height, tendon_relief, trans, wrist_y)
+from .memo import memoised
+from .thenar import T_cmc_base_pulley, thenar, thenar_axis_point, thenar_points
+from .topology import CMC_SERVO, FINGERS, SERVOS, chain
+
+
+def metacarpal_x(params) -> tuple[float, float]:
+    """x extent (m, palm frame, right hand) of the palm's metacarpal block: across the sockets
+    (:func:`socket_x`), and ulnar far enough that every finger drive's channel keeps a wall to the
+    block's ulnar face where the drive runs ulnar toward its servo (from its exit under the socket
+    to the palm's back face). The palm's ulnar face; its radial side is the thenar's."""
+    x0, x1 = socket_x(params)
+    y0 = palm_back(params)
+    half = tendon_relief(params) / 2.0 + params.palm.wall     # half a tendon hole and a wall
+    for f in FINGERS:
+        s = chain(f).servo
+        tangent = T_palm_servo(params, s) @ np.array([-servo_radius(params, s), 0.0, 0.0, 1.0])
+        exit_ = T_palm_socket(params, f) @ np.array([0.0, 0.0, tendon_height(params), 1.0])
+        at_back = exit_ + (tangent - exit_) * (y0 - exit_[1]) / (tangent[1] - exit_[1])
+        x1 = max(x1, float(max(exit_[0], at_back[0])) + half)
+    return x0, x1
+
+
+
+def T_palm_servo(params, servo: int) -> np.ndarray:
+    """Servo output frame (see module doc) of servo ``servo`` (0-based index, topology.SERVOS), in
+    the forearm module's row (:func:`forearm_servos`)."""
+    return forearm_servos(params)[servo].copy()
+
+
+
+def cmc_loop_direction(params) -> float:
+    """Polar angle (rad, the CMC pulley's frame at rest, right hand) of the direction from servo
+    6's pulley to the CMC pulley (they lie in one plane, :func:`coplanar_servo`): the loop's
+    strands reach the CMC pulley at that angle -+ 90 deg."""
+    T = T_palm_thumb_cmc_base(params) @ T_cmc_base_pulley(params)
+    d = T[:3, 3] - T_palm_servo(params, CMC_SERVO)[:3, 3]
+    v = T[:3, :3].T @ d
+    return math.atan2(v[1], v[0])
+
+
+
+def servo_boxes(params) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """(lo, hi) corners (m, servo frame) of a servo's body and of its flange ears (both ears as
+    one slab across the body): the body's output face one hole clearance below the pulley's
+    lower flange, the body toward -y of the shaft by cad.servo_shaft_offset."""
+    sv, cad = params.servo, params.cad
+    L, W, H = sv.body
+    z_top = -(cad.servo_pulley_width / 2.0 + params.print.hole_clearance)
+    z1 = z_top - cad.servo_ear_offset
+    z0 = z1 - cad.servo_ear_thickness
+    y0 = -cad.servo_shaft_offset
+    return {"body": (np.array([-W / 2.0, y0 - L / 2.0, z_top - H]), np.array([W / 2.0, y0 + L / 2.0, z_top])),
+            "ears": (np.array([-W / 2.0, y0 - sv.flange_span / 2.0, z0]),
+                     np.array([W / 2.0, y0 + sv.flange_span / 2.0, z1]))}
+
+
+
+def box_corners(lo, hi) -> np.ndarray:
+    """The eight corners (8, 3) of the axis-aligned box [lo, hi]."""
+    return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])], float)
+
+
+
+def servo_envelope(params, servo: int) -> np.ndarray:
+    """Points (m, servo frame) whose hull holds a servo with its clearance: the corners of its body
+    and ears and the rim of its pulley's cavity, grown by a hole clearance."""
+    c = params.print.hole_clearance
+    pts = [box_corners(lo - c, hi + c) for lo, hi in servo_boxes(params).values()]
+    rc = servo_radius(params, servo) + pulley_cavity_margin(params)
+    h = params.cad.servo_pulley_width / 2.0 + c
+    a = np.linspace(0.0, 2.0 * math.pi, 48, endpoint=False)
+    for z in (-h, h):
+        pts.append(np.c_[rc * np.cos(a), rc * np.sin(a), np.full_like(a, z)])
+    return np.vstack(pts)
+
+
+
+def forearm_pitch(params, a: int | None = None, b: int | None = None) -> float:
+    """Least x spacing (m) of two neighbouring servos ``a`` and ``b`` in the forearm module (by
+    default the largest of any two): the wider of their two pulley cavities' radii and a servo body
+    with its clearances, and a palm wall (:func:`forearm_servos` widens it where the servos, each
+    turned toward its target, would come closer than a wall)."""
+    m = pulley_cavity_margin(params)
+    r = sorted(servo_radius(params, s.index) for s in SERVOS)
+    ra, rb = (r[-1], r[-2]) if a is None else (servo_radius(params, a), servo_radius(params, b))
+    body = params.servo.body[1] + 2.0 * params.print.hole_clearance
+    return max(ra + rb + 2.0 * m, body) + params.palm.wall
+
+
+
+def servo_target(params, servo: int) -> np.ndarray:
+    """The palm-frame point (m, right hand) a servo's cable heads for as it leaves its pulley: the
+    finger's tendon exit at its socket; for the thumb's drive, its turn onto the CMC axis above the
+    CMC pulley (:func:`thenar`); for servo 6, the CMC pulley's centre (its loop's strands run either
+    side of the line between the pulleys)."""
+    s = SERVOS[servo]
+    if s.drive == "loop":
+        return thenar_axis_point(params, thenar(params)["pulley"])
+    if s.digit in FINGERS:
+        return socket_tendon_point(params, s.digit)
+    return thenar_axis_point(params, thenar(params)["turn"])
+
+
+
+def aimed_servo(C: np.ndarray, E: np.ndarray, r: float) -> np.ndarray:
+    """Servo frame at pulley centre C with its shaft along +z, turned about it so that the drive,
+    leaving the pulley (radius r) at (-r, 0, 0) along +y, passes over E's (x, y)."""
+    d = E[:2] - C[:2]
+    n2 = float(d @ d)
+    t = math.sqrt(n2 - r * r)
+    # E - C = -r x_s + t y_s with x_s = y_s cross z = (y_s.y, -y_s.x): solved for y_s = (a, b)
+    a, b = (t * d[0] + r * d[1]) / n2, (-r * d[0] + t * d[1]) / n2
+    T = np.eye(4)
+    T[:3, 0], T[:3, 1], T[:3, 2] = (b, -a, 0.0), (a, b, 0.0), (0.0, 0.0, 1.0)
+    T[:3, 3] = C
+    return T
+
+
+
+def coplanar_servo(x: float, y: float, Q: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """Servo frame at (x, y) (palm frame) with its shaft along ``a`` and its pulley's mid-plane the
+    plane through Q normal to ``a`` (the height z solves (S - Q) . a = 0), turned so that its y
+    points at Q: two pulleys of equal radii in one plane, which a closed loop joins with straight
+    strands at each one's -x and +x."""
+    a = np.asarray(a, float) / np.linalg.norm(a)
+    S = np.array([x, y, Q[2] - ((x - Q[0]) * a[0] + (y - Q[1]) * a[1]) / a[2]])
+    yv = (Q - S) - ((Q - S) @ a) * a
+    yv /= np.linalg.norm(yv)
+    T = np.eye(4)
+    T[:3, 0], T[:3, 1], T[:3, 2], T[:3, 3] = np.cross(yv, a), yv, a, S
+    return T
+
+
+
+def spaced(want, pitch) -> list[float]:
+    """The x_k nearest ``want`` in least squares with x_k+1 - x_k >= pitch_k (``pitch`` one number
+    or one per gap): with c_k the sum of the gaps before k and z_k = x_k - c_k it is the isotonic
+    regression of want_k - c_k (pool adjacent violators)."""
+    gaps = [float(pitch)] * max(len(want) - 1, 0) if np.isscalar(pitch) else [float(g) for g in pitch]
+    c = np.concatenate([[0.0], np.cumsum(gaps)]) if gaps else np.zeros(len(want))
+    blocks: list[list[float]] = []          # [mean, count]
+    for k, w in enumerate(want):
+        blocks.append([w - c[k], 1.0])
+        while len(blocks) > 1 and blocks[-2][0] > blocks[-1][0]:
+            (m1, n1), (m2, n2) = blocks[-2], blocks.pop()
+            blocks[-1] = [(m1 * n1 + m2 * n2) / (n1 + n2), n1 + n2]
+    z = [m for m, n in blocks for _ in range(int(n))]
+    return [zk + float(c[k]) for k, zk in enumerate(z)]
+
+
+
+_FOREARM: dict = {}
+
+
+
+def forearm_servos(params) -> dict[int, np.ndarray]:
+    """T_palm_servo (m, right hand) of every servo in the forearm module: one row across the
+    forearm in the order of their targets (radial to ulnar, so no two cables cross), each as near
+    (least squares, :func:`spaced`) to where its cable leaves straight ahead as at least
+    forearm_pitch apart allows, widened until the turned servos stand a palm wall apart
+    (:func:`servo_gaps`); the tendon servos' shafts dorsal, every pulley's mid-plane at its
+    target's height (the fingers' tendon height, the thumb drive's turn), so that every drive runs
+    level, each servo turned about its shaft so that its drive leaves straight toward its target
+    (:func:`servo_target`); servo 6's shaft parallel to the CMC axis, its pulley in the CMC pulley's
+    plane (:func:`coplanar_servo`: the loop's strands run straight and in both pulleys' planes);
+    the row as far forward as the servos' envelopes (:func:`servo_envelope`) allow, one palm wall
+    behind the module's front face (:func:`forearm_front`). Memoised (read-only)."""
+    return memoised(_FOREARM, params.digest, lambda: _forearm_servos(params), cap=16)
+
+
+
+def _forearm_servos(params) -> dict[int, np.ndarray]:
+    targets = {s.index: servo_target(params, s.index) for s in SERVOS}
+    # each pulley as near as the pitch allows to where its drive leaves straight ahead toward its
+    # target (its centre r ulnar of the target's x; a loop's centre on it): least squares with
+    # x_k+1 - x_k >= pitch, in the order of those x
+    radius = {k: servo_radius(params, k) for k in targets}
+    aim = {k: (0.0 if SERVOS[k].drive == "loop" else radius[k]) for k in targets}
+    envelope = {k: servo_envelope(params, k) for k in targets}
+    tendon = sorted(targets, key=lambda k: (targets[k][0] + aim[k], k))
+    want = [targets[k][0] + aim[k] for k in tendon]
+    front = forearm_front(params) - params.palm.wall
+    pitch = [forearm_pitch(params, a, b) for a, b in zip(tendon, tendon[1:])]
+    w = params.palm.wall
+    axis = T_palm_thumb_cmc_base(params)[:3, 2]
+    out: dict[int, np.ndarray] = {}
+    for _ in range(12):         # widen each gap until its turned servos stand a wall apart
+        xs = spaced(want, pitch)
+        y = front
+        for _ in range(6):      # a servo's turn depends (weakly) on the row's depth: settle it
+            out = {k: (coplanar_servo(xs[i], y, targets[k], axis) if SERVOS[k].drive == "loop" else
+                       aimed_servo(np.array([xs[i], y, targets[k][2]]), targets[k], aim[k]))
+                   for i, k in enumerate(tendon)}
+            reach = max(float((out[k][:3, :3] @ envelope[k].T)[1].max()) for k in tendon)
+            y = front - reach
+        short = [w - g for g in servo_gaps(params, out)]      # per neighbouring pair, in row order
+        if max(short) <= 1e-9:
+            break
+        pitch = [g + max(s, 0.0) + (1e-6 if s > 1e-9 else 0.0) for g, s in zip(pitch, short)]
+    return out
+
+
+
+def _outlines(params, T: np.ndarray, servo: int) -> list[np.ndarray]:
+    """The xy outlines (palm frame, counter-clockwise) of servo ``servo``'s body, ears and pulley
+    cavity, grown by a clearance, placed by T, with the pockets the module cuts for them: open along
+    the shaft up to the module's top (a wall above the palm's dorsal face), so a tilted shaft sweeps
+    them sideways (the convex hull of the outline at the servo and at the top)."""
+    c = params.print.hole_clearance
+    z_top = params.palm.thickness / 2.0 + params.palm.wall
+    shapes = []
+    for lo, hi in servo_boxes(params).values():
+        shapes.append([(x, y, lo[2] - c) for x, y in ((lo[0] - c, lo[1] - c), (hi[0] + c, lo[1] - c),
+                                                       (hi[0] + c, hi[1] + c), (lo[0] - c, hi[1] + c))])
+    rc = servo_radius(params, servo) + pulley_cavity_margin(params)
+    a = np.linspace(0.0, 2.0 * math.pi, 24, endpoint=False)
+    h = params.cad.servo_pulley_width / 2.0 + c
+    shapes.append([(rc * math.cos(t), rc * math.sin(t), -h) for t in a])
+    out = []
+    for corners in shapes:
+        pts = []
+        for v in corners:
+            p = T[:3, :3] @ np.array(v) + T[:3, 3]
+            pts.append(p[:2])
+            if T[2, 2] > 1e-9:
+                pts.append((p + T[:3, 2] * max((z_top - p[2]) / T[2, 2], 0.0))[:2])
+        pts = np.array(pts)
+        out.append(pts[convex_hull_2d(pts)])
+    return out
+
+
+
+def convex_hull_2d(points) -> np.ndarray:
+    """The indices of the vertices of the convex hull of 2-D points (n, 2), counter-clockwise from
+    the lowest x (then y); points on its edges left out (Andrew's monotone chain). numpy only: the
+    forearm's servo row is laid out on every build, and scipy.spatial costs 0.6 s to import.
+    ValueError when the points span no area."""
+    P = np.asarray(points, dtype=float)
+
+    def turn(o: int, a: int, b: int) -> float:     # > 0: o -> a -> b turns counter-clockwise
+        return float((P[a, 0] - P[o, 0]) * (P[b, 1] - P[o, 1]) - (P[a, 1] - P[o, 1]) * (P[b, 0] - P[o, 0]))
+
+    order = [int(i) for i in np.lexsort((P[:, 1], P[:, 0]))]
+    chains = []
+    for seq in (order, order[::-1]):                # the lower chain, then the upper one
+        chain_: list[int] = []
+        for i in seq:
+            while len(chain_) >= 2 and turn(chain_[-2], chain_[-1], i) <= 0.0:
+                chain_.pop()
+            chain_.append(i)
+        chains.append(chain_[:-1])
+    hull = chains[0] + chains[1]
+    if len(hull) < 3:
+        raise ValueError(f"convex_hull_2d: {len(P)} points span no area")
+    return np.array(hull)
+
+
+
+def servo_gaps(params, servos: dict[int, np.ndarray]) -> list[float]:
+    """Between each pair of neighbouring servos of a row (T_palm_servo), a lower bound (m) of the
+    distance between their outlines (:func:`_outlines`: body, ears and pulley cavity with clearance,
+    swept along the shaft to the module's top): the largest gap between their projections on an
+    edge normal of either (separating axes)."""
+    row = sorted(servos.items(), key=lambda kT: kT[1][0, 3])
+    outlines = [[(P, _edge_normals(P)) for P in _outlines(params, T, k)] for k, T in row]
+    gaps = []
+    for A, B in zip(outlines, outlines[1:]):
+        g = np.inf
+        for P, nP in A:
+            for Q, nQ in B:
+                n = np.vstack([nP, nQ])             # every edge normal of either: the axes
+                p, q = P @ n.T, Q @ n.T             # projections, one column per axis
+                best = np.maximum(q.min(axis=0) - p.max(axis=0), p.min(axis=0) - q.max(axis=0)).max()
+                g = min(g, float(best))
+        gaps.append(float(g))
+    return gaps
+
+
+
+def _edge_normals(R: np.ndarray) -> np.ndarray:
+    """The unit normals (k, 2) of a closed polygon's k edges (its vertices in order)."""
+    e = np.roll(R, -1, axis=0) - R
+    n = np.c_[-e[:, 1], e[:, 0]]
+    return n / np.linalg.norm(n, axis=1, keepdims=True)
+
+
+
+def palm_back(params) -> float:
+    """y (m, palm frame) of the palm's back face: the wrist crease, or the back of the thenar
+    (:func:`thenar_points`) where that reaches further back (the palm's metacarpal block reaches
+    back as far, so that the finger drives stay in channels up to the forearm module)."""
+    back = min(float(v[:, 1].min()) for v in thenar_points(params).values())
+    return min(wrist_y(params), back)
+
+
+
+def forearm_front(params) -> float:
+    """y (m, palm frame) of the forearm module's front face: a hole clearance behind the palm's
+    back face (:func:`palm_back`)."""
+    return palm_back(params) - params.print.hole_clearance
+
+
+
+def T_palm_forearm(params) -> np.ndarray:
+    """The forearm module's frame: the palm's axes, origin on the wrist crease at the middle of the
+    servo row, in the palm's mid-plane."""
+    xs = [T[0, 3] for T in forearm_servos(params).values()]
+    return trans((min(xs) + max(xs)) / 2.0, wrist_y(params), 0.0)

@@ -1,0 +1,51 @@
+"""The shared vector helpers (kinematics/vectors.py) and the digit lookup (kinematics/dimensions.py),
+on answers worked by hand."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from phantom_cad.kinematics.dimensions import digit_entry, digit_field, digit_path
+from phantom_cad.kinematics.vectors import clipped_acos, perpendicular_frame
+
+
+def test_clipped_acos_by_hand():
+    # a dot product rounded just past +-1 is the angle 0 or pi, not a math domain error
+    assert clipped_acos(1.0 + 1e-15) == 0.0
+    assert clipped_acos(-1.0 - 1e-15) == math.pi
+    assert clipped_acos(0.5) == pytest.approx(math.pi / 3.0)
+    assert isinstance(clipped_acos(np.float64(0.5)), float)
+    got = clipped_acos(np.array([1.5, 0.0, -2.0]))
+    assert isinstance(got, np.ndarray)
+    assert np.allclose(got, [0.0, math.pi / 2.0, math.pi])
+
+
+@pytest.mark.parametrize("u", [(1.0, 0.0, 0.0), (0.0, 0.0, -1.0), (0.6, 0.0, 0.8), (1.0, 2.0, -3.0)])
+def test_perpendicular_frame_is_right_handed_and_orthonormal(u):
+    u = np.asarray(u) / np.linalg.norm(u)
+    v, w = perpendicular_frame(u)
+    R = np.column_stack([u, v, w])
+    assert np.allclose(R.T @ R, np.eye(3))
+    assert np.linalg.det(R) == pytest.approx(1.0)
+
+
+def test_perpendicular_frame_along_x_by_hand():
+    # the axis least along x is y: v = x cross y = z, w = x cross z = -y
+    v, w = perpendicular_frame([1.0, 0.0, 0.0])
+    assert np.allclose(v, [0.0, 0.0, 1.0]) and np.allclose(w, [0.0, -1.0, 0.0])
+
+
+def test_a_digit_in_the_parameter_file():
+    doc = {"thumb": {"width_mm": 1}, "fingers": {"ring": {"width_mm": 2}}}
+    assert digit_path("thumb") == ("thumb",) and digit_path("ring") == ("fingers", "ring")
+    assert digit_field("thumb") == "thumb" and digit_field("ring") == "fingers.ring"
+    assert digit_entry(doc, "thumb") == {"width_mm": 1}
+    assert digit_entry(doc, "ring") == {"width_mm": 2}
+
+    class Hand:
+        thumb, fingers = "the thumb", {"ring": "the ring finger"}
+
+    assert digit_entry(Hand(), "thumb") == "the thumb" and digit_entry(Hand(), "ring") == "the ring finger"
