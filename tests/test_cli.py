@@ -215,6 +215,24 @@ def test_outputs_never_replace_user_data(tmp_path, command, victim):
     assert after == before
 
 
+@pytest.mark.parametrize("command", [("params", "validate", "{file}"),
+                                     ("build", "--params", "{file}", "--out", "{out}"),
+                                     ("check", "--params", "{file}", "--out", "{out}")])
+def test_every_command_checks_the_effects_table(tmp_path, document, command):
+    """The params layer checks [effects.*] with the effect library its caller hands it: a command
+    that builds refuses the file as `params validate` does, before anything is built or written."""
+    document["effects"] = {"tendon_slack": {"bogus": 3.0}}
+    bad = tmp_path / "bad.toml"
+    bad.write_text(tomli_w.dumps(document))
+    out = tmp_path / "out"
+    proc = cli(*(a.format(file=bad, out=out) for a in command), check=False)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.strip().splitlines()[-1] == (
+        f"error: {bad}: effects.tendon_slack.bogus = 3.0: unknown parameter of tendon_slack "
+        "(allowed: u1_deg, u2_deg, u3_deg, u4_deg, u5_deg)")
+    assert not out.exists()
+
+
 def test_params_validate_goes_on_after_a_bad_file(tmp_path):
     """A multi-file `params validate` reports every file: one unreadable file does not abort it."""
     from phantom_cad.params import DEFAULT_PARAMS

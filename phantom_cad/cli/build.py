@@ -35,6 +35,7 @@ def build(
 
     Parts are cached by their inputs: a rebuild with unchanged parameters takes about a second, changing one finger rebuilds only its parts. Every part is checked (one valid solid, STEP re-import, watertight manifold STL, no unplanned interference, slicing) before anything is written. See docs/exports.md.
     """
+    from ..calibration.effects import PARAMS_EFFECTS
     from ..errors import UserError, one_line
     from ..export.pipeline import BuildError, build_hand
     from ..params import ParamError
@@ -45,7 +46,7 @@ def build(
 
     try:
         result = build_hand(params, out, side=side, jobs=jobs, slice=slice_, render=render,
-                            cache_dir=cache_dir, log=log)
+                            cache_dir=cache_dir, log=log, effects=PARAMS_EFFECTS)
     except (ParamError, UserError) as exc:
         typer.echo(f"error: {one_line(exc)}", err=True)
         raise typer.Exit(2)

@@ -36,6 +36,7 @@ def check(
     servo commands (the pinch contacts of the thumb with a finger are listed). Exit 0 when every row is ok, 1 on any
     mismatch, 2 on an error. See docs/descriptions.md.
     """
+    from ..calibration.effects import PARAMS_EFFECTS
     from ..errors import one_line
     from ..export.check import check_export, table
     from ..export.pipeline import BuildError, ensure_export
@@ -44,7 +45,7 @@ def check(
         typer.echo(msg, err=True)
 
     try:
-        folder, hand_params = ensure_export(params, out, side, log, cache_dir=cache_dir)
+        folder, hand_params = ensure_export(params, out, side, log, effects=PARAMS_EFFECTS, cache_dir=cache_dir)
     except BuildError as exc:
         typer.echo(f"error: {one_line(exc)}", err=True)
         raise typer.Exit(1)

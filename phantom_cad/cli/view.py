@@ -60,11 +60,13 @@ def ensure_export(params_path, out, log: Callable[[str], None]):
     params/phantom.toml); builds the export into ``out`` (default the build's default,
     exports/<hand>) first when it is missing or was built from other parameters
     (export.pipeline.ensure_export, not sliced: the viewer needs no print estimates)."""
+    from ..calibration.effects import PARAMS_EFFECTS
     from ..export import pipeline
     from ..export.check import Export
 
     path = Path(params_path) if params_path is not None else DEFAULT_PARAMS
-    export, params = pipeline.ensure_export(path, out, None, lambda msg: log(f"view: {msg}"), slice=False)
+    export, params = pipeline.ensure_export(path, out, None, lambda msg: log(f"view: {msg}"), effects=PARAMS_EFFECTS,
+                                            slice=False)
     return params, export, Export.open(export).local_urdf
 
 

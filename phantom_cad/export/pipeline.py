@@ -80,7 +80,7 @@ def _is_export(folder: Path) -> bool:
         return False
 
 
-def _load(params_path, side):
+def _load(params_path, side, effects=None):
     path = Path(params_path) if params_path is not None else DEFAULT_PARAMS
     document = load_document(path)
     file_side = (document.get("hand") or {}).get("side") if isinstance(document.get("hand"), dict) else None
@@ -89,7 +89,7 @@ def _load(params_path, side):
         if not isinstance(document.get("hand"), dict):
             raise ParamError("hand", document.get("hand"), "must be a table", str(path))
         document["hand"]["side"] = side
-    params = parse(document, source=str(path))
+    params = parse(document, source=str(path), effects=effects)
     preflight.check(params)
     return path, document, params, file_side
 
@@ -348,13 +348,15 @@ def build_hand(params_path: str | os.PathLike | None = None, out_dir: str | os.P
                side: str | None = None, jobs: int | None = None, *, slice: bool | None = False,
                render: bool = True, cache_dir: str | os.PathLike | None = None,
                check_interference: bool = True,
-               log: Callable[[str], None] | None = None) -> BuildResult:
+               log: Callable[[str], None] | None = None, effects=None) -> BuildResult:
     """Build every part of the hand described by ``params_path`` into ``out_dir``.
 
     ``side`` overrides ``hand.side``; ``jobs`` worker processes (default os.cpu_count());
     ``slice`` False = skip (default: slicing every part costs ~1-4 s each, cached after),
     True = slice with PrusaSlicer (error if missing), None = slice when it is installed;
-    ``cache_dir`` default ``$PHANTOM_CAD_CACHE`` or ``.cache``.
+    ``cache_dir`` default ``$PHANTOM_CAD_CACHE`` or ``.cache``. ``effects``: the effect library
+    that checks the file's ``plugins`` and ``[effects.*]`` (``params.parse``); the parts never read
+    them.
     Raises :class:`BuildError` (nothing written), :class:`ParamError`, or UserError when ``out_dir``
     exists and is neither empty nor an earlier export (nothing is ever replaced but our own output).
     """
@@ -362,7 +364,7 @@ def build_hand(params_path: str | os.PathLike | None = None, out_dir: str | os.P
 
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
-    path, document, params, file_side = _load(params_path, side)
+    path, document, params, file_side = _load(params_path, side, effects)
     out = Path(out_dir) if out_dir is not None else _default_out(params, side, file_side)
     check_replaceable(out, _is_export, "a phantom-cad export (manifest.json)")
     jobs = max(1, int(jobs or os.cpu_count() or 1))
@@ -414,17 +416,18 @@ def export_problem(out: Path, digest: str, side: str) -> str | None:
 
 
 def ensure_export(params_path: str | os.PathLike | None = None, out_dir: str | os.PathLike | None = None,
-                  side: str | None = None, log: Callable[[str], None] | None = None, **build_kwargs):
+                  side: str | None = None, log: Callable[[str], None] | None = None, effects=None,
+                  **build_kwargs):
     """(export folder, params) of an export of ``params_path`` (``side`` overriding the file's),
     built first (:func:`build_hand`, cached) when ``out_dir`` holds none, one built from other
     parameters or one without its robot description (:func:`export_problem`). For the commands
     that read an export (check, view)."""
-    path, _document, params, file_side = _load(params_path, side)
+    path, _document, params, file_side = _load(params_path, side, effects)
     out = Path(out_dir) if out_dir is not None else _default_out(params, side, file_side)
     reason = export_problem(out, params.digest, params.side)
     if reason is not None:
         (log or (lambda msg: None))(f"{reason}; building it first from {path} (cached parts are reused)")
-        build_hand(path, out, side=side, log=log, **build_kwargs)
+        build_hand(path, out, side=side, log=log, effects=effects, **build_kwargs)
         reason = export_problem(out, params.digest, params.side)
         if reason is not None:  # the build wrote what this reads: a defect, not a user error
             raise RuntimeError(f"after building: {reason}")
