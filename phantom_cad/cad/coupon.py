@@ -21,10 +21,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .parts.common import Tolerances, as_solid, box, cylinder
+
+if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
+    from ..params.schema import HandParams
+
 
 #: the coupon's name (its files: coupon/fit_coupon.step, .stl, .md)
 NAME = "fit_coupon"
@@ -64,7 +69,7 @@ class FitCoupon:
     name = NAME
     color = COLOR
 
-    def __init__(self, params):
+    def __init__(self, params: HandParams):
         self.params = params
         self.tol = Tolerances(params)
 

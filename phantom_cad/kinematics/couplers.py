@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -17,6 +18,9 @@ from .routing import Point, Strand, routes
 from .routing_paths import pose, strand_nodes, strand_path
 from .routing_rules import WRAP_MARGIN, servo_clamp_wrap
 from .topology import CHAINS, SERVOS, chain, joint, link
+
+if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
+    from ..params.schema import HandParams
 
 
 @dataclass(frozen=True)
@@ -52,7 +56,7 @@ class Coupler:
 
 
 
-def _drive_strand(params, digit: str) -> Strand:
+def _drive_strand(params: HandParams, digit: str) -> Strand:
     """The drive's strand as :func:`routes` gives it (mirrored for a left hand), for posing with
     :func:`pose`."""
     return next(r.strands[0] for r in routes(params) if r.tendon.kind == "drive" and r.tendon.digit == digit)
@@ -66,7 +70,7 @@ def split_digits() -> tuple[str, ...]:
 
 
 
-def couplers(params) -> dict[str, Coupler]:
+def couplers(params: HandParams) -> dict[str, Coupler]:
     """The coupler of every split drive (right-hand frames; the left hand's are their mirror image,
     of the same dimensions). Refuses, naming ``hardware.tendon_stop``, a file whose coupler does not
     stay in its channel over the travel or does not come out of the socket at the service angle."""
@@ -78,7 +82,7 @@ _COUPLERS: dict = {}
 
 
 
-def _couplers(params) -> dict[str, Coupler]:
+def _couplers(params: HandParams) -> dict[str, Coupler]:
     hw, c = params.hardware, params.print.hole_clearance
     d = hw.tendon_diameter
     D = hw.stop_diameter + 2.0 * d

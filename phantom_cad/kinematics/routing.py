@@ -44,6 +44,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -57,6 +58,9 @@ from .routing_rules import (WRAP_MARGIN, clamp_angle, cmc_loop_clamps, joint_tra
                             servo_clamp_wrap)
 from .topology import (CHAINS, CMC_PULLEY, CMC_Q, CMC_SERVO, JOINTS, SERVOS, TENDONS, Tendon, chain, digit_links,
                        joint, link)
+
+if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
+    from ..params.schema import HandParams
 
 
 #: a clamp sits this far outside its pulley's centreline circle (m): a simulator's wrapping needs the
@@ -120,7 +124,7 @@ class Layout:
 
 
 
-def layout(params, digit: str) -> Layout:
+def layout(params: HandParams, digit: str) -> Layout:
     """The planes: loop k in the slot's half of sign (-1)^k (ulnar first), its groove one flank
     and one clearance inside the slot's edge; its hub on the cheek of that side, one flank wider
     than the groove; the return cord one flank inside the tongue that the second hub leaves."""
@@ -150,7 +154,7 @@ def _child_origin(rest: dict[str, np.ndarray], jname: str) -> np.ndarray:
 
 
 
-def _segment(params, link_name: str) -> float:
+def _segment(params: HandParams, link_name: str) -> float:
     return float(F.segment_length(params, link(link_name)))
 
 
@@ -164,7 +168,7 @@ def _p(x: float, yz) -> tuple[float, float, float]:
 
 
 
-def _loop(params, digit: str, k: int, lay: Layout, rest) -> tuple[Strand, Strand]:
+def _loop(params: HandParams, digit: str, k: int, lay: Layout, rest) -> tuple[Strand, Strand]:
     """The figure-eight loop between chain joints k and k+1 (see the module doc)."""
     ch = params.digit(digit).chain
     spec = chain(digit)
@@ -206,7 +210,7 @@ def _loop(params, digit: str, k: int, lay: Layout, rest) -> tuple[Strand, Strand
 
 
 
-def _return(params, digit: str, lay: Layout, rest) -> Strand:
+def _return(params: HandParams, digit: str, lay: Layout, rest) -> Strand:
     """The dorsal cable-spring: tangent to every joint's groove at its radius, on both sides."""
     spec = chain(digit)
     ch = params.digit(digit).chain
@@ -236,7 +240,7 @@ def _return(params, digit: str, lay: Layout, rest) -> Strand:
 
 
 
-def _drive(params, digit: str) -> Strand:
+def _drive(params: HandParams, digit: str) -> Strand:
     spec = chain(digit)
     servo = SERVOS[spec.servo]
     r = F.servo_radius(params, servo.index)
@@ -271,7 +275,7 @@ def _drive(params, digit: str) -> Strand:
 
 
 
-def _cmc_loop(params) -> tuple[Strand, Strand]:
+def _cmc_loop(params: HandParams) -> tuple[Strand, Strand]:
     """The closed loop from servo 6's pulley to the CMC pulley (equal radii r6: q15 = u6): strand a
     leaves servo 6's pulley at its -x along its y, strand b at its +x; both reach the CMC pulley
     on the same sides (an open loop: both pulleys turn the same way) and end at one clamp on each
@@ -324,7 +328,7 @@ _ROUTES: dict = {}
 
 
 
-def routes(params, right_handed: bool = False) -> tuple[Route, ...]:
+def routes(params: HandParams, right_handed: bool = False) -> tuple[Route, ...]:
     """Every tendon of the topology (``TENDONS`` order), routed for this hand (memoised by the
     parameters' digest and side: the routes are pure functions of them). ``right_handed``: the
     routes before a left hand's mirroring, in the frames the parts are built in (the CAD layer
@@ -334,7 +338,7 @@ def routes(params, right_handed: bool = False) -> tuple[Route, ...]:
 
 
 
-def _routes(params, mirror: bool) -> tuple[Route, ...]:
+def _routes(params: HandParams, mirror: bool) -> tuple[Route, ...]:
     out = []
     lays = {ch.digit: layout(params, ch.digit) for ch in CHAINS}
     rest = LF.rest_transforms(params)

@@ -20,6 +20,7 @@ back into its own. Why the servos are here and not in the palm: docs/parts.md.
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -32,6 +33,10 @@ from .common import Tolerances, box, build, cylinder, mm, transform
 from . import wrist
 from .servos import ServoMount
 
+if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
+    from ...params.schema import HandParams
+
+
 #: the servos the module holds
 FOREARM_SERVOS = tuple(s.index for s in SERVOS if SERVO_MOUNT[s.drive] == FOREARM)
 
@@ -43,14 +48,14 @@ class Forearm(ServoMount, Part):
     COLOR = (0.45, 0.47, 0.52)
     SCREWS = 2
 
-    def __init__(self, params):
+    def __init__(self, params: HandParams):
         self.params = params
         self.link = link(FOREARM)
         self.tol = Tolerances(params)
         self.pulley_width = mm(params.cad.servo_pulley_width)
 
     @classmethod
-    def for_link(cls, params, link):
+    def for_link(cls, params: HandParams, link):
         return cls(params)
 
     @property
