@@ -26,7 +26,6 @@ from .pipeline import run_pipeline
 from .identify import not_identifiable
 
 
-
 #: the loss of every fit: "linear" (least squares) unless inside robust_loss()
 _LOSS = {"loss": "linear", "f_scale": 1.0}
 

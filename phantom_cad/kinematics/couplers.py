@@ -55,19 +55,16 @@ class Coupler:
         return self.full[1] + self.bore / 2.0 - self.diameter / 2.0
 
 
-
 def _drive_strand(params: HandParams, digit: str) -> Strand:
     """The drive's strand as :func:`routes` gives it (mirrored for a left hand), for posing with
     :func:`pose`."""
     return next(r.strands[0] for r in routes(params) if r.tendon.kind == "drive" and r.tendon.digit == digit)
 
 
-
 def split_digits() -> tuple[str, ...]:
     """The digits whose drive is split at their magnet face: the magnet-held fingers (the thumb is
     fixed to the palm)."""
     return tuple(ch.digit for ch in CHAINS if link(joint(ch.joint_names[0]).parent).segment == "base")
-
 
 
 def couplers(params: HandParams) -> dict[str, Coupler]:
@@ -79,7 +76,6 @@ def couplers(params: HandParams) -> dict[str, Coupler]:
 
 
 _COUPLERS: dict = {}
-
 
 
 def _couplers(params: HandParams) -> dict[str, Coupler]:

@@ -36,12 +36,10 @@ def metacarpal_x(params: HandParams) -> tuple[float, float]:
     return x0, x1
 
 
-
 def T_palm_servo(params: HandParams, servo: int) -> np.ndarray:
     """Servo output frame (see module doc) of servo ``servo`` (0-based index, topology.SERVOS), in
     the forearm module's row (:func:`forearm_servos`)."""
     return forearm_servos(params)[servo].copy()
-
 
 
 def cmc_loop_direction(params: HandParams) -> float:
@@ -52,7 +50,6 @@ def cmc_loop_direction(params: HandParams) -> float:
     d = T[:3, 3] - T_palm_servo(params, CMC_SERVO)[:3, 3]
     v = T[:3, :3].T @ d
     return math.atan2(v[1], v[0])
-
 
 
 def servo_boxes(params: HandParams) -> dict[str, tuple[np.ndarray, np.ndarray]]:
@@ -70,11 +67,9 @@ def servo_boxes(params: HandParams) -> dict[str, tuple[np.ndarray, np.ndarray]]:
                      np.array([W / 2.0, y0 + sv.flange_span / 2.0, z1]))}
 
 
-
 def box_corners(lo, hi) -> np.ndarray:
     """The eight corners (8, 3) of the axis-aligned box [lo, hi]."""
     return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])], float)
-
 
 
 def servo_envelope(params: HandParams, servo: int) -> np.ndarray:
@@ -90,7 +85,6 @@ def servo_envelope(params: HandParams, servo: int) -> np.ndarray:
     return np.vstack(pts)
 
 
-
 def forearm_pitch(params: HandParams, a: int | None = None, b: int | None = None) -> float:
     """Least x spacing (m) of two neighbouring servos ``a`` and ``b`` in the forearm module (by
     default the largest of any two): the wider of their two pulley cavities' radii and a servo body
@@ -101,7 +95,6 @@ def forearm_pitch(params: HandParams, a: int | None = None, b: int | None = None
     ra, rb = (r[-1], r[-2]) if a is None else (servo_radius(params, a), servo_radius(params, b))
     body = params.servo.body[1] + 2.0 * params.print.hole_clearance
     return max(ra + rb + 2.0 * m, body) + params.palm.wall
-
 
 
 def servo_target(params: HandParams, servo: int) -> np.ndarray:
@@ -115,7 +108,6 @@ def servo_target(params: HandParams, servo: int) -> np.ndarray:
     if s.digit in FINGERS:
         return socket_tendon_point(params, s.digit)
     return thenar_axis_point(params, thenar(params)["turn"])
-
 
 
 def aimed_servo(C: np.ndarray, E: np.ndarray, r: float) -> np.ndarray:
@@ -132,7 +124,6 @@ def aimed_servo(C: np.ndarray, E: np.ndarray, r: float) -> np.ndarray:
     return T
 
 
-
 def coplanar_servo(x: float, y: float, Q: np.ndarray, a: np.ndarray) -> np.ndarray:
     """Servo frame at (x, y) (palm frame) with its shaft along ``a`` and its pulley's mid-plane the
     plane through Q normal to ``a`` (the height z solves (S - Q) . a = 0), turned so that its y
@@ -145,7 +136,6 @@ def coplanar_servo(x: float, y: float, Q: np.ndarray, a: np.ndarray) -> np.ndarr
     T = np.eye(4)
     T[:3, 0], T[:3, 1], T[:3, 2], T[:3, 3] = np.cross(yv, a), yv, a, S
     return T
-
 
 
 def spaced(want, pitch) -> list[float]:
@@ -168,7 +158,6 @@ def spaced(want, pitch) -> list[float]:
 _FOREARM: dict = {}
 
 
-
 def forearm_servos(params: HandParams) -> dict[int, np.ndarray]:
     """T_palm_servo (m, right hand) of every servo in the forearm module: one row across the
     forearm in the order of their targets (radial to ulnar, so no two cables cross), each as near
@@ -182,7 +171,6 @@ def forearm_servos(params: HandParams) -> dict[int, np.ndarray]:
     the row as far forward as the servos' envelopes (:func:`servo_envelope`) allow, one palm wall
     behind the module's front face (:func:`forearm_front`). Memoised (read-only)."""
     return memoised(_FOREARM, params.digest, lambda: _forearm_servos(params), cap=16)
-
 
 
 def _forearm_servos(params: HandParams) -> dict[int, np.ndarray]:
@@ -216,7 +204,6 @@ def _forearm_servos(params: HandParams) -> dict[int, np.ndarray]:
     return out
 
 
-
 def _outlines(params: HandParams, T: np.ndarray, servo: int) -> list[np.ndarray]:
     """The xy outlines (palm frame, counter-clockwise) of servo ``servo``'s body, ears and pulley
     cavity, grown by a clearance, placed by T, with the pockets the module cuts for them: open along
@@ -245,7 +232,6 @@ def _outlines(params: HandParams, T: np.ndarray, servo: int) -> list[np.ndarray]
     return out
 
 
-
 def convex_hull_2d(points) -> np.ndarray:
     """The indices of the vertices of the convex hull of 2-D points (n, 2), counter-clockwise from
     the lowest x (then y); points on its edges left out (Andrew's monotone chain). numpy only: the
@@ -271,7 +257,6 @@ def convex_hull_2d(points) -> np.ndarray:
     return np.array(hull)
 
 
-
 def servo_gaps(params: HandParams, servos: dict[int, np.ndarray]) -> list[float]:
     """Between each pair of neighbouring servos of a row (T_palm_servo), a lower bound (m) of the
     distance between their outlines (:func:`_outlines`: body, ears and pulley cavity with clearance,
@@ -292,13 +277,11 @@ def servo_gaps(params: HandParams, servos: dict[int, np.ndarray]) -> list[float]
     return gaps
 
 
-
 def _edge_normals(R: np.ndarray) -> np.ndarray:
     """The unit normals (k, 2) of a closed polygon's k edges (its vertices in order)."""
     e = np.roll(R, -1, axis=0) - R
     n = np.c_[-e[:, 1], e[:, 0]]
     return n / np.linalg.norm(n, axis=1, keepdims=True)
-
 
 
 def palm_back(params: HandParams) -> float:
@@ -309,12 +292,10 @@ def palm_back(params: HandParams) -> float:
     return min(wrist_y(params), back)
 
 
-
 def forearm_front(params: HandParams) -> float:
     """y (m, palm frame) of the forearm module's front face: a hole clearance behind the palm's
     back face (:func:`palm_back`)."""
     return palm_back(params) - params.print.hole_clearance
-
 
 
 def T_palm_forearm(params: HandParams) -> np.ndarray:

@@ -61,7 +61,6 @@ if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters b
 MIRROR = np.diag([-1.0, 1.0, 1.0, 1.0])
 
 
-
 # ---------------------------------------------------------------------------
 # elementary transforms
 # ---------------------------------------------------------------------------
@@ -71,17 +70,14 @@ def rot_x(a: float) -> np.ndarray:
     return np.array([[1, 0, 0, 0], [0, c, -s, 0], [0, s, c, 0], [0, 0, 0, 1]], float)
 
 
-
 def rot_y(a: float) -> np.ndarray:
     c, s = math.cos(a), math.sin(a)
     return np.array([[c, 0, s, 0], [0, 1, 0, 0], [-s, 0, c, 0], [0, 0, 0, 1]], float)
 
 
-
 def rot_z(a: float) -> np.ndarray:
     c, s = math.cos(a), math.sin(a)
     return np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]], float)
-
 
 
 def trans(x: float, y: float, z: float) -> np.ndarray:
@@ -90,11 +86,9 @@ def trans(x: float, y: float, z: float) -> np.ndarray:
     return T
 
 
-
 def flex(q: float) -> np.ndarray:
     """A flexion joint: rotation by q about -x."""
     return rot_x(-q)
-
 
 
 def to_mm(T: np.ndarray) -> np.ndarray:
@@ -104,7 +98,6 @@ def to_mm(T: np.ndarray) -> np.ndarray:
     return out
 
 
-
 def from_mm(T: np.ndarray) -> np.ndarray:
     """The same rigid transform with its translation in metres (from millimetres)."""
     out = np.array(T, float)
@@ -112,11 +105,9 @@ def from_mm(T: np.ndarray) -> np.ndarray:
     return out
 
 
-
 def mirror(T: np.ndarray) -> np.ndarray:
     """The left-hand counterpart of a right-hand transform (S T S)."""
     return MIRROR @ T @ MIRROR
-
 
 
 # ---------------------------------------------------------------------------
@@ -128,11 +119,9 @@ def finger_angle(params: HandParams, i: int) -> float:
     return (i - (len(FINGERS) - 1) / 2.0) * params.palm.arc_offset
 
 
-
 def finger_direction(params: HandParams, i: int) -> np.ndarray:
     phi = finger_angle(params, i)
     return np.array([math.sin(phi), math.cos(phi), 0.0])
-
 
 
 def mcp_position(params: HandParams, i: int) -> np.ndarray:
@@ -144,7 +133,6 @@ def mcp_position(params: HandParams, i: int) -> np.ndarray:
     return np.array([x, y, 0.0])
 
 
-
 def T_palm_finger_base(params: HandParams, finger: str) -> np.ndarray:
     i = FINGERS.index(finger)
     T = rot_z(-finger_angle(params, i))
@@ -152,11 +140,9 @@ def T_palm_finger_base(params: HandParams, finger: str) -> np.ndarray:
     return T
 
 
-
 def T_palm_socket(params: HandParams, finger: str) -> np.ndarray:
     """The palm's finger socket: origin at the centre of the magnet face, y its outward normal."""
     return T_palm_finger_base(params, finger) @ trans(0.0, -params.cad.finger_base_length, 0.0)
-
 
 
 def socket_x(params: HandParams) -> tuple[float, float]:
@@ -170,7 +156,6 @@ def socket_x(params: HandParams) -> tuple[float, float]:
     return min(xs), max(xs)
 
 
-
 def thumb_cmc_placement(offset, axis) -> np.ndarray:
     """T_palm_cmc_base at q15 = 0 for a CMC centre ``offset`` (m, palm frame) and ``axis`` =
     (roll, pitch, yaw) (rad): R = Rz(yaw) Ry(pitch) Rx(roll); the CMC axis is the frame's z."""
@@ -180,10 +165,8 @@ def thumb_cmc_placement(offset, axis) -> np.ndarray:
     return T
 
 
-
 def T_palm_thumb_cmc_base(params: HandParams, q15: float = 0.0) -> np.ndarray:
     return thumb_cmc_placement(params.palm.thumb_cmc_offset, params.palm.thumb_cmc_axis) @ rot_z(q15)
-
 
 
 def tendon_height(params: HandParams) -> float:
@@ -192,18 +175,15 @@ def tendon_height(params: HandParams) -> float:
     return -min(f.thickness for f in params.fingers.values()) / 2.0 + params.palm.wall
 
 
-
 def servo_pulley_lip(params: HandParams) -> float:
     """Flange height of a tendon servo pulley above its groove bottom: two tendon diameters."""
     return 2.0 * params.hardware.tendon_diameter
-
 
 
 def pulley_cavity_margin(params: HandParams) -> float:
     """The palm's cavity around a servo pulley is this much larger than the pulley's groove radius:
     the pulley's flanges, one tendon diameter of running room and a hole clearance."""
     return servo_pulley_lip(params) + params.hardware.tendon_diameter + params.print.hole_clearance
-
 
 
 def servo_radius(params: HandParams, servo: int) -> float:
@@ -215,12 +195,10 @@ def servo_radius(params: HandParams, servo: int) -> float:
     return params.digit(s.digit).chain.servo_radius
 
 
-
 def cmc_pulley_radius(params: HandParams) -> float:
     """Radius (m) of the CMC pulley: servo 6's (thumb.cmc_pulley_radius) over thumb.cmc_gain, so
     that the loop holds q15 = cmc_gain u6 (eq. 9; equal radii at the paper's gain of 1)."""
     return params.thumb.cmc_pulley_radius / params.thumb.cmc_gain
-
 
 
 def tendon_relief(params: HandParams) -> float:
@@ -229,18 +207,15 @@ def tendon_relief(params: HandParams) -> float:
     return params.hardware.tendon_diameter + 2.0 * params.print.hole_clearance
 
 
-
 def wrist_y(params: HandParams) -> float:
     """y (m, palm frame) of the wrist crease: the index metacarpal's length behind the index MCP.
     The palm lies between it and the knuckles, the forearm module behind it."""
     return -params.fingers[FINGERS[0]].metacarpal
 
 
-
 def socket_tendon_point(params: HandParams, finger: str) -> np.ndarray:
     """Where the finger's tendon crosses the magnet face (palm frame, metres)."""
     return (T_palm_socket(params, finger) @ np.array([0.0, 0.0, tendon_height(params), 1.0]))[:3]
-
 
 
 def guide_offsets(guide) -> tuple[np.ndarray, np.ndarray]:
@@ -252,7 +227,6 @@ def guide_offsets(guide) -> tuple[np.ndarray, np.ndarray]:
     G1 = guide.d1 * np.array([-math.sin(h), -math.cos(h)])
     G2 = guide.d2 * np.array([math.sin(h), -math.cos(h)])
     return G1, G2
-
 
 
 def guide_sites(params: HandParams, digit: str) -> tuple[tuple[str, np.ndarray], tuple[str, np.ndarray]]:
@@ -270,11 +244,9 @@ def guide_sites(params: HandParams, digit: str) -> tuple[tuple[str, np.ndarray],
     return (ref.parent, p1), (ref.child, p2)
 
 
-
 #: where a fingertip's pad centre sits on the tip's half cylinder: this far (rad) from the palmar
 #: face toward the tip (the flat palmar face carries the tendon's knot well)
 PAD_ANGLE = math.pi / 4.0
-
 
 
 def fingertip(params: HandParams, digit: str) -> tuple[float, float, float]:
@@ -284,7 +256,6 @@ def fingertip(params: HandParams, digit: str) -> tuple[float, float, float]:
     d = params.digit(digit)
     L = d.distal
     return L, min(d.thickness / 2.0, L - slot_back(d.thickness, params.print.hole_clearance)), d.width / 2.0
-
 
 
 def T_distal_pad(params: HandParams, digit: str) -> np.ndarray:
@@ -298,7 +269,6 @@ def T_distal_pad(params: HandParams, digit: str) -> np.ndarray:
     T[:3, 1] = np.cross(n, T[:3, 0])
     T[:3, 3] = np.array([0.0, L - r, 0.0]) + r * n
     return T
-
 
 
 def segment_length(params: HandParams, ln) -> float:

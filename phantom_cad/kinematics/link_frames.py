@@ -22,7 +22,6 @@ def rest_transforms(params: HandParams) -> dict[str, np.ndarray]:
     return joint_transforms(params, np.zeros(N_JOINTS))
 
 
-
 def _joint_transform(params: HandParams, ln, q) -> np.ndarray:
     """T_parent_child of link ``ln`` at joint angles q: a fixed mount on the palm (finger base,
     servo pulley), the CMC (about the CMC base's z) or a flexion joint behind the parent's
@@ -45,7 +44,6 @@ def _joint_transform(params: HandParams, ln, q) -> np.ndarray:
     return flex(float(q[j.index])) if L == 0.0 else trans(0, L, 0) @ flex(float(q[j.index]))
 
 
-
 def joint_transforms(params: HandParams, q) -> dict[str, np.ndarray]:
     """T_parent_child (named ``T_<parent>_<child>``) for every link but the palm at joint angles
     q (15,), right hand, metres."""
@@ -55,16 +53,13 @@ def joint_transforms(params: HandParams, q) -> dict[str, np.ndarray]:
     return {_transform_name(ln): _joint_transform(params, ln, q) for ln in LINKS if ln.parent is not None}
 
 
-
 def _transform_name(ln) -> str:
     return f"T_{ln.parent}_{ln.name}"
-
 
 
 #: link -> (parent link, joint transform name), from the topology; palm is the root
 LINK_PARENTS: dict[str, tuple[str, str]] = {ln.name: (ln.parent, _transform_name(ln))
                                             for ln in LINKS if ln.parent is not None}
-
 
 
 def link_transforms(params: HandParams, q=None) -> dict[str, np.ndarray]:
@@ -76,7 +71,6 @@ def link_transforms(params: HandParams, q=None) -> dict[str, np.ndarray]:
     if params.side == "left":
         out = {k: mirror(v) for k, v in out.items()}
     return out
-
 
 
 def joints(params: HandParams) -> list[dict]:

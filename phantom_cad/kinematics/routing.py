@@ -68,14 +68,12 @@ if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters b
 CLAMP_OFFSET = 1e-6
 
 
-
 @dataclass(frozen=True)
 class Point:
     kind: str                    # "anchor" or "via"
     link: str
     pos: tuple[float, float, float]
     role: str                    # "clamp", "interface", "guide", "crossing", "channel", "knot", ...
-
 
 
 @dataclass(frozen=True)
@@ -89,12 +87,10 @@ class Pulley:
     joint: str | None = None               # the joint (or servo) it sits on
 
 
-
 @dataclass(frozen=True)
 class Strand:
     name: str
     elements: tuple[Point | Pulley, ...]
-
 
 
 @dataclass(frozen=True)
@@ -110,7 +106,6 @@ class Route:
         return self.tendon.name
 
 
-
 @dataclass(frozen=True)
 class Layout:
     """Where a digit's tendons run across its joints (x in every link frame of the digit,
@@ -121,7 +116,6 @@ class Layout:
     loop_x: tuple[float, ...]    # plane of each coupling loop, chain order
     return_x: float              # plane of the return cord
     hub_width: float             # a hub beside the cheek: from the cheek face to its inner flank
-
 
 
 def layout(params: HandParams, digit: str) -> Layout:
@@ -141,17 +135,14 @@ def layout(params: HandParams, digit: str) -> Layout:
     return Layout(s, g, gr, loops, x_ret, hub)
 
 
-
 def _yz(angle: float, r: float) -> np.ndarray:
     return np.array([r * math.cos(angle), r * math.sin(angle)])
-
 
 
 def _child_origin(rest: dict[str, np.ndarray], jname: str) -> np.ndarray:
     """The joint's axis point (its child's origin) in its parent's frame, from the rest transforms."""
     j = joint(jname)
     return rest[f"T_{j.parent}_{j.child}"][:3, 3].copy()
-
 
 
 def _segment(params: HandParams, link_name: str) -> float:
@@ -162,10 +153,8 @@ def _segment(params: HandParams, link_name: str) -> float:
 X = np.array([1.0, 0.0, 0.0])
 
 
-
 def _p(x: float, yz) -> tuple[float, float, float]:
     return (float(x), float(yz[0]), float(yz[1]))
-
 
 
 def _loop(params: HandParams, digit: str, k: int, lay: Layout, rest) -> tuple[Strand, Strand]:
@@ -209,7 +198,6 @@ def _loop(params: HandParams, digit: str, k: int, lay: Layout, rest) -> tuple[St
     return a, b
 
 
-
 def _return(params: HandParams, digit: str, lay: Layout, rest) -> Strand:
     """The dorsal cable-spring: tangent to every joint's groove at its radius, on both sides."""
     spec = chain(digit)
@@ -237,7 +225,6 @@ def _return(params: HandParams, digit: str, lay: Layout, rest) -> Strand:
     y_end = max(2.0 * e, _segment(params, last) - d.thickness / 2.0)
     els.append(Point("anchor", last, (float(x), float(y_end), float(ch.radii[-1])), "knot"))
     return Strand(f"{digit}_return", tuple(els))
-
 
 
 def _drive(params: HandParams, digit: str) -> Strand:
@@ -272,7 +259,6 @@ def _drive(params: HandParams, digit: str) -> Strand:
     els += [Point("via", base, tuple(float(v) for v in g1), "guide G1"),
             Point("anchor", l2, tuple(float(v) for v in g2), "guide G2")]
     return Strand(f"{digit}_drive", tuple(els))
-
 
 
 def _cmc_loop(params: HandParams) -> tuple[Strand, Strand]:
@@ -313,7 +299,6 @@ def _cmc_loop(params: HandParams) -> tuple[Strand, Strand]:
     return tuple(out)
 
 
-
 def _mirror_element(e):
     S = F.MIRROR[:3, :3]
     mirror = lambda v: tuple(float(t) for t in S @ np.asarray(v, float))  # noqa: E731
@@ -327,7 +312,6 @@ def _mirror_element(e):
 _ROUTES: dict = {}
 
 
-
 def routes(params: HandParams, right_handed: bool = False) -> tuple[Route, ...]:
     """Every tendon of the topology (``TENDONS`` order), routed for this hand (memoised by the
     parameters' digest and side: the routes are pure functions of them). ``right_handed``: the
@@ -335,7 +319,6 @@ def routes(params: HandParams, right_handed: bool = False) -> tuple[Route, ...]:
     cuts right-handed parts and mirrors them on export)."""
     mirror = params.side == "left" and not right_handed
     return memoised(_ROUTES, (params.digest, mirror), lambda: _routes(params, mirror), cap=16)
-
 
 
 def _routes(params: HandParams, mirror: bool) -> tuple[Route, ...]:

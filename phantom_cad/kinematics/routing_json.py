@@ -15,13 +15,17 @@ if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters b
     from ..params.schema import HandParams
 
 
+def rounded_mm(metres: float) -> float:
+    """A length in routing.json: millimetres to 1e-6 mm."""
+    return round(units.mm(metres), 6)
+
+
 def _element_doc(e) -> dict:
     if isinstance(e, Point):
-        return {"type": e.kind, "role": e.role, "link": e.link, "pos_mm": [round(units.mm(v), 6) for v in e.pos]}
+        return {"type": e.kind, "role": e.role, "link": e.link, "pos_mm": [rounded_mm(v) for v in e.pos]}
     return {"type": "pulley", "role": e.role, "link": e.link, "joint": e.joint,
-            "centre_mm": [round(units.mm(v), 6) for v in e.centre], "axis": [round(v, 9) for v in e.axis],
-            "radius_mm": round(units.mm(e.radius), 6), "width_mm": round(units.mm(e.width), 6)}
-
+            "centre_mm": [rounded_mm(v) for v in e.centre], "axis": [round(v, 9) for v in e.axis],
+            "radius_mm": rounded_mm(e.radius), "width_mm": rounded_mm(e.width)}
 
 
 def document(params: HandParams) -> dict:
@@ -38,8 +42,8 @@ def document(params: HandParams) -> dict:
         tendons.append({
             "name": t.name, "kind": t.kind, "digit": t.digit, "links": list(t.links), "joints": list(t.joints),
             "servo": None if t.servo is None else SERVOS[t.servo].name,
-            "cord": {"diameter_mm": round(units.mm(r.diameter), 6), "stiffness": r.stiffness},
-            "strands": [{"name": s.name, "rest_length_mm": round(units.mm(rest[s.name]), 6),
+            "cord": {"diameter_mm": rounded_mm(r.diameter), "stiffness": r.stiffness},
+            "strands": [{"name": s.name, "rest_length_mm": rounded_mm(rest[s.name]),
                          "elements": [_element_doc(e) for e in s.elements]} for s in r.strands],
             **extra,
         })
@@ -48,17 +52,15 @@ def document(params: HandParams) -> dict:
             "tendons": tendons}
 
 
-
 def coupler_document(params: HandParams, cp: Coupler) -> dict:
     """A split drive in ``routing.json`` (millimetres, degrees; s from the socket face into the palm)."""
-    mm = lambda v: round(units.mm(v), 6)  # noqa: E731
-    return {"at": "socket face", "coupler": {"stop_diameter_mm": mm(params.hardware.stop_diameter),
-                                              "stop_length_mm": mm(params.hardware.stop_length),
-                                              "envelope_diameter_mm": mm(cp.diameter),
-                                              "envelope_length_mm": mm(cp.length),
-                                              "bore_mm": mm(cp.bore)},
-            "s_rest_mm": [mm(v) for v in cp.rest], "s_full_travel_mm": [mm(v) for v in cp.full],
-            "channel_mm": mm(cp.channel), "run_mm": mm(cp.run),
-            "palm_strand_mm": mm(cp.palm_strand), "finger_strand_mm": mm(cp.finger_strand),
-            "service_angle_deg": round(units.deg(cp.service_angle), 6), "service_payout_mm": mm(cp.payout),
-            "service_emergence_mm": mm(cp.emergence)}
+    return {"at": "socket face", "coupler": {"stop_diameter_mm": rounded_mm(params.hardware.stop_diameter),
+                                              "stop_length_mm": rounded_mm(params.hardware.stop_length),
+                                              "envelope_diameter_mm": rounded_mm(cp.diameter),
+                                              "envelope_length_mm": rounded_mm(cp.length),
+                                              "bore_mm": rounded_mm(cp.bore)},
+            "s_rest_mm": [rounded_mm(v) for v in cp.rest], "s_full_travel_mm": [rounded_mm(v) for v in cp.full],
+            "channel_mm": rounded_mm(cp.channel), "run_mm": rounded_mm(cp.run),
+            "palm_strand_mm": rounded_mm(cp.palm_strand), "finger_strand_mm": rounded_mm(cp.finger_strand),
+            "service_angle_deg": round(units.deg(cp.service_angle), 6), "service_payout_mm": rounded_mm(cp.payout),
+            "service_emergence_mm": rounded_mm(cp.emergence)}

@@ -28,14 +28,12 @@ def servo_axis(params: HandParams) -> np.ndarray:
     return np.array([0.0, 0.0, 1.0 if params.side == "right" else -1.0])
 
 
-
 def _rotation(axis, angle: float) -> np.ndarray:
     a = np.asarray(axis, float)
     K = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
     R = np.eye(4)
     R[:3, :3] = np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
     return R
-
 
 
 def pose(params: HandParams, q=None, u=None) -> dict[str, np.ndarray]:
@@ -50,10 +48,8 @@ def pose(params: HandParams, q=None, u=None) -> dict[str, np.ndarray]:
     return Ts
 
 
-
 def _world(Ts, link_name, v, w=1.0) -> np.ndarray:
     return (Ts[link_name] @ np.array([*v, w]))[:3]
-
 
 
 def _wrap(P, N, centre, axis, rho):
@@ -96,7 +92,6 @@ def _wrap(P, N, centre, axis, rho):
     return length, pts
 
 
-
 def strand_path(params: HandParams, strand: Strand, Ts) -> tuple[float, np.ndarray]:
     """Length (m) and polyline (palm frame, metres) of a strand with the links at ``Ts``."""
     els = strand.elements
@@ -123,7 +118,6 @@ def strand_path(params: HandParams, strand: Strand, Ts) -> tuple[float, np.ndarr
     return total, np.array(pts)
 
 
-
 def strand_nodes(strand: Strand, Ts) -> list[tuple[np.ndarray | None, np.ndarray | None]]:
     """(arrival, departure) point of every element, palm frame: a point's own position; a pulley's
     two tangent points (None where the strand lifts off it)."""
@@ -139,7 +133,6 @@ def strand_nodes(strand: Strand, Ts) -> list[tuple[np.ndarray | None, np.ndarray
                            _world(Ts, e.link, e.axis, 0.0), e.radius)
             out[i] = (pts[1], pts[-2]) if len(pts) > 2 else (None, None)
     return out
-
 
 
 @dataclass(frozen=True)
@@ -160,7 +153,6 @@ class Run:
 _RUNS: dict = {}
 
 
-
 def runs(params: HandParams, right_handed: bool = False) -> tuple[Run, ...]:
     """Every straight run of every strand, with the links it is fixed to. A run is fixed to a link
     when both its ends stay put in that link's frame at rest, at mid travel and at full travel
@@ -168,7 +160,6 @@ def runs(params: HandParams, right_handed: bool = False) -> tuple[Run, ...]:
     that holds both the pulley's axis and the point it comes from). ``right_handed`` as for
     :func:`routes`."""
     return memoised(_RUNS, (params.digest, right_handed), lambda: _runs(params, right_handed), cap=16)
-
 
 
 def _runs(params: HandParams, right_handed: bool) -> tuple[Run, ...]:
@@ -212,7 +203,6 @@ _POSES: dict = {}
 _TRAVEL_NODES: dict = {}
 
 
-
 def travel_poses(params: HandParams, fractions) -> tuple[dict[str, np.ndarray], ...]:
     """T_palm_link with every flexion joint and tendon servo at each fraction of its travel (the
     joints to the clamps' design travel, :func:`joint_travel`; the CMC at rest). Memoised by
@@ -221,13 +211,11 @@ def travel_poses(params: HandParams, fractions) -> tuple[dict[str, np.ndarray], 
     return memoised(_POSES, (params.digest, fr), lambda: _travel_poses(params, fr), cap=16)
 
 
-
 def travel_nodes(params: HandParams, strand: Strand, fractions) -> tuple[list, ...]:
     """:func:`strand_nodes` of ``strand`` at each of :func:`travel_poses` (memoised, read-only)."""
     fr = tuple(float(f) for f in fractions)
     return memoised(_TRAVEL_NODES, (params.digest, strand, fr),
                     lambda: tuple(strand_nodes(strand, Ts) for Ts in travel_poses(params, fr)), cap=512)
-
 
 
 def _travel_poses(params: HandParams, fractions) -> tuple[dict[str, np.ndarray], ...]:
@@ -240,7 +228,6 @@ def _travel_poses(params: HandParams, fractions) -> tuple[dict[str, np.ndarray],
         u = np.array([f * params.digit(s.digit).chain.travel[1] if s.drive == "tendon" else 0.0 for s in SERVOS])
         out.append(pose(params, q, u))
     return tuple(out)
-
 
 
 def arc_range(params: HandParams, strand: Strand, index: int, fractions=tuple(np.linspace(0.0, 1.0, 11))) -> tuple[float, float]:
@@ -266,7 +253,6 @@ def arc_range(params: HandParams, strand: Strand, index: int, fractions=tuple(np
     return ref + min(rel), ref + max(rel)
 
 
-
 def run_sweep(params: HandParams, run: Run, link_name: str, fractions=tuple(np.linspace(0.0, 1.0, 21)),
               right_handed: bool = False) -> list[tuple[np.ndarray, np.ndarray]]:
     """The ends of a run (m) in ``link_name``'s frame at each fraction of the travel
@@ -283,7 +269,6 @@ def run_sweep(params: HandParams, run: Run, link_name: str, fractions=tuple(np.l
     return out
 
 
-
 def lengths(params: HandParams, q=None, u=None, which=None) -> dict[str, float]:
     """Every strand's length (m) at joint angles q and servo angles u."""
     Ts = pose(params, q, np.zeros(len(SERVOS)) if u is None else u)
@@ -292,7 +277,6 @@ def lengths(params: HandParams, q=None, u=None, which=None) -> dict[str, float]:
         for s in r.strands:
             out[s.name] = strand_path(params, s, Ts)[0]
     return out
-
 
 
 def mid_travel_pose(params: HandParams) -> dict[str, np.ndarray]:
@@ -304,7 +288,6 @@ def mid_travel_pose(params: HandParams) -> dict[str, np.ndarray]:
             q[j.index] = joint_travel(params, j.name) / 2.0
     u = np.array([sum(params.digit(s.digit).chain.travel) / 2.0 if s.drive == "tendon" else 0.0 for s in SERVOS])
     return pose(params, q, u)
-
 
 
 def side_sites(params: HandParams, strand: Strand, Ts=None) -> list[tuple[str, tuple[float, float, float]] | None]:

@@ -20,10 +20,8 @@ if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters b
 WRAP_MARGIN = units.rad(8.0)
 
 
-
 #: a loop's clamps are placed for a travel this far past the joint's upper limit (rad)
 TRAVEL_MARGIN = units.rad(3.0)
-
 
 
 def clamp_angle(lo: float, hi: float, what: str, params, field: str, value, why: str) -> float:
@@ -37,12 +35,10 @@ def clamp_angle(lo: float, hi: float, what: str, params, field: str, value, why:
     return (lo + hi) / 2.0
 
 
-
 def joint_travel(params: HandParams, jname: str) -> float:
     j = joint(jname)
     lim = dict(zip(params.digit(j.digit).chain.joints, params.digit(j.digit).chain.limits))[j.key]
     return lim[1] + TRAVEL_MARGIN + (params.cad.module_stop_margin if link(j.parent).segment == "base" else 0.0)
-
 
 
 def limit_field(params: HandParams, digit: str, jname: str) -> tuple[str, list[float]]:
@@ -50,7 +46,6 @@ def limit_field(params: HandParams, digit: str, jname: str) -> tuple[str, list[f
     ch = params.digit(digit).chain
     key = joint(jname).key
     return f"{digit_field(digit)}.limits_rad.{key}", [round(v, 6) for v in dict(zip(ch.joints, ch.limits))[key]]
-
 
 
 def loop_travel_rule(ja: str, jb: str, carrier: str, jname: str, q: float, gamma: float, L: float,
@@ -64,7 +59,6 @@ def loop_travel_rule(ja: str, jb: str, carrier: str, jname: str, q: float, gamma
             f"R_{joint(jb).key}) / L_{link(carrier).segment}) - {2 * units.deg(m):g} deg = "
             f"{units.deg(2 * gamma - 2 * m):.2f} deg (L = {units.mm(L):.2f} mm, R = {units.mm(Ra):g} and "
             f"{units.mm(Rb):g} mm: smaller pulley radii or a longer phalanx allow more)")
-
 
 
 def servo_clamp_wrap(params: HandParams, servo: int) -> float:
@@ -81,10 +75,8 @@ def servo_clamp_wrap(params: HandParams, servo: int) -> float:
     return hi
 
 
-
 #: how far (rad) each of the CMC loop's clamps sits inside the wraps the travel allows
 LOOP_CLAMP_MARGIN = units.rad(2.0)
-
 
 
 def cmc_loop_clamps(params: HandParams) -> tuple[tuple[float, float], tuple[float, float]]:

@@ -20,7 +20,6 @@ if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters b
 _THENAR: dict = {}
 
 
-
 def thenar(params: HandParams) -> dict[str, float]:
     """The palm's hold on the thumb (CMC base frame at rest, distances s along the CMC axis from
     the CMC centre, metres; memoised, read-only):
@@ -38,7 +37,6 @@ def thenar(params: HandParams) -> dict[str, float]:
     The palm cuts a slot from the cavity toward servo 6 (the loop runs in it; the pulley slides in
     through it, then the column up through the journal into it)."""
     return memoised(_THENAR, params.digest, lambda: thenar_layout(params, T_palm_thumb_cmc_base(params)), cap=16)
-
 
 
 def thenar_layout(params: HandParams, T0: np.ndarray) -> dict[str, float]:
@@ -60,10 +58,8 @@ def thenar_layout(params: HandParams, T0: np.ndarray) -> dict[str, float]:
             "turn": ceiling + w + tendon_relief(params)}
 
 
-
 #: the CMC axis's largest tilt from the palm's normal (rad): the column along it climbs into the palm
 MAX_CMC_TILT = units.rad(60.0)
-
 
 
 def thenar_margins(params: HandParams, T0: np.ndarray) -> dict[str, float]:
@@ -88,12 +84,10 @@ def thenar_margins(params: HandParams, T0: np.ndarray) -> dict[str, float]:
     return out
 
 
-
 def T_cmc_base_pulley(params: HandParams) -> np.ndarray:
     """The CMC pulley's frame in the CMC base's (fixed): on the CMC axis at the pulley's mid-plane,
     the CMC base's axes (its key's flat on +y)."""
     return trans(0.0, 0.0, thenar(params)["pulley"])
-
 
 
 def thenar_axis_point(params: HandParams, s: float) -> np.ndarray:
@@ -101,13 +95,11 @@ def thenar_axis_point(params: HandParams, s: float) -> np.ndarray:
     return (T_palm_thumb_cmc_base(params) @ np.array([0.0, 0.0, s, 1.0]))[:3]
 
 
-
 def _ring(T0: np.ndarray, s: float, r: float, n: int = 24) -> np.ndarray:
     """Points (n, 3) of the circle of radius r about the CMC axis, s along it (palm frame)."""
     a = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
     pts = np.c_[r * np.cos(a), r * np.sin(a), np.full_like(a, s), np.ones_like(a)]
     return (T0 @ pts.T).T[:, :3]
-
 
 
 def thenar_points(params: HandParams, T0: np.ndarray | None = None) -> dict[str, np.ndarray]:
