@@ -386,20 +386,20 @@ def test_gravity_sag_is_left_or_matched(hand):
     d, out, floor, vs_truth = run_hidden(hand, {}, noise_seed=3000, extra=gravity_sag(hand))
     info = summary(out, floor, vs_truth)
     assert abs(floor - EXPECTED_FLOOR) <= 0.25 * EXPECTED_FLOOR, info
-    if out["explained"]:
-        assert vs_truth <= 0.5 * floor, info
-        assert out["mae_deg_after"] <= 1.5 * floor, info
-    else:
-        fingers = {f"q{j + 1}" for j in range(2, 14)}
-        assert out["left"] and set(out["left"]) <= fingers, info
-        overall = out["verdict"]["overall"]
-        assert overall["white"] is False and overall["whiteness_z"] > 4.0, overall
-        # what is left is the same in both directions and on the fingers, not the thumb
-        sm = out["signature_match"]["after"]
-        assert sm["measured"]["direction"] == "same" and sm["measured"]["digits"] == "some", sm
-        assert set(sm["details"]["digits_with_structure"]) <= {"index", "middle", "ring", "pinky"}
-        text = "\n".join(diagnosis_text(d, out))
-        assert "neighbouring residuals are correlated: lag-1 autocorrelation" in text
+    # no library effect is the sag: the model kept is off the truth by more than the criterion, so
+    # the one honest outcome is "not explained", left on finger joints
+    assert vs_truth > 0.5 * floor, info
+    assert out["explained"] is False, info
+    fingers = {f"q{j + 1}" for j in range(2, 14)}
+    assert out["left"] and set(out["left"]) <= fingers, info
+    overall = out["verdict"]["overall"]
+    assert overall["white"] is False and overall["whiteness_z"] > 4.0, overall
+    # what is left is the same in both directions and on the fingers, not the thumb
+    sm = out["signature_match"]["after"]
+    assert sm["measured"]["direction"] == "same" and sm["measured"]["digits"] == "some", sm
+    assert set(sm["details"]["digits_with_structure"]) <= {"index", "middle", "ring", "pinky"}
+    text = "\n".join(diagnosis_text(d, out))
+    assert "neighbouring residuals are correlated: lag-1 autocorrelation" in text
 
 
 def test_soft_stop_is_left_on_its_joint(hand):

@@ -95,17 +95,27 @@ def files(hand, tmp_path_factory):
     return d
 
 
+@pytest.fixture(scope="module")
+def calibrated(files):
+    """fit with the plugin on the module's data: (its process result, the calibrated file)."""
+    out = files / "cal" / "calibrated.toml"
+    (files / "cal").mkdir(exist_ok=True)
+    r = run("fit", files / "data.csv", "--effects", "finger_compliance", "--out", out,
+            "--plugin", files / "plugins" / "finger.py")
+    return r, out
+
+
 def mae_line(text, label):
     return float(re.search(label + r"\s+([0-9.]+)", text).group(1))
 
 
-def test_the_plugin_path_end_to_end(hand, files):
+def test_the_plugin_path_end_to_end(hand, files, calibrated):
     d = files
-    data, out = d / "data.csv", d / "cal" / "calibrated.toml"
-    (d / "cal").mkdir()
-    r = run("fit", data, "--effects", "finger_compliance", "--out", out)
+    data = d / "data.csv"
+    r = run("fit", data, "--effects", "finger_compliance", "--out", d / "refused.toml")
     assert r.returncode == 2 and "unknown effect 'finger_compliance'" in r.stderr
-    r = run("fit", data, "--effects", "finger_compliance", "--out", out, "--plugin", d / "plugins" / "finger.py")
+    assert not (d / "refused.toml").exists()
+    r, out = calibrated
     assert r.returncode == 0, r.stderr
     before, after = map(float, re.search(r"MAE ([0-9.]+) deg \(analytic\) -> ([0-9.]+) deg", r.stdout).groups())
     floor = NOISE_DEG * math.sqrt(2 / math.pi)
@@ -134,13 +144,12 @@ def test_the_plugin_path_end_to_end(hand, files):
     assert "calibrated (finger_compliance + tendon_elasticity)" in r.stdout
 
 
-def test_the_calibrated_control_law_uses_the_plugin(files):
+def test_the_calibrated_control_law_uses_the_plugin(files, calibrated):
     from phantom_cad import load_hand
     from phantom_cad.calibration.effects import unload_plugin
 
-    out = files / "cal" / "calibrated.toml"
-    if not out.exists():
-        pytest.skip("needs the file of test_the_plugin_path_end_to_end")
+    r, out = calibrated
+    assert r.returncode == 0, r.stderr
     try:
         hand = load_hand(out)
         assert hand.effects.names == ("finger_compliance", "tendon_elasticity")
