@@ -234,6 +234,7 @@ def single_cases():
 
 
 @pytest.mark.parametrize("name, seed", list(single_cases()))
+@pytest.mark.slow
 def test_one_hidden_effect(hand, name, seed):
     hidden = hidden_values(hand, [name], seed)
     d, out, floor, vs_truth = run_hidden(hand, hidden, noise_seed=1000 + 10 * SINGLES.index(name) + seed)
@@ -305,6 +306,7 @@ NEARLY_DUPLICATED_BY_CAMERA = {"pulley_radius_error"}
 
 
 @pytest.mark.parametrize("a, b, k", list(pair_cases()))
+@pytest.mark.slow
 def test_two_hidden_effects(hand, a, b, k):
     hidden = hidden_values(hand, [a, b], seed=100 + k)
     d, out, floor, vs_truth = run_hidden(hand, hidden, noise_seed=2000 + k)
@@ -327,6 +329,7 @@ def test_two_hidden_effects(hand, a, b, k):
     check_fit(out, floor, vs_truth)
 
 
+@pytest.mark.slow
 def test_a_hand_effect_the_camera_duplicates_is_named(hand):
     """A uniform compliance and a camera scale hidden together (DUPLICATED_BY_CAMERA above): the
     attribution cannot be right from these data (a compliance scales each distal joint by a
@@ -373,6 +376,7 @@ def test_outside_physics_known_answers(hand):
     assert np.allclose(np.delete(q, mcp, axis=1), np.delete(q0, mcp, axis=1), atol=1e-15)
 
 
+@pytest.mark.slow
 def test_gravity_sag_is_left_or_matched(hand):
     """A joint error that depends on the pose (gravity sag, hidden.gravity_sag: 1.0 / 0.6 / 0.3 deg at
     MCP / PIP / DIP of the four fingers, times the cosine of the link's absolute angle). Either

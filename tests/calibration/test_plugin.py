@@ -109,6 +109,7 @@ def mae_line(text, label):
     return float(re.search(label + r"\s+([0-9.]+)", text).group(1))
 
 
+@pytest.mark.slow
 def test_the_plugin_path_end_to_end(hand, files, calibrated):
     d = files
     data = d / "data.csv"
@@ -144,6 +145,7 @@ def test_the_plugin_path_end_to_end(hand, files, calibrated):
     assert "calibrated (finger_compliance + tendon_elasticity)" in r.stdout
 
 
+@pytest.mark.slow
 def test_the_calibrated_control_law_uses_the_plugin(files, calibrated):
     from phantom_cad import load_hand
     from phantom_cad.calibration.effects import unload_plugin
@@ -162,6 +164,7 @@ def test_the_calibrated_control_law_uses_the_plugin(files, calibrated):
         unload_plugin(files / "plugins" / "finger.py")
 
 
+@pytest.mark.slow
 def test_diagnose_and_simulate_take_the_plugin(files):
     d = files
     r = run("diagnose", d / "data.csv", "--plugin", d / "plugins" / "finger.py", "--json", d / "d.json",
@@ -175,6 +178,7 @@ def test_diagnose_and_simulate_take_the_plugin(files):
     assert r.returncode == 0, r.stderr
 
 
+@pytest.mark.slow
 def test_fit_refuses_an_effect_the_control_law_cannot_invert(files):
     d = files
     r = run("fit", d / "data.csv", "--plugin", d / "plugins" / "cmc_gain.py", "--effects", "cmc_gain",
@@ -193,6 +197,7 @@ def test_fit_refuses_an_effect_the_control_law_cannot_invert(files):
     ("from phantom_cad.calibration.effects import JointOffset, register_effect\n\n"
      "register_effect(JointOffset)\n", "effect 'joint_offset' is already defined"),
 ])
+@pytest.mark.slow
 def test_a_broken_plugin_is_one_error_line(files, command, body, message, tmp_path):
     path = tmp_path / "broken.py"
     if body is not None:
