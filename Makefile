@@ -5,7 +5,7 @@ PIP    := $(PY) -m pip
 STAMP  := $(VENV)/.installed-stamp
 export PIP_DISABLE_PIP_VERSION_CHECK := 1
 
-.PHONY: install demo test bench property sysdeps clean
+.PHONY: install demo test test-fast bench property sysdeps clean
 
 $(STAMP): pyproject.toml
 	@test -x $(PY) || python3 -m venv $(VENV)
@@ -26,6 +26,12 @@ demo: install sysdeps
 
 test: install sysdeps
 	$(PY) -m pytest
+
+# The tests not marked slow (no whole-hand build, no MuJoCo simulation of a hand, no browser, no
+# slicing of whole hands, no property test, no command line run for seconds): under a minute, for
+# while you work. `make test` runs them all (CI).
+test-fast: install sysdeps
+	$(PY) -m pytest -m "not slow"
 
 bench: install
 	$(PY) bench/run.py

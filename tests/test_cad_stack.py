@@ -7,6 +7,7 @@ import math
 import pytest
 
 
+@pytest.mark.slow
 def test_build123d_and_cadquery_share_ocp_and_build_solids():
     import build123d
     import cadquery as cq

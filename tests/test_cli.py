@@ -13,6 +13,8 @@ import tomli_w
 
 from tests.test_model import Q_REF_STAR, U_STAR, easy_document
 
+pytestmark = pytest.mark.slow     # each test runs the command line in processes of its own
+
 
 def cli(*args, check=True):
     proc = subprocess.run([sys.executable, "-m", "phantom_cad", *map(str, args)],

@@ -96,6 +96,7 @@ def run(argv, capsys):
 
 
 @pytest.mark.parametrize("command, slot, bad", CASES, ids=[f"{c}-{s}-{b or 'empty-string'}" for c, s, b in CASES])
+@pytest.mark.slow
 def test_bad_input_is_one_error_line(tmp_path, monkeypatch, capsys, command, slot, bad):
     monkeypatch.chdir(tmp_path)
     files = _fixtures(tmp_path)

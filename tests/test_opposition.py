@@ -33,6 +33,7 @@ def _sampled_distance(p1, q1, p2, q2, n=801):
     return np.linalg.norm(a[:, None] - b[None], axis=-1).min()
 
 
+@pytest.mark.slow
 def test_segment_distance_is_the_sampled_minimum():
     rng = np.random.default_rng(3)
     cases = [rng.normal(size=(4, 3)) for _ in range(40)]
@@ -123,6 +124,7 @@ SOLVED = ((-0.04368, -0.07324, -0.01410), tuple(math.radians(v) for v in (-26.85
 
 
 @pytest.mark.parametrize("placement", ["file", "solved"])
+@pytest.mark.slow
 def test_reach_is_the_brute_force_minimum(hand, placement):
     """The closest pad-facing approach and the squarest contact over a coarse command grid, by
     sampling points along the capsules' axes and taking the contact direction between the nearest
@@ -219,6 +221,7 @@ def test_the_palm_envelope_by_hand(hand):
     assert hi[0] * 1e3 == pytest.approx(x_pinky + doc["fingers"]["pinky"]["width_mm"] / 2 + wall)
 
 
+@pytest.mark.slow
 def test_solve_improves_on_the_file(hand):
     """A short search returns a placement inside its bounds whose margin (measured again here on
     the search's grid) is no worse than the file's placement, which is in its first population,
@@ -238,6 +241,7 @@ def test_solve_improves_on_the_file(hand):
     assert sol.intrusion <= 0.0
 
 
+@pytest.mark.slow
 def test_solve_meets_a_callers_constraint(hand):
     """A caller's requirement the file's placement breaks (the CMC centre at least 8 mm further
     ulnar and 10 mm more distal than the file puts it): the short search's placement meets it,

@@ -48,6 +48,7 @@ CASES = [(path, side) for path in FILES for side in ("right", "left")]
 
 
 @pytest.mark.parametrize("path,side", CASES, ids=[f"{p.stem}-{s}" for p, s in CASES])
+@pytest.mark.slow
 def test_lengths_are_the_mechanism(path, side):
     p = _params(path, side)
     doc = tomllib.loads(path.read_text())
@@ -78,6 +79,7 @@ def test_lengths_are_the_mechanism(path, side):
 
 
 @pytest.mark.parametrize("path", FILES, ids=[p.stem for p in FILES])
+@pytest.mark.slow
 def test_over_the_travel_the_loops_hold_and_the_drive_winds(path):
     """Along the model's coupled motion (hand.forward, uncompensated) at 20 commands over each
     servo's travel: every loop strand within 0.02 mm of its rest length, the drive's free part
@@ -254,6 +256,7 @@ def test_servo_boxes_and_wrist_by_hand():
 
 
 @pytest.mark.parametrize("path,side", CASES, ids=[f"{p.stem}-{s}" for p, s in CASES])
+@pytest.mark.slow
 def test_the_cmc_loop_holds_q15_at_cmc_gain_u6(path, side):
     """The CMC loop's two strands (docs/transmission.md): turning servo 6's pulley by u6 changes
     their paths by +- r6 u6, turning the CMC by q15 by -+ (r6 / cmc_gain) q15, by hand from the file's

@@ -34,6 +34,9 @@ from phantom_cad.kinematics.topology import JOINTS, LINK_NAMES, SERVOS
 pytest.importorskip("viser")
 pytest.importorskip("yourdfpy")
 
+#: builds the default hand and drives headless Chromium
+pytestmark = pytest.mark.slow
+
 CHROMIUM = Path("/usr/bin/chromium")
 CHROMEDRIVER = Path("/usr/bin/chromedriver")
 #: flags that work on a closed-network machine as root; the last three give WebGL in software
@@ -44,13 +47,13 @@ CHROMIUM_FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic
 
 
 @pytest.fixture(scope="module")
-def export(tmp_path_factory):
-    """The default hand's export (robot description included), built with a private cache."""
+def export(tmp_path_factory, part_cache):
+    """The default hand's export (robot description included), built with the session's part cache."""
     pytest.importorskip("build123d")
     from phantom_cad.export.pipeline import build_hand
 
     root = tmp_path_factory.mktemp("viewer")
-    result = build_hand(None, root / "exports" / "phantom", cache_dir=root / "cache", jobs=2, slice=False)
+    result = build_hand(None, root / "exports" / "phantom", cache_dir=part_cache, jobs=2, slice=False)
     return result.out_dir
 
 
@@ -188,7 +191,7 @@ def test_gui_lists_servos_travel_and_digest(viewer, model):
     assert model.params.digest in viewer.info.content
 
 
-def test_stale_export_is_rebuilt(export, tmp_path, monkeypatch):
+def test_stale_export_is_rebuilt(export, part_cache, tmp_path, monkeypatch):
     """An export whose manifest records another digest is rebuilt (from the cache) before viewing."""
     import json
 
@@ -199,7 +202,7 @@ def test_stale_export_is_rebuilt(export, tmp_path, monkeypatch):
     man = json.loads((copy / "manifest.json").read_text())
     man["params"]["digest"] = "0" * 64
     (copy / "manifest.json").write_text(json.dumps(man))
-    monkeypatch.setenv("PHANTOM_CAD_CACHE", str(export.parent.parent / "cache"))   # the fixture's cache
+    monkeypatch.setenv("PHANTOM_CAD_CACHE", str(part_cache))   # the fixture's cache
     messages = []
     params, out, urdf = ensure_export(None, copy, messages.append)
     assert len(messages) == 1 and "000000000000" in messages[0] and "building" in messages[0]

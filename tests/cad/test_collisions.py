@@ -75,6 +75,7 @@ def test_pinch_contacts_are_reported_and_real(hand):
     assert occ == pytest.approx(big["volume_mm3"], rel=0.05, abs=0.05)
 
 
+@pytest.mark.slow
 def test_the_old_finger_pitch_collides(document, variant):
     """At a 19.5 mm finger pitch the columns fan out by 5 deg and the fully flexed index and middle
     fingers, which point back toward the wrist, converge into each other: the sweep finds it, and

@@ -103,6 +103,7 @@ def test_the_coupon_holes_are_the_hands(coupon, built):
     assert missing == []
 
 
+@pytest.mark.slow
 def test_hole_compensation_moves_the_hand_and_the_coupon(variant, document):
     """0.3 mm of compensation: the finger's bearing seat and axle bore, and the coupon's, grow by
     0.05 mm in radius over the default; the tendon channel does not."""

@@ -19,6 +19,7 @@ def _build(p, name):
     return pt, shape
 
 
+@pytest.mark.slow
 def test_small_mcp_pulley_keeps_one_guide_eyelet(variant):
     """A small MCP pulley (found at R_MCP = 2.51 mm): the figure-eight channels leave tendon-hole
     faces near the MCP almost as long as an eyelet, which the guide measurement took for eyelets;
@@ -46,6 +47,7 @@ def test_parallel_fingers_palm(variant):
     assert facing == {(0.0, 1.0, 0.0)}
 
 
+@pytest.mark.slow
 def test_the_cmc_base_clears_the_palm_where_the_rule_accepts(variant):
     """The CMC axis along the palm's normal and the CMC base's top 0.01 mm inside what the thenar
     rule accepts (a clearance below the palmar face: centre at -12 - 0.2 - 7.5 - 0.01 mm): the

@@ -24,6 +24,7 @@ def _run(code: str) -> dict:
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.slow
 def test_build123d_without_scikit_learn():
     """After import_build123d, no sklearn module is loaded; build123d's DBSCAN is the real one
     when called (two clusters in a known point set: scikit-learn's own answer, imported then), and
@@ -47,6 +48,7 @@ print(json.dumps({"box": bd.Solid.make_box(1, 2, 3).volume, "loaded": loaded, "l
     assert got["real"] is True
 
 
+@pytest.mark.slow
 def test_build123d_as_usual_when_scikit_learn_is_loaded():
     """With scikit-learn already imported, build123d is imported as usual (its own DBSCAN)."""
     got = _run("""
@@ -59,6 +61,7 @@ print(json.dumps({"same": brep_from_stl.DBSCAN is sklearn.cluster.DBSCAN}))
     assert got["same"] is True
 
 
+@pytest.mark.slow
 def test_build123d_asking_for_more_of_scikit_learn(tmp_path):
     """A build123d whose import asks scikit-learn for more than DBSCAN (a stand-in package first on
     the path) is imported again as usual: the real scikit-learn then, the stand-in's body run."""
@@ -93,6 +96,7 @@ print(json.dumps({{"breps": out, "occt": OSD_Parallel.ToUseOcctThreads_s(),
 """
 
 
+@pytest.mark.slow
 def test_one_thread_builds_the_same_solids():
     """use_threads(1): OpenCascade's pool with one thread; the parts it builds are the same BREP
     bytes as with OpenCascade's default (a thread per logical processor)."""
@@ -167,6 +171,7 @@ def test_freed_memory_is_reused_without_page_faults():
     assert kept["faults"] < 100, kept
 
 
+@pytest.mark.slow
 def test_init_worker_sets_up_the_build_workers():
     """A pool started as the pipeline starts its own: build123d loaded, no scikit-learn, one
     OpenCascade thread, freed memory reused (no page faults in the second round of _CYCLE)."""

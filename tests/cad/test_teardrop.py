@@ -67,6 +67,7 @@ needs_slicer = pytest.mark.skipif(
 
 @needs_slicer
 @pytest.mark.parametrize("layer_mm", [0.2, 0.3])
+@pytest.mark.slow
 def test_prusaslicer_supports_round_channels_not_teardrops(tmp_path, layer_mm):
     """A 40 x 12 x 12 mm block with a 3 mm and a 1.9 mm channel along it, level and climbing 5 deg
     (a roof's ridge crossing layers): PrusaSlicer's automatic supports fill the round channels and

@@ -46,6 +46,7 @@ def test_left_hand_tendons_pass_through_no_material(document, right_solids):
     assert _fmt(clearance.tendon_hits(left, right_solids)) == []
 
 
+@pytest.mark.slow
 def test_slender_hand_tendons_pass_through_no_material():
     p = load_params(ROOT / "params" / "examples" / "slender.toml")
     solids = {n: registry.part(p, n).build() for n in assembly.part_names(p)}
@@ -95,6 +96,7 @@ def test_the_drive_couplers_travel_in_the_palms_bore(params, document, right_sol
     _couplers_travel_in_the_bore(params, document, right_solids["palm"])
 
 
+@pytest.mark.slow
 def test_slender_hand_couplers_travel_in_the_palms_bore():
     from phantom_cad.params import load_document
     path = ROOT / "params" / "examples" / "slender.toml"

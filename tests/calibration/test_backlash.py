@@ -90,6 +90,7 @@ def test_diagnose_selects_backlash_and_reaches_the_noise(hand, seed):
     assert sm["effects_with_this_signature"] == ["backlash", "drive_friction"]
 
 
+@pytest.mark.slow
 def test_fit_writes_backlash_and_the_file_reproduces_it(hand, tmp_path):
     """The written file's forward, given the recording's history, reproduces the fit; its control
     law runs (backlash aims at the middle of the play)."""

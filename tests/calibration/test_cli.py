@@ -12,6 +12,8 @@ import pytest
 from phantom_cad import load_hand
 from phantom_cad.calibration.data import read_measurements
 
+pytestmark = pytest.mark.slow     # each test runs the command line in processes of its own
+
 
 def run(*args):
     return subprocess.run([str(Path(sys.executable).parent / "phantom-cad"), *map(str, args)],

@@ -14,6 +14,7 @@ LIBRARY = ["tendon_elasticity", "friction_hysteresis", "tendon_slack", "joint_of
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 @pytest.mark.parametrize("effect", LIBRARY)
+@pytest.mark.slow
 def test_hidden_effect_is_found_first(hand, effect, seed):
     sim = simulate(hand, [effect], noise_deg=NOISE, seed=seed, points=POINTS)
     floor = sim.noise_mae_deg
@@ -24,6 +25,7 @@ def test_hidden_effect_is_found_first(hand, effect, seed):
     assert mae(d.after) <= 1.5 * floor
 
 
+@pytest.mark.slow
 def test_nothing_hidden_nothing_selected_in_19_of_20_seeds(hand):
     empty = 0
     for seed in range(20):
@@ -39,6 +41,7 @@ def test_nothing_hidden_nothing_selected_in_19_of_20_seeds(hand):
     (("tendon_slack", "tendon_elasticity"), 4),
     (("pulley_radius_error", "friction_hysteresis"), 5),
 ])
+@pytest.mark.slow
 def test_two_hidden_effects_are_both_found(hand, pair, seed):
     sim = simulate(hand, list(pair), noise_deg=NOISE, seed=seed, points=POINTS)
     d = diagnose(hand, sim.measurements)

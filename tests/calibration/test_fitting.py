@@ -10,6 +10,7 @@ from phantom_cad.calibration.simulate import simulate
 
 @pytest.mark.parametrize("names, seed", [(["friction_hysteresis", "joint_offset", "tendon_elasticity"], 1),
                                          (["tendon_slack", "pulley_radius_error"], 2)])
+@pytest.mark.slow
 def test_streamed_fit_matches_least_squares(hand, names, seed, monkeypatch):
     """Same minimum, same sum of squares, same uncertainties as scipy.optimize.least_squares
     (trust region reflective), on blocks smaller than the file so that the sums over blocks count."""

@@ -234,6 +234,7 @@ def single_cases():
 
 
 @pytest.mark.parametrize("name, seed", list(single_cases()))
+@pytest.mark.slow
 def test_one_hidden_effect(hand, name, seed):
     hidden = hidden_values(hand, [name], seed)
     d, out, floor, vs_truth = run_hidden(hand, hidden, noise_seed=1000 + 10 * SINGLES.index(name) + seed)
@@ -304,6 +305,7 @@ NEARLY_DUPLICATED_BY_CAMERA = {"pulley_radius_error"}
 
 
 @pytest.mark.parametrize("a, b, k", list(pair_cases()))
+@pytest.mark.slow
 def test_two_hidden_effects(hand, a, b, k):
     hidden = hidden_values(hand, [a, b], seed=100 + k)
     d, out, floor, vs_truth = run_hidden(hand, hidden, noise_seed=2000 + k)
@@ -326,6 +328,7 @@ def test_two_hidden_effects(hand, a, b, k):
     check_fit(out, floor, vs_truth)
 
 
+@pytest.mark.slow
 def test_a_hand_effect_the_camera_duplicates_is_named(hand):
     """A uniform compliance and a camera scale hidden together (DUPLICATED_BY_CAMERA above): the
     attribution cannot be right from these data (a compliance scales each distal joint by a
@@ -372,6 +375,7 @@ def test_outside_physics_known_answers(hand):
     assert np.allclose(np.delete(q, mcp, axis=1), np.delete(q0, mcp, axis=1), atol=1e-15)
 
 
+@pytest.mark.slow
 def test_gravity_sag_is_left_or_matched(hand):
     """A joint error that depends on the pose (gravity sag, hidden.gravity_sag: 1.0 / 0.6 / 0.3 deg at
     MCP / PIP / DIP of the four fingers, times the cosine of the link's absolute angle). Either
@@ -385,20 +389,20 @@ def test_gravity_sag_is_left_or_matched(hand):
     d, out, floor, vs_truth = run_hidden(hand, {}, noise_seed=3000, extra=gravity_sag(hand))
     info = summary(out, floor, vs_truth)
     assert abs(floor - EXPECTED_FLOOR) <= 0.25 * EXPECTED_FLOOR, info
-    if out["explained"]:
-        assert vs_truth <= 0.5 * floor, info
-        assert out["mae_deg_after"] <= 1.5 * floor, info
-    else:
-        fingers = {f"q{j + 1}" for j in range(2, 14)}
-        assert out["left"] and set(out["left"]) <= fingers, info
-        overall = out["verdict"]["overall"]
-        assert overall["white"] is False and overall["whiteness_z"] > 4.0, overall
-        # what is left is the same in both directions and on the fingers, not the thumb
-        sm = out["signature_match"]["after"]
-        assert sm["measured"]["direction"] == "same" and sm["measured"]["digits"] == "some", sm
-        assert set(sm["details"]["digits_with_structure"]) <= {"index", "middle", "ring", "pinky"}
-        text = "\n".join(diagnosis_text(d, out))
-        assert "neighbouring residuals are correlated: lag-1 autocorrelation" in text
+    # no library effect is the sag: the model kept is off the truth by more than the criterion, so
+    # the one honest outcome is "not explained", left on finger joints
+    assert vs_truth > 0.5 * floor, info
+    assert out["explained"] is False, info
+    fingers = {f"q{j + 1}" for j in range(2, 14)}
+    assert out["left"] and set(out["left"]) <= fingers, info
+    overall = out["verdict"]["overall"]
+    assert overall["white"] is False and overall["whiteness_z"] > 4.0, overall
+    # what is left is the same in both directions and on the fingers, not the thumb
+    sm = out["signature_match"]["after"]
+    assert sm["measured"]["direction"] == "same" and sm["measured"]["digits"] == "some", sm
+    assert set(sm["details"]["digits_with_structure"]) <= {"index", "middle", "ring", "pinky"}
+    text = "\n".join(diagnosis_text(d, out))
+    assert "neighbouring residuals are correlated: lag-1 autocorrelation" in text
 
 
 def test_soft_stop_is_left_on_its_joint(hand):

@@ -91,6 +91,7 @@ def test_whiteness_known_answer_and_null_distribution():
     assert whiteness(rng.normal(0, 0.1, n) + smooth, a, b)[1] > WHITENESS_Z
 
 
+@pytest.mark.slow
 def test_nothing_hidden_floor_and_explained_in_19_of_20_seeds(hand):
     u, sweep, cj = sweeps(hand)
     q_true = analytic(hand, u)
@@ -224,6 +225,7 @@ def test_robust_fit_lists_the_glitches_and_is_not_bent_by_them(hand):
     assert plain["outliers_count"] == 6 and plain["explained"] is False
 
 
+@pytest.mark.slow
 def test_structure_left_is_not_an_outlier_a_glitch_on_it_is(hand):
     """The eccentricity residual (1.5 deg, period 40 deg) stays beyond 5 noise sd over whole
     stretches of the sweep: that is structure for the verdict, not a list of outliers, and a robust

@@ -31,6 +31,7 @@ def test_a_pool_of_two_forks_workers(hand):
 
 
 @fork
+@pytest.mark.slow
 def test_workers_and_one_process_give_the_same_bytes(hand):
     sim = simulate(hand, ["tendon_elasticity", "joint_offset"], noise_deg=0.1, seed=4, points=40)
     one = diagnose(hand, sim.measurements, jobs=1)
@@ -73,6 +74,7 @@ def test_an_error_in_a_worker_is_raised_as_itself(hand, exploding_effect):
 
 
 @fork
+@pytest.mark.slow
 def test_the_workers_die_with_their_parent(tmp_path):
     script = textwrap.dedent("""
         import os, sys, time

@@ -40,6 +40,7 @@ def test_robust_limits_known_answer():
     assert lo < 0.0 and hi > 2.0
 
 
+@pytest.mark.slow
 def test_outliers_do_not_set_the_residual_range(hand, tmp_path):
     m, q_true = noisy(hand)
     r_clean = (m.q - q_true) * 180 / math.pi
@@ -70,6 +71,7 @@ def test_outliers_do_not_set_the_residual_range(hand, tmp_path):
     assert inside == int(ok.sum()) - len(GLITCHES)
 
 
+@pytest.mark.slow
 def test_no_outlier_nothing_clipped(hand, tmp_path):
     m, q_true = noisy(hand, seed=2)
     fig = plot_residuals(tmp_path / "r.png", m, q_true, "t")
@@ -113,6 +115,7 @@ def test_mae_bars_carry_the_floor_and_flag_worse_joints(hand, tmp_path):
     assert by_gid(fig, "worse") == [] and "worse" not in fig.axes[0].get_title()
 
 
+@pytest.mark.slow
 def test_one_direction_data_say_so_on_the_hysteresis_plot(hand, tmp_path):
     m, q_true = noisy(hand, seed=3)
     fig = plot_hysteresis(tmp_path / "h.png", m, q_true, q_true, "both")
@@ -130,6 +133,7 @@ def test_one_direction_data_say_so_on_the_hysteresis_plot(hand, tmp_path):
     assert "one direction only" in fig._suptitle.get_text()
 
 
+@pytest.mark.slow
 def test_one_joints_structure_is_inside_the_range(hand, tmp_path):
     """A 2 deg sinusoid left on q4 alone (the others: 0.1 deg noise) is the picture's subject: the
     shared range holds all of it, nothing is drawn as clipped. (Pooled over all joints, the Tukey

@@ -95,17 +95,28 @@ def files(hand, tmp_path_factory):
     return d
 
 
+@pytest.fixture(scope="module")
+def calibrated(files):
+    """fit with the plugin on the module's data: (its process result, the calibrated file)."""
+    out = files / "cal" / "calibrated.toml"
+    (files / "cal").mkdir(exist_ok=True)
+    r = run("fit", files / "data.csv", "--effects", "finger_compliance", "--out", out,
+            "--plugin", files / "plugins" / "finger.py")
+    return r, out
+
+
 def mae_line(text, label):
     return float(re.search(label + r"\s+([0-9.]+)", text).group(1))
 
 
-def test_the_plugin_path_end_to_end(hand, files):
+@pytest.mark.slow
+def test_the_plugin_path_end_to_end(hand, files, calibrated):
     d = files
-    data, out = d / "data.csv", d / "cal" / "calibrated.toml"
-    (d / "cal").mkdir()
-    r = run("fit", data, "--effects", "finger_compliance", "--out", out)
+    data = d / "data.csv"
+    r = run("fit", data, "--effects", "finger_compliance", "--out", d / "refused.toml")
     assert r.returncode == 2 and "unknown effect 'finger_compliance'" in r.stderr
-    r = run("fit", data, "--effects", "finger_compliance", "--out", out, "--plugin", d / "plugins" / "finger.py")
+    assert not (d / "refused.toml").exists()
+    r, out = calibrated
     assert r.returncode == 0, r.stderr
     before, after = map(float, re.search(r"MAE ([0-9.]+) deg \(analytic\) -> ([0-9.]+) deg", r.stdout).groups())
     floor = NOISE_DEG * math.sqrt(2 / math.pi)
@@ -134,13 +145,13 @@ def test_the_plugin_path_end_to_end(hand, files):
     assert "calibrated (finger_compliance + tendon_elasticity)" in r.stdout
 
 
-def test_the_calibrated_control_law_uses_the_plugin(files):
+@pytest.mark.slow
+def test_the_calibrated_control_law_uses_the_plugin(files, calibrated):
     from phantom_cad import load_hand
     from phantom_cad.calibration.effects import unload_plugin
 
-    out = files / "cal" / "calibrated.toml"
-    if not out.exists():
-        pytest.skip("needs the file of test_the_plugin_path_end_to_end")
+    r, out = calibrated
+    assert r.returncode == 0, r.stderr
     try:
         hand = load_hand(out)
         assert hand.effects.names == ("finger_compliance", "tendon_elasticity")
@@ -153,6 +164,7 @@ def test_the_calibrated_control_law_uses_the_plugin(files):
         unload_plugin(files / "plugins" / "finger.py")
 
 
+@pytest.mark.slow
 def test_diagnose_and_simulate_take_the_plugin(files):
     d = files
     r = run("diagnose", d / "data.csv", "--plugin", d / "plugins" / "finger.py", "--json", d / "d.json",
@@ -166,6 +178,7 @@ def test_diagnose_and_simulate_take_the_plugin(files):
     assert r.returncode == 0, r.stderr
 
 
+@pytest.mark.slow
 def test_fit_refuses_an_effect_the_control_law_cannot_invert(files):
     d = files
     r = run("fit", d / "data.csv", "--plugin", d / "plugins" / "cmc_gain.py", "--effects", "cmc_gain",
@@ -184,6 +197,7 @@ def test_fit_refuses_an_effect_the_control_law_cannot_invert(files):
     ("from phantom_cad.calibration.effects import JointOffset, register_effect\n\n"
      "register_effect(JointOffset)\n", "effect 'joint_offset' is already defined"),
 ])
+@pytest.mark.slow
 def test_a_broken_plugin_is_one_error_line(files, command, body, message, tmp_path):
     path = tmp_path / "broken.py"
     if body is not None:

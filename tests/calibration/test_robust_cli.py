@@ -14,6 +14,8 @@ from phantom_cad.params import load_document
 from ._cli import run_cli as run
 from .test_noise_floor import GLITCHES, OFFSETS, glitched_data
 
+pytestmark = pytest.mark.slow     # each test runs the command line in processes of its own
+
 
 
 @pytest.fixture(scope="module")

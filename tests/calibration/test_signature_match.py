@@ -115,6 +115,7 @@ def test_per_finger_compliance_matches_tendon_elasticity(hand):
     assert out["selected"] == ["tendon_elasticity_per_finger"] and out["explained"] is True
 
 
+@pytest.mark.slow
 def test_a_friction_band_on_the_drive_matches_drive_friction(hand):
     """The drive tendon's friction band (written row by row in hidden.friction_band, 1.5 deg at rest,
     3 deg more at full flexion): a band between the branches on the MCP as on the distal joints, a

@@ -67,6 +67,7 @@ def test_the_page_prints_the_commands_that_run():
     assert [c for c, _ in doc_blocks()] == WT.COMMANDS
 
 
+@pytest.mark.slow
 def test_every_quoted_line_is_in_the_output(run):
     _, outputs = run
     for command, quoted in doc_blocks():
@@ -74,6 +75,7 @@ def test_every_quoted_line_is_in_the_output(run):
             assert same_line(line, outputs[command]), f"{command}: not in its output: {line}"
 
 
+@pytest.mark.slow
 def test_the_library_alone_does_not_explain_it_and_says_what_it_sees(run):
     d, _ = run
     import json
@@ -85,6 +87,7 @@ def test_the_library_alone_does_not_explain_it_and_says_what_it_sees(run):
     assert out["mae_deg_after"] > 3 * out["noise_floor_deg"]
 
 
+@pytest.mark.slow
 def test_with_the_plugin_it_is_explained_and_the_amplitudes_are_the_hidden_ones(run):
     d, _ = run
     import json
@@ -102,6 +105,7 @@ def test_with_the_plugin_it_is_explained_and_the_amplitudes_are_the_hidden_ones(
             assert abs(got["value"] - want) <= max(3.0 * got["std"], 0.005), (servo, key, got, want)
 
 
+@pytest.mark.slow
 def test_the_calibrated_control_law_reaches_the_targets(run):
     d, _ = run
     u, err_nominal, err_cal = WT.control_law_errors(d / "cal" / "calibrated.toml")

@@ -64,16 +64,15 @@ def real_assembly_available() -> bool:
 
 
 @pytest.fixture(scope="session")
-def hand_build(tmp_path_factory):
+def hand_build(tmp_path_factory, part_cache):
     """The default hand with the real parts, built once per session (jobs = 2)."""
     if not real_assembly_available():
         pytest.skip("phantom_cad.cad.assembly (the real parts) is not there yet")
     from phantom_cad.export.pipeline import build_hand
 
     root = tmp_path_factory.mktemp("hand")
-    result = build_hand(None, root / "exports" / "phantom", cache_dir=root / "cache", jobs=2,
-                        slice=None)
-    return result, root / "cache"
+    result = build_hand(None, root / "exports" / "phantom", cache_dir=part_cache, jobs=2, slice=None)
+    return result, part_cache
 
 
 @pytest.fixture(scope="session")

@@ -133,8 +133,8 @@ def test_a_changed_mjcf_coupling_is_named(export, tmp_path):
     assert failed == {"MJCF twin settled (near-rigid tendons) = hand.forward(u) (1 commands)": "ring_dip"}
 
 
-def _cli_check(tmp_path, *args) -> subprocess.CompletedProcess:
-    env = {**os.environ, "PHANTOM_CAD_CACHE": str(tmp_path / "cache")}
+def _cli_check(tmp_path, cache, *args) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PHANTOM_CAD_CACHE": str(cache)}
     return subprocess.run([sys.executable, "-m", "phantom_cad", "check", "--samples", "4", "--settle", "2",
                            "--out", str(tmp_path / "export"), *args], capture_output=True, text=True, env=env,
                           cwd=ROOT)
@@ -142,8 +142,9 @@ def _cli_check(tmp_path, *args) -> subprocess.CompletedProcess:
 
 @pytest.mark.parametrize("args", [("--side", "left"), ("--params", str(ROOT / "params" / "examples" / "slender.toml"))],
                          ids=["left", "slender"])
-def test_check_builds_and_passes_the_left_hand_and_a_second_file(tmp_path, args):
-    proc = _cli_check(tmp_path, *args)
+@pytest.mark.slow     # builds the two hands
+def test_check_builds_and_passes_the_left_hand_and_a_second_file(tmp_path, part_cache, args):
+    proc = _cli_check(tmp_path, part_cache, *args)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-2000:]
     assert " 0 failed" in proc.stdout and "FAIL" not in proc.stdout
     assert ("(left)" in proc.stdout) == ("left" in args)

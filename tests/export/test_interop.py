@@ -50,6 +50,7 @@ def test_location_rejects_bad_matrix():
         location(np.eye(3))
 
 
+@pytest.mark.slow
 def test_real_parts_posed(tmp_path):
     """Two real parts at a bent pose: the locations are assembly.pose_transforms(q)."""
     # (not ``from conftest import ...``: with tests/cad collected too, "conftest" may be its module)

@@ -161,6 +161,7 @@ def test_bom_csv(standin_build):
     assert [r["item"] for r in man["bom"]] == ["bearing", "servo"]
 
 
+@pytest.mark.slow
 def test_deterministic_fresh_cache(standin_build, standin, tmp_path):
     from phantom_cad.export.pipeline import build_hand
 
@@ -188,6 +189,7 @@ def test_warm_rebuild_uses_cache(standin_build, standin, tmp_path):
     assert tree(again.out_dir) == tree(result.out_dir)
 
 
+@pytest.mark.slow
 def test_one_finger_change_rebuilds_only_its_parts(standin_build, standin, tmp_path):
     from phantom_cad.export.pipeline import build_hand
 
@@ -253,6 +255,7 @@ def test_two_solids_refused(standin, previous_export, tmp_path):
     assert tree(out) == before
 
 
+@pytest.mark.slow
 def test_interference_refused(standin, previous_export, tmp_path):
     from phantom_cad.export.pipeline import BuildError, build_hand
 
@@ -368,6 +371,7 @@ def test_demo_without_prusa_slicer(hand_build, tmp_path, monkeypatch):
     assert len(list((tmp_path / "o" / "stl").glob("*.stl"))) == 28
 
 
+@pytest.mark.slow
 def test_cache_serves_only_what_it_verified(standin_build, standin, tmp_path):
     """The cache serves only entries it verified: a truncated part.stl is not exported nor certified
     watertight, a truncated meta.json gives no traceback, and entries a --no-render build left are
@@ -402,6 +406,7 @@ def test_cache_serves_only_what_it_verified(standin_build, standin, tmp_path):
         sorted(p.name for p in (result.out_dir / "renders").glob("*.png"))
 
 
+@pytest.mark.slow
 def test_assembly_entry_served_only_when_verified(standin_build, standin, tmp_path):
     """The assembly entry (assembly STEP, render, interference report) is verified like
     a part entry: a truncated STEP or an edited report is not served; the entry is rebuilt, the
@@ -431,6 +436,7 @@ def test_assembly_entry_served_only_when_verified(standin_build, standin, tmp_pa
     assert any("interference.json does not match its SHA-256" in m for m in log), log
 
 
+@pytest.mark.slow
 def test_slicer_estimates_served_only_when_verified(standin_build, standin, tmp_path):
     """A cached PrusaSlicer estimate carries the SHA-256 of its numbers; an edited or
     truncated one is sliced again (the log says so) and the manifest holds the true estimate."""
@@ -467,6 +473,7 @@ def test_slicer_estimates_served_only_when_verified(standin_build, standin, tmp_
         assert abs(g["time_s"] - w["time_s"]) <= max(2.0, 1e-4 * w["time_s"]), name
 
 
+@pytest.mark.slow
 def test_concurrent_builds_share_one_cache(tmp_path):
     """Builds sharing one part cache at once (three processes, two workers each, on an
     empty cache: every part is built by several of them and committed by the first). Each
@@ -496,6 +503,7 @@ def test_concurrent_builds_share_one_cache(tmp_path):
     assert cache_mod.entry_problem(assemblies[0], cache_mod.ASSEMBLY_FILES) is None
 
 
+@pytest.mark.slow
 def test_workers_die_with_a_killed_build(tmp_path):
     """A killed build's workers exit with it (left running, each would hold ~550 MB under parent
     PID 1). Kill the build while its workers import the CAD stack and build parts: they exit."""
