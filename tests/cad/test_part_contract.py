@@ -75,6 +75,23 @@ def test_a_part_without_a_fingertip_refuses_a_pad(params):
 # the cache key covers what a part reads
 # ---------------------------------------------------------------------------
 
+@pytest.fixture(autouse=True)
+def _memos_kept(monkeypatch):
+    """Every memo of the package keeps its entries while a test of this module runs: a store
+    cleared past its cap in the middle of a recording (it may be near its cap from earlier tests)
+    drops what ``_routing_ahead`` made unrecorded, and the part is charged with the whole hand."""
+    from phantom_cad.kinematics.memo import memoised
+
+    def kept(store, key, make, cap=None):
+        return memoised(store, key, make, cap=sys.maxsize)
+
+    users = [m for name, m in sys.modules.items() if name.startswith("phantom_cad.")
+             and name != "phantom_cad.kinematics.memo" and getattr(m, "memoised", None) is memoised]
+    assert users, "no module memoises through kinematics.memo"
+    for module in users:
+        monkeypatch.setattr(module, "memoised", kept)
+
+
 def _routing_ahead(params) -> None:
     """The whole-hand routing computations a part takes its link's share of (every tendon routed,
     its runs, the travel poses), made for the memo. Each reads every digit, so recorded they would
