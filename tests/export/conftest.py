@@ -90,7 +90,8 @@ EXPORT_HANDS = [("default", None, None), ("left", None, "left"),
 @pytest.fixture(scope="session")
 def hand_export(hand_build, tmp_path_factory):
     """``hand_export(kind)`` -> the BuildResult of one of :data:`EXPORT_HANDS` (the default hand's
-    is ``hand_build``'s), each built once per session, not sliced."""
+    is ``hand_build``'s), each built once per session with the session's part cache, and sliced
+    when PrusaSlicer is installed (the description's masses then come from the slicer)."""
     from phantom_cad.export.pipeline import build_hand
 
     result, cache = hand_build
