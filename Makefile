@@ -28,7 +28,7 @@ test: install sysdeps
 	$(PY) -m pytest
 
 # The tests not marked slow (no whole-hand build, no MuJoCo simulation of a hand, no browser, no
-# slicing of whole hands, no property test, no command line run for seconds): under a minute, for
+# slicing of whole hands, no property test, no command line run for seconds): about a minute, for
 # while you work. `make test` runs them all (CI).
 test-fast: install sysdeps
 	$(PY) -m pytest -m "not slow"
