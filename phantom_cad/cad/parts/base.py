@@ -77,11 +77,6 @@ def child_joint(ln: Link) -> Joint | None:
     return next((j for j in JOINTS if j.parent == ln.name and j.digit == ln.digit), None)
 
 
-def digit_table(document, digit: str):
-    """The parameter document's table of ``digit`` (``[thumb]`` or ``[fingers.<f>]``)."""
-    return document["fingers"][digit] if digit in document["fingers"] else document["thumb"]
-
-
 class Part(abc.ABC):
     """Base of the part families (see the module doc)."""
 

@@ -15,10 +15,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ... import canon
+from ...kinematics.dimensions import digit_entry
 from ...kinematics.frames import tendon_height
 from ...kinematics.topology import FINGERS, digit_links
 from ..measure import circular_pockets, eyelet_centres, point_line_distance
-from .base import MAGNET_DOWN, Part, child_joint, digit_table
+from .base import MAGNET_DOWN, Part, child_joint
 from .common import DigitSection, box, build, cylinder, mm
 from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, hub_grooves
 from .drive_fans import clear_of_fans, drive_fan_tools, guide_entry
@@ -52,7 +53,7 @@ class FingerBase(RoutedPart, Part):
 
     def inputs(self) -> dict:
         doc = self.params.document
-        return {**self.common_inputs(), "finger": canon.plain(digit_table(doc, self.finger)),
+        return {**self.common_inputs(), "finger": canon.plain(digit_entry(doc, self.finger)),
                 # the tendon height at the magnet face follows the thinnest finger
                 "thicknesses_mm": {f: doc["fingers"][f]["thickness_mm"] for f in FINGERS}}
 

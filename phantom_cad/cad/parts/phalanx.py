@@ -20,10 +20,10 @@ import numpy as np
 
 from ... import canon, units
 from ...kinematics import frames as F
-from ...kinematics.dimensions import FLANK
+from ...kinematics.dimensions import FLANK, digit_entry
 from ...kinematics.topology import CMC_Q, LINKS, digit_links, joint
 from ..measure import eyelet_centres, point_line_distance
-from .base import DORSAL_DOWN, Part, child_joint, digit_table, parent_joint
+from .base import DORSAL_DOWN, Part, child_joint, parent_joint
 from .common import DigitSection, box, build, cyl_x, cylinder, mm, prism_x, sphere
 from .drive_fans import drive_fan_tools
 from .tendons import (LinkTendons, RoutedPart, link_tendons, anchor_tools, channel_tools, groove_outer,
@@ -220,7 +220,7 @@ class Phalanx(RoutedPart, Part):
     def inputs(self) -> dict:
         doc = self.params.document
         key = "finger" if self.digit in doc["fingers"] else "thumb"
-        return {**self.common_inputs(), key: canon.plain(digit_table(doc, self.digit))}
+        return {**self.common_inputs(), key: canon.plain(digit_entry(doc, self.digit))}
 
     @property
     def has_guide(self) -> bool:

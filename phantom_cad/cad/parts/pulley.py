@@ -22,10 +22,11 @@ import numpy as np
 
 from ... import canon, units
 
+from ...kinematics.dimensions import digit_entry
 from ...kinematics import frames
 from ...kinematics.topology import CMC_PULLEY, N_SERVOS, SERVOS, link
 from ..measure import measure_groove_radius
-from .base import Part, digit_table
+from .base import Part
 from .common import Tolerances, box, build, cylinder, mm
 
 if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
@@ -155,7 +156,7 @@ class ServoPulley(GroovedPulley):
             src = {k: canon.plain(th[k]) for k in ("cmc_pulley_radius_mm", "cmc_servo_travel_deg", "cmc_gain")}
         else:
             # the radius, and the travel that places the drive's clamp (routing_rules.servo_clamp_wrap)
-            table = digit_table(doc, self.servo.digit)
+            table = digit_entry(doc, self.servo.digit)
             src = {k: canon.plain(table[k]) for k in ("servo_pulley_radius_mm", "servo_travel_deg")}
         return {**self.common_inputs(), "servo": self.servo.label, **src}
 

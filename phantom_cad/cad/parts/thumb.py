@@ -22,9 +22,10 @@ import numpy as np
 from ... import canon
 from ...kinematics import frames as F
 from ...kinematics import thenar as TH
+from ...kinematics.dimensions import digit_entry
 from ...kinematics.topology import CMC_Q, JOINTS, link
 from ..measure import eyelet_centres, point_line_distance
-from .base import PALMAR_DOWN, Part, child_joint, digit_table
+from .base import PALMAR_DOWN, Part, child_joint
 from .common import DigitSection, box, build, cylinder, cylinder_floor, mm, prism_x, sphere, transform
 from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, eyelet_boss_axis, hub_grooves
 from .drive_fans import drive_fan_tools, guide_entry
@@ -66,7 +67,7 @@ class ThumbCMCBase(RoutedPart, Part):
         """The thumb's table and the palm's (its thickness and the CMC placement set the column's
         length, ``thenar.thenar``)."""
         doc = self.params.document
-        return {**self.common_inputs(), "thumb": canon.plain(digit_table(doc, self.digit)),
+        return {**self.common_inputs(), "thumb": canon.plain(digit_entry(doc, self.digit)),
                 "palm": canon.plain(doc["palm"])}
 
     def guide_boss(self) -> tuple[np.ndarray, np.ndarray]:
