@@ -12,7 +12,6 @@ the solids, which is what is measured.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -20,9 +19,6 @@ from .. import units
 from ..kinematics import frames as F
 from ..kinematics import routing
 from ..kinematics import routing_paths
-
-if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
-    from ..params.schema import HandParams
 
 
 #: fractions of the travel the check poses the hand at
@@ -59,7 +55,7 @@ def _mesh(shape):
     return trimesh.Trimesh(np.array([[v.X, v.Y, v.Z] for v in verts]), np.array(tris), process=True)
 
 
-def tendon_hits(params: HandParams, shapes: dict, fractions=FRACTIONS, step_mm: float = STEP_MM) -> list[Hit]:
+def tendon_hits(params, shapes: dict, fractions=FRACTIONS, step_mm: float = STEP_MM) -> list[Hit]:
     """Every (strand, pose, part) where sampled points of the strand lie inside the part's solid.
     ``shapes``: {part name (= its link's name): right-handed solid in its link frame, mm}. Points
     in a part's bounding box are classified against its tessellation (trimesh, ray parity) and

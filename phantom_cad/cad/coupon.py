@@ -21,14 +21,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .parts.common import Tolerances, as_solid, box, cylinder
-
-if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
-    from ..params.schema import HandParams
 
 
 #: the coupon's name (its files: coupon/fit_coupon.step, .stl, .md)
@@ -69,7 +65,7 @@ class FitCoupon:
     name = NAME
     color = COLOR
 
-    def __init__(self, params: HandParams):
+    def __init__(self, params):
         self.params = params
         self.tol = Tolerances(params)
 

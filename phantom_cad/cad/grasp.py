@@ -30,7 +30,6 @@ re-measure what they return with other tools.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -39,9 +38,6 @@ from ..kinematics import frames, opposition
 from ..kinematics.topology import CMC_SERVO, FINGERS, N_SERVOS, THUMB_CHAIN, chain, digit_links
 from .assembly import pose_transforms
 from .measure import placed
-
-if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
-    from ..params.schema import HandParams
 
 
 #: the surface distance (mm) a grasp's contacts must come within to count as touching
@@ -120,7 +116,7 @@ def model_contacts(hand, finger: str, n: int = CANDIDATES) -> list[np.ndarray]:
     return out
 
 
-def on_pad(params: HandParams, T_hand_link: np.ndarray, digit: str, point) -> bool:
+def on_pad(params, T_hand_link: np.ndarray, digit: str, point) -> bool:
     """Whether a point (hand frame, mm) of a digit's distal phalanx lies on its pad: in the link's
     frame on its palmar half (z <= 0) and its distal half (y >= L / 2, ``frames.fingertip``)."""
     x = np.linalg.solve(T_hand_link, np.r_[np.asarray(point, float), 1.0])[:3]

@@ -9,17 +9,13 @@ parameter file for building or validating (``params validate``, ``build``, ``dem
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
 
 from .. import units
 from ..params import ParamError
 from .parts.common import mm
 
-if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
-    from ..params.schema import HandParams
 
-
-def check(params: HandParams) -> None:
+def check(params) -> None:
     """Raise ParamError if the palm's thenar cannot hold the CMC (``thenar.thenar``): the CMC axis
     must climb into the palm within 60 deg of its normal (the column along it enters the palm's
     journal), the CMC base (a hub of half the thumb's width, the thumb's thickness, turning with the

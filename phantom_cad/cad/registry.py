@@ -7,7 +7,6 @@ part is one class in ``cad/parts/`` and one entry in :data:`FAMILIES`. numpy onl
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
 
 from ..kinematics.topology import LINKS, link
 from .parts.base import Part
@@ -17,9 +16,6 @@ from .parts.palm import Palm
 from .parts.phalanx import Phalanx
 from .parts.pulley import CMCPulley, ServoPulley
 from .parts.thumb import ThumbCMCBase
-
-if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
-    from ..params.schema import HandParams
 
 
 #: the part families
@@ -42,7 +38,7 @@ def _check() -> None:
 _check()
 
 
-def part(params: HandParams, name: str) -> Part:
+def part(params, name: str) -> Part:
     """The part ``name`` of the hand ``params`` (its dimension object; ``.build()`` makes the
     right-hand solid). KeyError for a name that is no part."""
     fam = FAMILY.get(name)

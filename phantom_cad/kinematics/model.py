@@ -18,15 +18,11 @@ The model knows the parameters by duck typing (``params.chains``, ``params.thumb
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from . import closed_form as cf
 from .topology import CHAINS, CMC_Q, CMC_SERVO, N_JOINTS, N_SERVOS, TENDON_SERVOS
-
-if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
-    from ..params.schema import HandParams
 
 
 #: rows per block of a batched forward (a block's temporaries fit a core's L2 cache)
@@ -41,7 +37,7 @@ class Hand:
     that carries fitted effects must be given them: ``phantom_cad.load_hand`` does.
     """
 
-    def __init__(self, params: HandParams, effects=None):
+    def __init__(self, params, effects=None):
         if params.effects and not effects:
             raise ValueError(f"{params.source or 'these parameters'} carry fitted effects "
                              f"({', '.join(params.effects)}): build the hand with phantom_cad.load_hand "

@@ -44,7 +44,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -58,9 +57,6 @@ from .routing_rules import (WRAP_MARGIN, clamp_angle, cmc_loop_clamps, joint_tra
                             servo_clamp_wrap)
 from .topology import (CHAINS, CMC_PULLEY, CMC_Q, CMC_SERVO, JOINTS, SERVOS, TENDONS, Tendon, chain, digit_links,
                        joint, link)
-
-if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
-    from ..params.schema import HandParams
 
 
 #: a clamp sits this far outside its pulley's centreline circle (m): a simulator's wrapping needs the
@@ -118,7 +114,7 @@ class Layout:
     hub_width: float             # a hub beside the cheek: from the cheek face to its inner flank
 
 
-def layout(params: HandParams, digit: str) -> Layout:
+def layout(params, digit: str) -> Layout:
     """The planes: loop k in the slot's half of sign (-1)^k (ulnar first), its groove one flank
     and one clearance inside the slot's edge; its hub on the cheek of that side, one flank wider
     than the groove; the return cord one flank inside the tongue that the second hub leaves."""
@@ -145,9 +141,8 @@ def _child_origin(rest: dict[str, np.ndarray], jname: str) -> np.ndarray:
     return rest[f"T_{j.parent}_{j.child}"][:3, 3].copy()
 
 
-def _segment(params: HandParams, link_name: str) -> float:
+def _segment(params, link_name: str) -> float:
     return float(F.segment_length(params, link(link_name)))
-
 
 
 X = np.array([1.0, 0.0, 0.0])
@@ -157,7 +152,7 @@ def _p(x: float, yz) -> tuple[float, float, float]:
     return (float(x), float(yz[0]), float(yz[1]))
 
 
-def _loop(params: HandParams, digit: str, k: int, lay: Layout, rest) -> tuple[Strand, Strand]:
+def _loop(params, digit: str, k: int, lay: Layout, rest) -> tuple[Strand, Strand]:
     """The figure-eight loop between chain joints k and k+1 (see the module doc)."""
     ch = params.digit(digit).chain
     spec = chain(digit)
@@ -198,7 +193,7 @@ def _loop(params: HandParams, digit: str, k: int, lay: Layout, rest) -> tuple[St
     return a, b
 
 
-def _return(params: HandParams, digit: str, lay: Layout, rest) -> Strand:
+def _return(params, digit: str, lay: Layout, rest) -> Strand:
     """The dorsal cable-spring: tangent to every joint's groove at its radius, on both sides."""
     spec = chain(digit)
     ch = params.digit(digit).chain
@@ -227,7 +222,7 @@ def _return(params: HandParams, digit: str, lay: Layout, rest) -> Strand:
     return Strand(f"{digit}_return", tuple(els))
 
 
-def _drive(params: HandParams, digit: str) -> Strand:
+def _drive(params, digit: str) -> Strand:
     spec = chain(digit)
     servo = SERVOS[spec.servo]
     r = F.servo_radius(params, servo.index)
@@ -261,7 +256,7 @@ def _drive(params: HandParams, digit: str) -> Strand:
     return Strand(f"{digit}_drive", tuple(els))
 
 
-def _cmc_loop(params: HandParams) -> tuple[Strand, Strand]:
+def _cmc_loop(params) -> tuple[Strand, Strand]:
     """The closed loop from servo 6's pulley to the CMC pulley (equal radii r6: q15 = u6): strand a
     leaves servo 6's pulley at its -x along its y, strand b at its +x; both reach the CMC pulley
     on the same sides (an open loop: both pulleys turn the same way) and end at one clamp on each
@@ -308,11 +303,10 @@ def _mirror_element(e):
     return Pulley(e.link, mirror(e.centre), tuple(-v for v in mirror(e.axis)), e.radius, e.width, e.role, e.joint)
 
 
-
 _ROUTES: dict = {}
 
 
-def routes(params: HandParams, right_handed: bool = False) -> tuple[Route, ...]:
+def routes(params, right_handed: bool = False) -> tuple[Route, ...]:
     """Every tendon of the topology (``TENDONS`` order), routed for this hand (memoised by the
     parameters' digest and side: the routes are pure functions of them). ``right_handed``: the
     routes before a left hand's mirroring, in the frames the parts are built in (the CAD layer
@@ -321,7 +315,7 @@ def routes(params: HandParams, right_handed: bool = False) -> tuple[Route, ...]:
     return memoised(_ROUTES, (params.digest, mirror), lambda: _routes(params, mirror), cap=16)
 
 
-def _routes(params: HandParams, mirror: bool) -> tuple[Route, ...]:
+def _routes(params, mirror: bool) -> tuple[Route, ...]:
     out = []
     lays = {ch.digit: layout(params, ch.digit) for ch in CHAINS}
     rest = LF.rest_transforms(params)

@@ -3,16 +3,12 @@ frames, millimetres, their rest lengths, and each split drive's coupler). Determ
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
 
 from .. import units
 from .couplers import Coupler, couplers
 from .routing import Point, routes
 from .routing_paths import lengths
 from .topology import SERVOS
-
-if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
-    from ..params.schema import HandParams
 
 
 def rounded_mm(metres: float) -> float:
@@ -28,7 +24,7 @@ def _element_doc(e) -> dict:
             "radius_mm": rounded_mm(e.radius), "width_mm": rounded_mm(e.width)}
 
 
-def document(params: HandParams) -> dict:
+def document(params) -> dict:
     """``routing.json``: per tendon its kind, links, joints, servo, cord and strands (each a list of
     path elements in link frames, millimetres), and the rest length of every strand."""
     rest = lengths(params)
@@ -52,7 +48,7 @@ def document(params: HandParams) -> dict:
             "tendons": tendons}
 
 
-def coupler_document(params: HandParams, cp: Coupler) -> dict:
+def coupler_document(params, cp: Coupler) -> dict:
     """A split drive in ``routing.json`` (millimetres, degrees; s from the socket face into the palm)."""
     return {"at": "socket face", "coupler": {"stop_diameter_mm": rounded_mm(params.hardware.stop_diameter),
                                               "stop_length_mm": rounded_mm(params.hardware.stop_length),

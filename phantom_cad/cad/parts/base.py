@@ -34,16 +34,12 @@ from __future__ import annotations
 
 import abc
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ... import canon
 from ...kinematics import frames as F
 from ...kinematics.topology import DIGITS, JOINTS, LINKS, Joint, Link, joint
-
-if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
-    from ...params.schema import HandParams
 
 
 #: display colours (RGB 0..1) of the digit links, one per digit in topology.DIGITS order
@@ -95,7 +91,7 @@ class Part(abc.ABC):
 
     @classmethod
     @abc.abstractmethod
-    def for_link(cls, params: HandParams, link: Link) -> "Part":
+    def for_link(cls, params, link: Link) -> "Part":
         """The part of ``link`` (one of the family's ``links()``) of the hand ``params``."""
 
     # -- what a part declares ------------------------------------------------

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import math
 from functools import cached_property
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -29,9 +28,6 @@ from ...kinematics import frames as F
 from ...kinematics import topology
 from ...kinematics.dimensions import printed_hole, slot_back
 from ..kernel import import_build123d
-
-if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
-    from ...params.schema import HandParams
 
 
 def mm(x: float) -> float:
@@ -46,7 +42,7 @@ def mm(x: float) -> float:
 class Tolerances:
     """The print tolerances and hardware, in mm, with the derived hole sizes."""
 
-    def __init__(self, params: HandParams):
+    def __init__(self, params):
         pr, hw = params.print, params.hardware
         self.clearance = mm(pr.hole_clearance)
         self.interference = mm(pr.press_fit_interference)
@@ -138,7 +134,7 @@ class Tolerances:
 class DigitSection:
     """Cross-section and joint dimensions (mm) shared by every link of one digit."""
 
-    def __init__(self, params: HandParams, digit: str):
+    def __init__(self, params, digit: str):
         self.params = params
         self.digit = digit
         d = params.digit(digit)

@@ -10,7 +10,6 @@ MCP limit), and the anchors of the two dorsal cable springs.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -25,9 +24,6 @@ from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, hub_grooves
 from .drive_fans import clear_of_fans, drive_fan_tools, guide_entry
 from .tendons import RoutedPart, link_tendons, anchor_tools, channel_tools
 
-if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
-    from ...params.schema import HandParams
-
 
 class FingerBase(RoutedPart, Part):
     """The metacarpal module of ``finger``: a link fixed to the palm by two magnets."""
@@ -36,7 +32,7 @@ class FingerBase(RoutedPart, Part):
     #: magnet pockets on its magnet face
     MAGNETS = 2
 
-    def __init__(self, params: HandParams, finger: str):
+    def __init__(self, params, finger: str):
         links = [ln for ln in digit_links(finger) if ln.segment in self.SEGMENTS]
         if finger not in params.fingers or not links:
             raise ValueError(f"unknown finger {finger!r}")
@@ -48,7 +44,7 @@ class FingerBase(RoutedPart, Part):
         self.joint = child_joint(self.link).key
 
     @classmethod
-    def for_link(cls, params: HandParams, link):
+    def for_link(cls, params, link):
         return cls(params, link.digit)
 
     def inputs(self) -> dict:

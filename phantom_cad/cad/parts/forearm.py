@@ -20,7 +20,6 @@ back into its own. Why the servos are here and not in the palm: docs/parts.md.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -32,9 +31,6 @@ from .base import Part
 from .common import Tolerances, box, build, cylinder, mm, transform
 from . import wrist
 from .servos import ServoMount
-
-if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
-    from ...params.schema import HandParams
 
 
 #: the servos the module holds
@@ -48,14 +44,14 @@ class Forearm(ServoMount, Part):
     COLOR = (0.45, 0.47, 0.52)
     SCREWS = 2
 
-    def __init__(self, params: HandParams):
+    def __init__(self, params):
         self.params = params
         self.link = link(FOREARM)
         self.tol = Tolerances(params)
         self.pulley_width = mm(params.cad.servo_pulley_width)
 
     @classmethod
-    def for_link(cls, params: HandParams, link):
+    def for_link(cls, params, link):
         return cls(params)
 
     @property

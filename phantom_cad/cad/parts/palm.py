@@ -30,7 +30,6 @@ y distal, z dorsal. Built from:
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -47,9 +46,6 @@ from .common import DigitSection, Tolerances, box, build, cylinder, mm, prism_x,
 from . import wrist
 from .servos import ServoMount
 
-if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
-    from ...params.schema import HandParams
-
 
 def _mm(T):
     return F.to_mm(T)
@@ -61,7 +57,7 @@ class Palm(ServoMount, Part):
     SEGMENTS = ("palm",)
     COLOR = (0.55, 0.57, 0.60)
 
-    def __init__(self, params: HandParams):
+    def __init__(self, params):
         self.params = params
         self.link = next(ln for ln in LINKS if ln.parent is None)
         self.tol = Tolerances(params)
@@ -72,7 +68,7 @@ class Palm(ServoMount, Part):
         self.tendon_z = mm(F.tendon_height(params))
 
     @classmethod
-    def for_link(cls, params: HandParams, link):
+    def for_link(cls, params, link):
         return cls(params)
 
     @property

@@ -14,7 +14,6 @@ wall at full extension).
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -29,9 +28,6 @@ from .drive_fans import drive_fan_tools
 from .tendons import (LinkTendons, RoutedPart, link_tendons, anchor_tools, channel_tools, groove_outer,
                       groove_tool, knot_pocket_depth, sector_prism, cutter,
                       parent_hub_x)
-
-if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
-    from ...params.schema import HandParams
 
 
 #: how far (rad) the drive's knot well behind G2 leans distally from the palmar normal (see
@@ -195,7 +191,7 @@ class Phalanx(RoutedPart, Part):
     SEGMENTS = tuple(dict.fromkeys(ln.segment for ln in LINKS
                                    if ln.parent_joint and joint(ln.parent_joint).index != CMC_Q))
 
-    def __init__(self, params: HandParams, digit: str, segment: str):
+    def __init__(self, params, digit: str, segment: str):
         links = [ln for ln in digit_links(digit) if ln.segment in self.SEGMENTS]
         if not links:
             raise ValueError(f"unknown digit {digit!r}")
@@ -214,7 +210,7 @@ class Phalanx(RoutedPart, Part):
             raise ValueError(f"{digit} {segment} length {self.length:.2f} mm is shorter than two joint bosses")
 
     @classmethod
-    def for_link(cls, params: HandParams, link):
+    def for_link(cls, params, link):
         return cls(params, link.digit, link.segment)
 
     def inputs(self) -> dict:

@@ -16,7 +16,6 @@ radius r6 / cmc_gain and width, the loop's two clamps, and a keyed bore on the C
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -29,16 +28,13 @@ from ..measure import measure_groove_radius
 from .base import Part
 from .common import Tolerances, box, build, cylinder, mm
 
-if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
-    from ...params.schema import HandParams
-
 
 #: a drive pulley's horn screws, before the turn that puts its anchor (cut on +y) at the clamp:
 #: on x, square to the anchor (on it, as at 45/225 deg, they would cut the knot well)
 DRIVE_HORN_ANGLES = (0.0, math.pi)
 
 
-def _anchor_angles(params: HandParams, link_name: str) -> tuple[float, ...]:
+def _anchor_angles(params, link_name: str) -> tuple[float, ...]:
     """Polar angles (rad, the link's frame at rest, right hand) of the clamps the routing model puts
     on a pulley link: a drive's (``routing_rules.servo_clamp_wrap``: every wrap inside the travel) or
     the CMC loop's two (``routing_rules.cmc_loop_clamps``)."""
@@ -134,7 +130,7 @@ class ServoPulley(GroovedPulley):
 
     SEGMENTS = ("servo_pulley",)
 
-    def __init__(self, params: HandParams, servo: int):
+    def __init__(self, params, servo: int):
         if servo not in range(N_SERVOS):
             raise ValueError(f"servo must be 0..{N_SERVOS - 1} ({SERVOS[0].label}..{SERVOS[-1].label}), got {servo!r}")
         self.params, self.servo = params, SERVOS[servo]
@@ -145,7 +141,7 @@ class ServoPulley(GroovedPulley):
         self.radius = mm(frames.servo_radius(params, servo))
 
     @classmethod
-    def for_link(cls, params: HandParams, link):
+    def for_link(cls, params, link):
         return cls(params, link.servo)
 
     def inputs(self) -> dict:
@@ -179,7 +175,7 @@ class CMCPulley(GroovedPulley):
 
     SEGMENTS = ("cmc_pulley",)
 
-    def __init__(self, params: HandParams):
+    def __init__(self, params):
         self.params = params
         self.link = link(CMC_PULLEY)
         self.tol = Tolerances(params)
@@ -188,7 +184,7 @@ class CMCPulley(GroovedPulley):
         self.column_radius = mm(params.cad.cmc_column_radius)
 
     @classmethod
-    def for_link(cls, params: HandParams, link):
+    def for_link(cls, params, link):
         return cls(params)
 
     def inputs(self) -> dict:

@@ -15,7 +15,6 @@ phalanx.Phalanx("thumb", ...).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -31,9 +30,6 @@ from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, eyelet_boss_axis, hub_groo
 from .drive_fans import drive_fan_tools, guide_entry
 from .tendons import RoutedPart, link_tendons, anchor_tools, channel_tools
 
-if TYPE_CHECKING:  # the annotations' type only: the code reads the parameters by their attributes
-    from ...params.schema import HandParams
-
 
 #: depth (mm) of the flat that keys the column's end to the CMC pulley [choice]
 KEY_DEPTH = 1.0
@@ -45,7 +41,7 @@ class ThumbCMCBase(RoutedPart, Part):
 
     SEGMENTS = ("cmc_base",)
 
-    def __init__(self, params: HandParams):
+    def __init__(self, params):
         self.params = params
         self.link = link(JOINTS[CMC_Q].child)
         self.sec = DigitSection(params, self.link.digit)
@@ -60,7 +56,7 @@ class ThumbCMCBase(RoutedPart, Part):
                              f"(radius {self.hub_radius:g} mm) and the {self.joint.upper()} clevis")
 
     @classmethod
-    def for_link(cls, params: HandParams, link):
+    def for_link(cls, params, link):
         return cls(params)
 
     def inputs(self) -> dict:
