@@ -431,5 +431,4 @@ def signature_report(measured: dict | None, best: str | None, registry: dict) ->
     return out
 
 
-__all__ = ["NoiseFloor", "noise_floor", "verdict", "made_worse", "measured_features", "compare_features",
-           "signature_report", "signature", "tolerance", "whiteness", "FLOOR_FACTOR", "SMALL_SAMPLE", "WHITENESS_Z"]
+__all__ = ["joint_signature", "signature", "measured_features", "compare_features", "signature_report"]
