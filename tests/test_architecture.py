@@ -22,7 +22,7 @@ PKG = Path(__file__).resolve().parents[1] / "phantom_cad"
 FOUNDATION = {"phantom_cad.units", "phantom_cad.canon", "phantom_cad.errors", "phantom_cad.atomic",
               "phantom_cad.workers",
               "phantom_cad.kinematics.topology", "phantom_cad.kinematics.closed_form",
-              "phantom_cad.kinematics.dimensions"}
+              "phantom_cad.kinematics.dimensions", "phantom_cad.kinematics.hand_params"}
 #: package -> layer; packages on one layer must not import each other
 LAYERS = {"params": 1, "kinematics": 2, "calibration": 3, "cad": 3, "export": 4, "": 5,
           "cli": 6, "interop": 6, "__main__": 7}
