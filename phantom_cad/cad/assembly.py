@@ -29,6 +29,7 @@ import numpy as np
 
 from ..kinematics import frames as F
 from ..kinematics import link_frames as LF
+from ..kinematics.hand_params import HandParams
 from ..kinematics.topology import CMC_PULLEY, CMC_Q, DIGITS, JOINTS, LINKS, N_JOINTS, digit_links
 from . import registry, verify
 from .materials import bill_of_materials  # noqa: F401  (part of the interface)
@@ -53,21 +54,21 @@ class Built:
 MIRROR = np.array([-1.0, 1.0, 1.0])
 
 
-def part_names(params) -> list[str]:
+def part_names(params: HandParams) -> list[str]:
     return list(registry.PART_NAMES)
 
 
-def part_inputs(params, name: str) -> dict:
+def part_inputs(params: HandParams, name: str) -> dict:
     """The plain parameter values ``name`` depends on (a superset, never a subset)."""
     return registry.part(params, name).inputs()
 
 
-def part_object(params, name: str):
+def part_object(params: HandParams, name: str):
     """The part's dimension object (mm properties; ``.build()`` makes the right-hand solid)."""
     return registry.part(params, name)
 
 
-def pose_transforms(params, q=None) -> dict[str, np.ndarray]:
+def pose_transforms(params: HandParams, q=None) -> dict[str, np.ndarray]:
     """T_hand_link (mm) of every part at joint angles q (15,), None = rest."""
     if q is not None:
         q = np.asarray(q, float)
@@ -77,7 +78,7 @@ def pose_transforms(params, q=None) -> dict[str, np.ndarray]:
     return {n: F.to_mm(links[n]) for n in part_names(params)}
 
 
-def tip_frames(params) -> dict[str, tuple[str, np.ndarray]]:
+def tip_frames(params: HandParams) -> dict[str, tuple[str, np.ndarray]]:
     """``<digit>_tip`` -> (its distal link, T_link_tip in metres): the centre of each fingertip pad,
     z along the pad normal (what retargeting and grasp tools look for); mirrored for a left hand."""
     out = {}
@@ -89,7 +90,7 @@ def tip_frames(params) -> dict[str, tuple[str, np.ndarray]]:
     return out
 
 
-def build_part(params, name: str) -> Built:
+def build_part(params: HandParams, name: str) -> Built:
     part = registry.part(params, name)
     shape = part.build()
     collision = tuple(part.collision_solids())
@@ -106,12 +107,12 @@ def build_part(params, name: str) -> Built:
                  print_rotation=part.print_rotation, digit=part.digit, collision=collision, blockers=blockers)
 
 
-def verify_part(params, name: str, shape) -> list[str]:
+def verify_part(params: HandParams, name: str, shape) -> list[str]:
     """Problems of a built part (``phantom_cad.cad.verify.verify_part``)."""
     return verify.verify_part(params, name, shape)
 
 
-def designed_contacts(params) -> list[tuple[str, str, str]]:
+def designed_contacts(params: HandParams) -> list[tuple[str, str, str]]:
     """Pairs of parts that touch at rest by design: every finger base on its palm socket, every
     tendon-driven joint's tongue heel on its extension stop, the CMC pulley on the CMC base's
     column."""

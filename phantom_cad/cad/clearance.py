@@ -19,6 +19,7 @@ from .. import units
 from ..kinematics import frames as F
 from ..kinematics import routing
 from ..kinematics import routing_paths
+from ..kinematics.hand_params import HandParams
 
 
 #: fractions of the travel the check poses the hand at
@@ -55,7 +56,7 @@ def _mesh(shape):
     return trimesh.Trimesh(np.array([[v.X, v.Y, v.Z] for v in verts]), np.array(tris), process=True)
 
 
-def tendon_hits(params, shapes: dict, fractions=FRACTIONS, step_mm: float = STEP_MM) -> list[Hit]:
+def tendon_hits(params: HandParams, shapes: dict, fractions=FRACTIONS, step_mm: float = STEP_MM) -> list[Hit]:
     """Every (strand, pose, part) where sampled points of the strand lie inside the part's solid.
     ``shapes``: {part name (= its link's name): right-handed solid in its link frame, mm}. Points
     in a part's bounding box are classified against its tessellation (trimesh, ray parity) and

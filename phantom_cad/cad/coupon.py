@@ -24,6 +24,7 @@ from functools import cached_property
 
 import numpy as np
 
+from ..kinematics.hand_params import HandParams
 from .parts.common import Tolerances, as_solid, box, cylinder
 
 
@@ -65,7 +66,7 @@ class FitCoupon:
     name = NAME
     color = COLOR
 
-    def __init__(self, params):
+    def __init__(self, params: HandParams):
         self.params = params
         self.tol = Tolerances(params)
 

@@ -35,6 +35,7 @@ import numpy as np
 
 from .. import units
 from ..kinematics import frames, opposition
+from ..kinematics.hand_params import HandParams
 from ..kinematics.topology import CMC_SERVO, FINGERS, N_SERVOS, THUMB_CHAIN, chain, digit_links
 from .assembly import pose_transforms
 from .measure import placed
@@ -116,7 +117,7 @@ def model_contacts(hand, finger: str, n: int = CANDIDATES) -> list[np.ndarray]:
     return out
 
 
-def on_pad(params, T_hand_link: np.ndarray, digit: str, point) -> bool:
+def on_pad(params: HandParams, T_hand_link: np.ndarray, digit: str, point) -> bool:
     """Whether a point (hand frame, mm) of a digit's distal phalanx lies on its pad: in the link's
     frame on its palmar half (z <= 0) and its distal half (y >= L / 2, ``frames.fingertip``)."""
     x = np.linalg.solve(T_hand_link, np.r_[np.asarray(point, float), 1.0])[:3]

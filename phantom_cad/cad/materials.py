@@ -8,6 +8,7 @@ from __future__ import annotations
 
 
 from .. import units
+from ..kinematics.hand_params import HandParams
 from ..kinematics.topology import CMC_SERVO, DIGITS, FINGER_CHAINS, FINGERS, N_SERVOS, SERVOS, THUMB_CHAIN, joint
 
 
@@ -15,7 +16,7 @@ from ..kinematics.topology import CMC_SERVO, DIGITS, FINGER_CHAINS, FINGERS, N_S
 KNOT_ALLOWANCE_MM = 20.0
 
 
-def _cords(params) -> list[dict]:
+def _cords(params: HandParams) -> list[dict]:
     """One row per routed tendon (``kinematics.routing``): its cut length, from the routing model's
     rest length of its strands (plus, for a drive, what its servo winds over the travel) and a
     knot allowance per end, and how it is anchored and tensioned."""
@@ -86,7 +87,7 @@ def _cords(params) -> list[dict]:
     return rows
 
 
-def _bearings(params) -> dict[str, int]:
+def _bearings(params: HandParams) -> dict[str, int]:
     """Bearings per digit: one per joint whose tongue has a face where the seat fits beside the
     grooves (``phalanx.tongue_bearing_face``); the others turn on the axle in their bore."""
     from .parts.common import DigitSection
@@ -104,7 +105,7 @@ def _bearings(params) -> dict[str, int]:
     return out
 
 
-def bill_of_materials(params) -> list[dict]:
+def bill_of_materials(params: HandParams) -> list[dict]:
     hw = params.hardware
     g = lambda v: f"{units.mm(v):g}"  # noqa: E731
     n_joints = {c.digit: len(c.keys) for c in FINGER_CHAINS + (THUMB_CHAIN,)}

@@ -12,10 +12,11 @@ from __future__ import annotations
 
 from .. import units
 from ..params import ParamError
+from ..kinematics.hand_params import HandParams
 from .parts.common import mm
 
 
-def check(params) -> None:
+def check(params: HandParams) -> None:
     """Raise ParamError if the palm's thenar cannot hold the CMC (``thenar.thenar``): the CMC axis
     must climb into the palm within 60 deg of its normal (the column along it enters the palm's
     journal), the CMC base (a hub of half the thumb's width, the thumb's thickness, turning with the

@@ -8,6 +8,7 @@ part is one class in ``cad/parts/`` and one entry in :data:`FAMILIES`. numpy onl
 from __future__ import annotations
 
 
+from ..kinematics.hand_params import HandParams
 from ..kinematics.topology import LINKS, link
 from .parts.base import Part
 from .parts.finger_base import FingerBase
@@ -38,7 +39,7 @@ def _check() -> None:
 _check()
 
 
-def part(params, name: str) -> Part:
+def part(params: HandParams, name: str) -> Part:
     """The part ``name`` of the hand ``params`` (its dimension object; ``.build()`` makes the
     right-hand solid). KeyError for a name that is no part."""
     fam = FAMILY.get(name)

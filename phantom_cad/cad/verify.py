@@ -7,6 +7,7 @@ pipeline runs once per part before writing it. build123d is imported lazily.
 from __future__ import annotations
 
 
+from ..kinematics.hand_params import HandParams
 from . import registry
 from .measure import solid_report
 
@@ -44,7 +45,7 @@ def check_solid(name: str, shape) -> None:
         raise problems[0]
 
 
-def verify_part(params, name: str, shape) -> list[str]:
+def verify_part(params: HandParams, name: str, shape) -> list[str]:
     """Problems found by measuring ``shape`` (part ``name`` in its link frame, mm) against the
     parameters: first one valid solid of positive volume (:func:`solid_problems`), then what
     the part's family measures (``Part.verify``: groove radius R, r_j or r6,

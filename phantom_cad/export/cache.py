@@ -37,6 +37,7 @@ from typing import Any, Mapping
 
 from ..atomic import write_json_atomic
 from ..canon import canonical, plain, sha256
+from ..kinematics.hand_params import HandParams
 
 #: bump when the cached files' format or the export pipeline changes their bytes
 PIPELINE_VERSION = 1
@@ -93,7 +94,7 @@ def cad_versions() -> dict[str, str | None]:
     }
 
 
-def coupon_key(params) -> str:
+def coupon_key(params: HandParams) -> str:
     """The fit-test coupon's key: the print settings, the hardware and the wall it is made of."""
     doc = params.document
     return sha256(canonical({
@@ -105,7 +106,7 @@ def coupon_key(params) -> str:
     }))
 
 
-def part_key(params, name: str, part_inputs: Mapping[str, Any]) -> str:
+def part_key(params: HandParams, name: str, part_inputs: Mapping[str, Any]) -> str:
     return sha256(canonical({
         "pipeline": PIPELINE_VERSION,
         "part": name,

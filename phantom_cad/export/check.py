@@ -35,6 +35,7 @@ import numpy as np
 from .. import units
 from ..errors import UserError
 from ..kinematics import thenar as TH
+from ..kinematics.hand_params import HandParams
 from ..kinematics.model import Hand
 from ..kinematics.topology import CMC_Q, JOINTS, LINK_NAMES, SERVOS, joint
 from ..kinematics.vectors import clipped_acos
@@ -143,7 +144,7 @@ def load_urdf(export: Export):
     return yourdfpy.URDF.load(str(export.local_urdf), load_meshes=False, build_collision_scene_graph=False)
 
 
-def urdf_rows(robot, params, hand: Hand, U: np.ndarray) -> list[Row]:
+def urdf_rows(robot, params: HandParams, hand: Hand, U: np.ndarray) -> list[Row]:
     """Link poses and joint angles of the URDF (``robot``, yourdfpy) at the commands ``U``."""
     from ..cad.assembly import pose_transforms
 
@@ -206,7 +207,7 @@ def _mj_name(mujoco, m, obj, i) -> str:
     return mujoco.mj_id2name(m, obj, i) or ""
 
 
-def mjcf_rows(export: Export, params, hand: Hand, U: np.ndarray, settle: int) -> tuple[list[Row], dict]:
+def mjcf_rows(export: Export, params: HandParams, hand: Hand, U: np.ndarray, settle: int) -> tuple[list[Row], dict]:
     """The MJCF's rows, and its inertials by body (for :func:`inertial_rows`)."""
     import mujoco
 
@@ -316,7 +317,7 @@ def _solids(export: Export) -> tuple[dict[str, object], dict[str, dict]]:
     return solids, {name: mass_properties(shape) for name, shape in solids.items()}
 
 
-def axis_rows(robot, params, solids: dict) -> list[Row]:
+def axis_rows(robot, params: HandParams, solids: dict) -> list[Row]:
     """Each joint's axis (URDF, at rest) on the bores measured in the solids, each solid placed
     where the CAD assembly puts it at rest: the parent's axle press bore and the child's bearing
     seat and axle bore (a tongue without a bearing turns on the axle in its bore); for the CMC the
@@ -361,7 +362,8 @@ def axis_rows(robot, params, solids: dict) -> list[Row]:
             _row("joint axes (URDF) on the bores measured in the solids: angle", ang, TOL_DEG, "deg")]
 
 
-def _expected_inertials(export: Export, params, props: dict) -> dict[str, tuple[float, np.ndarray, np.ndarray]]:
+def _expected_inertials(export: Export, params: HandParams,
+                        props: dict) -> dict[str, tuple[float, np.ndarray, np.ndarray]]:
     """(mass kg, centre m, tensor kg m^2 about it) of each part from its STEP solid's mass
     properties ``props``."""
     out = {}
@@ -391,7 +393,7 @@ def _urdf_inertials(robot) -> dict[str, tuple[float, np.ndarray, np.ndarray]]:
     return out
 
 
-def inertial_rows(export: Export, robot, params, props: dict, mjcf_inertials: dict) -> list[Row]:
+def inertial_rows(export: Export, robot, params: HandParams, props: dict, mjcf_inertials: dict) -> list[Row]:
     expected = _expected_inertials(export, params, props)
     rows = []
     for label, got in (("URDF", _urdf_inertials(robot)), ("MJCF", mjcf_inertials)):
@@ -432,7 +434,7 @@ def mesh_rows(export: Export, props: dict) -> list[Row]:
             _row("visual meshes: centre = the solid's", centre, TOL_MESH_CENTRE, "mm")]
 
 
-def collision_rows(export: Export, params, hand: Hand, log=lambda msg: None) -> list[Row]:
+def collision_rows(export: Export, params: HandParams, hand: Hand, log=lambda msg: None) -> list[Row]:
     """No two parts interpenetrate over the grid of servo commands of
     ``interference.command_sweep`` (the description's visual meshes, posed by the assembly
     interface): a joint's parent and child and the designed contacts may touch; the pinch
@@ -461,7 +463,7 @@ def collision_rows(export: Export, params, hand: Hand, log=lambda msg: None) -> 
                  errors, SWEEP_TOL_MM3, "mm^3")]
 
 
-def check_export(export_dir: Path, params, samples: int = 8, settle: int = 3, seed: int = 0,
+def check_export(export_dir: Path, params: HandParams, samples: int = 8, settle: int = 3, seed: int = 0,
                  log=lambda msg: None, sweep: bool = True) -> list[Row]:
     """Every row of the check of the export in ``export_dir`` built from ``params``."""
     export = Export.open(Path(export_dir))

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
+from ..kinematics.hand_params import HandParams
 from . import cache as cache_mod
 
 #: the robot description package's folder in an export
@@ -32,7 +33,7 @@ DESCRIPTION = "description"
 class ExportContext:
     """What the exporters of one build read (``pipeline._Build.write`` makes it)."""
 
-    params: Any
+    params: HandParams
     params_path: Path
     asm: Any                        # the assembly interface (export.interface)
     names: list[str]

@@ -26,6 +26,7 @@ import numpy as np
 
 from .. import units
 from ..canon import jsonable
+from ..kinematics.hand_params import HandParams, Print
 from .cache import cad_versions, code_digest, package_version
 from .step_stl import ANGULAR_TOLERANCE_RAD, step_timestamp
 
@@ -40,7 +41,7 @@ def file_sha256(path: Path) -> str:
     return h.hexdigest()
 
 
-def mass_g(volume_mm3: float, printing) -> float:
+def mass_g(volume_mm3: float, printing: Print) -> float:
     """Mass estimate (g) of a part printed with ``params.print`` (density, infill):
     cm^3 times g/cm^3 times infill."""
     return units.cm3(volume_mm3) * (printing.density / units.G_PER_CM3) * printing.infill
@@ -50,7 +51,7 @@ def _r(x: float, nd: int = 6) -> float:
     return round(float(x), nd)
 
 
-def build_manifest(*, stage: Path, params, params_path: Path, names, keys, metas, poses, estimates,
+def build_manifest(*, stage: Path, params: HandParams, params_path: Path, names, keys, metas, poses, estimates,
                    slicer_info, interference, contacts, bom) -> dict:
     printing = params.print
     parts = []

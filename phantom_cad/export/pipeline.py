@@ -52,6 +52,7 @@ from ..canon import canonical, plain, sha256
 from ..params import ParamError, load_document, parse
 from ..params.io import DEFAULT_PARAMS
 from .. import workers
+from ..kinematics.hand_params import HandParams
 from . import cache as cache_mod
 from . import interface, pool as pool_mod
 from .cache import Cache
@@ -94,7 +95,7 @@ def _load(params_path, side, effects=None):
     return path, document, params, file_side
 
 
-def _default_out(params, side, file_side) -> Path:
+def _default_out(params: HandParams, side, file_side) -> Path:
     name = params.name
     if side is not None and side != file_side:
         name = f"{name}_{side}"
@@ -104,7 +105,7 @@ def _default_out(params, side, file_side) -> Path:
 class _Build:
     """One run of :func:`build_hand`: its inputs, the lazily started process pool, the stages."""
 
-    def __init__(self, path, document, params, out: Path, jobs: int, cache: Cache, render: bool, log):
+    def __init__(self, path, document, params: HandParams, out: Path, jobs: int, cache: Cache, render: bool, log):
         self.path, self.document, self.params, self.out = path, document, params, out
         self.jobs, self.cache, self.render, self.log = jobs, cache, render, log
         self.asm = interface.assembly()

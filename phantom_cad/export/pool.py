@@ -22,6 +22,7 @@ from ..atomic import write_atomic
 from ..canon import jsonable, sha256
 from ..params import parse
 from ..workers import die_with_parent, keep_freed_memory
+from ..kinematics.hand_params import HandParams
 from . import interface, orient
 from .cache import Cache, seal
 from .manifest import mass_g
@@ -53,7 +54,7 @@ def _bbox(v: np.ndarray) -> dict:
             "max": [round(float(x), 6) for x in v.max(axis=0)]}
 
 
-def _check(asm, params, name: str, shape) -> str:
+def _check(asm, params: HandParams, name: str, shape) -> str:
     """The part's one validity check and its measured verification: the assembly module's
     ``verify_part`` when it has one ("ok", or CheckError listing the problems), else only
     ``phantom_cad.cad.verify.check_solid`` ("skipped": nothing measured)."""

@@ -31,6 +31,7 @@ from ..kinematics import closed_form as cf
 from ..kinematics import link_frames as LF
 from ..kinematics import routing
 from ..kinematics import routing_paths
+from ..kinematics.hand_params import ChainParams, HandParams, Print
 from ..kinematics.topology import CHAINS, CMC_PULLEY, CMC_Q, JOINTS, LINK_NAMES, LINKS, SERVOS
 from .manifest import mass_g
 
@@ -129,7 +130,7 @@ class RobotModel:
     adjacent: tuple[tuple[str, str], ...] = ()
 
 
-def inertial(meta: dict, printing, estimate: dict | None = None) -> Inertial:
+def inertial(meta: dict, printing: Print, estimate: dict | None = None) -> Inertial:
     """The inertial of a part from its measured mass properties (``meta["mass_properties"]``:
     volume mm^3, centre of mass mm, tensor about it in mm^5 at unit density)."""
     mp = meta["mass_properties"]
@@ -146,14 +147,14 @@ def inertial(meta: dict, printing, estimate: dict | None = None) -> Inertial:
     return Inertial(mass, com, (I[0, 0], I[0, 1], I[0, 2], I[1, 1], I[1, 2], I[2, 2]), source)
 
 
-def _max_rate(chain) -> float:
+def _max_rate(chain: ChainParams) -> float:
     """The largest dq_ref/du over the chain's servo travel (eq. 6), on a dense grid."""
     u = np.linspace(chain.travel[0], chain.travel[1], RATE_SAMPLES)
     g = chain.guide
     return float(np.max(np.abs(cf.reference_angle_rate(u, g.d1, g.d2, g.alpha, chain.servo_radius))))
 
 
-def _drives(params) -> dict[str, tuple[float, float, Mimic | None]]:
+def _drives(params: HandParams) -> dict[str, tuple[float, float, Mimic | None]]:
     """joint name -> (effort N m, velocity rad/s, mimic) of the 15 actuated joints."""
     tau, speed = params.servo.stall_torque, params.servo.speed
     out = {}
@@ -174,7 +175,7 @@ def _drives(params) -> dict[str, tuple[float, float, Mimic | None]]:
 STRAND_TAU = 0.002
 
 
-def transmissions(params) -> tuple[tuple[ServoDrive, ...], tuple[Strand, ...]]:
+def transmissions(params: HandParams) -> tuple[tuple[ServoDrive, ...], tuple[Strand, ...]]:
     """The six servo drives (servo order) and every routed tendon strand, from the topology's
     servos, the routing model and the parameters."""
     tau, speed = params.servo.stall_torque, params.servo.speed
@@ -198,7 +199,7 @@ def transmissions(params) -> tuple[tuple[ServoDrive, ...], tuple[Strand, ...]]:
     return tuple(drives), tuple(strands)
 
 
-def robot_model(params, metas: dict[str, dict], tips: dict[str, tuple[str, np.ndarray]],
+def robot_model(params: HandParams, metas: dict[str, dict], tips: dict[str, tuple[str, np.ndarray]],
                 estimates: dict[str, dict | None] | None = None) -> RobotModel:
     """The robot model of a built hand: ``metas`` the part metas (by link name), ``tips`` the
     fingertip frames (``assembly.tip_frames``), ``estimates`` the slicer's per-part estimates."""

@@ -25,6 +25,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from .. import units
+from ..kinematics.hand_params import Print
 
 EXECUTABLE = "prusa-slicer"
 
@@ -60,7 +61,7 @@ def slicer_version(exe: str | None = None) -> str | None:
     return m.group(1) if m else "unknown"
 
 
-def config_ini(print_params) -> str:
+def config_ini(print_params: Print) -> str:
     """The PrusaSlicer config derived from ``params.print`` (a phantom_cad Print)."""
     density_g_cm3 = print_params.density / units.G_PER_CM3   # kg/m^3 -> g/cm^3
     return (

@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import units
+from ..kinematics.hand_params import HandParams
 from . import slicer
 
 
@@ -28,7 +29,7 @@ from . import slicer
 SURROUNDED = 6 / 8
 
 
-def in_features(params, link: str, points: np.ndarray, solid=None) -> dict[str, float]:
+def in_features(params: HandParams, link: str, points: np.ndarray, solid=None) -> dict[str, float]:
     """mm of support path inside each tendon groove and channel of ``link`` (``points``: link
     frame, mm, right hand): {"groove <role> <joint>": mm, "channel <k>": mm}. ``solid``: the part
     (a ``trimesh.Trimesh``, link frame), for where a channel lies in it."""
@@ -72,7 +73,7 @@ def link_points(stl_path, print_transform, ini_text: str, project=None) -> np.nd
     return pts @ T[:3, :3].T + T[:3, 3] if len(pts) else pts
 
 
-def part_support(params, stl_path, print_transform, link: str, ini_text: str, project=None,
+def part_support(params: HandParams, stl_path, print_transform, link: str, ini_text: str, project=None,
                  side: str = "right") -> dict:
     """Slice an exported part with automatic supports (as an STL, or its ``project``): {"total_mm":
     the support path, "features": :func:`in_features`, the part's STL as its solid}

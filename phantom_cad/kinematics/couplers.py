@@ -12,6 +12,7 @@ import numpy as np
 from .. import units
 from ..errors import ParamError
 from . import frames as F
+from .hand_params import HandParams
 from .memo import memoised
 from .routing import Point, Strand, routes
 from .routing_paths import pose, strand_nodes, strand_path
@@ -51,7 +52,7 @@ class Coupler:
         return self.full[1] + self.bore / 2.0 - self.diameter / 2.0
 
 
-def _drive_strand(params, digit: str) -> Strand:
+def _drive_strand(params: HandParams, digit: str) -> Strand:
     """The drive's strand as :func:`routes` gives it (mirrored for a left hand), for posing with
     :func:`pose`."""
     return next(r.strands[0] for r in routes(params) if r.tendon.kind == "drive" and r.tendon.digit == digit)
@@ -63,7 +64,7 @@ def split_digits() -> tuple[str, ...]:
     return tuple(ch.digit for ch in CHAINS if link(joint(ch.joint_names[0]).parent).segment == "base")
 
 
-def couplers(params) -> dict[str, Coupler]:
+def couplers(params: HandParams) -> dict[str, Coupler]:
     """The coupler of every split drive (right-hand frames; the left hand's are their mirror image,
     of the same dimensions). Refuses, naming ``hardware.tendon_stop``, a file whose coupler does not
     stay in its channel over the travel or does not come out of the socket at the service angle."""
@@ -73,7 +74,7 @@ def couplers(params) -> dict[str, Coupler]:
 _COUPLERS: dict = {}
 
 
-def _couplers(params) -> dict[str, Coupler]:
+def _couplers(params: HandParams) -> dict[str, Coupler]:
     hw, c = params.hardware, params.print.hole_clearance
     d = hw.tendon_diameter
     D = hw.stop_diameter + 2.0 * d

@@ -10,12 +10,13 @@ import numpy as np
 
 from .frames import (T_palm_socket, T_palm_thumb_cmc_base, pulley_cavity_margin, servo_radius, socket_tendon_point,
                      socket_x, tendon_height, tendon_relief, trans, wrist_y)
+from .hand_params import HandParams
 from .memo import memoised
 from .thenar import T_cmc_base_pulley, thenar, thenar_axis_point, thenar_points
 from .topology import CMC_SERVO, FINGERS, SERVOS, chain
 
 
-def metacarpal_x(params) -> tuple[float, float]:
+def metacarpal_x(params: HandParams) -> tuple[float, float]:
     """x extent (m, palm frame, right hand) of the palm's metacarpal block: across the sockets
     (:func:`socket_x`), and ulnar far enough that every finger drive's channel keeps a wall to the
     block's ulnar face where the drive runs ulnar toward its servo (from its exit under the socket
@@ -32,13 +33,13 @@ def metacarpal_x(params) -> tuple[float, float]:
     return x0, x1
 
 
-def T_palm_servo(params, servo: int) -> np.ndarray:
+def T_palm_servo(params: HandParams, servo: int) -> np.ndarray:
     """Servo output frame (see module doc) of servo ``servo`` (0-based index, topology.SERVOS), in
     the forearm module's row (:func:`forearm_servos`)."""
     return forearm_servos(params)[servo].copy()
 
 
-def cmc_loop_direction(params) -> float:
+def cmc_loop_direction(params: HandParams) -> float:
     """Polar angle (rad, the CMC pulley's frame at rest, right hand) of the direction from servo
     6's pulley to the CMC pulley (they lie in one plane, :func:`coplanar_servo`): the loop's
     strands reach the CMC pulley at that angle -+ 90 deg."""
@@ -48,7 +49,7 @@ def cmc_loop_direction(params) -> float:
     return math.atan2(v[1], v[0])
 
 
-def servo_boxes(params) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+def servo_boxes(params: HandParams) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """(lo, hi) corners (m, servo frame) of a servo's body and of its flange ears (both ears as
     one slab across the body): the body's output face one hole clearance below the pulley's
     lower flange, the body toward -y of the shaft by cad.servo_shaft_offset."""
@@ -68,7 +69,7 @@ def box_corners(lo, hi) -> np.ndarray:
     return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])], float)
 
 
-def servo_envelope(params, servo: int) -> np.ndarray:
+def servo_envelope(params: HandParams, servo: int) -> np.ndarray:
     """Points (m, servo frame) whose hull holds a servo with its clearance: the corners of its body
     and ears and the rim of its pulley's cavity, grown by a hole clearance."""
     c = params.print.hole_clearance
@@ -81,7 +82,7 @@ def servo_envelope(params, servo: int) -> np.ndarray:
     return np.vstack(pts)
 
 
-def forearm_pitch(params, a: int | None = None, b: int | None = None) -> float:
+def forearm_pitch(params: HandParams, a: int | None = None, b: int | None = None) -> float:
     """Least x spacing (m) of two neighbouring servos ``a`` and ``b`` in the forearm module (by
     default the largest of any two): the wider of their two pulley cavities' radii and a servo body
     with its clearances, and a palm wall (:func:`forearm_servos` widens it where the servos, each
@@ -93,7 +94,7 @@ def forearm_pitch(params, a: int | None = None, b: int | None = None) -> float:
     return max(ra + rb + 2.0 * m, body) + params.palm.wall
 
 
-def servo_target(params, servo: int) -> np.ndarray:
+def servo_target(params: HandParams, servo: int) -> np.ndarray:
     """The palm-frame point (m, right hand) a servo's cable heads for as it leaves its pulley: the
     finger's tendon exit at its socket; for the thumb's drive, its turn onto the CMC axis above the
     CMC pulley (:func:`thenar`); for servo 6, the CMC pulley's centre (its loop's strands run either
@@ -153,7 +154,7 @@ def spaced(want, pitch) -> list[float]:
 _FOREARM: dict = {}
 
 
-def forearm_servos(params) -> dict[int, np.ndarray]:
+def forearm_servos(params: HandParams) -> dict[int, np.ndarray]:
     """T_palm_servo (m, right hand) of every servo in the forearm module: one row across the
     forearm in the order of their targets (radial to ulnar, so no two cables cross), each as near
     (least squares, :func:`spaced`) to where its cable leaves straight ahead as at least
@@ -168,7 +169,7 @@ def forearm_servos(params) -> dict[int, np.ndarray]:
     return memoised(_FOREARM, params.digest, lambda: _forearm_servos(params), cap=16)
 
 
-def _forearm_servos(params) -> dict[int, np.ndarray]:
+def _forearm_servos(params: HandParams) -> dict[int, np.ndarray]:
     targets = {s.index: servo_target(params, s.index) for s in SERVOS}
     # each pulley as near as the pitch allows to where its drive leaves straight ahead toward its
     # target (its centre r ulnar of the target's x; a loop's centre on it): least squares with
@@ -199,7 +200,7 @@ def _forearm_servos(params) -> dict[int, np.ndarray]:
     return out
 
 
-def _outlines(params, T: np.ndarray, servo: int) -> list[np.ndarray]:
+def _outlines(params: HandParams, T: np.ndarray, servo: int) -> list[np.ndarray]:
     """The xy outlines (palm frame, counter-clockwise) of servo ``servo``'s body, ears and pulley
     cavity, grown by a clearance, placed by T, with the pockets the module cuts for them: open along
     the shaft up to the module's top (a wall above the palm's dorsal face), so a tilted shaft sweeps
@@ -252,7 +253,7 @@ def convex_hull_2d(points) -> np.ndarray:
     return np.array(hull)
 
 
-def servo_gaps(params, servos: dict[int, np.ndarray]) -> list[float]:
+def servo_gaps(params: HandParams, servos: dict[int, np.ndarray]) -> list[float]:
     """Between each pair of neighbouring servos of a row (T_palm_servo), a lower bound (m) of the
     distance between their outlines (:func:`_outlines`: body, ears and pulley cavity with clearance,
     swept along the shaft to the module's top): the largest gap between their projections on an
@@ -279,7 +280,7 @@ def _edge_normals(R: np.ndarray) -> np.ndarray:
     return n / np.linalg.norm(n, axis=1, keepdims=True)
 
 
-def palm_back(params) -> float:
+def palm_back(params: HandParams) -> float:
     """y (m, palm frame) of the palm's back face: the wrist crease, or the back of the thenar
     (:func:`thenar_points`) where that reaches further back (the palm's metacarpal block reaches
     back as far, so that the finger drives stay in channels up to the forearm module)."""
@@ -287,13 +288,13 @@ def palm_back(params) -> float:
     return min(wrist_y(params), back)
 
 
-def forearm_front(params) -> float:
+def forearm_front(params: HandParams) -> float:
     """y (m, palm frame) of the forearm module's front face: a hole clearance behind the palm's
     back face (:func:`palm_back`)."""
     return palm_back(params) - params.print.hole_clearance
 
 
-def T_palm_forearm(params) -> np.ndarray:
+def T_palm_forearm(params: HandParams) -> np.ndarray:
     """The forearm module's frame: the palm's axes, origin on the wrist crease at the middle of the
     servo row, in the palm's mid-plane."""
     xs = [T[0, 3] for T in forearm_servos(params).values()]

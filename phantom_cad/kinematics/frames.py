@@ -51,6 +51,7 @@ import numpy as np
 
 from .. import units
 from .dimensions import finger_columns, slot_back
+from .hand_params import Guide, HandParams
 from .topology import FINGERS, SERVOS, chain, joint, link
 
 
@@ -110,17 +111,17 @@ def mirror(T: np.ndarray) -> np.ndarray:
 # the hand's frames
 # ---------------------------------------------------------------------------
 
-def finger_angle(params, i: int) -> float:
+def finger_angle(params: HandParams, i: int) -> float:
     """phi_i: rotation of finger column i (0 = index) about -z, symmetric about the middle of the arc."""
     return (i - (len(FINGERS) - 1) / 2.0) * params.palm.arc_offset
 
 
-def finger_direction(params, i: int) -> np.ndarray:
+def finger_direction(params: HandParams, i: int) -> np.ndarray:
     phi = finger_angle(params, i)
     return np.array([math.sin(phi), math.cos(phi), 0.0])
 
 
-def mcp_position(params, i: int) -> np.ndarray:
+def mcp_position(params: HandParams, i: int) -> np.ndarray:
     """MCP axis centre of finger i in the palm frame (index at the origin): on the palm arc,
     stepped along its column by its metacarpal's length less the index's
     (``dimensions.finger_columns``)."""
@@ -129,19 +130,19 @@ def mcp_position(params, i: int) -> np.ndarray:
     return np.array([x, y, 0.0])
 
 
-def T_palm_finger_base(params, finger: str) -> np.ndarray:
+def T_palm_finger_base(params: HandParams, finger: str) -> np.ndarray:
     i = FINGERS.index(finger)
     T = rot_z(-finger_angle(params, i))
     T[:3, 3] = mcp_position(params, i)
     return T
 
 
-def T_palm_socket(params, finger: str) -> np.ndarray:
+def T_palm_socket(params: HandParams, finger: str) -> np.ndarray:
     """The palm's finger socket: origin at the centre of the magnet face, y its outward normal."""
     return T_palm_finger_base(params, finger) @ trans(0.0, -params.cad.finger_base_length, 0.0)
 
 
-def socket_x(params) -> tuple[float, float]:
+def socket_x(params: HandParams) -> tuple[float, float]:
     """x extent (m, palm frame, right hand) of the palm's finger sockets: the outer sides of the
     index's and the pinky's (the columns converge toward the wrist, so their faces are widest)."""
     xs = []
@@ -161,28 +162,28 @@ def thumb_cmc_placement(offset, axis) -> np.ndarray:
     return T
 
 
-def T_palm_thumb_cmc_base(params, q15: float = 0.0) -> np.ndarray:
+def T_palm_thumb_cmc_base(params: HandParams, q15: float = 0.0) -> np.ndarray:
     return thumb_cmc_placement(params.palm.thumb_cmc_offset, params.palm.thumb_cmc_axis) @ rot_z(q15)
 
 
-def tendon_height(params) -> float:
+def tendon_height(params: HandParams) -> float:
     """z of every finger tendon where it crosses the magnet face (palm and finger base):
     one wall above the palmar face of the thinnest finger."""
     return -min(f.thickness for f in params.fingers.values()) / 2.0 + params.palm.wall
 
 
-def servo_pulley_lip(params) -> float:
+def servo_pulley_lip(params: HandParams) -> float:
     """Flange height of a tendon servo pulley above its groove bottom: two tendon diameters."""
     return 2.0 * params.hardware.tendon_diameter
 
 
-def pulley_cavity_margin(params) -> float:
+def pulley_cavity_margin(params: HandParams) -> float:
     """The palm's cavity around a servo pulley is this much larger than the pulley's groove radius:
     the pulley's flanges, one tendon diameter of running room and a hole clearance."""
     return servo_pulley_lip(params) + params.hardware.tendon_diameter + params.print.hole_clearance
 
 
-def servo_radius(params, servo: int) -> float:
+def servo_radius(params: HandParams, servo: int) -> float:
     """Radius (m) of a servo's pulley: the chain's r_j for a tendon servo, the CMC loop's pulley
     radius (thumb.cmc_pulley_radius, the same on the CMC column: q15 = u6) for servo 6."""
     s = SERVOS[servo]
@@ -191,30 +192,30 @@ def servo_radius(params, servo: int) -> float:
     return params.digit(s.digit).chain.servo_radius
 
 
-def cmc_pulley_radius(params) -> float:
+def cmc_pulley_radius(params: HandParams) -> float:
     """Radius (m) of the CMC pulley: servo 6's (thumb.cmc_pulley_radius) over thumb.cmc_gain, so
     that the loop holds q15 = cmc_gain u6 (eq. 9; equal radii at the paper's gain of 1)."""
     return params.thumb.cmc_pulley_radius / params.thumb.cmc_gain
 
 
-def tendon_relief(params) -> float:
+def tendon_relief(params: HandParams) -> float:
     """Radius (m) of the sphere that rounds a tendon channel's bend: a tendon hole (the tendon
     and two clearances) wide."""
     return params.hardware.tendon_diameter + 2.0 * params.print.hole_clearance
 
 
-def wrist_y(params) -> float:
+def wrist_y(params: HandParams) -> float:
     """y (m, palm frame) of the wrist crease: the index metacarpal's length behind the index MCP.
     The palm lies between it and the knuckles, the forearm module behind it."""
     return -params.fingers[FINGERS[0]].metacarpal
 
 
-def socket_tendon_point(params, finger: str) -> np.ndarray:
+def socket_tendon_point(params: HandParams, finger: str) -> np.ndarray:
     """Where the finger's tendon crosses the magnet face (palm frame, metres)."""
     return (T_palm_socket(params, finger) @ np.array([0.0, 0.0, tendon_height(params), 1.0]))[:3]
 
 
-def guide_offsets(guide) -> tuple[np.ndarray, np.ndarray]:
+def guide_offsets(guide: Guide) -> tuple[np.ndarray, np.ndarray]:
     """The drive tendon's guide eyelets G1 and G2 as (y, z) from the reference joint's (MCP /
     thumb MP) axis at rest, metres: G1 on the metacarpal side at d1, G2 on the phalanx at d2,
     symmetric about the palmar direction (-z) and alpha apart, so that their chord at rest is
@@ -225,7 +226,7 @@ def guide_offsets(guide) -> tuple[np.ndarray, np.ndarray]:
     return G1, G2
 
 
-def guide_sites(params, digit: str) -> tuple[tuple[str, np.ndarray], tuple[str, np.ndarray]]:
+def guide_sites(params: HandParams, digit: str) -> tuple[tuple[str, np.ndarray], tuple[str, np.ndarray]]:
     """(link, point) of G1 and G2 of a digit's drive tendon, each in its own link frame (metres,
     mirrored for a left hand): G1 on the reference joint's parent link, G2 on its child. The
     straight line between them is the chord of eq. (4)-(5) in every pose."""
@@ -245,7 +246,7 @@ def guide_sites(params, digit: str) -> tuple[tuple[str, np.ndarray], tuple[str, 
 PAD_ANGLE = math.pi / 4.0
 
 
-def fingertip(params, digit: str) -> tuple[float, float, float]:
+def fingertip(params: HandParams, digit: str) -> tuple[float, float, float]:
     """(length, tip radius, half width), metres, of a digit's distal phalanx: its tip is a half
     cylinder about the link's x at y = length - radius, of radius half the thickness (or less, when
     the phalanx is shorter than the clevis slot behind it needs), across the digit's width."""
@@ -254,7 +255,7 @@ def fingertip(params, digit: str) -> tuple[float, float, float]:
     return L, min(d.thickness / 2.0, L - slot_back(d.thickness, params.print.hole_clearance)), d.width / 2.0
 
 
-def T_distal_pad(params, digit: str) -> np.ndarray:
+def T_distal_pad(params: HandParams, digit: str) -> np.ndarray:
     """T_link_pad (metres, right hand) of a fingertip: the centre of its contact pad on the tip's
     half cylinder, PAD_ANGLE from the palmar face toward the tip; z the outward surface normal
     there, x the link's x."""
@@ -267,7 +268,7 @@ def T_distal_pad(params, digit: str) -> np.ndarray:
     return T
 
 
-def segment_length(params, ln) -> float:
+def segment_length(params: HandParams, ln) -> float:
     """Length (m) of link ``ln`` from its proximal joint to its distal one (0 for a finger base,
     whose origin is its distal joint)."""
     key = ln.length_key

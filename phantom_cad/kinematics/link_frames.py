@@ -9,16 +9,17 @@ import numpy as np
 
 from .forearm_layout import T_palm_forearm, T_palm_servo
 from .frames import T_palm_finger_base, T_palm_thumb_cmc_base, flex, mirror, segment_length, trans
+from .hand_params import HandParams
 from .thenar import T_cmc_base_pulley
 from .topology import CMC_Q, JOINTS, LINKS, N_JOINTS, joint, link
 
 
-def rest_transforms(params) -> dict[str, np.ndarray]:
+def rest_transforms(params: HandParams) -> dict[str, np.ndarray]:
     """Joint origins T_parent_child at rest, named after their frames (right hand, metres)."""
     return joint_transforms(params, np.zeros(N_JOINTS))
 
 
-def _joint_transform(params, ln, q) -> np.ndarray:
+def _joint_transform(params: HandParams, ln, q) -> np.ndarray:
     """T_parent_child of link ``ln`` at joint angles q: a fixed mount on the palm (finger base,
     servo pulley), the CMC (about the CMC base's z) or a flexion joint behind the parent's
     segment."""
@@ -40,7 +41,7 @@ def _joint_transform(params, ln, q) -> np.ndarray:
     return flex(float(q[j.index])) if L == 0.0 else trans(0, L, 0) @ flex(float(q[j.index]))
 
 
-def joint_transforms(params, q) -> dict[str, np.ndarray]:
+def joint_transforms(params: HandParams, q) -> dict[str, np.ndarray]:
     """T_parent_child (named ``T_<parent>_<child>``) for every link but the palm at joint angles
     q (15,), right hand, metres."""
     q = np.zeros(N_JOINTS) if q is None else np.asarray(q, float)
@@ -58,7 +59,7 @@ LINK_PARENTS: dict[str, tuple[str, str]] = {ln.name: (ln.parent, _transform_name
                                             for ln in LINKS if ln.parent is not None}
 
 
-def link_transforms(params, q=None) -> dict[str, np.ndarray]:
+def link_transforms(params: HandParams, q=None) -> dict[str, np.ndarray]:
     """T_palm_link (metres) of every link at joint angles q (None = rest), mirrored for a left hand."""
     joints = joint_transforms(params, q)
     out = {"palm": np.eye(4)}
@@ -69,7 +70,7 @@ def link_transforms(params, q=None) -> dict[str, np.ndarray]:
     return out
 
 
-def joints(params) -> list[dict]:
+def joints(params: HandParams) -> list[dict]:
     """The 15 actuated joints, in q order (Table I), as a robot-description writer would use
     them: name (``index_dip``, ...), parent and child link, ``origin`` = T_parent_child at rest
     (metres, mirrored for a left hand), ``axis`` (unit vector in the child frame; q turns the

@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import closed_form as cf
+from .hand_params import HandParams
 from .topology import CHAINS, CMC_Q, CMC_SERVO, N_JOINTS, N_SERVOS, TENDON_SERVOS
 
 
@@ -37,7 +38,7 @@ class Hand:
     that carries fitted effects must be given them: ``phantom_cad.load_hand`` does.
     """
 
-    def __init__(self, params, effects=None):
+    def __init__(self, params: HandParams, effects=None):
         if params.effects and not effects:
             raise ValueError(f"{params.source or 'these parameters'} carry fitted effects "
                              f"({', '.join(params.effects)}): build the hand with phantom_cad.load_hand "

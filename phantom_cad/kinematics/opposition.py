@@ -37,6 +37,7 @@ from .. import units
 from . import frames as F
 from . import forearm_layout as FL
 from . import thenar as TH
+from .hand_params import HandParams
 from .topology import CMC_Q, FINGERS, N_SERVOS, OPPOSED_FINGERS, SERVOS, THUMB_CHAIN, chain
 
 
@@ -66,7 +67,7 @@ def _servo(digit: str) -> int:
     return chain(digit).servo
 
 
-def _chain(params, digit: str, q: np.ndarray, origin_y: float):
+def _chain(params: HandParams, digit: str, q: np.ndarray, origin_y: float):
     """The distal link of ``digit`` in its chain's root frame (the finger base; the thumb's CMC
     base), for joint angles q (n, 15): flexion turns about -x, so every link of the chain stays in
     the root's y-z plane. Returns the tip segment's ends (n, 3) x2, the pad normal (n, 3), the tip
@@ -260,7 +261,7 @@ class Bounds:
         return np.array([*self.offset, *self.axis], float)
 
 
-def default_bounds(params) -> Bounds:
+def default_bounds(params: HandParams) -> Bounds:
     """The thenar region of a palm of human breadth, scaled with the hand length (189 mm: the
     reference hand): the CMC centre up to 35 mm radial of the palm's radial edge
     (:func:`palm_envelope`), 20-75 mm proximal of the index MCP and 35 mm palmar to 10 mm dorsal
@@ -276,7 +277,7 @@ def default_bounds(params) -> Bounds:
                   axis=((rad(-90), rad(90)), (rad(-90), rad(30)), (rad(-90), rad(90))))
 
 
-def palm_envelope(params) -> tuple[np.ndarray, np.ndarray]:
+def palm_envelope(params: HandParams) -> tuple[np.ndarray, np.ndarray]:
     """(lo, hi) corners (m, palm frame, right hand) of the palm a human-scale hand has behind its
     knuckles: across the four fingers' sockets from the index's radial edge to the pinky's ulnar
     edge, one palm wall beyond each; from the most distal socket face back to the index
@@ -313,7 +314,7 @@ def palm_intrusion(thumb: ThumbTips, T0: np.ndarray, envelope) -> float:
 HUMAN_BREADTH = 0.095
 
 
-def human_edge(params) -> float:
+def human_edge(params: HandParams) -> float:
     """x (m, palm frame, right hand) of the radial edge of a palm of human breadth
     (:data:`HUMAN_BREADTH`, scaled with the hand length) that ends at the palm's ulnar face
     (``forearm_layout.metacarpal_x``: the pinky socket's outer side, or a wall ulnar of a drive's channel
@@ -321,7 +322,7 @@ def human_edge(params) -> float:
     return FL.metacarpal_x(params)[1] - HUMAN_BREADTH * params.hand_length / 0.189
 
 
-def carpus(params) -> float:
+def carpus(params: HandParams) -> float:
     """Length (m) of the carpus, between the metacarpals' bases (``frames.wrist_y``) and the wrist
     crease the hand length is measured from: the hand length less the middle finger's metacarpal
     and phalanges (15.7 mm at the default's fractions). A human thenar reaches that far back; the
@@ -330,7 +331,7 @@ def carpus(params) -> float:
     return params.hand_length - (m.metacarpal + m.proximal + m.middle + m.distal)
 
 
-def thenar_constraint(params, human: bool = True):
+def thenar_constraint(params: HandParams, human: bool = True):
     """The placement search's ``constraint`` for the palm's thenar (``thenar.thenar``): metres by
     which a placement T0 misses ``frames.thenar_margins`` (the CMC axis's tilt priced at the thumb's
     half width per radian) and, with ``human``, by which the journal's and the turn's walls reach

@@ -52,6 +52,7 @@ from . import frames as F
 from . import link_frames as LF
 from . import thenar as TH
 from .dimensions import FLANK, slot_back
+from .hand_params import HandParams
 from .memo import memoised
 from .routing_rules import (WRAP_MARGIN, clamp_angle, cmc_loop_clamps, joint_travel, limit_field, loop_travel_rule,
                             servo_clamp_wrap)
@@ -114,7 +115,7 @@ class Layout:
     hub_width: float             # a hub beside the cheek: from the cheek face to its inner flank
 
 
-def layout(params, digit: str) -> Layout:
+def layout(params: HandParams, digit: str) -> Layout:
     """The planes: loop k in the slot's half of sign (-1)^k (ulnar first), its groove one flank
     and one clearance inside the slot's edge; its hub on the cheek of that side, one flank wider
     than the groove; the return cord one flank inside the tongue that the second hub leaves."""
@@ -141,7 +142,7 @@ def _child_origin(rest: dict[str, np.ndarray], jname: str) -> np.ndarray:
     return rest[f"T_{j.parent}_{j.child}"][:3, 3].copy()
 
 
-def _segment(params, link_name: str) -> float:
+def _segment(params: HandParams, link_name: str) -> float:
     return float(F.segment_length(params, link(link_name)))
 
 
@@ -152,7 +153,7 @@ def _p(x: float, yz) -> tuple[float, float, float]:
     return (float(x), float(yz[0]), float(yz[1]))
 
 
-def _loop(params, digit: str, k: int, lay: Layout, rest) -> tuple[Strand, Strand]:
+def _loop(params: HandParams, digit: str, k: int, lay: Layout, rest) -> tuple[Strand, Strand]:
     """The figure-eight loop between chain joints k and k+1 (see the module doc)."""
     ch = params.digit(digit).chain
     spec = chain(digit)
@@ -193,7 +194,7 @@ def _loop(params, digit: str, k: int, lay: Layout, rest) -> tuple[Strand, Strand
     return a, b
 
 
-def _return(params, digit: str, lay: Layout, rest) -> Strand:
+def _return(params: HandParams, digit: str, lay: Layout, rest) -> Strand:
     """The dorsal cable-spring: tangent to every joint's groove at its radius, on both sides."""
     spec = chain(digit)
     ch = params.digit(digit).chain
@@ -222,7 +223,7 @@ def _return(params, digit: str, lay: Layout, rest) -> Strand:
     return Strand(f"{digit}_return", tuple(els))
 
 
-def _drive(params, digit: str) -> Strand:
+def _drive(params: HandParams, digit: str) -> Strand:
     spec = chain(digit)
     servo = SERVOS[spec.servo]
     r = F.servo_radius(params, servo.index)
@@ -256,7 +257,7 @@ def _drive(params, digit: str) -> Strand:
     return Strand(f"{digit}_drive", tuple(els))
 
 
-def _cmc_loop(params) -> tuple[Strand, Strand]:
+def _cmc_loop(params: HandParams) -> tuple[Strand, Strand]:
     """The closed loop from servo 6's pulley to the CMC pulley (equal radii r6: q15 = u6): strand a
     leaves servo 6's pulley at its -x along its y, strand b at its +x; both reach the CMC pulley
     on the same sides (an open loop: both pulleys turn the same way) and end at one clamp on each
@@ -306,7 +307,7 @@ def _mirror_element(e):
 _ROUTES: dict = {}
 
 
-def routes(params, right_handed: bool = False) -> tuple[Route, ...]:
+def routes(params: HandParams, right_handed: bool = False) -> tuple[Route, ...]:
     """Every tendon of the topology (``TENDONS`` order), routed for this hand (memoised by the
     parameters' digest and side: the routes are pure functions of them). ``right_handed``: the
     routes before a left hand's mirroring, in the frames the parts are built in (the CAD layer
@@ -315,7 +316,7 @@ def routes(params, right_handed: bool = False) -> tuple[Route, ...]:
     return memoised(_ROUTES, (params.digest, mirror), lambda: _routes(params, mirror), cap=16)
 
 
-def _routes(params, mirror: bool) -> tuple[Route, ...]:
+def _routes(params: HandParams, mirror: bool) -> tuple[Route, ...]:
     out = []
     lays = {ch.digit: layout(params, ch.digit) for ch in CHAINS}
     rest = LF.rest_transforms(params)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from .. import units
 from .couplers import Coupler, couplers
+from .hand_params import HandParams
 from .routing import Point, routes
 from .routing_paths import lengths
 from .topology import SERVOS
@@ -24,7 +25,7 @@ def _element_doc(e) -> dict:
             "radius_mm": rounded_mm(e.radius), "width_mm": rounded_mm(e.width)}
 
 
-def document(params) -> dict:
+def document(params: HandParams) -> dict:
     """``routing.json``: per tendon its kind, links, joints, servo, cord and strands (each a list of
     path elements in link frames, millimetres), and the rest length of every strand."""
     rest = lengths(params)
@@ -48,7 +49,7 @@ def document(params) -> dict:
             "tendons": tendons}
 
 
-def coupler_document(params, cp: Coupler) -> dict:
+def coupler_document(params: HandParams, cp: Coupler) -> dict:
     """A split drive in ``routing.json`` (millimetres, degrees; s from the socket face into the palm)."""
     return {"at": "socket face", "coupler": {"stop_diameter_mm": rounded_mm(params.hardware.stop_diameter),
                                               "stop_length_mm": rounded_mm(params.hardware.stop_length),

@@ -12,6 +12,7 @@ import numpy as np
 from .. import units
 from . import frames as F
 from . import link_frames as LF
+from .hand_params import HandParams
 from .memo import memoised
 from .routing import Point, Pulley, Strand, routes
 from .routing_rules import joint_travel
@@ -19,7 +20,7 @@ from .topology import CMC_Q, JOINTS, N_JOINTS, SERVOS
 from .vectors import clipped_acos
 
 
-def servo_axis(params) -> np.ndarray:
+def servo_axis(params: HandParams) -> np.ndarray:
     """A tendon servo's axis in its own (mirrored) frame: positive u winds its drive."""
     return np.array([0.0, 0.0, 1.0 if params.side == "right" else -1.0])
 
@@ -32,7 +33,7 @@ def _rotation(axis, angle: float) -> np.ndarray:
     return R
 
 
-def pose(params, q=None, u=None) -> dict[str, np.ndarray]:
+def pose(params: HandParams, q=None, u=None) -> dict[str, np.ndarray]:
     """T_palm_link of every link at joint angles q (15) and servo angles u (6): every servo's
     pulley turned by u about :func:`servo_axis` (servo 6's by u6: its loop holds q15 = cmc_gain u6
     when both are given so)."""
@@ -88,7 +89,7 @@ def _wrap(P, N, centre, axis, rho):
     return length, pts
 
 
-def strand_path(params, strand: Strand, Ts) -> tuple[float, np.ndarray]:
+def strand_path(params: HandParams, strand: Strand, Ts) -> tuple[float, np.ndarray]:
     """Length (m) and polyline (palm frame, metres) of a strand with the links at ``Ts``."""
     els = strand.elements
     total, pts = 0.0, []
@@ -148,7 +149,7 @@ class Run:
 _RUNS: dict = {}
 
 
-def runs(params, right_handed: bool = False) -> tuple[Run, ...]:
+def runs(params: HandParams, right_handed: bool = False) -> tuple[Run, ...]:
     """Every straight run of every strand, with the links it is fixed to. A run is fixed to a link
     when both its ends stay put in that link's frame at rest, at mid travel and at full travel
     (found by evaluating them there, not by case analysis: a tangent point is fixed to the link
@@ -157,7 +158,7 @@ def runs(params, right_handed: bool = False) -> tuple[Run, ...]:
     return memoised(_RUNS, (params.digest, right_handed), lambda: _runs(params, right_handed), cap=16)
 
 
-def _runs(params, right_handed: bool) -> tuple[Run, ...]:
+def _runs(params: HandParams, right_handed: bool) -> tuple[Run, ...]:
     q_full = np.zeros(N_JOINTS)
     for j in JOINTS:
         if j.key != "cmc":
@@ -196,7 +197,7 @@ _POSES: dict = {}
 _TRAVEL_NODES: dict = {}
 
 
-def travel_poses(params, fractions) -> tuple[dict[str, np.ndarray], ...]:
+def travel_poses(params: HandParams, fractions) -> tuple[dict[str, np.ndarray], ...]:
     """T_palm_link with every flexion joint and tendon servo at each fraction of its travel (the
     joints to the clamps' design travel, :func:`joint_travel`; the CMC at rest). Memoised by
     the parameters' digest and the fractions (read-only)."""
@@ -204,14 +205,14 @@ def travel_poses(params, fractions) -> tuple[dict[str, np.ndarray], ...]:
     return memoised(_POSES, (params.digest, fr), lambda: _travel_poses(params, fr), cap=16)
 
 
-def travel_nodes(params, strand: Strand, fractions) -> tuple[list, ...]:
+def travel_nodes(params: HandParams, strand: Strand, fractions) -> tuple[list, ...]:
     """:func:`strand_nodes` of ``strand`` at each of :func:`travel_poses` (memoised, read-only)."""
     fr = tuple(float(f) for f in fractions)
     return memoised(_TRAVEL_NODES, (params.digest, strand, fr),
                     lambda: tuple(strand_nodes(strand, Ts) for Ts in travel_poses(params, fr)), cap=512)
 
 
-def _travel_poses(params, fractions) -> tuple[dict[str, np.ndarray], ...]:
+def _travel_poses(params: HandParams, fractions) -> tuple[dict[str, np.ndarray], ...]:
     out = []
     for f in fractions:
         q = np.zeros(N_JOINTS)
@@ -223,7 +224,8 @@ def _travel_poses(params, fractions) -> tuple[dict[str, np.ndarray], ...]:
     return tuple(out)
 
 
-def arc_range(params, strand: Strand, index: int, fractions=tuple(np.linspace(0.0, 1.0, 11))) -> tuple[float, float]:
+def arc_range(params: HandParams, strand: Strand, index: int,
+              fractions=tuple(np.linspace(0.0, 1.0, 11))) -> tuple[float, float]:
     """The polar angles (rad, about the pulley's centre in its link's (y, z) plane, from +y toward
     +z) between which strand element ``index`` (a pulley) is ever in contact over the travel: the
     sector its groove must span. Mirror-invariant (a left hand mirrors x only)."""
@@ -246,7 +248,7 @@ def arc_range(params, strand: Strand, index: int, fractions=tuple(np.linspace(0.
     return ref + min(rel), ref + max(rel)
 
 
-def run_sweep(params, run: Run, link_name: str, fractions=tuple(np.linspace(0.0, 1.0, 21)),
+def run_sweep(params: HandParams, run: Run, link_name: str, fractions=tuple(np.linspace(0.0, 1.0, 21)),
               right_handed: bool = False) -> list[tuple[np.ndarray, np.ndarray]]:
     """The ends of a run (m) in ``link_name``'s frame at each fraction of the travel
     (:func:`travel_poses`): the region a free run (a chord across a joint) sweeps through a part."""
@@ -262,7 +264,7 @@ def run_sweep(params, run: Run, link_name: str, fractions=tuple(np.linspace(0.0,
     return out
 
 
-def lengths(params, q=None, u=None, which=None) -> dict[str, float]:
+def lengths(params: HandParams, q=None, u=None, which=None) -> dict[str, float]:
     """Every strand's length (m) at joint angles q and servo angles u."""
     Ts = pose(params, q, np.zeros(len(SERVOS)) if u is None else u)
     out = {}
@@ -272,7 +274,7 @@ def lengths(params, q=None, u=None, which=None) -> dict[str, float]:
     return out
 
 
-def mid_travel_pose(params) -> dict[str, np.ndarray]:
+def mid_travel_pose(params: HandParams) -> dict[str, np.ndarray]:
     """T_palm_link with every flexion joint at half its travel (as the clamps are placed) and every
     tendon servo at the middle of its travel: where :func:`side_sites` places the side sites."""
     q = np.zeros(N_JOINTS)
@@ -283,7 +285,7 @@ def mid_travel_pose(params) -> dict[str, np.ndarray]:
     return pose(params, q, u)
 
 
-def side_sites(params, strand: Strand, Ts=None) -> list[tuple[str, tuple[float, float, float]] | None]:
+def side_sites(params: HandParams, strand: Strand, Ts=None) -> list[tuple[str, tuple[float, float, float]] | None]:
     """For each element of ``strand``: None for a point; for a pulley, a point on the side its
     strand wraps (MuJoCo's ``sidesite``), fixed to the link that carries the strand's straight
     runs beside it, half a radius outside the arc's middle at the middle of every travel

@@ -9,6 +9,7 @@ import math
 from .. import units
 from ..errors import ParamError
 from .dimensions import digit_field
+from .hand_params import HandParams
 from .topology import CMC_SERVO, SERVOS, joint, link
 
 
@@ -20,7 +21,7 @@ WRAP_MARGIN = units.rad(8.0)
 TRAVEL_MARGIN = units.rad(3.0)
 
 
-def clamp_angle(lo: float, hi: float, what: str, params, field: str, value, why: str) -> float:
+def clamp_angle(lo: float, hi: float, what: str, params: HandParams, field: str, value, why: str) -> float:
     """The middle of [lo, hi]; a ParamError naming ``field`` (its ``value``) when it is empty: no
     clamp keeps every wrap of ``what`` inside (WRAP_MARGIN, 180 deg - WRAP_MARGIN) over the travel
     (``why``: what that asks of the parameters, in their words)."""
@@ -31,13 +32,13 @@ def clamp_angle(lo: float, hi: float, what: str, params, field: str, value, why:
     return (lo + hi) / 2.0
 
 
-def joint_travel(params, jname: str) -> float:
+def joint_travel(params: HandParams, jname: str) -> float:
     j = joint(jname)
     lim = dict(zip(params.digit(j.digit).chain.joints, params.digit(j.digit).chain.limits))[j.key]
     return lim[1] + TRAVEL_MARGIN + (params.cad.module_stop_margin if link(j.parent).segment == "base" else 0.0)
 
 
-def limit_field(params, digit: str, jname: str) -> tuple[str, list[float]]:
+def limit_field(params: HandParams, digit: str, jname: str) -> tuple[str, list[float]]:
     """The parameter field (and its value) a loop's clamp rule names: the joint's limits."""
     ch = params.digit(digit).chain
     key = joint(jname).key
@@ -57,7 +58,7 @@ def loop_travel_rule(ja: str, jb: str, carrier: str, jname: str, q: float, gamma
             f"{units.mm(Rb):g} mm: smaller pulley radii or a longer phalanx allow more)")
 
 
-def servo_clamp_wrap(params, servo: int) -> float:
+def servo_clamp_wrap(params: HandParams, servo: int) -> float:
     """Wrap (rad) of a drive on its servo pulley at u = 0: the largest that keeps the wrap inside
     (margin, 180 deg - margin) over the servo's travel, so that unwinding below the travel to the
     service angle pays the most cord out (:class:`Coupler`)."""
@@ -75,7 +76,7 @@ def servo_clamp_wrap(params, servo: int) -> float:
 LOOP_CLAMP_MARGIN = units.rad(2.0)
 
 
-def cmc_loop_clamps(params) -> tuple[tuple[float, float], tuple[float, float]]:
+def cmc_loop_clamps(params: HandParams) -> tuple[tuple[float, float], tuple[float, float]]:
     """Polar angles (rad, right hand, each pulley's frame at rest: servo 6's, and the CMC pulley's
     turned so that its y points away from servo 6) of the CMC loop's clamps, strand a's and strand
     b's, on servo 6's pulley and on the CMC pulley. Each strand winds on one pulley as it unwinds

@@ -10,13 +10,14 @@ import numpy as np
 
 from .. import units
 from .frames import T_palm_thumb_cmc_base, cmc_pulley_radius, pulley_cavity_margin, tendon_relief, trans
+from .hand_params import HandParams
 from .memo import memoised
 
 
 _THENAR: dict = {}
 
 
-def thenar(params) -> dict[str, float]:
+def thenar(params: HandParams) -> dict[str, float]:
     """The palm's hold on the thumb (CMC base frame at rest, distances s along the CMC axis from
     the CMC centre, metres; memoised, read-only):
 
@@ -35,7 +36,7 @@ def thenar(params) -> dict[str, float]:
     return memoised(_THENAR, params.digest, lambda: thenar_layout(params, T_palm_thumb_cmc_base(params)), cap=16)
 
 
-def thenar_layout(params, T0: np.ndarray) -> dict[str, float]:
+def thenar_layout(params: HandParams, T0: np.ndarray) -> dict[str, float]:
     """:func:`thenar` for the CMC placement T0 (T_palm_cmc_base at rest) instead of the file's."""
     a, C = T0[:3, 2], T0[:3, 3]
     c, w = params.print.hole_clearance, params.palm.wall
@@ -58,7 +59,7 @@ def thenar_layout(params, T0: np.ndarray) -> dict[str, float]:
 MAX_CMC_TILT = units.rad(60.0)
 
 
-def thenar_margins(params, T0: np.ndarray) -> dict[str, float]:
+def thenar_margins(params: HandParams, T0: np.ndarray) -> dict[str, float]:
     """How well the palm's thenar holds the CMC placed at T0 (T_palm_cmc_base at rest): each
     margin >= 0 where it fits. ``tilt`` (rad): the CMC axis within MAX_CMC_TILT of the palm's
     normal; ``base`` (m): the CMC base (a hub of half the thumb's width, the thumb's thickness,
@@ -80,13 +81,13 @@ def thenar_margins(params, T0: np.ndarray) -> dict[str, float]:
     return out
 
 
-def T_cmc_base_pulley(params) -> np.ndarray:
+def T_cmc_base_pulley(params: HandParams) -> np.ndarray:
     """The CMC pulley's frame in the CMC base's (fixed): on the CMC axis at the pulley's mid-plane,
     the CMC base's axes (its key's flat on +y)."""
     return trans(0.0, 0.0, thenar(params)["pulley"])
 
 
-def thenar_axis_point(params, s: float) -> np.ndarray:
+def thenar_axis_point(params: HandParams, s: float) -> np.ndarray:
     """The palm-frame point (m, right hand) s along the CMC axis from the CMC centre, at rest."""
     return (T_palm_thumb_cmc_base(params) @ np.array([0.0, 0.0, s, 1.0]))[:3]
 
@@ -98,7 +99,7 @@ def _ring(T0: np.ndarray, s: float, r: float, n: int = 24) -> np.ndarray:
     return (T0 @ pts.T).T[:, :3]
 
 
-def thenar_points(params, T0: np.ndarray | None = None) -> dict[str, np.ndarray]:
+def thenar_points(params: HandParams, T0: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """Points (m, palm frame, right hand) of what the palm's thenar holds round the CMC axis
     (:func:`thenar`), each grown by a palm wall: ``journal`` (the column's bore from the palmar face
     to the pulley's cavity), ``cavity`` (the CMC pulley's cavity) and ``turn`` (the thumb drive's

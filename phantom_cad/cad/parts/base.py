@@ -39,6 +39,7 @@ import numpy as np
 
 from ... import canon
 from ...kinematics import frames as F
+from ...kinematics.hand_params import HandParams
 from ...kinematics.topology import DIGITS, JOINTS, LINKS, Joint, Link, joint
 
 
@@ -91,7 +92,7 @@ class Part(abc.ABC):
 
     @classmethod
     @abc.abstractmethod
-    def for_link(cls, params, link: Link) -> "Part":
+    def for_link(cls, params: HandParams, link: Link) -> "Part":
         """The part of ``link`` (one of the family's ``links()``) of the hand ``params``."""
 
     # -- what a part declares ------------------------------------------------

@@ -27,6 +27,7 @@ from ... import units
 from ...kinematics import frames as F
 from ...kinematics import topology
 from ...kinematics.dimensions import printed_hole, slot_back
+from ...kinematics.hand_params import HandParams
 from ..kernel import import_build123d
 
 
@@ -42,7 +43,7 @@ def mm(x: float) -> float:
 class Tolerances:
     """The print tolerances and hardware, in mm, with the derived hole sizes."""
 
-    def __init__(self, params):
+    def __init__(self, params: HandParams):
         pr, hw = params.print, params.hardware
         self.clearance = mm(pr.hole_clearance)
         self.interference = mm(pr.press_fit_interference)
@@ -134,7 +135,7 @@ class Tolerances:
 class DigitSection:
     """Cross-section and joint dimensions (mm) shared by every link of one digit."""
 
-    def __init__(self, params, digit: str):
+    def __init__(self, params: HandParams, digit: str):
         self.params = params
         self.digit = digit
         d = params.digit(digit)

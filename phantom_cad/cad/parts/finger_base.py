@@ -16,6 +16,7 @@ import numpy as np
 from ... import canon
 from ...kinematics.dimensions import digit_entry
 from ...kinematics.frames import tendon_height
+from ...kinematics.hand_params import HandParams
 from ...kinematics.topology import FINGERS, digit_links
 from ..measure import circular_pockets, eyelet_centres, point_line_distance
 from .base import MAGNET_DOWN, Part, child_joint
@@ -32,7 +33,7 @@ class FingerBase(RoutedPart, Part):
     #: magnet pockets on its magnet face
     MAGNETS = 2
 
-    def __init__(self, params, finger: str):
+    def __init__(self, params: HandParams, finger: str):
         links = [ln for ln in digit_links(finger) if ln.segment in self.SEGMENTS]
         if finger not in params.fingers or not links:
             raise ValueError(f"unknown finger {finger!r}")
@@ -44,7 +45,7 @@ class FingerBase(RoutedPart, Part):
         self.joint = child_joint(self.link).key
 
     @classmethod
-    def for_link(cls, params, link):
+    def for_link(cls, params: HandParams, link):
         return cls(params, link.digit)
 
     def inputs(self) -> dict:

@@ -25,6 +25,7 @@ import numpy as np
 
 from ...kinematics import forearm_layout as FL
 from ...kinematics import frames as F
+from ...kinematics.hand_params import HandParams
 from ...kinematics.topology import FOREARM, SERVO_MOUNT, SERVOS, link
 from ..measure import circular_pockets
 from .base import Part
@@ -44,14 +45,14 @@ class Forearm(ServoMount, Part):
     COLOR = (0.45, 0.47, 0.52)
     SCREWS = 2
 
-    def __init__(self, params):
+    def __init__(self, params: HandParams):
         self.params = params
         self.link = link(FOREARM)
         self.tol = Tolerances(params)
         self.pulley_width = mm(params.cad.servo_pulley_width)
 
     @classmethod
-    def for_link(cls, params, link):
+    def for_link(cls, params: HandParams, link):
         return cls(params)
 
     @property

@@ -38,6 +38,7 @@ from ...kinematics import couplers
 from ...kinematics import forearm_layout as FL
 from ...kinematics import frames as F
 from ...kinematics import thenar as TH
+from ...kinematics.hand_params import HandParams
 from ...kinematics.topology import FINGERS, LINKS, chain
 from ...kinematics.vectors import clipped_acos
 from ..measure import circular_pockets
@@ -57,7 +58,7 @@ class Palm(ServoMount, Part):
     SEGMENTS = ("palm",)
     COLOR = (0.55, 0.57, 0.60)
 
-    def __init__(self, params):
+    def __init__(self, params: HandParams):
         self.params = params
         self.link = next(ln for ln in LINKS if ln.parent is None)
         self.tol = Tolerances(params)
@@ -68,7 +69,7 @@ class Palm(ServoMount, Part):
         self.tendon_z = mm(F.tendon_height(params))
 
     @classmethod
-    def for_link(cls, params, link):
+    def for_link(cls, params: HandParams, link):
         return cls(params)
 
     @property

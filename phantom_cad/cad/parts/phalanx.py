@@ -20,6 +20,7 @@ import numpy as np
 from ... import canon, units
 from ...kinematics import frames as F
 from ...kinematics.dimensions import FLANK, digit_entry
+from ...kinematics.hand_params import HandParams
 from ...kinematics.topology import CMC_Q, LINKS, digit_links, joint
 from ..measure import eyelet_centres, point_line_distance
 from .base import DORSAL_DOWN, Part, child_joint, parent_joint
@@ -191,7 +192,7 @@ class Phalanx(RoutedPart, Part):
     SEGMENTS = tuple(dict.fromkeys(ln.segment for ln in LINKS
                                    if ln.parent_joint and joint(ln.parent_joint).index != CMC_Q))
 
-    def __init__(self, params, digit: str, segment: str):
+    def __init__(self, params: HandParams, digit: str, segment: str):
         links = [ln for ln in digit_links(digit) if ln.segment in self.SEGMENTS]
         if not links:
             raise ValueError(f"unknown digit {digit!r}")
@@ -210,7 +211,7 @@ class Phalanx(RoutedPart, Part):
             raise ValueError(f"{digit} {segment} length {self.length:.2f} mm is shorter than two joint bosses")
 
     @classmethod
-    def for_link(cls, params, link):
+    def for_link(cls, params: HandParams, link):
         return cls(params, link.digit, link.segment)
 
     def inputs(self) -> dict:

@@ -23,6 +23,7 @@ from ... import canon, units
 
 from ...kinematics.dimensions import digit_entry
 from ...kinematics import frames
+from ...kinematics.hand_params import HandParams
 from ...kinematics.topology import CMC_PULLEY, N_SERVOS, SERVOS, link
 from ..measure import measure_groove_radius
 from .base import Part
@@ -34,7 +35,7 @@ from .common import Tolerances, box, build, cylinder, mm
 DRIVE_HORN_ANGLES = (0.0, math.pi)
 
 
-def _anchor_angles(params, link_name: str) -> tuple[float, ...]:
+def _anchor_angles(params: HandParams, link_name: str) -> tuple[float, ...]:
     """Polar angles (rad, the link's frame at rest, right hand) of the clamps the routing model puts
     on a pulley link: a drive's (``routing_rules.servo_clamp_wrap``: every wrap inside the travel) or
     the CMC loop's two (``routing_rules.cmc_loop_clamps``)."""
@@ -130,7 +131,7 @@ class ServoPulley(GroovedPulley):
 
     SEGMENTS = ("servo_pulley",)
 
-    def __init__(self, params, servo: int):
+    def __init__(self, params: HandParams, servo: int):
         if servo not in range(N_SERVOS):
             raise ValueError(f"servo must be 0..{N_SERVOS - 1} ({SERVOS[0].label}..{SERVOS[-1].label}), got {servo!r}")
         self.params, self.servo = params, SERVOS[servo]
@@ -141,7 +142,7 @@ class ServoPulley(GroovedPulley):
         self.radius = mm(frames.servo_radius(params, servo))
 
     @classmethod
-    def for_link(cls, params, link):
+    def for_link(cls, params: HandParams, link):
         return cls(params, link.servo)
 
     def inputs(self) -> dict:
@@ -175,7 +176,7 @@ class CMCPulley(GroovedPulley):
 
     SEGMENTS = ("cmc_pulley",)
 
-    def __init__(self, params):
+    def __init__(self, params: HandParams):
         self.params = params
         self.link = link(CMC_PULLEY)
         self.tol = Tolerances(params)
@@ -184,7 +185,7 @@ class CMCPulley(GroovedPulley):
         self.column_radius = mm(params.cad.cmc_column_radius)
 
     @classmethod
-    def for_link(cls, params, link):
+    def for_link(cls, params: HandParams, link):
         return cls(params)
 
     def inputs(self) -> dict:

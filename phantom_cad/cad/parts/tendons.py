@@ -32,6 +32,7 @@ from ... import units
 from ...kinematics import routing
 from ...kinematics import routing_paths
 from ...kinematics.dimensions import FLANK
+from ...kinematics.hand_params import HandParams
 from ...kinematics.memo import memoised
 from ...kinematics.topology import TENDONS, joint
 from ...kinematics.vectors import clipped_acos, perpendicular_frame
@@ -89,7 +90,7 @@ class Anchor:
 class LinkTendons:
     """What the routing model asks of one link's part (right hand, mm)."""
 
-    def __init__(self, params, link_name: str):
+    def __init__(self, params: HandParams, link_name: str):
         self.params, self.link = params, link_name
         cl = units.mm(params.print.hole_clearance)
         self.grooves: list[Groove] = []
@@ -200,14 +201,14 @@ def verify_grooves(part, shape, lt: LinkTendons, out: list[str], faces: list[dic
 _LINK_TENDONS: dict = {}
 
 
-def link_tendons(params, link_name: str) -> LinkTendons:
+def link_tendons(params: HandParams, link_name: str) -> LinkTendons:
     """The :class:`LinkTendons` of one link, made once per hand (memoised by the parameters'
     digest: the routes are pure functions of them; a part's build, its verification, its
     child's tongue and the bill of materials all read the same one)."""
     return memoised(_LINK_TENDONS, (params.digest, link_name), lambda: LinkTendons(params, link_name))
 
 
-def parent_hub_x(params, joint_name: str) -> float | None:
+def parent_hub_x(params: HandParams, joint_name: str) -> float | None:
     """x of the hub on a joint's parent link (the loop plane that joint's tongue must leave free),
     or None."""
     j = joint(joint_name)

@@ -22,6 +22,7 @@ from ... import canon
 from ...kinematics import frames as F
 from ...kinematics import thenar as TH
 from ...kinematics.dimensions import digit_entry
+from ...kinematics.hand_params import HandParams
 from ...kinematics.topology import CMC_Q, JOINTS, link
 from ..measure import eyelet_centres, point_line_distance
 from .base import PALMAR_DOWN, Part, child_joint
@@ -41,7 +42,7 @@ class ThumbCMCBase(RoutedPart, Part):
 
     SEGMENTS = ("cmc_base",)
 
-    def __init__(self, params):
+    def __init__(self, params: HandParams):
         self.params = params
         self.link = link(JOINTS[CMC_Q].child)
         self.sec = DigitSection(params, self.link.digit)
@@ -56,7 +57,7 @@ class ThumbCMCBase(RoutedPart, Part):
                              f"(radius {self.hub_radius:g} mm) and the {self.joint.upper()} clevis")
 
     @classmethod
-    def for_link(cls, params, link):
+    def for_link(cls, params: HandParams, link):
         return cls(params)
 
     def inputs(self) -> dict:

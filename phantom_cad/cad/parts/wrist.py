@@ -17,6 +17,7 @@ from ...kinematics import forearm_layout as FL
 from ...kinematics import frames as F
 from ...kinematics import routing
 from ...kinematics import routing_paths
+from ...kinematics.hand_params import HandParams
 from ...kinematics.topology import THUMB_CHAIN
 from .common import mm
 
@@ -25,13 +26,13 @@ from .common import mm
 TAB_LENGTH = 10.0
 
 
-def socket_x(params) -> tuple[float, float]:
+def socket_x(params: HandParams) -> tuple[float, float]:
     """x extent (mm) of the palm's finger sockets (``frames.socket_x``)."""
     lo, hi = F.socket_x(params)
     return mm(lo), mm(hi)
 
 
-def forearm_block(params) -> tuple[float, float, float, float, float, float]:
+def forearm_block(params: HandParams) -> tuple[float, float, float, float, float, float]:
     """x0, x1, y0, y1, z0, z1 (palm frame, mm) of the forearm module's block: one palm wall around
     every one of its servos' envelopes (``forearm_layout.servo_envelope``), its front face
     ``forearm_layout.forearm_front``, its top a wall above the palm's dorsal face (flush with the tab)."""
@@ -45,7 +46,7 @@ def forearm_block(params) -> tuple[float, float, float, float, float, float]:
             pts[:, 2].min() - w, mm(params.palm.thickness) / 2.0 + w)
 
 
-def tab(params) -> tuple[np.ndarray, np.ndarray]:
+def tab(params: HandParams) -> tuple[np.ndarray, np.ndarray]:
     """(lo, hi) of the forearm module's tab on the palm: across the metacarpal block where the
     module covers it, from the module's front face to TAB_LENGTH ahead of the palm's back face,
     one palm wall thick on the palm's dorsal face."""
@@ -56,7 +57,7 @@ def tab(params) -> tuple[np.ndarray, np.ndarray]:
             np.array([min(forearm_x[1], px1), mm(FL.palm_back(params)) + TAB_LENGTH, top + mm(params.palm.wall)]))
 
 
-def tab_screws(params) -> list[np.ndarray]:
+def tab_screws(params: HandParams) -> list[np.ndarray]:
     """Centres of the tab's two screws on the palm's dorsal face, half a tab length in from its
     ends, halfway along its length over the palm."""
     lo, hi = tab(params)
@@ -65,7 +66,7 @@ def tab_screws(params) -> list[np.ndarray]:
     return [np.array([lo[0] + inset, y, lo[2]]), np.array([hi[0] - inset, y, lo[2]])]
 
 
-def thumb_drive_path(params) -> list[np.ndarray]:
+def thumb_drive_path(params: HandParams) -> list[np.ndarray]:
     """Palm-frame points (mm, right hand) of the thumb drive where the routing model runs it on the
     forearm module and the palm: where it leaves servo 1's pulley (tangent), its turn onto the CMC
     axis above the CMC pulley's cavity, the CMC axis at the cavity's ceiling (``kinematics.routing``).
