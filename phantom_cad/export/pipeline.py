@@ -81,7 +81,7 @@ def _is_export(folder: Path) -> bool:
         return False
 
 
-def _load(params_path, side, effects=None):
+def _load(params_path, side, effects=None) -> tuple[Path, dict[str, Any], HandParams, Any]:
     path = Path(params_path) if params_path is not None else DEFAULT_PARAMS
     document = load_document(path)
     file_side = (document.get("hand") or {}).get("side") if isinstance(document.get("hand"), dict) else None
@@ -418,7 +418,7 @@ def export_problem(out: Path, digest: str, side: str) -> str | None:
 
 def ensure_export(params_path: str | os.PathLike | None = None, out_dir: str | os.PathLike | None = None,
                   side: str | None = None, log: Callable[[str], None] | None = None, effects=None,
-                  **build_kwargs):
+                  **build_kwargs) -> tuple[Path, HandParams]:
     """(export folder, params) of an export of ``params_path`` (``side`` overriding the file's),
     built first (:func:`build_hand`, cached) when ``out_dir`` holds none, one built from other
     parameters or one without its robot description (:func:`export_problem`). For the commands
