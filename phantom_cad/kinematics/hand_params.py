@@ -25,6 +25,7 @@ from .dimensions import digit_entry
 __all__ = ["Guide", "ChainParams", "Finger", "Thumb", "Mechanics", "Palm", "ServoBody", "Hardware",
            "Print", "Cad", "HandParams"]
 
+
 @dataclass(frozen=True)
 class Guide:
     """MCP (or thumb MP) tendon guides: distances d1 (metacarpal side), d2 (phalanx side)

@@ -150,7 +150,8 @@ def _check_path(t: TomlTable, key: str, length: float, segment: float, r_a: floa
                          f"{segname.split('.')[-1]} segment between its pulleys", t.source)
 
 
-def _check_compliance(mechanics: Mechanics, fingers, thumb, source) -> None:
+def _check_compliance(mechanics: Mechanics, fingers: Mapping[str, Finger], thumb: Thumb,
+                      source: str | None) -> None:
     """Eq. (13): the tendon's stretch (compliance k_s / EA) takes back part of each coupled joint's
     motion; it must not take all of it (a coupled joint that stands still or extends while its
     reference joint flexes)."""
@@ -173,7 +174,8 @@ def _fractions(t: TomlTable, names: tuple[str, ...], hand_length: float) -> dict
     return out
 
 
-def _digit(t: TomlTable, spec: topology.Chain, extra_limits: tuple[str, ...], hand_length: float):
+def _digit(t: TomlTable, spec: topology.Chain, extra_limits: tuple[str, ...],
+           hand_length: float) -> tuple[dict[str, float], float, float, ChainParams, dict[str, tuple[float, float]]]:
     """What a finger and the thumb share: segments, section, pulleys, guide, servo, limits, tendon.
 
     ``spec`` is the digit's topology chain (joint keys reference first; the file lists them
@@ -230,7 +232,8 @@ def _thumb(t: TomlTable, hand_length: float) -> Thumb:
                  gain, limits[cmc], cmc_travel, horn)
 
 
-def _cad(c: TomlTable, hand_length, fingers, thumb, palm, servo, hardware, printing) -> Cad:
+def _cad(c: TomlTable, hand_length: float, fingers: Mapping[str, Finger], thumb: Thumb, palm: Palm,
+         servo: ServoBody, hardware: Hardware, printing: Print) -> Cad:
     """[cad]: the few dimensions only the printable parts need, and the rules that make them fit."""
     cad = Cad(
         finger_base_length=c.number("finger_base_length_mm", gt=0) * MM,
