@@ -9,8 +9,8 @@
   three.js canvas is not blank;
 * the command's error path: one line ``error: ...``, exit 2.
 
-The default hand is built once (module fixture, private cache under tmp: a cold build takes
-about 1-2 minutes). docs/viewer.md.
+The default hand is exported once (module fixture, into a folder of its own, with the session's
+part cache). docs/viewer.md.
 """
 
 from __future__ import annotations

@@ -90,14 +90,20 @@ def tip_frames(params: HandParams) -> dict[str, tuple[str, np.ndarray]]:
     return out
 
 
-def build_part(params: HandParams, name: str) -> Built:
+def build_part(params: HandParams, name: str, shape=None) -> Built:
+    """The part ``name`` of this hand, built; or, given ``shape`` (its solid for this side, built
+    before: the export's part cache keeps it as BREP), everything else about it made around that
+    solid (the convex collision solids and the support blockers are small)."""
+    import build123d as bd
+
     part = registry.part(params, name)
-    shape = part.build()
+    if shape is None:
+        shape = part.build()
+        if params.side == "left":
+            shape = shape.mirror(bd.Plane.YZ)
     collision = tuple(part.collision_solids())
     blockers = tuple(part.support_blockers())
     if params.side == "left":
-        import build123d as bd
-        shape = shape.mirror(bd.Plane.YZ)
         collision = tuple(s.mirror(bd.Plane.YZ) for s in collision)
         # the mirror x -> -x, its faces turned back outward
         blockers = tuple(replace(b, vertices=b.vertices * MIRROR, faces=b.faces[:, ::-1].copy(),

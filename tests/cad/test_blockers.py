@@ -61,18 +61,14 @@ def _manifold(V, F):
 
 
 @pytest.mark.parametrize("name", ["index_proximal", "index_base"])
-def test_left_hand_blockers_lie_on_its_mirrored_features(name, built, hand_meshes):
+def test_left_hand_blockers_lie_on_its_mirrored_features(name, built, hand_parts, hand_meshes):
     """A left hand's part is the right's mirror; so are its blockers: each holds as much of the
     part, and as much air, as the right hand's (manifold3d), and the air is there (the feature)."""
-    import copy
-
     from phantom_cad.cad import assembly
-    from phantom_cad.canon import plain
-    from phantom_cad.params import load_params, parse
 
-    doc = copy.deepcopy(plain(load_params().document))
-    doc["hand"]["side"] = "left"
-    left = assembly.build_part(parse(doc), name).blockers
+    p, shapes = hand_parts("left")
+    assert p.side == "left"
+    left = assembly.build_part(p, name, shape=shapes[name]).blockers
     right = built[name].blockers
     assert [b.label for b in left] == [b.label for b in right]
     solids = {side: _manifold(*hand_meshes(kind)[name]) for side, kind in (("right", "default"), ("left", "left"))}

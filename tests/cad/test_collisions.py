@@ -21,7 +21,7 @@ from phantom_cad.export import step_stl
 from phantom_cad.export.interference import command_sweep, may_touch
 from phantom_cad.kinematics.topology import SERVOS, link
 
-from tests.cad.conftest import HANDS
+from tests.support.hands import HANDS
 
 FRACTIONS = (0.0, 0.25, 0.5, 0.75, 0.9, 1.0)
 

@@ -21,7 +21,7 @@ from phantom_cad.kinematics import link_frames
 from phantom_cad.kinematics import thenar
 from phantom_cad.kinematics.topology import FINGERS, SERVO_MOUNT, SERVOS
 
-from tests.cad.conftest import HANDS
+from tests.support.hands import HANDS
 
 
 @pytest.fixture(scope="module", params=HANDS)

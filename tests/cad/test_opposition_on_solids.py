@@ -25,7 +25,7 @@ from phantom_cad.cad import measure
 from phantom_cad.export.interference import interference, may_touch
 from phantom_cad.kinematics import opposition
 
-from tests.cad.conftest import HANDS
+from tests.support.hands import HANDS
 
 #: the surface distance (mm) the pads must come within
 REACH_MM = 1.0

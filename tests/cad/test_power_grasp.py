@@ -23,26 +23,28 @@ import math
 import numpy as np
 import pytest
 
-from phantom_cad import make_hand
 from phantom_cad.cad import assembly, grasp
 from phantom_cad.cad import measure
 from phantom_cad.export.interference import interference, may_touch
 from phantom_cad.kinematics.topology import FINGERS
 
-from tests.cad.conftest import HANDS
+from tests.conftest import POWER_GRASP_MM
+from tests.support.hands import HANDS
 
 #: the power grasp's cylinder across the palm (mm), and the distance its contacts must come within
-DIAMETER_MM = 35.0
+DIAMETER_MM = POWER_GRASP_MM
 REACH_MM = 1.0
 #: manifold3d's overlap (mm^3) that counts as interpenetration: the command sweep's bar
 OVERLAP_MM3 = 0.01
 
 
 @pytest.fixture(scope="module", params=HANDS)
-def hand(request, hand_parts, hand_meshes):
+def hand(request, hand_parts, hand_meshes, power_grasps):
+    """The power grasp of one reference hand, on its export's solids (``power_grasps``: the
+    session's, shared with the MuJoCo hold test)."""
     p, shapes = hand_parts(request.param)
-    h = make_hand(p)
-    g, tried = grasp.power_grasp(h, shapes, DIAMETER_MM)
+    h, g, tried = power_grasps(request.param)
+    assert h.params is p
     return request.param, p, h, shapes, hand_meshes(request.param), g, tried
 
 

@@ -14,7 +14,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from phantom_cad import load_params
 from phantom_cad.cad import assembly, clearance, registry
 from phantom_cad.params import parse
 
@@ -46,10 +45,10 @@ def test_left_hand_tendons_pass_through_no_material(document, right_solids):
     assert _fmt(clearance.tendon_hits(left, right_solids)) == []
 
 
-@pytest.mark.slow
-def test_slender_hand_tendons_pass_through_no_material():
-    p = load_params(ROOT / "params" / "examples" / "slender.toml")
-    solids = {n: registry.part(p, n).build() for n in assembly.part_names(p)}
+def test_slender_hand_tendons_pass_through_no_material(hand_parts):
+    """params/examples/slender.toml, on its export's solids."""
+    p, solids = hand_parts("slender")
+    assert sorted(solids) == sorted(assembly.part_names(p))
     assert _fmt(clearance.tendon_hits(p, solids)) == []
 
 
@@ -96,13 +95,12 @@ def test_the_drive_couplers_travel_in_the_palms_bore(params, document, right_sol
     _couplers_travel_in_the_bore(params, document, right_solids["palm"])
 
 
-@pytest.mark.slow
-def test_slender_hand_couplers_travel_in_the_palms_bore():
+def test_slender_hand_couplers_travel_in_the_palms_bore(hand_parts):
     from phantom_cad.params import load_document
-    path = ROOT / "params" / "examples" / "slender.toml"
-    p, doc = load_params(path), load_document(path)
+    p, solids = hand_parts("slender")
+    doc = load_document(ROOT / "params" / "examples" / "slender.toml")
     doc["hardware"].setdefault("tendon_stop", {"diameter_mm": 2.0, "length_mm": 3.0})
-    _couplers_travel_in_the_bore(p, doc, registry.part(p, "palm").build())
+    _couplers_travel_in_the_bore(p, doc, solids["palm"])
 
 
 def _couplers_travel_in_the_bore(params, document, palm):

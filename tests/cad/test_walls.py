@@ -95,12 +95,13 @@ def test_a_knife_edge_is_a_wall():
 
 
 @pytest.fixture(scope="module")
-def walls(built, params):
-    """Each part's walls on its mesh at the export's STL tolerance. A mesh lies within that tolerance
-    of each face, so a wall of exactly 0.8 mm (the flanks beside the tendon grooves,
-    dimensions.FLANK) can read down to 0.8 - 2 x tolerance: that is the bar a wall must clear."""
+def walls(hand_meshes, params):
+    """Each part's walls on its mesh at the export's STL tolerance (the export's own). A mesh lies
+    within that tolerance of each face, so a wall of exactly 0.8 mm (the flanks beside the tendon
+    grooves, dimensions.FLANK) can read down to 0.8 - 2 x tolerance: that is the bar a wall must
+    clear."""
     tol = params.print.stl_tolerance * 1e3
-    return {n: thin_walls(*step_stl.tessellate(b.shape, tol), MIN_WALL - 2.0 * tol) for n, b in built.items()}
+    return {n: thin_walls(v, f, MIN_WALL - 2.0 * tol) for n, (v, f) in hand_meshes("default").items()}
 
 
 def test_the_servo_pulleys_print(walls):
@@ -131,31 +132,32 @@ def test_every_wall_is_two_perimeters(walls, params):
     assert thin == {}
 
 
-def test_every_wall_of_a_170_mm_hand_is_two_perimeters(hand_parts):
+def test_every_wall_of_a_170_mm_hand_is_two_perimeters(hand_parts, hand_meshes):
     """The same rule on every part of a hand of hand_length 170 mm (the third reference
     hand, params/examples/small.toml): the digits shorter and narrower, the palm and forearm laid out
-    again."""
-    p, shapes = hand_parts("hand_length_170")
+    again; on its export's meshes, at its STL tolerance."""
+    p, _ = hand_parts("hand_length_170")
     assert p.hand_length == pytest.approx(0.170)
     tol = p.print.stl_tolerance * 1e3
     bar = MIN_WALL - 2.0 * tol
+    meshes = hand_meshes("hand_length_170")
     thin = {}
-    for n, shape in shapes.items():
-        r = thin_walls(*step_stl.tessellate(shape, tol), bar)
+    for n, (v, f) in meshes.items():
+        r = thin_walls(v, f, bar)
         if r["wall_thinnest"] < bar:
             thin[n] = round(r["wall_thinnest"], 3)
-    assert len(shapes) == 28 and thin == {}
+    assert len(meshes) == 28 and thin == {}
 
 
 @pytest.mark.parametrize("kind", ["default", "hand_length_170"])
-def test_the_palms_walls_sampled_ten_times_as_densely(hand_parts, kind):
+def test_the_palms_walls_sampled_ten_times_as_densely(hand_parts, hand_meshes, kind):
     """The palm again, at 200,000 surface samples: 20,000 can miss a small thin spot, such as a
     skin between the thumb drive's channel and the CMC pulley cavity's back opening, where the
     channel enters the back face (``Palm.thumb_channel_relief`` cuts it open)."""
-    p, shapes = hand_parts(kind)
+    p, _ = hand_parts(kind)
     tol = p.print.stl_tolerance * 1e3
     bar = MIN_WALL - 2.0 * tol
-    r = thin_walls(*step_stl.tessellate(shapes["palm"], tol), bar, samples=200_000)
+    r = thin_walls(*hand_meshes(kind)["palm"], bar, samples=200_000)
     assert r["wall_thinnest"] >= bar, (kind, r["wall_thinnest"], r["wall_at"])
 
 

@@ -17,7 +17,7 @@ import pytest
 
 from phantom_cad.kinematics.topology import JOINT_NAMES
 from phantom_cad.params.io import load_params
-from tests.cad.conftest import HANDS, SMALL, hand_document
+from tests.support.hands import HANDS
 
 mujoco = pytest.importorskip("mujoco")
 
@@ -406,43 +406,20 @@ def test_compiled_mjcf_is_served_from_the_cache_only_when_it_matches(hand_build,
 
 #: the mass (kg) of the cylinder the closed hand must hold with the palm facing down
 CYLINDER_KG = 0.1
-#: the cylinders (diameter, mm) across the palm: the power grasp's 35 mm. The palm's heel holds it:
-#: without it the fingertips would squeeze it toward the wrist and it would fall out palm down
-#: (docs/parts.md)
-CYLINDERS = [35.0]
 
 
-#: the three reference hands (tests/cad/conftest.py): (name, parameter file, side); the default hand's
-#: export is the session's
-GRASP_HANDS = [("default", PARAMS, None), ("left", PARAMS, "left"), ("hand_length_170", SMALL, None)]
-assert [h[0] for h in GRASP_HANDS] == list(HANDS)
-
-
-@pytest.fixture(scope="module", params=[(h, d) for h in GRASP_HANDS for d in CYLINDERS],
-                ids=lambda v: f"{v[0][0]}-{v[1]:g}mm")
-def cylinder_grasp(request, hand_build, hand_export):
-    """(``cad.grasp.power_grasp`` of a hand on a cylinder: where the solids say every finger reaches
-    past its equator, and the thumb's commands that clear it; the hand's MJCF scene), each hand's
-    export built with the session's part cache; the solids are the export's own (each part's BREP
-    from the cache entry its manifest names)."""
-    from phantom_cad import make_hand
-    from phantom_cad.cad import assembly, grasp
-    from phantom_cad.canon import plain
-    from phantom_cad.export import step_stl
-    from phantom_cad.export.cache import Cache
-    from phantom_cad.params import parse
-
-    (kind, path, side), diameter = request.param
-    _, cache = hand_build
-    result = hand_export(kind)
-    p = parse(hand_document(kind, plain(load_params(PARAMS).document)))
-    assert (p.side, p.digest) == (result.side, result.params_digest)
-    names = [n for n in assembly.part_names(p) if n != "forearm" and not n.startswith("servo_pulley_")]
-    keys = {e["name"]: e["cache_key"] for e in result.manifest["parts"]}
-    shapes = {n: step_stl.read_brep(Cache(cache).part_dir(keys[n]) / "part.brep") for n in names}
-    g, _ = grasp.power_grasp(make_hand(p), shapes, diameter)
+@pytest.fixture(scope="module", params=HANDS)
+def cylinder_grasp(request, hand_export, power_grasps):
+    """(``cad.grasp.power_grasp`` of a reference hand on the power grasp's cylinder
+    (35 mm across the palm, tests/conftest.py): where the solids say every finger reaches past its
+    equator, and the thumb's commands that clear it; the hand's MJCF scene), on the solids of the
+    hand's export (each part's BREP from the cache entry its manifest names: tests/conftest.py).
+    The palm's heel holds the cylinder: without it the fingertips would squeeze it toward the
+    wrist and it would fall out palm down (docs/parts.md)."""
+    kind = request.param
+    _, g, _ = power_grasps(kind)
     assert g is not None
-    return g, result.out_dir / "description" / "mjcf" / "scene.xml"
+    return g, hand_export(kind).out_dir / "description" / "mjcf" / "scene.xml"
 
 
 def test_the_closed_hand_holds_a_cylinder_palm_down(cylinder_grasp):

@@ -1,0 +1,82 @@
+"""The three reference hands the slow tests build, and where a test finds their solids.
+
+* :data:`HANDS`: the default hand, its left twin, and a hand of hand_length 170 mm (a file of its
+  own, params/examples/small.toml: the fingers narrower, the pitch shorter, its CMC placement
+  solved for it).
+* :func:`hand_source`: the parameter file and side ``phantom-cad build`` is given for one of them,
+  or for ``"slender"`` (params/examples/slender.toml), a fourth hand some tests export.
+* :func:`hand_document`: its plain parameter document.
+* :func:`export_solids`: the solids and meshes of a built export, read back from the part cache
+  entries its manifest names (the BREP each part was exported from, and the mesh its STL, its
+  robot description and its pictures were made of).
+"""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+SMALL = ROOT / "params" / "examples" / "small.toml"
+SLENDER = ROOT / "params" / "examples" / "slender.toml"
+
+#: name -> (parameter file or None: the default file, side given on the command line or None)
+_SOURCES = {"default": (None, None), "left": (None, "left"), "hand_length_170": (SMALL, None),
+            "slender": (SLENDER, None)}
+#: the reference hands, exported sliced (when PrusaSlicer is installed) as a user would; the other
+#: hands of :data:`_SOURCES` (params/examples/slender.toml) are exported without slicing
+HANDS = ("default", "left", "hand_length_170")
+
+
+def hand_source(kind: str) -> tuple[Path | None, str | None]:
+    """(parameter file or None: the default file, side or None) of one of :data:`HANDS`, as
+    ``build_hand`` takes them."""
+    return _SOURCES[kind]
+
+
+def hand_document(kind: str, document: dict | None = None) -> dict:
+    """The plain document of one of :data:`HANDS`; ``document``: the default file's, when the
+    caller has it already."""
+    from phantom_cad.canon import plain
+    from phantom_cad.params.io import load_params
+
+    path, side = hand_source(kind)
+    if path is not None or document is None:
+        document = plain(load_params(path).document)
+    doc = copy.deepcopy(document)
+    if side is not None:
+        doc["hand"]["side"] = side
+    return doc
+
+
+def _entries(result, cache_root: Path) -> dict[str, Path]:
+    """name -> cache entry of every part of a BuildResult, each checked against the hashes it
+    was sealed with (the cache's own check)."""
+    from phantom_cad.export.cache import Cache
+
+    cache = Cache(cache_root)
+    out = {}
+    for e in result.manifest["parts"]:
+        problem = cache.part_problem(e["cache_key"])
+        assert problem is None, f"{e['name']}: the part cache entry of the export is {problem}"
+        out[e["name"]] = cache.part_dir(e["cache_key"])
+    return out
+
+
+def export_solids(result, cache_root: Path) -> dict:
+    """{name: solid in its link frame, mm} of a built export (each part's part.brep)."""
+    from phantom_cad.export import step_stl
+
+    return {n: step_stl.read_brep(d / "part.brep") for n, d in _entries(result, cache_root).items()}
+
+
+def export_meshes(result, cache_root: Path) -> dict:
+    """{name: (vertices, faces)} in the link frame, mm, at the export's STL tolerance (each part's
+    mesh.npz)."""
+    import numpy as np
+
+    out = {}
+    for n, d in _entries(result, cache_root).items():
+        with np.load(d / "mesh.npz") as m:
+            out[n] = (m["vertices"], m["faces"].astype(np.int64))
+    return out
