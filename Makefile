@@ -24,8 +24,11 @@ sysdeps:
 demo: install sysdeps
 	$(VENV)/bin/phantom-cad demo
 
+# in TEST_JOBS processes (pytest-xdist; a test module stays in one, with its fixtures); each
+# whole-hand build and power grasp is made once between them (tests/support/shared.py)
+TEST_JOBS ?= 2
 test: install sysdeps
-	$(PY) -m pytest
+	$(PY) -m pytest -n $(TEST_JOBS) --dist loadscope
 
 # The tests not marked slow (no whole-hand build, no MuJoCo simulation of a hand, no browser, no
 # slicing of whole hands, no property test, no command line run for seconds): about a minute, for

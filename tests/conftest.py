@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.support import hands
+from tests.support import hands, shared
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_PARAMS = ROOT / "params" / "phantom.toml"
@@ -34,40 +34,47 @@ def hand():
 
 
 @pytest.fixture(scope="session")
-def part_cache(tmp_path_factory):
-    """The part cache of every whole-hand build of the session: a part is built once, by whichever
-    build needs it first (the cache verifies every entry it serves)."""
-    return tmp_path_factory.mktemp("part-cache")
+def shared_root(tmp_path_factory) -> Path:
+    """The folder the test processes of this run share (``tests.support.shared``)."""
+    return shared.run_root(tmp_path_factory)
 
 
 @pytest.fixture(scope="session")
-def hand_build(tmp_path_factory, part_cache):
-    """(BuildResult, part cache) of the default hand with the real parts, built once per session
-    (jobs = 2) with the session's part cache."""
+def part_cache(shared_root):
+    """The part cache of every whole-hand build of the run: a part is built once, by whichever
+    build needs it first (the cache verifies every entry it serves; builds in several processes
+    share it safely)."""
+    path = shared_root / "part-cache"
+    path.mkdir(exist_ok=True)
+    return path
+
+
+def _export(shared_root: Path, part_cache: Path, kind: str):
+    """The BuildResult of one of the hands of ``tests.support.hands``, built once per test run with
+    the run's part cache (jobs = 2): the reference hands sliced when PrusaSlicer is installed (the
+    description's masses then come from the slicer), ``"slender"`` not."""
     from phantom_cad.export.pipeline import build_hand
 
-    root = tmp_path_factory.mktemp("hand")
-    result = build_hand(None, root / "exports" / "phantom", cache_dir=part_cache, jobs=2, slice=None)
-    return result, part_cache
+    def make():
+        path, side = hands.hand_source(kind)
+        return build_hand(path, shared_root / "exports" / kind, side=side, cache_dir=part_cache, jobs=2,
+                          slice=None if kind in hands.HANDS else False)
+    return shared.once(shared_root, f"export-{kind}", make)
 
 
 @pytest.fixture(scope="session")
-def hand_export(hand_build, tmp_path_factory):
+def hand_build(shared_root, part_cache):
+    """(BuildResult, part cache) of the default hand with the real parts, built once per run."""
+    return _export(shared_root, part_cache, "default"), part_cache
+
+
+@pytest.fixture(scope="session")
+def hand_export(hand_build, shared_root, part_cache):
     """``hand_export(kind)`` -> the BuildResult of one of the reference hands
-    (``tests.support.hands.HANDS``; the default hand's is ``hand_build``'s), each built once per
-    session with the session's part cache, and sliced when PrusaSlicer is installed (the
-    description's masses then come from the slicer); or of ``"slender"``, not sliced."""
-    from phantom_cad.export.pipeline import build_hand
-
-    result, cache = hand_build
-    done = {"default": result}
-
+    (``tests.support.hands.HANDS``; the default hand's is ``hand_build``'s) or of ``"slender"``,
+    each built once per run (:func:`_export`)."""
     def get(kind: str):
-        if kind not in done:
-            path, side = hands.hand_source(kind)
-            done[kind] = build_hand(path, tmp_path_factory.mktemp(kind) / "export", side=side, cache_dir=cache,
-                                    jobs=2, slice=None if kind in hands.HANDS else False)
-        return done[kind]
+        return hand_build[0] if kind == "default" else _export(shared_root, part_cache, kind)
     return get
 
 
@@ -104,9 +111,10 @@ def hand_meshes(hand_export, part_cache):
 
 
 @pytest.fixture(scope="session")
-def power_grasps(hand_parts):
+def power_grasps(hand_parts, shared_root):
     """``power_grasps(kind)`` -> (hand, grasp, every position tried) of ``cad.grasp.power_grasp``:
-    the 35 mm cylinder across the palm of one of the reference hands, on its export's solids."""
+    the 35 mm cylinder across the palm of one of the reference hands, on its export's solids; made
+    once per run."""
     from phantom_cad import make_hand
     from phantom_cad.cad import grasp
 
@@ -116,7 +124,9 @@ def power_grasps(hand_parts):
         if kind not in done:
             p, shapes = hand_parts(kind)
             h = make_hand(p)
-            done[kind] = (h, *grasp.power_grasp(h, shapes, POWER_GRASP_MM))
+            found = shared.once(shared_root, f"power-grasp-{kind}",
+                                lambda: grasp.power_grasp(h, shapes, POWER_GRASP_MM))
+            done[kind] = (h, *found)
         return done[kind]
     return get
 
@@ -124,11 +134,10 @@ def power_grasps(hand_parts):
 #: session fixtures that build a whole hand or every part of one: a test that uses any of them
 #: (directly or through another fixture) is in the slow tier (`make test`, not `make test-fast`)
 SLOW_FIXTURES = frozenset({
-    "built", "placed", "hand_parts", "hand_meshes",      # tests/cad/conftest.py, here
-    "hand_build", "hand_export", "power_grasps",         # here
-    "pkg",                                               # tests/export/conftest.py
-    "standin_build",                                     # the stand-in hand, through worker processes
-    "part_cache",                                        # a build that shares the session's cache
+    "hand_build", "hand_export", "hand_parts", "hand_meshes", "power_grasps",    # here
+    "built", "placed",                                   # tests/cad/conftest.py
+    "pkg", "standin_build",                              # tests/export/conftest.py (the stand-in through workers)
+    "part_cache",                                        # a build that shares the run's cache
 })
 
 

@@ -4,8 +4,10 @@ The kinematics, the CAD and the export read the records of ``kinematics/hand_par
 argument named ``params`` of a function there is annotated ``HandParams``, and every attribute
 chain read on an argument annotated with one of the records (``params.palm.finger_pitch``,
 ``chain.radii``) resolves, link by link, to a field, property or method of the record, following
-the dataclasses' type hints. A chain stops at a type that is not a record, at a subscript, and at
-a call whose method does not return a record. The checker's own checks run on made-up sources.
+the dataclasses' type hints; so does every chain read on ``self.params`` in a method (the parts,
+the model: the hand they belong to). A chain stops at a type that is not a record, at a
+subscript, and at a call whose method does not return a record. The checker's own checks run on
+made-up sources.
 """
 
 from __future__ import annotations
@@ -74,6 +76,12 @@ def hinted_records(hint) -> tuple[type, ...]:
     return ()
 
 
+class _Self:
+    """The ``self`` of a method: of its attributes only ``params`` is followed, as the hand (a
+    part's, a model's, an exporter context's)."""
+
+
+SELF = (_Self,)
 _MISSING = object()
 
 
@@ -118,6 +126,12 @@ def check_source(text: str, where: str) -> Findings:
     def follow(name: ast.Name, records: tuple[type, ...], function: str) -> None:
         node: ast.expr = name
         chain = [name.id]
+        if records == SELF:         # a method's ``self``: its ``params`` is the hand
+            parent = parents.get(node)
+            if not (isinstance(parent, ast.Attribute) and parent.value is node and parent.attr == "params"):
+                return
+            chain.append("params")
+            node, records = parent, (hand_params.HandParams,)
         while records:
             parent = parents.get(node)
             if not (isinstance(parent, ast.Attribute) and parent.value is node):
@@ -164,6 +178,9 @@ def check_source(text: str, where: str) -> Findings:
                         inner[arg.arg] = records
                     else:
                         inner.pop(arg.arg, None)
+                if isinstance(node, ast.ClassDef) and isinstance(child, FUNCTIONS) and child.args.args \
+                        and child.args.args[0].arg == "self":
+                    inner["self"] = SELF
                 body = child.body if isinstance(child, FUNCTIONS) else [child.body]
                 for b in body:
                     visit_expr(b, inner, name)
@@ -308,3 +325,21 @@ def test_checker_follows_scopes():
         """)
     assert [u.split(": ")[1] for u in f.unknown] == ["params.palm.nope1", "hw.nope2", "params.nope3"]
     assert f.unannotated == ["probe.py:5 shadow"]
+
+
+def test_checker_follows_self_params_in_methods():
+    """In a method, ``self.params`` is the hand; ``self``'s other attributes and a function's own
+    ``self`` argument outside a class are not followed."""
+    f = check("""
+        class Phalanx:
+            def width(self):
+                return self.params.palm.nope1 + self.params.palm.finger_pitch + self.other.nope
+
+            @staticmethod
+            def static(x):
+                return x.params.nope
+
+        def free(self):
+            return self.params.nope
+        """)
+    assert [u.split(": ")[1] for u in f.unknown] == ["self.params.palm.nope1"]

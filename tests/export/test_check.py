@@ -140,10 +140,13 @@ def _cli_check(tmp_path, cache, *args) -> subprocess.CompletedProcess:
                           cwd=ROOT)
 
 
-@pytest.mark.parametrize("args", [("--side", "left"), ("--params", str(ROOT / "params" / "examples" / "slender.toml"))],
+@pytest.mark.parametrize("kind, args", [("left", ("--side", "left")),
+                                         ("slender", ("--params", str(ROOT / "params" / "examples" / "slender.toml")))],
                          ids=["left", "slender"])
-@pytest.mark.slow     # builds the two hands
-def test_check_builds_and_passes_the_left_hand_and_a_second_file(tmp_path, part_cache, args):
+def test_check_builds_and_passes_the_left_hand_and_a_second_file(tmp_path, hand_export, part_cache, kind, args):
+    """The command builds the hand's export with the run's part cache, where the session's export of
+    the same hand (``hand_export``) left its parts, and checks it."""
+    hand_export(kind)
     proc = _cli_check(tmp_path, part_cache, *args)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-2000:]
     assert " 0 failed" in proc.stdout and "FAIL" not in proc.stdout

@@ -82,7 +82,8 @@ class Part(abc.ABC):
     #: display colour; None = the digit's colour
     COLOR: tuple[float, float, float] | None = None
 
-    params = None
+    #: the hand this part belongs to (set by each family's constructor)
+    params: HandParams
     link: Link
 
     @classmethod
