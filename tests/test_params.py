@@ -128,6 +128,15 @@ def test_unknown_key_in_finger_lists_allowed(document):
                      "servo_travel_deg, limits_rad, path_length_mm)")
 
 
+def test_a_horn_radius_for_servo_6_under_the_cmc_names_the_loop_pulley(document):
+    """Servo 6 turns the CMC through a cable loop (docs/parameters.md): a horn radius under the CMC
+    is refused, naming the key to use."""
+    document["thumb"]["cmc_horn_radius_mm"] = 7.0
+    refuse(document, "thumb.cmc_horn_radius_mm = 7.0: not a parameter: servo 6 does not sit under the CMC "
+                     "(it turns it through a cable loop from the forearm module): name the loop's pulley "
+                     "radius cmc_pulley_radius_mm instead (docs/parameters.md)")
+
+
 def test_radius_not_positive(document):
     document["fingers"]["index"]["pulley_radius_mm"]["pip"] = -4.0
     refuse(document, "fingers.index.pulley_radius_mm.pip = -4.0: must be > 0")

@@ -215,10 +215,9 @@ def _thumb(t: TomlTable, hand_length: float) -> Thumb:
     cmc_travel = tuple(v * DEG for v in t.interval("cmc_servo_travel_deg"))
     if isinstance(t.data, dict) and "cmc_horn_radius_mm" in t.data:
         raise t.error("cmc_horn_radius_mm", t.data["cmc_horn_radius_mm"],
-                      f"{topology.SERVOS[topology.CMC_SERVO].title} no longer sits under the CMC (it turns it "
-                      "through a cable loop from the "
-                      "forearm module): name the loop's pulley radius cmc_pulley_radius_mm instead "
-                      "(docs/parameters.md)")
+                      f"not a parameter: {topology.SERVOS[topology.CMC_SERVO].title} does not sit under the CMC "
+                      "(it turns it through a cable loop from the forearm module): name the loop's pulley "
+                      "radius cmc_pulley_radius_mm instead (docs/parameters.md)")
     horn = t.number("cmc_pulley_radius_mm", gt=0) * MM
     lo, hi = limits[cmc]
     q15, u6 = topology.JOINTS[topology.CMC_Q].label, topology.SERVOS[topology.CMC_SERVO].label

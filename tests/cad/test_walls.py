@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 import trimesh
 
-from phantom_cad.export import step_stl
 from phantom_cad.export.walls import thin_walls, wall_samples, wall_thickness
 
 MIN_WALL = 0.8

@@ -253,7 +253,7 @@ def test_column_reader_agrees_with_the_exact_reader(tmp_path, monkeypatch, seed)
 def test_column_reader_reads_a_plain_grid(tmp_path, monkeypatch):
     """The fast path is taken (not only the fallback) and gives the exact values: a file of
     70,000 rows (two chunks), a sweep column, empty cells, degrees."""
-    from phantom_cad.calibration import data, fastcsv
+    from phantom_cad.calibration import fastcsv
 
     n = 70_000
     rng = np.random.default_rng(0)
