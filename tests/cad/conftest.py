@@ -18,7 +18,6 @@ import pytest
 from phantom_cad import load_params
 from phantom_cad.params import parse
 from phantom_cad.canon import plain as _plain
-from tests.support import hands
 
 
 @pytest.fixture(scope="session")
@@ -41,13 +40,13 @@ def variant(document):
 
 
 @pytest.fixture(scope="session")
-def built(params, hand_build):
+def built(params, hand_parts):
     """{name: Built} of every part of the default hand: the solids of the session's export
-    (``hand_build``, each part's BREP from its cache entry), the rest made around them."""
+    (``hand_parts``: each part's BREP from its cache entry), the rest made around them."""
     from phantom_cad.cad import assembly
 
-    result, cache = hand_build
-    shapes = hands.export_solids(result, cache)
+    p, shapes = hand_parts("default")
+    assert p.digest == params.digest
     return {name: assembly.build_part(params, name, shape=shapes[name]) for name in assembly.part_names(params)}
 
 
