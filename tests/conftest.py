@@ -79,10 +79,23 @@ def hand_export(hand_build, shared_root, part_cache):
 
 
 @pytest.fixture(scope="session")
-def hand_parts(hand_export, part_cache):
+def hand_entries(hand_export, part_cache):
+    """``hand_entries(kind)`` -> {name: part cache entry} of every part of a hand ``hand_export``
+    exports, as its manifest names them, each checked once against its hashes."""
+    done = {}
+
+    def get(kind: str):
+        if kind not in done:
+            done[kind] = hands.export_entries(hand_export(kind), part_cache)
+        return done[kind]
+    return get
+
+
+@pytest.fixture(scope="session")
+def hand_parts(hand_export, hand_entries):
     """``hand_parts(kind)`` -> (params, {name: solid in its link frame, mm}) of every part of a
-    hand ``hand_export`` exports: the solids of its export, each read back from the BREP of the
-    part cache entry the export's manifest names."""
+    hand ``hand_export`` exports: the solids of its export, each read back from the BREP of its
+    part cache entry."""
     from phantom_cad.params import parse
 
     done = {}
@@ -92,20 +105,20 @@ def hand_parts(hand_export, part_cache):
             p = parse(hands.hand_document(kind))
             result = hand_export(kind)
             assert (p.side, p.digest) == (result.side, result.params_digest)
-            done[kind] = (p, hands.export_solids(result, part_cache))
+            done[kind] = (p, hands.entry_solids(hand_entries(kind)))
         return done[kind]
     return get
 
 
 @pytest.fixture(scope="session")
-def hand_meshes(hand_export, part_cache):
+def hand_meshes(hand_entries):
     """``hand_meshes(kind)`` -> {name: (vertices, faces)} of ``hand_parts(kind)``'s solids at the
     export's STL tolerance (link frames, mm): the meshes of the export (each part's mesh.npz)."""
     done = {}
 
     def get(kind: str):
         if kind not in done:
-            done[kind] = hands.export_meshes(hand_export(kind), part_cache)
+            done[kind] = hands.entry_meshes(hand_entries(kind))
         return done[kind]
     return get
 
@@ -134,7 +147,7 @@ def power_grasps(hand_parts, shared_root):
 #: session fixtures that build a whole hand or every part of one: a test that uses any of them
 #: (directly or through another fixture) is in the slow tier (`make test`, not `make test-fast`)
 SLOW_FIXTURES = frozenset({
-    "hand_build", "hand_export", "hand_parts", "hand_meshes", "power_grasps",    # here
+    "hand_build", "hand_export", "hand_entries", "hand_parts", "hand_meshes", "power_grasps",    # here
     "built", "placed",                                   # tests/cad/conftest.py
     "pkg", "standin_build",                              # tests/export/conftest.py (the stand-in through workers)
     "part_cache",                                        # a build that shares the run's cache

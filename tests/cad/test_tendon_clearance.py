@@ -9,15 +9,13 @@ built without the channels cut for it (the check can fail).
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from phantom_cad.cad import assembly, clearance, registry
 from phantom_cad.params import parse
-
-ROOT = Path(__file__).resolve().parents[2]
+from tests.support.hands import hand_source
 
 
 @pytest.fixture(scope="module")
@@ -98,7 +96,7 @@ def test_the_drive_couplers_travel_in_the_palms_bore(params, document, right_sol
 def test_slender_hand_couplers_travel_in_the_palms_bore(hand_parts):
     from phantom_cad.params import load_document
     p, solids = hand_parts("slender")
-    doc = load_document(ROOT / "params" / "examples" / "slender.toml")
+    doc = load_document(hand_source("slender")[0])
     doc["hardware"].setdefault("tendon_stop", {"diameter_mm": 2.0, "length_mm": 3.0})
     _couplers_travel_in_the_bore(p, doc, solids["palm"])
 

@@ -6,9 +6,9 @@
 * :func:`hand_source`: the parameter file and side ``phantom-cad build`` is given for one of them,
   or for ``"slender"`` (params/examples/slender.toml), a fourth hand some tests export.
 * :func:`hand_document`: its plain parameter document.
-* :func:`export_solids`: the solids and meshes of a built export, read back from the part cache
-  entries its manifest names (the BREP each part was exported from, and the mesh its STL, its
-  robot description and its pictures were made of).
+* :func:`export_entries`, :func:`entry_solids`, :func:`entry_meshes`: the solids and meshes of a
+  built export, read back from the part cache entries its manifest names (the BREP each part was
+  exported from, and the mesh its STL, its robot description and its pictures were made of).
 """
 
 from __future__ import annotations
@@ -29,28 +29,25 @@ HANDS = ("default", "left", "hand_length_170")
 
 
 def hand_source(kind: str) -> tuple[Path | None, str | None]:
-    """(parameter file or None: the default file, side or None) of one of :data:`HANDS`, as
-    ``build_hand`` takes them."""
+    """(parameter file or None: the default file, side or None) of one of :data:`HANDS` or of
+    ``"slender"``, as ``build_hand`` takes them."""
     return _SOURCES[kind]
 
 
-def hand_document(kind: str, document: dict | None = None) -> dict:
-    """The plain document of one of :data:`HANDS`; ``document``: the default file's, when the
-    caller has it already."""
+def hand_document(kind: str) -> dict:
+    """The plain document of one of :data:`HANDS` or of ``"slender"``."""
     from phantom_cad.canon import plain
     from phantom_cad.params.io import load_params
 
     path, side = hand_source(kind)
-    if path is not None or document is None:
-        document = plain(load_params(path).document)
-    doc = copy.deepcopy(document)
+    doc = copy.deepcopy(plain(load_params(path).document))
     if side is not None:
         doc["hand"]["side"] = side
     return doc
 
 
-def _entries(result, cache_root: Path) -> dict[str, Path]:
-    """name -> cache entry of every part of a BuildResult, each checked against the hashes it
+def export_entries(result, cache_root: Path) -> dict[str, Path]:
+    """name -> part cache entry of every part of a BuildResult, each checked against the hashes it
     was sealed with (the cache's own check)."""
     from phantom_cad.export.cache import Cache
 
@@ -63,20 +60,20 @@ def _entries(result, cache_root: Path) -> dict[str, Path]:
     return out
 
 
-def export_solids(result, cache_root: Path) -> dict:
-    """{name: solid in its link frame, mm} of a built export (each part's part.brep)."""
+def entry_solids(entries: dict[str, Path]) -> dict:
+    """{name: solid in its link frame, mm} of :func:`export_entries` (each part's part.brep)."""
     from phantom_cad.export import step_stl
 
-    return {n: step_stl.read_brep(d / "part.brep") for n, d in _entries(result, cache_root).items()}
+    return {n: step_stl.read_brep(d / "part.brep") for n, d in entries.items()}
 
 
-def export_meshes(result, cache_root: Path) -> dict:
-    """{name: (vertices, faces)} in the link frame, mm, at the export's STL tolerance (each part's
-    mesh.npz)."""
+def entry_meshes(entries: dict[str, Path]) -> dict:
+    """{name: (vertices, faces)} in the link frame, mm, at the export's STL tolerance, of
+    :func:`export_entries` (each part's mesh.npz)."""
     import numpy as np
 
     out = {}
-    for n, d in _entries(result, cache_root).items():
+    for n, d in entries.items():
         with np.load(d / "mesh.npz") as m:
             out[n] = (m["vertices"], m["faces"].astype(np.int64))
     return out
