@@ -17,7 +17,7 @@ from .memo import memoised
 from .routing import Point, Pulley, Strand, routes
 from .routing_rules import joint_travel
 from .topology import CMC_Q, JOINTS, N_JOINTS, SERVOS
-from .vectors import clipped_acos
+from .vectors import clipped_acos, cross3
 
 
 def servo_axis(params: HandParams) -> np.ndarray:
@@ -49,44 +49,70 @@ def _world(Ts, link_name, v, w=1.0) -> np.ndarray:
     return (Ts[link_name] @ np.array([*v, w]))[:3]
 
 
+class _Wrap:
+    """A strand's composite path P -> tangent -> arc (positive about the pulley's axis) -> tangent
+    -> N, in the pulley's plane frame (e1, e2, axis). The cord lifts off (straight P-N) when the
+    arc would exceed 180 degrees (a wrap the routes never ask for) or vanish: ``lifted``."""
+
+    def __init__(self, P, N, centre, axis, rho):
+        a = axis / np.linalg.norm(axis)
+        # not vectors.perpendicular_frame: another frame in the pulley's plane moves the tangent
+        # points by rounding, and with them the grooves cut into the parts
+        e1 = cross3(a, [1.0, 0.0, 0.0])
+        if np.linalg.norm(e1) < 1e-6:
+            e1 = cross3(a, [0.0, 1.0, 0.0])
+        e1 /= np.linalg.norm(e1)
+        e2 = cross3(a, e1)
+        loc = lambda p: np.array([np.dot(p - centre, e1), np.dot(p - centre, e2), np.dot(p - centre, a)])  # noqa: E731
+        p, n = loc(P), loc(N)
+        dp, dn = math.hypot(p[0], p[1]), math.hypot(n[0], n[1])
+        if dp < rho * (1.0 - 1e-9) or dn < rho * (1.0 - 1e-9):
+            raise ValueError("a route point lies inside its pulley")
+        t_in = math.atan2(p[1], p[0]) + clipped_acos(rho / dp)
+        t_out = math.atan2(n[1], n[0]) - clipped_acos(rho / dn)
+        arc = (t_out - t_in) % (2.0 * math.pi)
+        if arc > 2.0 * math.pi - 1e-9:      # a tangent run (no wrap) that rounding put a turn away
+            arc = 0.0
+        self.P, self.N, self.lifted = P, N, arc > math.pi
+        if self.lifted:
+            self.length = float(np.linalg.norm(N - P))
+            return
+        self.l1 = math.sqrt(max(0.0, dp * dp - rho * rho))
+        l3 = math.sqrt(max(0.0, dn * dn - rho * rho))
+        self.planar = self.l1 + rho * arc + l3
+        self.dz = n[2] - p[2]
+        self.length = math.hypot(self.planar, self.dz)
+        self.t_in, self.arc, self.z_in = t_in, arc, p[2]
+        self.centre, self.rho, self.e1, self.e2, self.a = centre, rho, e1, e2, a
+
+    def _angles(self) -> np.ndarray:
+        return np.linspace(self.t_in, self.t_in + self.arc, max(2, int(self.arc / units.rad(5.0)) + 1))
+
+    def _on_arc(self, t) -> np.ndarray:
+        """The arc's point at angle t, its height interpolated along the planar length."""
+        s = (self.l1 + self.rho * (t - self.t_in)) / self.planar if self.planar > 0 else 0.0
+        h = self.z_in + s * self.dz
+        return self.centre + self.rho * math.cos(t) * self.e1 + self.rho * math.sin(t) * self.e2 + h * self.a
+
+    def points(self) -> list[np.ndarray]:
+        """P, the arc's points every 5 degrees or less (its two tangent points included), N."""
+        if self.lifted:
+            return [self.P, self.N]
+        return [self.P, *(self._on_arc(t) for t in self._angles()), self.N]
+
+    def tangent_points(self) -> tuple[np.ndarray, np.ndarray] | tuple[None, None]:
+        """The arc's first and last point (:meth:`points`' second and second to last), or None
+        twice where the cord lifts off."""
+        if self.lifted:
+            return None, None
+        t = self._angles()
+        return self._on_arc(t[0]), self._on_arc(t[-1])
+
+
 def _wrap(P, N, centre, axis, rho):
-    """Composite path P -> tangent -> arc (positive about axis) -> tangent -> N. Returns
-    (length, list of points along it). The cord lifts off (straight P-N) when the arc would
-    exceed 180 degrees (a wrap the routes never ask for) or vanish."""
-    a = axis / np.linalg.norm(axis)
-    # not vectors.perpendicular_frame: another frame in the pulley's plane moves the tangent points
-    # by rounding, and with them the grooves cut into the parts
-    e1 = np.cross(a, [1.0, 0.0, 0.0])
-    if np.linalg.norm(e1) < 1e-6:
-        e1 = np.cross(a, [0.0, 1.0, 0.0])
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(a, e1)
-    loc = lambda p: np.array([np.dot(p - centre, e1), np.dot(p - centre, e2), np.dot(p - centre, a)])  # noqa: E731
-    p, n = loc(P), loc(N)
-    dp, dn = math.hypot(p[0], p[1]), math.hypot(n[0], n[1])
-    if dp < rho * (1.0 - 1e-9) or dn < rho * (1.0 - 1e-9):
-        raise ValueError("a route point lies inside its pulley")
-    t_in = math.atan2(p[1], p[0]) + clipped_acos(rho / dp)
-    t_out = math.atan2(n[1], n[0]) - clipped_acos(rho / dn)
-    arc = (t_out - t_in) % (2.0 * math.pi)
-    if arc > 2.0 * math.pi - 1e-9:      # a tangent run (no wrap) that rounding put a turn away
-        arc = 0.0
-    if arc > math.pi:
-        return float(np.linalg.norm(N - P)), [P, N]
-    l1 = math.sqrt(max(0.0, dp * dp - rho * rho))
-    l3 = math.sqrt(max(0.0, dn * dn - rho * rho))
-    planar = l1 + rho * arc + l3
-    dz = n[2] - p[2]
-    length = math.hypot(planar, dz)
-    # points: the two tangent points and the arc, heights interpolated along the planar length
-    pts = [P]
-    k = max(2, int(arc / units.rad(5.0)) + 1)
-    for i, t in enumerate(np.linspace(t_in, t_in + arc, k)):
-        s = (l1 + rho * (t - t_in)) / planar if planar > 0 else 0.0
-        h = p[2] + s * dz
-        pts.append(centre + rho * math.cos(t) * e1 + rho * math.sin(t) * e2 + h * a)
-    pts.append(N)
-    return length, pts
+    """(length, points along it) of :class:`_Wrap`'s path."""
+    w = _Wrap(P, N, centre, axis, rho)
+    return w.length, w.points()
 
 
 def strand_path(params: HandParams, strand: Strand, Ts) -> tuple[float, np.ndarray]:
@@ -126,9 +152,8 @@ def strand_nodes(strand: Strand, Ts) -> list[tuple[np.ndarray | None, np.ndarray
             out[i] = (p, p)
     for i, e in enumerate(els):
         if isinstance(e, Pulley):
-            _, pts = _wrap(out[i - 1][1], out[i + 1][0], _world(Ts, e.link, e.centre),
-                           _world(Ts, e.link, e.axis, 0.0), e.radius)
-            out[i] = (pts[1], pts[-2]) if len(pts) > 2 else (None, None)
+            out[i] = _Wrap(out[i - 1][1], out[i + 1][0], _world(Ts, e.link, e.centre),
+                           _world(Ts, e.link, e.axis, 0.0), e.radius).tangent_points()
     return out
 
 
@@ -169,6 +194,12 @@ def _runs(params: HandParams, right_handed: bool) -> tuple[Run, ...]:
                        for s in SERVOS])
     poses = [pose(params, None, np.zeros(len(SERVOS))), mid_travel_pose(params), pose(params, q_full, u_full)]
     unmirror = F.MIRROR[:3, :3] if (right_handed and params.side == "left") else np.eye(3)
+    inverses: list[dict] = [{} for _ in poses]      # T_link_palm of each pose, each inverted once
+
+    def inverse(k: int, ln: str) -> np.ndarray:
+        if ln not in inverses[k]:
+            inverses[k][ln] = np.linalg.inv(poses[k][ln])
+        return inverses[k][ln]
     out = []
     for r in routes(params):
         for st in r.strands:
@@ -183,8 +214,8 @@ def _runs(params: HandParams, right_handed: bool) -> tuple[Run, ...]:
                 cands = dict.fromkeys(e.link for e in (els[i], els[i + 1]))
                 fixed = {}
                 for ln in cands:
-                    loc = [tuple((np.linalg.inv(Ts[ln]) @ np.array([*p, 1.0]))[:3] for p in pair)
-                           for Ts, pair in zip(poses, ends)]
+                    loc = [tuple((inverse(k, ln) @ np.array([*p, 1.0]))[:3] for p in pair)
+                           for k, pair in enumerate(ends)]
                     if all(np.linalg.norm(a - b) < 1e-9 for pr in loc[1:] for a, b in zip(pr, loc[0])):
                         fixed[ln] = tuple(tuple(float(v) for v in unmirror @ p) for p in loc[0])
                 out.append(Run(r.name, st.name, i, tuple(fixed), fixed, r.diameter))
