@@ -83,28 +83,30 @@ print(json.dumps({{"file": bd.__file__, "kind": bd.KIND, "sklearn": hasattr(sys.
 _PARTS = ("palm", "index_proximal", "thumb_cmc_base")
 _BUILD = """
 import hashlib, json
-from phantom_cad.cad import kernel
-{setup}
 from phantom_cad import load_params
 from phantom_cad.cad import assembly
 from phantom_cad.export import step_stl
-from OCP.OSD import OSD_Parallel, OSD_ThreadPool
+from OCP.OSD import OSD_ThreadPool
 p = load_params()
 out = {{n: hashlib.sha256(step_stl.brep_bytes(assembly.build_part(p, n).shape)).hexdigest() for n in {parts!r}}}
-print(json.dumps({{"breps": out, "occt": OSD_Parallel.ToUseOcctThreads_s(),
-                  "threads": OSD_ThreadPool.DefaultPool_s().NbThreads()}}))
+print(json.dumps({{"breps": out, "threads": OSD_ThreadPool.DefaultPool_s().NbThreads()}}))
 """
 
 
-@pytest.mark.slow
-def test_one_thread_builds_the_same_solids():
-    """use_threads(1): OpenCascade's pool with one thread; the parts it builds are the same BREP
-    bytes as with OpenCascade's default (a thread per logical processor)."""
-    one = _run(_BUILD.format(setup="kernel.use_threads(1)", parts=_PARTS))
-    default = _run(_BUILD.format(setup="", parts=_PARTS))
-    assert one["occt"] is True and one["threads"] == 1
+def test_a_workers_share_of_the_threads_builds_the_same_solids(hand_entries):
+    """The parts of the session's default export, built by two workers with their share of the
+    CPUs (kernel.use_threads(occt_threads(2)): one thread each on two cores), are the same BREP
+    bytes as with OpenCascade's default pool (a thread per logical processor) in a fresh
+    interpreter."""
+    import hashlib
+
+    from phantom_cad.export.pipeline import occt_threads
+
+    entries = hand_entries("default")
+    default = _run(_BUILD.format(parts=_PARTS))
     assert default["threads"] == os.cpu_count()
-    assert one["breps"] == default["breps"]
+    assert occt_threads(2) is not None and occt_threads(2) < default["threads"]
+    assert {n: hashlib.sha256((entries[n] / "part.brep").read_bytes()).hexdigest() for n in _PARTS} == default["breps"]
 
 
 def test_use_threads_refuses_zero():
