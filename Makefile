@@ -9,7 +9,7 @@ export PIP_DISABLE_PIP_VERSION_CHECK := 1
 
 $(STAMP): pyproject.toml
 	@test -x $(PY) || python3 -m venv $(VENV)
-	$(PIP) install -q -e '.[dev]'
+	$(PIP) install -q --no-compile -e '.[dev]'   # bytecode is written on first import, for what is imported
 	$(PY) -c "from phantom_cad.calibration import fastcsv; fastcsv.compile()"   # numba's cache: once
 	@touch $(STAMP)
 
