@@ -460,3 +460,39 @@ def test_stepped_metacarpal_heads(document):
     # the knuckle line: middle 1.6 mm ahead of the index, ring 5.4 and pinky 14.8 mm behind it
     ys = [frames.mcp_position(p, i)[1] * 1e3 for i in range(4)]
     assert [round(v, 1) for v in ys] == [0.0, 1.6, -5.4, -14.8]
+
+
+def _refused_by_the_command_line(tmp_path, capsys, document) -> tuple[str, list]:
+    """``params validate`` and ``build`` on ``document`` written to a file: (the file, and each
+    command's (exit code, stderr lines, what the build wrote))."""
+    import tomli_w
+
+    from phantom_cad.cli import main
+
+    path = tmp_path / "hand.toml"
+    path.write_text(tomli_w.dumps(document), encoding="utf-8")
+    out = []
+    for argv in (["params", "validate", str(path)], ["build", "--params", str(path), "--out", str(tmp_path / "out")]):
+        with pytest.raises(SystemExit) as exit_:
+            main(argv)
+        err = capsys.readouterr().err.splitlines()
+        out.append((exit_.value.code, err, sorted(q.name for q in tmp_path.iterdir())))
+    return str(path), out
+
+
+def test_a_servo_body_too_long_for_its_flange_screws(tmp_path, capsys, document):
+    """Each flange screw's pilot lies mid-ear, (flange_span - length) / 4 beyond the body's end; the
+    body's pocket is a hole clearance wider. A 30 mm body under a 32.3 mm flange leaves 0.575 mm,
+    less than the 1.8 mm pilot's radius (0.8 x 2 + 0.2 mm hole compensation): the pilots break into
+    the pocket and the forearm module's check counts none of its 12 (found with a 32.6 mm palm,
+    which plays no part). The limit with a 0.8 mm wall: 32.3 - 4 (0.9 + 0.2 + 0.8) = 24.7 mm."""
+    document["servo"]["body_mm"] = [30.0, 12.1, 25.3]
+    document["palm"]["thickness_mm"] = 32.6
+    path, runs = _refused_by_the_command_line(tmp_path, capsys, document)
+    want = (f"error: {path}: servo.body_mm = [30.0, 12.1, 25.3]: a body 30 mm long leaves the flange ears "
+            "(servo.flange_span_mm = 32.3) too short for their screw pilots (1.800 mm, mid-ear, with "
+            "hole_compensation) and a 0.8 mm wall to the body's pocket: the length must be <= 24.700 mm")
+    for code, err, files in runs:
+        assert (code, err, files) == (2, [want], ["hand.toml"])
+    document["servo"]["body_mm"] = [24.69, 12.1, 25.3]
+    parse(document)

@@ -70,3 +70,13 @@ def test_the_cmc_base_clears_the_palm_where_the_rule_accepts(variant):
     base_part, base = _build(p, "thumb_cmc_base")
     gap = placed(palm, rest["palm"]).distance_to(placed(base, rest["thumb_cmc_base"]))
     assert gap >= base_part.sec.tol.clearance - 1e-6
+
+
+@pytest.mark.slow
+def test_the_longest_servo_body_the_rule_accepts_builds(variant):
+    """A 24.69 mm servo body under the 32.3 mm flange, 0.01 mm inside what the flange-screw rule
+    accepts (tests/test_params.py): the forearm module is one valid solid and its check finds the
+    12 flange pilot holes, each a wall from its servo's pocket."""
+    p = variant(lambda d: d["servo"].__setitem__("body_mm", [24.69, 12.1, 25.3]))
+    pt, shape = _build(p, "forearm")
+    assert pt.verify(shape) == []
