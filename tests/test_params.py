@@ -496,3 +496,19 @@ def test_a_servo_body_too_long_for_its_flange_screws(tmp_path, capsys, document)
         assert (code, err, files) == (2, [want], ["hand.toml"])
     document["servo"]["body_mm"] = [24.69, 12.1, 25.3]
     parse(document)
+
+
+def test_the_thenar_keeps_clear_of_the_finger_sockets_magnet_pockets(tmp_path, capsys, document):
+    """The CMC 25.085 mm behind the index MCP (from 73.78; found with a 2.5 mm screw, which plays no
+    part): the CMC pulley's cavity (radius 8 + its margin, about the CMC axis) reaches 0.414 mm into
+    the index socket's radial magnet pocket and the palm's check finds 7 pockets of 8. Refused
+    below a 0.8 mm gap; at 26.99 mm the gap is 0.80 mm (the palm builds:
+    tests/cad/test_found_by_the_property_test.py)."""
+    document["palm"]["thumb_cmc_offset_mm"] = [-25.75, -25.085, -32.81]
+    document["hardware"]["screw_diameter_mm"] = 2.5
+    path, runs = _refused_by_the_command_line(tmp_path, capsys, document)
+    want = (f"error: {path}: palm.thumb_cmc_offset_mm = [-25.75, -25.085, -32.81]: with palm.thumb_cmc_axis_deg "
+            "the palm's CMC pulley's cavity comes -0.414 mm from the fingers.index socket's magnet pockets "
+            "(negative: into them); the gap must be >= 0.8 mm, two perimeters")
+    for code, err, files in runs:
+        assert (code, err, files) == (2, [want], ["hand.toml"])

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from .. import units
 from ..params import ParamError
+from ..params.rules import MIN_WALL
 from ..kinematics.hand_params import HandParams
 from .parts.common import mm
 
@@ -25,7 +26,8 @@ def check(params: HandParams) -> None:
     position for a loop or a drive (``routing.routes`` raises the ParamError: a joint's travel too
     large for its loop's pulleys and carrier), or a finger drive's coupler has no room in its palm
     channel or does not come out at the service angle (``couplers.couplers``), or if the palm's heel
-    reaches past the metacarpal block's front."""
+    reaches past the metacarpal block's front; and if the thenar's cuts (journal, cavity, turn) come
+    within two perimeters of a finger socket's magnet pockets (``thenar.socket_pocket_gap``)."""
     from ..kinematics import couplers
     from ..kinematics import frames as F
     from ..kinematics import routing
@@ -53,6 +55,13 @@ def check(params: HandParams) -> None:
                          f"thumb.cmc_pulley_radius_mm with its flanges and running room, tilted with the CMC axis), "
                          f"{mm(-fit['turn']):.3f} mm short of a relief and a wall under the dorsal face: a thicker "
                          "palm, a smaller pulley or a CMC axis nearer the palm's normal", src)
+    gap, finger, cut = TH.socket_pocket_gap(params)
+    if gap < MIN_WALL - 1e-12:
+        names = {"journal": "column's journal", "cavity": "CMC pulley's cavity", "turn": "thumb drive's turn"}
+        raise ParamError("palm.thumb_cmc_offset_mm", [round(mm(v), 6) for v in params.palm.thumb_cmc_offset],
+                         f"with palm.thumb_cmc_axis_deg the palm's {names[cut]} comes {mm(gap):.3f} mm from the "
+                         f"fingers.{finger} socket's magnet pockets (negative: into them); the gap must be >= "
+                         f"{mm(MIN_WALL):g} mm, two perimeters", src)
     if params.palm.heel_height > 0.0:
         from .parts.palm import Palm
 

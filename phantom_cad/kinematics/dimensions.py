@@ -47,6 +47,14 @@ def slot_back(thickness: float, hole_clearance: float) -> float:
     return thickness / 2.0 + hole_clearance
 
 
+def magnet_pocket_offset(pocket: float, wall: float) -> float:
+    """Lateral offset (+-x of the magnet face's centre) of each of the two magnet pockets of a
+    finger base and its palm socket: the pockets (diameter ``pocket``) one ``wall`` apart (lengths
+    in any one unit). One implementation: the finger base and the palm cut them there, the palm's
+    layout rules (``kinematics.thenar.socket_pocket_gap``) keep the thenar clear of them."""
+    return (pocket + wall) / 2.0
+
+
 def servo_screw_offset(body_length: float, flange_span: float) -> float:
     """Distance along a servo's length from its body's centre to each flange screw: mid-ear, halfway
     between the body's end and the flange's (lengths in any one unit). One implementation: the servo mount
