@@ -512,3 +512,18 @@ def test_the_thenar_keeps_clear_of_the_finger_sockets_magnet_pockets(tmp_path, c
             "(negative: into them); the gap must be >= 0.8 mm, two perimeters")
     for code, err, files in runs:
         assert (code, err, files) == (2, [want], ["hand.toml"])
+
+
+def test_servo_6s_flange_pilots_open_inside_the_forearm_module(tmp_path, capsys, document):
+    """A servo body 34.36 mm wide (found by the property test; 21 mm is enough): the row spaces the
+    servos by their width, servo 6 (u6, its shaft along the tilted CMC axis, its pulley in the CMC
+    pulley's plane) moves radial and, in that tilted plane, up: its radial flange pilot opens 17.3 mm
+    above the module's top (12 + 2.4 mm) and the forearm's check finds 11 pilots of 12. At 20 mm it
+    opens 0.06 mm below the top and the forearm builds (tests/cad/test_found_by_the_property_test.py)."""
+    document["servo"]["body_mm"] = [23.2, 34.355052, 25.3]
+    path, runs = _refused_by_the_command_line(tmp_path, capsys, document)
+    want = (f"error: {path}: servo.body_mm = [23.2, 34.355052, 25.3]: places servo u6's flange screw pilot "
+            "17.318 mm above the forearm module's top (palm.thickness_mm / 2 + palm.wall_mm = 14.4 mm): the pilot "
+            "must open at or below it, so that the screw's thread gets its full depth in the module")
+    for code, err, files in runs:
+        assert (code, err, files) == (2, [want], ["hand.toml"])

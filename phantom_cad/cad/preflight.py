@@ -14,6 +14,7 @@ from .. import units
 from ..params import ParamError
 from ..params.rules import MIN_WALL
 from ..kinematics.hand_params import HandParams
+from ..kinematics.topology import SERVOS
 from .parts.common import mm
 
 
@@ -27,8 +28,10 @@ def check(params: HandParams) -> None:
     large for its loop's pulleys and carrier), or a finger drive's coupler has no room in its palm
     channel or does not come out at the service angle (``couplers.couplers``), or if the palm's heel
     reaches past the metacarpal block's front; and if the thenar's cuts (journal, cavity, turn) come
-    within two perimeters of a finger socket's magnet pockets (``thenar.socket_pocket_gap``)."""
+    within two perimeters of a finger socket's magnet pockets (``thenar.socket_pocket_gap``), or a
+    servo's flange screw pilot opens above the forearm module's top (``forearm_layout.pilot_headroom``)."""
     from ..kinematics import couplers
+    from ..kinematics import forearm_layout as FL
     from ..kinematics import frames as F
     from ..kinematics import routing
     from ..kinematics import thenar as TH
@@ -62,6 +65,13 @@ def check(params: HandParams) -> None:
                          f"with palm.thumb_cmc_axis_deg the palm's {names[cut]} comes {mm(gap):.3f} mm from the "
                          f"fingers.{finger} socket's magnet pockets (negative: into them); the gap must be >= "
                          f"{mm(MIN_WALL):g} mm, two perimeters", src)
+    head, k = FL.pilot_headroom(params)
+    if head < -1e-12:
+        raise ParamError("servo.body_mm", [round(mm(v), 6) for v in params.servo.body],
+                         f"places servo {SERVOS[k].label}'s flange screw pilot {mm(-head):.3f} mm above the forearm "
+                         f"module's top (palm.thickness_mm / 2 + palm.wall_mm = "
+                         f"{mm(FL.forearm_top(params)):g} mm): the pilot must open at or below it, so that the "
+                         "screw's thread gets its full depth in the module", src)
     if params.palm.heel_height > 0.0:
         from .parts.palm import Palm
 

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from .dimensions import printed_hole, servo_screw_offset
 from .frames import (T_palm_socket, T_palm_thumb_cmc_base, pulley_cavity_margin, servo_radius, socket_tendon_point,
                      socket_x, tendon_height, tendon_relief, trans, wrist_y)
 from .hand_params import HandParams
@@ -206,7 +207,7 @@ def _outlines(params: HandParams, T: np.ndarray, servo: int) -> list[np.ndarray]
     the shaft up to the module's top (a wall above the palm's dorsal face), so a tilted shaft sweeps
     them sideways (the convex hull of the outline at the servo and at the top)."""
     c = params.print.hole_clearance
-    z_top = params.palm.thickness / 2.0 + params.palm.wall
+    z_top = forearm_top(params)
     shapes = []
     for lo, hi in servo_boxes(params).values():
         shapes.append([(x, y, lo[2] - c) for x, y in ((lo[0] - c, lo[1] - c), (hi[0] + c, lo[1] - c),
@@ -278,6 +279,35 @@ def _edge_normals(R: np.ndarray) -> np.ndarray:
     e = np.roll(R, -1, axis=0) - R
     n = np.c_[-e[:, 1], e[:, 0]]
     return n / np.linalg.norm(n, axis=1, keepdims=True)
+
+
+def forearm_top(params: HandParams) -> float:
+    """z (m, palm frame) of the forearm module's top: a palm wall above the palm's dorsal face
+    (flush with the tab that screws it onto the palm)."""
+    return params.palm.thickness / 2.0 + params.palm.wall
+
+
+def pilot_headroom(params: HandParams) -> tuple[float, int]:
+    """(headroom (m), servo index): the least height of the module's top (:func:`forearm_top`) above
+    the highest point of a flange screw pilot's opening (mid-ear, ``dimensions.servo_screw_offset``,
+    on the ears' underside, a circle tilted with its servo's shaft), and whose. Negative: the pilot
+    starts above the module and its screw does not get its thread's full depth in the module (servo
+    6 is tilted with the CMC axis and set as high as its pulley's plane: a wide body moves it radial
+    and up)."""
+    sv, pr = params.servo, params.print
+    e = servo_screw_offset(sv.body[0], sv.flange_span)
+    z = servo_boxes(params)["ears"][0][2]
+    y0 = -params.cad.servo_shaft_offset
+    r = printed_hole(pr.screw_pilot_ratio * params.hardware.screw_diameter, pr.hole_compensation) / 2.0
+    top = forearm_top(params)
+    best = (math.inf, -1)
+    for k, T in forearm_servos(params).items():
+        rim = r * math.sqrt(max(1.0 - float(T[2, 2]) ** 2, 0.0))
+        for side in (-1.0, 1.0):
+            h = top - (float((T @ np.array([0.0, y0 + side * e, z, 1.0]))[2]) + rim)
+            if h < best[0]:
+                best = (h, k)
+    return best
 
 
 def palm_back(params: HandParams) -> float:
