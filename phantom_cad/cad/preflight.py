@@ -29,7 +29,8 @@ def check(params: HandParams) -> None:
     channel or does not come out at the service angle (``couplers.couplers``), or if the palm's heel
     reaches past the metacarpal block's front; and if the thenar's cuts (journal, cavity, turn) come
     within two perimeters of a finger socket's magnet pockets (``thenar.socket_pocket_gap``), or a
-    servo's flange screw pilot opens above the forearm module's top (``forearm_layout.pilot_headroom``)."""
+    servo's flange screw pilot opens above the forearm module's top (``forearm_layout.pilot_headroom``),
+    or the CMC base comes within a clearance of the palm's heel (``forearm_layout.heel_gap``)."""
     from ..kinematics import couplers
     from ..kinematics import forearm_layout as FL
     from ..kinematics import frames as F
@@ -65,6 +66,14 @@ def check(params: HandParams) -> None:
                          f"with palm.thumb_cmc_axis_deg the palm's {names[cut]} comes {mm(gap):.3f} mm from the "
                          f"fingers.{finger} socket's magnet pockets (negative: into them); the gap must be >= "
                          f"{mm(MIN_WALL):g} mm, two perimeters", src)
+    heel = FL.heel_gap(params)
+    if heel < params.print.hole_clearance - 1e-12:
+        raise ParamError("palm.thumb_cmc_offset_mm", [round(mm(v), 6) for v in params.palm.thumb_cmc_offset],
+                         f"with palm.thumb_cmc_axis_deg and the palm's heel (palm.heel_height_mm = "
+                         f"{mm(params.palm.heel_height):g}, palm.heel_length_mm = {mm(params.palm.heel_length):g}) "
+                         f"the CMC base (its hub, its column up to the palm and its arm) comes {mm(heel):.3f} mm from "
+                         f"the heel (negative: into it); the gap must be >= print.hole_clearance_mm = "
+                         f"{mm(params.print.hole_clearance):g} mm", src)
     head, k = FL.pilot_headroom(params)
     if head < -1e-12:
         raise ParamError("servo.body_mm", [round(mm(v), 6) for v in params.servo.body],

@@ -281,6 +281,46 @@ def _edge_normals(R: np.ndarray) -> np.ndarray:
     return n / np.linalg.norm(n, axis=1, keepdims=True)
 
 
+def heel_box(params: HandParams) -> tuple[np.ndarray, np.ndarray] | None:
+    """(lo, hi) (m, palm frame, right hand) of the palm's heel, under the metacarpal block
+    (:func:`metacarpal_x`) from the palm's back face (:func:`palm_back`) ``palm.heel_length_mm``
+    forward, ``palm.heel_height_mm`` below the palmar face (``cad.parts.palm.Palm.heel`` builds it);
+    None for a flat palm."""
+    pm = params.palm
+    if pm.heel_height <= 0.0:
+        return None
+    x0, x1 = metacarpal_x(params)
+    y0 = palm_back(params)
+    return (np.array([x0, y0, -pm.thickness / 2.0 - pm.heel_height]),
+            np.array([x1, y0 + pm.heel_length, -pm.thickness / 2.0]))
+
+
+def heel_gap(params: HandParams) -> float:
+    """The least distance (m) from the palm's heel (:func:`heel_box`) to the CMC base at rest (its
+    hub: thumb.width_mm across, thumb.thickness_mm thick about the CMC axis; its column up the axis
+    to the palm's palmar face; the metacarpal's arm, as wide and thick, out to the MP axis);
+    negative where they overlap; inf for a flat palm. Their surfaces are sampled; a point's distance
+    to the box is the largest of its distances beyond the box's faces (a lower bound)."""
+    box = heel_box(params)
+    if box is None:
+        return math.inf
+    th = params.thumb
+    t = thenar(params)
+    W, T, L = th.width, th.thickness, th.metacarpal
+    a = np.linspace(0.0, 2.0 * math.pi, 48, endpoint=False)
+    pts = [np.c_[r * np.cos(a), r * np.sin(a), np.full_like(a, s)]
+           for r, s0, s1 in ((W / 2.0, -T / 2.0, T / 2.0), (t["column_r"], T / 2.0, max(t["face"], T / 2.0)))
+           for s in np.linspace(s0, s1, 9)]
+    u = np.linspace(0.0, 1.0, 13)
+    g = np.array([(x, y, z) for x in -W / 2.0 + W * u for y in L * u for z in (-T / 2.0, T / 2.0)] +
+                 [(x, y, z) for x in (-W / 2.0, W / 2.0) for y in L * u for z in -T / 2.0 + T * u])
+    local = np.vstack(pts + [g])
+    T0 = T_palm_thumb_cmc_base(params)
+    P = local @ T0[:3, :3].T + T0[:3, 3]
+    lo, hi = box
+    return float(np.maximum(lo - P, P - hi).max(axis=1).min())
+
+
 def forearm_top(params: HandParams) -> float:
     """z (m, palm frame) of the forearm module's top: a palm wall above the palm's dorsal face
     (flush with the tab that screws it onto the palm)."""

@@ -110,3 +110,24 @@ def test_the_widest_servo_body_the_rule_accepts_builds(variant):
     assert 0.0 < pilot_headroom(p)[0] < 0.1e-3
     pt, shape = _build(p, "forearm")
     assert pt.verify(shape) == []
+
+
+@pytest.mark.slow
+def test_the_lowest_cmc_the_heel_rule_accepts_builds(variant):
+    """The CMC 40.0 mm below the index MCP, 0.245 mm from the palm's heel by the rule's measure
+    (``forearm_layout.heel_gap``; 40.4 mm is refused): the palm and the CMC base, where the assembly
+    places them, stay at least a clearance apart (OpenCascade's distance; the column in its journal
+    is a clearance from the palm by design)."""
+    from phantom_cad.cad import preflight
+    from phantom_cad.cad.assembly import pose_transforms
+    from phantom_cad.cad.measure import placed
+    from phantom_cad.kinematics.forearm_layout import heel_gap
+
+    p = variant(lambda d: d["palm"].__setitem__("thumb_cmc_offset_mm", [-25.75, -73.78, -40.0]))
+    preflight.check(p)
+    assert 0.2e-3 <= heel_gap(p) < 0.25e-3
+    rest = pose_transforms(p)
+    _, palm = _build(p, "palm")
+    base_part, base = _build(p, "thumb_cmc_base")
+    gap = placed(palm, rest["palm"]).distance_to(placed(base, rest["thumb_cmc_base"]))
+    assert gap >= base_part.sec.tol.clearance - 1e-6
