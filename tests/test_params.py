@@ -460,3 +460,87 @@ def test_stepped_metacarpal_heads(document):
     # the knuckle line: middle 1.6 mm ahead of the index, ring 5.4 and pinky 14.8 mm behind it
     ys = [frames.mcp_position(p, i)[1] * 1e3 for i in range(4)]
     assert [round(v, 1) for v in ys] == [0.0, 1.6, -5.4, -14.8]
+
+
+def _refused_by_the_command_line(tmp_path, capsys, document) -> tuple[str, list]:
+    """``params validate`` and ``build`` on ``document`` written to a file: (the file, and each
+    command's (exit code, stderr lines, what the build wrote))."""
+    import tomli_w
+
+    from phantom_cad.cli import main
+
+    path = tmp_path / "hand.toml"
+    path.write_text(tomli_w.dumps(document), encoding="utf-8")
+    out = []
+    for argv in (["params", "validate", str(path)], ["build", "--params", str(path), "--out", str(tmp_path / "out")]):
+        with pytest.raises(SystemExit) as exit_:
+            main(argv)
+        err = capsys.readouterr().err.splitlines()
+        out.append((exit_.value.code, err, sorted(q.name for q in tmp_path.iterdir())))
+    return str(path), out
+
+
+def test_a_servo_body_too_long_for_its_flange_screws(tmp_path, capsys, document):
+    """Each flange screw's pilot lies mid-ear, (flange_span - length) / 4 beyond the body's end; the
+    body's pocket is a hole clearance wider. A 30 mm body under a 32.3 mm flange leaves 0.575 mm,
+    less than the 1.8 mm pilot's radius (0.8 x 2 + 0.2 mm hole compensation): the pilots break into
+    the pocket and the forearm module's check counts none of its 12 (found with a 32.6 mm palm,
+    which plays no part). The limit with a 0.8 mm wall: 32.3 - 4 (0.9 + 0.2 + 0.8) = 24.7 mm."""
+    document["servo"]["body_mm"] = [30.0, 12.1, 25.3]
+    document["palm"]["thickness_mm"] = 32.6
+    path, runs = _refused_by_the_command_line(tmp_path, capsys, document)
+    want = (f"error: {path}: servo.body_mm = [30.0, 12.1, 25.3]: a body 30 mm long leaves the flange ears "
+            "(servo.flange_span_mm = 32.3) too short for their screw pilots (1.800 mm, mid-ear, with "
+            "hole_compensation) and a 0.8 mm wall to the body's pocket: the length must be <= 24.700 mm")
+    for code, err, files in runs:
+        assert (code, err, files) == (2, [want], ["hand.toml"])
+    document["servo"]["body_mm"] = [24.69, 12.1, 25.3]
+    parse(document)
+
+
+def test_the_thenar_keeps_clear_of_the_finger_sockets_magnet_pockets(tmp_path, capsys, document):
+    """The CMC 25.085 mm behind the index MCP (from 73.78; found with a 2.5 mm screw, which plays no
+    part): the CMC pulley's cavity (radius 8 + its margin, about the CMC axis) reaches 0.414 mm into
+    the index socket's radial magnet pocket and the palm's check finds 7 pockets of 8. Refused
+    below a 0.8 mm gap; at 26.99 mm the gap is 0.80 mm (the palm builds:
+    tests/cad/test_found_by_the_property_test.py)."""
+    document["palm"]["thumb_cmc_offset_mm"] = [-25.75, -25.085, -32.81]
+    document["hardware"]["screw_diameter_mm"] = 2.5
+    path, runs = _refused_by_the_command_line(tmp_path, capsys, document)
+    want = (f"error: {path}: palm.thumb_cmc_offset_mm = [-25.75, -25.085, -32.81]: with palm.thumb_cmc_axis_deg "
+            "the palm's CMC pulley's cavity comes -0.414 mm from the fingers.index socket's magnet pockets "
+            "(negative: into them); the gap must be >= 0.8 mm, two perimeters")
+    for code, err, files in runs:
+        assert (code, err, files) == (2, [want], ["hand.toml"])
+
+
+def test_servo_6s_flange_pilots_open_inside_the_forearm_module(tmp_path, capsys, document):
+    """A servo body 34.36 mm wide (found by the property test; 21 mm is enough): the row spaces the
+    servos by their width, servo 6 (u6, its shaft along the tilted CMC axis, its pulley in the CMC
+    pulley's plane) moves radial and, in that tilted plane, up: its radial flange pilot opens 17.3 mm
+    above the module's top (12 + 2.4 mm) and the forearm's check finds 11 pilots of 12. At 20 mm it
+    opens 0.06 mm below the top and the forearm builds (tests/cad/test_found_by_the_property_test.py)."""
+    document["servo"]["body_mm"] = [23.2, 34.355052, 25.3]
+    path, runs = _refused_by_the_command_line(tmp_path, capsys, document)
+    want = (f"error: {path}: servo.body_mm = [23.2, 34.355052, 25.3]: places servo u6's flange screw pilot "
+            "17.318 mm above the forearm module's top (palm.thickness_mm / 2 + palm.wall_mm = 14.4 mm): the pilot "
+            "must open at or below it, so that the screw's thread gets its full depth in the module")
+    for code, err, files in runs:
+        assert (code, err, files) == (2, [want], ["hand.toml"])
+
+
+def test_the_cmc_base_keeps_clear_of_the_palms_heel(tmp_path, capsys, document):
+    """The CMC 54.1 mm below the index MCP (from 32.81; found by the property test, seed 7, and with
+    a 2.5 mm screw, which plays no part): along the tilted CMC axis the CMC base moves ulnar under
+    the palm's heel, its column and hub 4.9 mm into it, and the build stops: palm x thumb_cmc_base
+    210 mm^3 at rest. Refused below a clearance (0.2 mm); at 40.0 mm the gap is 0.245 mm and the
+    two parts stand apart (tests/cad/test_found_by_the_property_test.py)."""
+    document["palm"]["thumb_cmc_offset_mm"] = [-25.75, -73.78, -54.104009]
+    document["hardware"]["screw_diameter_mm"] = 2.5
+    path, runs = _refused_by_the_command_line(tmp_path, capsys, document)
+    want = (f"error: {path}: palm.thumb_cmc_offset_mm = [-25.75, -73.78, -54.104009]: with palm.thumb_cmc_axis_deg "
+            "and the palm's heel (palm.heel_height_mm = 11, palm.heel_length_mm = 40) the CMC base (its hub, its "
+            "column up to the palm and its arm) comes -4.933 mm from the heel (negative: into it); the gap must be "
+            ">= print.hole_clearance_mm = 0.2 mm")
+    for code, err, files in runs:
+        assert (code, err, files) == (2, [want], ["hand.toml"])

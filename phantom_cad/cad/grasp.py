@@ -22,6 +22,9 @@ the fingertips, over 90 deg), so that at first contact each finger presses it to
 Whether the closing hand then holds it is a question of dynamics: tests/export/test_mjcf.py
 simulates it in MuJoCo (it does, against the palm's heel: docs/parts.md "Power grasp").
 
+**The fist** (``fingertips_to_palm``): each fingertip's distance to the palm with every tendon servo
+at the end of its travel, which ``phantom-cad check`` reports (``export.check.fist_rows``).
+
 Used by ``bench/hand_figures.py`` (the opposition and power-grasp pictures are drawn at these
 commands) and by tests/cad/test_opposition_on_solids.py and tests/cad/test_power_grasp.py, which
 re-measure what they return with other tools.
@@ -206,6 +209,26 @@ class CylinderGrasp:
     def solid(self):
         """The cylinder as a build123d solid (hand frame, mm)."""
         return cylinder_solid(self.diameter_mm, self.axis_y_mm, self.axis_z_mm, self.x_mm)
+
+
+def full_travel(hand) -> np.ndarray:
+    """The servo commands of the closed fist: every tendon servo at the end of its travel, the CMC's
+    loop servo at rest."""
+    u = np.array(hand.u_max, float)
+    u[CMC_SERVO] = 0.0
+    return u
+
+
+def fingertips_to_palm(hand, solids: dict) -> dict[str, float]:
+    """{finger: the distance (mm, OpenCascade's) from its distal phalanx to the palm} at
+    :func:`full_travel` (the analytic model's joint angles), the palm at rest. ``solids``: the palm
+    and the fingers' distal phalanges in their link frames (mm). A report, not a requirement: under
+    the paper's Table I limits the curled fingertips stay 14-29 mm from the palm (docs/parts.md
+    "Power grasp")."""
+    p = hand.params
+    T = pose_transforms(p, hand.forward(full_travel(hand)))
+    palm = placed(solids["palm"], T["palm"])
+    return {f: float(placed(solids[_distal(f)], T[_distal(f)]).distance_to(palm)) for f in FINGERS}
 
 
 def cylinder_solid(diameter_mm: float, axis_y_mm: float, axis_z_mm: float, x_mm: tuple[float, float]):

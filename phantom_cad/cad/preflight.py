@@ -12,7 +12,9 @@ from __future__ import annotations
 
 from .. import units
 from ..params import ParamError
+from ..params.rules import MIN_WALL
 from ..kinematics.hand_params import HandParams
+from ..kinematics.topology import SERVOS
 from .parts.common import mm
 
 
@@ -25,8 +27,12 @@ def check(params: HandParams) -> None:
     position for a loop or a drive (``routing.routes`` raises the ParamError: a joint's travel too
     large for its loop's pulleys and carrier), or a finger drive's coupler has no room in its palm
     channel or does not come out at the service angle (``couplers.couplers``), or if the palm's heel
-    reaches past the metacarpal block's front."""
+    reaches past the metacarpal block's front; and if the thenar's cuts (journal, cavity, turn) come
+    within two perimeters of a finger socket's magnet pockets (``thenar.socket_pocket_gap``), or a
+    servo's flange screw pilot opens above the forearm module's top (``forearm_layout.pilot_headroom``),
+    or the CMC base comes within a clearance of the palm's heel (``forearm_layout.heel_gap``)."""
     from ..kinematics import couplers
+    from ..kinematics import forearm_layout as FL
     from ..kinematics import frames as F
     from ..kinematics import routing
     from ..kinematics import thenar as TH
@@ -53,6 +59,28 @@ def check(params: HandParams) -> None:
                          f"thumb.cmc_pulley_radius_mm with its flanges and running room, tilted with the CMC axis), "
                          f"{mm(-fit['turn']):.3f} mm short of a relief and a wall under the dorsal face: a thicker "
                          "palm, a smaller pulley or a CMC axis nearer the palm's normal", src)
+    gap, finger, cut = TH.socket_pocket_gap(params)
+    if gap < MIN_WALL - 1e-12:
+        names = {"journal": "column's journal", "cavity": "CMC pulley's cavity", "turn": "thumb drive's turn"}
+        raise ParamError("palm.thumb_cmc_offset_mm", [round(mm(v), 6) for v in params.palm.thumb_cmc_offset],
+                         f"with palm.thumb_cmc_axis_deg the palm's {names[cut]} comes {mm(gap):.3f} mm from the "
+                         f"fingers.{finger} socket's magnet pockets (negative: into them); the gap must be >= "
+                         f"{mm(MIN_WALL):g} mm, two perimeters", src)
+    heel = FL.heel_gap(params)
+    if heel < params.print.hole_clearance - 1e-12:
+        raise ParamError("palm.thumb_cmc_offset_mm", [round(mm(v), 6) for v in params.palm.thumb_cmc_offset],
+                         f"with palm.thumb_cmc_axis_deg and the palm's heel (palm.heel_height_mm = "
+                         f"{mm(params.palm.heel_height):g}, palm.heel_length_mm = {mm(params.palm.heel_length):g}) "
+                         f"the CMC base (its hub, its column up to the palm and its arm) comes {mm(heel):.3f} mm from "
+                         f"the heel (negative: into it); the gap must be >= print.hole_clearance_mm = "
+                         f"{mm(params.print.hole_clearance):g} mm", src)
+    head, k = FL.pilot_headroom(params)
+    if head < -1e-12:
+        raise ParamError("servo.body_mm", [round(mm(v), 6) for v in params.servo.body],
+                         f"places servo {SERVOS[k].label}'s flange screw pilot {mm(-head):.3f} mm above the forearm "
+                         f"module's top (palm.thickness_mm / 2 + palm.wall_mm = "
+                         f"{mm(FL.forearm_top(params)):g} mm): the pilot must open at or below it, so that the "
+                         "screw's thread gets its full depth in the module", src)
     if params.palm.heel_height > 0.0:
         from .parts.palm import Palm
 

@@ -14,7 +14,9 @@ Every row compares what one source says with what another measures, at random se
 - URDF and MJCF inertials against the STEP solids' mass properties (mass: the slicer's filament
   estimate when the export was sliced, else volume x density x infill);
 - each visual mesh against its solid (volume, centre, bounding box);
-- every mesh reference resolves, ``check_urdf`` accepts the URDF, MuJoCo's model test.
+- every mesh reference resolves, ``check_urdf`` accepts the URDF, MuJoCo's model test;
+- reported, never failing: each fingertip's distance to the palm with every tendon servo at the
+  end of its travel (:func:`fist_rows`).
 
 A row names the worst item (link, joint, file); ``ok`` None = not run (a tool missing).
 Needs the ``cad`` extra (build123d, trimesh, mujoco, yourdfpy); imports them inside the checks.
@@ -434,6 +436,17 @@ def mesh_rows(export: Export, props: dict) -> list[Row]:
             _row("visual meshes: centre = the solid's", centre, TOL_MESH_CENTRE, "mm")]
 
 
+def fist_rows(hand: Hand, solids: dict) -> list[Row]:
+    """The fingertips' distances to the palm at full travel (``cad.grasp.fingertips_to_palm``, on
+    the STEP solids): a report that never fails. Under the paper's Table I limits a curled fingertip
+    stays 14-29 mm from the palm, and the power grasp's cylinder needs that room (docs/parts.md)."""
+    from ..cad.grasp import fingertips_to_palm
+
+    far = fingertips_to_palm(hand, solids)
+    return [Row("fingertips to the palm at full travel (reported: Table I's curl, docs/parts.md)",
+                " / ".join(far), "-", " / ".join(f"{d:.1f}" for d in far.values()) + " mm", "-", True)]
+
+
 def collision_rows(export: Export, params: HandParams, hand: Hand, log=lambda msg: None) -> list[Row]:
     """No two parts interpenetrate over the grid of servo commands of
     ``interference.command_sweep`` (the description's visual meshes, posed by the assembly
@@ -485,6 +498,7 @@ def check_export(export_dir: Path, params: HandParams, samples: int = 8, settle:
     rows += axis_rows(robot, params, solids)
     rows += inertial_rows(export, robot, params, props, mj_inertials)
     rows += mesh_rows(export, props)
+    rows += fist_rows(hand, solids)
     if sweep:
         log("check: collisions over the command grid (manifold3d)")
         rows += collision_rows(export, params, hand, log)

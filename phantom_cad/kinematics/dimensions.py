@@ -47,6 +47,28 @@ def slot_back(thickness: float, hole_clearance: float) -> float:
     return thickness / 2.0 + hole_clearance
 
 
+def magnet_pocket_offset(pocket: float, wall: float) -> float:
+    """Lateral offset (+-x of the magnet face's centre) of each of the two magnet pockets of a
+    finger base and its palm socket: the pockets (diameter ``pocket``) one ``wall`` apart (lengths
+    in any one unit). One implementation: the finger base and the palm cut them there, the palm's
+    layout rules (``kinematics.thenar.socket_pocket_gap``) keep the thenar clear of them."""
+    return (pocket + wall) / 2.0
+
+
+def servo_screw_offset(body_length: float, flange_span: float) -> float:
+    """Distance along a servo's length from its body's centre to each flange screw: mid-ear, halfway
+    between the body's end and the flange's (lengths in any one unit). One implementation: the servo mount
+    (``cad.parts.servos``) drills its pilots there, ``params.rules`` checks the wall beside them."""
+    return (body_length / 2.0 + flange_span / 2.0) / 2.0
+
+
+def servo_pilot_wall(body_length: float, flange_span: float, pilot: float, hole_clearance: float) -> float:
+    """The wall between a flange screw's pilot hole (diameter ``pilot``, at
+    :func:`servo_screw_offset`) and the servo body's pocket (the body grown by a hole clearance):
+    (flange_span - body_length) / 4 - pilot / 2 - hole_clearance. SI units."""
+    return servo_screw_offset(body_length, flange_span) - pilot / 2.0 - (body_length / 2.0 + hole_clearance)
+
+
 def finger_columns(pitch: float, arc_offset: float, metacarpals) -> list[tuple[float, float, float]]:
     """(x, y, phi) of each finger column's MCP (palm frame, SI, index at the origin) and its turn
     phi about -z: the columns fan out by arc_offset, phi_i = (i - (n - 1) / 2) arc_offset;

@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from .dimensions import printed_hole, servo_screw_offset
 from .frames import (T_palm_socket, T_palm_thumb_cmc_base, pulley_cavity_margin, servo_radius, socket_tendon_point,
                      socket_x, tendon_height, tendon_relief, trans, wrist_y)
 from .hand_params import HandParams
@@ -206,7 +207,7 @@ def _outlines(params: HandParams, T: np.ndarray, servo: int) -> list[np.ndarray]
     the shaft up to the module's top (a wall above the palm's dorsal face), so a tilted shaft sweeps
     them sideways (the convex hull of the outline at the servo and at the top)."""
     c = params.print.hole_clearance
-    z_top = params.palm.thickness / 2.0 + params.palm.wall
+    z_top = forearm_top(params)
     shapes = []
     for lo, hi in servo_boxes(params).values():
         shapes.append([(x, y, lo[2] - c) for x, y in ((lo[0] - c, lo[1] - c), (hi[0] + c, lo[1] - c),
@@ -278,6 +279,75 @@ def _edge_normals(R: np.ndarray) -> np.ndarray:
     e = np.roll(R, -1, axis=0) - R
     n = np.c_[-e[:, 1], e[:, 0]]
     return n / np.linalg.norm(n, axis=1, keepdims=True)
+
+
+def heel_box(params: HandParams) -> tuple[np.ndarray, np.ndarray] | None:
+    """(lo, hi) (m, palm frame, right hand) of the palm's heel, under the metacarpal block
+    (:func:`metacarpal_x`) from the palm's back face (:func:`palm_back`) ``palm.heel_length_mm``
+    forward, ``palm.heel_height_mm`` below the palmar face (``cad.parts.palm.Palm.heel`` builds it);
+    None for a flat palm."""
+    pm = params.palm
+    if pm.heel_height <= 0.0:
+        return None
+    x0, x1 = metacarpal_x(params)
+    y0 = palm_back(params)
+    return (np.array([x0, y0, -pm.thickness / 2.0 - pm.heel_height]),
+            np.array([x1, y0 + pm.heel_length, -pm.thickness / 2.0]))
+
+
+def heel_gap(params: HandParams) -> float:
+    """The least distance (m) from the palm's heel (:func:`heel_box`) to the CMC base at rest (its
+    hub: thumb.width_mm across, thumb.thickness_mm thick about the CMC axis; its column up the axis
+    to the palm's palmar face; the metacarpal's arm, as wide and thick, out to the MP axis);
+    negative where they overlap; inf for a flat palm. Their surfaces are sampled; a point's distance
+    to the box is the largest of its distances beyond the box's faces (a lower bound)."""
+    box = heel_box(params)
+    if box is None:
+        return math.inf
+    th = params.thumb
+    t = thenar(params)
+    W, T, L = th.width, th.thickness, th.metacarpal
+    a = np.linspace(0.0, 2.0 * math.pi, 48, endpoint=False)
+    pts = [np.c_[r * np.cos(a), r * np.sin(a), np.full_like(a, s)]
+           for r, s0, s1 in ((W / 2.0, -T / 2.0, T / 2.0), (t["column_r"], T / 2.0, max(t["face"], T / 2.0)))
+           for s in np.linspace(s0, s1, 9)]
+    u = np.linspace(0.0, 1.0, 13)
+    g = np.array([(x, y, z) for x in -W / 2.0 + W * u for y in L * u for z in (-T / 2.0, T / 2.0)] +
+                 [(x, y, z) for x in (-W / 2.0, W / 2.0) for y in L * u for z in -T / 2.0 + T * u])
+    local = np.vstack(pts + [g])
+    T0 = T_palm_thumb_cmc_base(params)
+    P = local @ T0[:3, :3].T + T0[:3, 3]
+    lo, hi = box
+    return float(np.maximum(lo - P, P - hi).max(axis=1).min())
+
+
+def forearm_top(params: HandParams) -> float:
+    """z (m, palm frame) of the forearm module's top: a palm wall above the palm's dorsal face
+    (flush with the tab that screws it onto the palm)."""
+    return params.palm.thickness / 2.0 + params.palm.wall
+
+
+def pilot_headroom(params: HandParams) -> tuple[float, int]:
+    """(headroom (m), servo index): the least height of the module's top (:func:`forearm_top`) above
+    the highest point of a flange screw pilot's opening (mid-ear, ``dimensions.servo_screw_offset``,
+    on the ears' underside, a circle tilted with its servo's shaft), and whose. Negative: the pilot
+    starts above the module and its screw does not get its thread's full depth in the module (servo
+    6 is tilted with the CMC axis and set as high as its pulley's plane: a wide body moves it radial
+    and up)."""
+    sv, pr = params.servo, params.print
+    e = servo_screw_offset(sv.body[0], sv.flange_span)
+    z = servo_boxes(params)["ears"][0][2]
+    y0 = -params.cad.servo_shaft_offset
+    r = printed_hole(pr.screw_pilot_ratio * params.hardware.screw_diameter, pr.hole_compensation) / 2.0
+    top = forearm_top(params)
+    best = (math.inf, -1)
+    for k, T in forearm_servos(params).items():
+        rim = r * math.sqrt(max(1.0 - float(T[2, 2]) ** 2, 0.0))
+        for side in (-1.0, 1.0):
+            h = top - (float((T @ np.array([0.0, y0 + side * e, z, 1.0]))[2]) + rim)
+            if h < best[0]:
+                best = (h, k)
+    return best
 
 
 def palm_back(params: HandParams) -> float:

@@ -9,9 +9,12 @@ import math
 import numpy as np
 
 from .. import units
-from .frames import T_palm_thumb_cmc_base, cmc_pulley_radius, pulley_cavity_margin, tendon_relief, trans
+from .dimensions import magnet_pocket_offset, printed_hole
+from .frames import (T_palm_socket, T_palm_thumb_cmc_base, cmc_pulley_radius, pulley_cavity_margin, tendon_relief,
+                     trans)
 from .hand_params import HandParams
 from .memo import memoised
+from .topology import FINGERS
 
 
 _THENAR: dict = {}
@@ -99,22 +102,65 @@ def _ring(T0: np.ndarray, s: float, r: float, n: int = 24) -> np.ndarray:
     return (T0 @ pts.T).T[:, :3]
 
 
+def thenar_cuts(params: HandParams, T0: np.ndarray | None = None) -> dict[str, tuple[float, float, float]]:
+    """What the palm cuts round the CMC axis, as (s0, s1, radius) (m, s along the CMC axis from the
+    CMC centre, :func:`thenar`): ``journal`` (the column's bore from the palmar face to the pulley's
+    cavity), ``cavity`` (the CMC pulley's cavity) and ``turn`` (the thumb drive's relief where it
+    turns onto the axis). ``T0``: another CMC placement than the file's (T_palm_cmc_base at rest)."""
+    t = thenar(params) if T0 is None else thenar_layout(params, T0)
+    r = tendon_relief(params)
+    return {"journal": (t["face"], t["pulley"] - t["cavity_h"], t["journal_r"]),
+            "cavity": (t["pulley"] - t["cavity_h"], t["ceiling"], t["cavity_r"]),
+            "turn": (t["turn"] - r, t["turn"] + r, r)}
+
+
 def thenar_points(params: HandParams, T0: np.ndarray | None = None) -> dict[str, np.ndarray]:
     """Points (m, palm frame, right hand) of what the palm's thenar holds round the CMC axis
-    (:func:`thenar`), each grown by a palm wall: ``journal`` (the column's bore from the palmar face
-    to the pulley's cavity), ``cavity`` (the CMC pulley's cavity) and ``turn`` (the thumb drive's
-    turn onto the axis). The palm's thenar block is their bounding box, clipped to the palm's faces;
-    only the journal and the turn set how far radial it reaches (the cavity is cut where it reaches
-    past that: open, as its slot toward servo 6 is).
+    (:func:`thenar_cuts`), each grown by a palm wall (the journal across only: it runs from the
+    palmar face into the cavity): ``journal``, ``cavity`` and ``turn``. The palm's thenar block is
+    their bounding box, clipped to the palm's faces; only the journal and the turn set how far
+    radial it reaches (the cavity is cut where it reaches past that: open, as its slot toward
+    servo 6 is).
     ``T0``: another CMC placement than the file's (T_palm_cmc_base at rest)."""
     if T0 is None:
-        T0, t = T_palm_thumb_cmc_base(params), thenar(params)
+        T0 = T_palm_thumb_cmc_base(params)
+        cuts = thenar_cuts(params)
     else:
-        t = thenar_layout(params, T0)
+        cuts = thenar_cuts(params, T0)
     w = params.palm.wall
-    rj = t["journal_r"] + w
-    return {"journal": np.vstack([_ring(T0, s, rj) for s in (t["face"], t["pulley"] - t["cavity_h"])]),
-            "cavity": np.vstack([_ring(T0, s, t["cavity_r"] + w) for s in (t["pulley"] - t["cavity_h"] - w,
-                                                                          t["ceiling"] + w)]),
-            "turn": np.vstack([_ring(T0, s, tendon_relief(params) + w) for s in (t["turn"] - tendon_relief(params) - w,
-                                                                                  t["turn"] + tendon_relief(params) + w)])}
+    (j0, j1, rj), (c0, c1, rc), (t0, t1, rt) = cuts["journal"], cuts["cavity"], cuts["turn"]
+    return {"journal": np.vstack([_ring(T0, s, rj + w) for s in (j0, j1)]),
+            "cavity": np.vstack([_ring(T0, s, rc + w) for s in (c0 - w, c1 + w)]),
+            "turn": np.vstack([_ring(T0, s, rt + w) for s in (t0 - w, t1 + w)])}
+
+
+def socket_pocket_gap(params: HandParams, T0: np.ndarray | None = None) -> tuple[float, str, str]:
+    """(gap (m), finger, cut): the least distance from the finger sockets' magnet pockets to the
+    thenar's cuts (:func:`thenar_cuts`), and where it is; negative where a cut reaches into a
+    pocket. Each pocket (diameter and depth as the finger base's, at
+    ``dimensions.magnet_pocket_offset`` either side of its socket's centre, ``frames.T_palm_socket``)
+    is sampled on its wall and bottom; a point's distance to a cut is the largest of its radial and
+    its two axial distances (a lower bound: the gap is never overstated).
+    ``T0``: another CMC placement than the file's (T_palm_cmc_base at rest)."""
+    pr, hw = params.print, params.hardware
+    pocket = printed_hole(hw.magnet_diameter + 2.0 * pr.magnet_clearance, pr.hole_compensation)
+    depth = hw.magnet_thickness + pr.magnet_clearance
+    off = magnet_pocket_offset(pocket, params.palm.wall)
+    a = np.linspace(0.0, 2.0 * math.pi, 72, endpoint=False)
+    rings = [(r, d) for d in np.linspace(0.0, depth, 7) for r in (pocket / 2.0,)] + \
+            [(pocket / 2.0 * k / 4.0, depth) for k in range(4)]
+    # socket frame: y the face's outward normal, the pockets reach depth behind the face
+    local = np.vstack([np.c_[sx + r * np.cos(a), np.full_like(a, -d), r * np.sin(a), np.ones_like(a)]
+                       for sx in (-off, off) for r, d in rings])
+    T0 = T_palm_thumb_cmc_base(params) if T0 is None else T0
+    Ti = np.linalg.inv(T0)
+    cuts = thenar_cuts(params, T0)
+    best = (math.inf, "", "")
+    for f in FINGERS:
+        L = (Ti @ T_palm_socket(params, f) @ local.T).T
+        rho, s = np.hypot(L[:, 0], L[:, 1]), L[:, 2]
+        for name, (s0, s1, r) in cuts.items():
+            gap = float(np.maximum(np.maximum(rho - r, s0 - s), s - s1).min())
+            if gap < best[0]:
+                best = (gap, f, name)
+    return best

@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import math
 
-from ..kinematics.dimensions import FLANK, digit_field, finger_columns, printed_hole, slot_back
+from ..kinematics.dimensions import (FLANK, digit_field, finger_columns, printed_hole, servo_pilot_wall,
+                                     slot_back)
 from ..units import DEG, MM
 from .errors import ParamError
 
@@ -255,6 +256,17 @@ def _servos(c, fingers, thumb, servo, hardware, printing, cad) -> None:
         raise c.error("servo_ear_offset_mm", cad.servo_ear_offset / MM,
                       f"with servo_ear_thickness_mm = {cad.servo_ear_thickness / MM:g} the ears must lie on the "
                       f"servo body (height servo.body_mm[2] = {servo.body[2] / MM:g})")
+    # each flange ear's screw pilot (mid-ear, kinematics.dimensions.servo_screw_offset) keeps a wall
+    # to the body's pocket: a pilot breaking into the pocket is no blind hole and holds no thread
+    pilot = printed_hole(printing.screw_pilot_ratio * hardware.screw_diameter, printing.hole_compensation)
+    L, span = servo.body[0], servo.flange_span
+    if servo_pilot_wall(L, span, pilot, printing.hole_clearance) < MIN_WALL - 1e-12:
+        longest = span - 4.0 * (pilot / 2.0 + printing.hole_clearance + MIN_WALL)
+        raise ParamError("servo.body_mm", [round(v / MM, 6) for v in servo.body],
+                         f"a body {L / MM:g} mm long leaves the flange ears (servo.flange_span_mm = {span / MM:g}) "
+                         f"too short for their screw pilots ({pilot / MM:.3f} mm, mid-ear, with "
+                         f"hole_compensation) and a {MIN_WALL / MM:g} mm wall to the body's pocket: the length "
+                         f"must be <= {longest / MM:.3f} mm", c.source)
     if cad.servo_shaft_offset >= servo.body[0] / 2.0:
         raise c.error("servo_shaft_offset_mm", cad.servo_shaft_offset / MM,
                       f"must be < half the servo body length ({servo.body[0] / 2.0 / MM:g} mm)")

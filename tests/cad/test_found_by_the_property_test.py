@@ -70,3 +70,64 @@ def test_the_cmc_base_clears_the_palm_where_the_rule_accepts(variant):
     base_part, base = _build(p, "thumb_cmc_base")
     gap = placed(palm, rest["palm"]).distance_to(placed(base, rest["thumb_cmc_base"]))
     assert gap >= base_part.sec.tol.clearance - 1e-6
+
+
+@pytest.mark.slow
+def test_the_longest_servo_body_the_rule_accepts_builds(variant):
+    """A 24.69 mm servo body under the 32.3 mm flange, 0.01 mm inside what the flange-screw rule
+    accepts (tests/test_params.py): the forearm module is one valid solid and its check finds the
+    12 flange pilot holes, each a wall from its servo's pocket."""
+    p = variant(lambda d: d["servo"].__setitem__("body_mm", [24.69, 12.1, 25.3]))
+    pt, shape = _build(p, "forearm")
+    assert pt.verify(shape) == []
+
+
+@pytest.mark.slow
+def test_the_cmc_nearest_the_sockets_the_rule_accepts_builds(variant):
+    """The CMC 26.99 mm behind the index MCP, where the thenar's cuts come 0.80 mm from the index
+    socket's magnet pockets (the least gap the rule accepts, ``thenar.socket_pocket_gap``): the palm is
+    one valid solid and its check finds all 8 magnet pockets."""
+    from phantom_cad.cad import preflight
+    from phantom_cad.kinematics.thenar import socket_pocket_gap
+
+    p = variant(lambda d: d["palm"].__setitem__("thumb_cmc_offset_mm", [-25.75, -26.99, -32.81]))
+    preflight.check(p)
+    assert socket_pocket_gap(p)[0] == pytest.approx(0.8e-3, abs=0.02e-3)
+    pt, shape = _build(p, "palm")
+    assert pt.verify(shape) == []
+
+
+@pytest.mark.slow
+def test_the_widest_servo_body_the_rule_accepts_builds(variant):
+    """A 20 mm wide servo body: servo 6's radial flange pilot opens 0.06 mm below the forearm module's
+    top (``forearm_layout.pilot_headroom``; 21 mm is refused): the module is one valid solid and its
+    check finds all 12 pilots."""
+    from phantom_cad.cad import preflight
+    from phantom_cad.kinematics.forearm_layout import pilot_headroom
+
+    p = variant(lambda d: d["servo"].__setitem__("body_mm", [23.2, 20.0, 25.3]))
+    preflight.check(p)
+    assert 0.0 < pilot_headroom(p)[0] < 0.1e-3
+    pt, shape = _build(p, "forearm")
+    assert pt.verify(shape) == []
+
+
+@pytest.mark.slow
+def test_the_lowest_cmc_the_heel_rule_accepts_builds(variant):
+    """The CMC 40.0 mm below the index MCP, 0.245 mm from the palm's heel by the rule's measure
+    (``forearm_layout.heel_gap``; 40.4 mm is refused): the palm and the CMC base, where the assembly
+    places them, stay at least a clearance apart (OpenCascade's distance; the column in its journal
+    is a clearance from the palm by design)."""
+    from phantom_cad.cad import preflight
+    from phantom_cad.cad.assembly import pose_transforms
+    from phantom_cad.cad.measure import placed
+    from phantom_cad.kinematics.forearm_layout import heel_gap
+
+    p = variant(lambda d: d["palm"].__setitem__("thumb_cmc_offset_mm", [-25.75, -73.78, -40.0]))
+    preflight.check(p)
+    assert 0.2e-3 <= heel_gap(p) < 0.25e-3
+    rest = pose_transforms(p)
+    _, palm = _build(p, "palm")
+    base_part, base = _build(p, "thumb_cmc_base")
+    gap = placed(palm, rest["palm"]).distance_to(placed(base, rest["thumb_cmc_base"]))
+    assert gap >= base_part.sec.tol.clearance - 1e-6

@@ -68,8 +68,52 @@ def test_the_default_hand_is_all_green(export):
     checks = " | ".join(r.check for r in rows)
     for what in ("URDF link positions", "MJCF body positions", "URDF joint angles", "MJCF twin settled",
                  "bores measured in the solids", "URDF masses", "MJCF inertia tensors", "visual meshes",
-                 "mesh references", "MuJoCo model test", "parts apart over the command grid"):
+                 "mesh references", "MuJoCo model test", "parts apart over the command grid",
+                 "fingertips to the palm at full travel"):
         assert what in checks
+
+
+def test_the_fist_row_reports_the_fingertips_distances(export):
+    """The fist row (every tendon servo at the end of its travel) reports each fingertip's distance
+    to the palm and never fails; its numbers agree with trimesh's on the exported visual meshes,
+    posed by the URDF (yourdfpy) at the model's joint angles: the least distance from either
+    mesh's vertices to the other's surface, which the tessellation (stl_tolerance 0.02 mm) and the
+    row's 0.1 mm rounding bound."""
+    import build123d as bd
+    import trimesh
+    import yourdfpy
+
+    from phantom_cad.cad.grasp import full_travel
+    from phantom_cad.export.check import Export, fist_rows
+    from phantom_cad.kinematics.model import Hand
+    from phantom_cad.kinematics.topology import FINGERS, joint
+
+    p = load_params(PARAMS)
+    hand = Hand(p)
+    names = ["palm"] + [f"{f}_distal" for f in FINGERS]
+    solids = {n: bd.import_step(export / "step" / f"{n}.step") for n in names}
+    (row,) = fist_rows(hand, solids)
+    assert row.ok is True and row.item == "index / middle / ring / pinky"
+    reported = [float(v) for v in row.measured.removesuffix(" mm").split(" / ")]
+
+    robot = yourdfpy.URDF.load(str(Export.open(export).local_urdf), load_meshes=False,
+                               build_collision_scene_graph=False)
+    q = hand.forward(full_travel(hand))
+    robot.update_cfg({n: float(q[joint(n).index]) for n in robot.actuated_joint_names})
+    meshes = {}
+    for n in names:
+        m = trimesh.load(export / "description" / "meshes" / "visual" / f"{n}.stl", force="mesh")
+        m.apply_transform(robot.get_transform(n, robot.base_link))
+        m.apply_scale(1e3)
+        meshes[n] = m
+
+    def distance(a, b):
+        return min(float(trimesh.proximity.closest_point(b, a.vertices)[1].min()),
+                   float(trimesh.proximity.closest_point(a, b.vertices)[1].min()))
+
+    measured = [distance(meshes[f"{f}_distal"], meshes["palm"]) for f in FINGERS]
+    assert reported == pytest.approx(measured, abs=0.1)
+    assert min(measured) > 10.0         # the curl of Table I: no fingertip comes within 10 mm
 
 
 def test_a_shifted_joint_origin_is_named(export, tmp_path):

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ... import canon
-from ...kinematics.dimensions import digit_entry
+from ...kinematics.dimensions import digit_entry, magnet_pocket_offset
 from ...kinematics.frames import tendon_height
 from ...kinematics.hand_params import HandParams
 from ...kinematics.topology import FINGERS, digit_links
@@ -71,7 +71,7 @@ class FingerBase(RoutedPart, Part):
     def magnet_offset(self) -> float:
         """Lateral offset (+/-x) of the two magnet pockets: one wall between them."""
         t = self.sec.tol
-        return (t.magnet_pocket_d + t.wall) / 2.0
+        return magnet_pocket_offset(t.magnet_pocket_d, t.wall)
 
     def magnet_centres(self) -> list[np.ndarray]:
         """Centres of the magnet pocket openings on the magnet face (link frame, mm)."""

@@ -12,7 +12,7 @@ import numpy as np
 
 from ...kinematics import forearm_layout as FL
 from ...kinematics import frames as F
-from ...kinematics.dimensions import FLANK
+from ...kinematics.dimensions import FLANK, servo_screw_offset
 from ...kinematics.topology import SERVOS
 from .common import mm
 
@@ -61,8 +61,7 @@ class ServoMount:
 
     def screw_points(self, servo: int) -> list[np.ndarray]:
         """Flange screw centres (servo frame) on the ears' underside, mid-ear, one each end."""
-        L = mm(self.params.servo.body[0])
-        e = (L / 2.0 + mm(self.params.servo.flange_span) / 2.0) / 2.0
+        e = servo_screw_offset(mm(self.params.servo.body[0]), mm(self.params.servo.flange_span))
         z_under = self.ear_box(servo)[0][2]
         y0 = -mm(self.params.cad.servo_shaft_offset)
         return [np.array([0.0, y0 + s * e, z_under]) for s in (-1.0, 1.0)]
