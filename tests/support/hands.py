@@ -23,8 +23,8 @@ SLENDER = ROOT / "params" / "examples" / "slender.toml"
 #: name -> (parameter file or None: the default file, side given on the command line or None)
 _SOURCES = {"default": (None, None), "left": (None, "left"), "hand_length_170": (SMALL, None),
             "slender": (SLENDER, None)}
-#: the reference hands (the default one is exported sliced, as a user's build is, when PrusaSlicer is
-#: installed); the other hands of :data:`_SOURCES` (params/examples/slender.toml) are checked less
+#: the reference hands, exported sliced (when PrusaSlicer is installed) as a user would; the other
+#: hands of :data:`_SOURCES` (params/examples/slender.toml) are exported without slicing
 HANDS = ("default", "left", "hand_length_170")
 
 
