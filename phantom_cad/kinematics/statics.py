@@ -29,8 +29,8 @@ from dataclasses import dataclass
 from types import SimpleNamespace
 
 import numpy as np
-from numpy.polynomial import chebyshev
 
+from ..errors import ParamError
 from . import closed_form as cf
 from .hand_params import ChainParams, HandParams
 from .memo import memoised
@@ -149,10 +149,22 @@ def chain_statics(radii, strands: ChainStrands, d1: float, d2: float, spring_k: 
 
 
 def hand_statics(params: HandParams) -> tuple[ChainStatics, ...]:
-    """:func:`chain_statics` of every tendon chain (servo order) with the file's k_s, EA and loop preload."""
+    """:func:`chain_statics` of every tendon chain (servo order) with the file's k_s, EA and loop
+    preload. A ParamError naming EA when the strands' stretch takes back all of a coupled joint's
+    motion in some regime (it would stand still or extend while its reference joint flexes)."""
     m = params.mechanics
-    return tuple(chain_statics(c.radii, st, c.guide.d1, c.guide.d2, m.spring_k, m.tendon_EA, m.loop_preload)
-                 for c, st in zip(params.chains, chain_strands(params)))
+    out = tuple(chain_statics(c.radii, st, c.guide.d1, c.guide.d2, m.spring_k, m.tendon_EA, m.loop_preload)
+                for c, st in zip(params.chains, chain_strands(params)))
+    for chain, c in zip(params.chains, out):
+        worst = int(np.argmin(c.c[:, 1:].min(axis=1)))
+        k = int(np.argmin(c.c[worst, 1:])) + 1
+        if not c.c[worst, k] > 0.0:
+            raise ParamError("mechanics.tendon_EA_N", m.tendon_EA,
+                             f"with spring_k_N_per_m = {m.spring_k:g} the strands' stretch (the routed statics) "
+                             f"leaves {chain.digit} {chain.joints[k].upper()} a coupling of {c.c[worst, k]:.4g}: "
+                             f"a coupled joint must flex with its {chain.joints[0].upper()}, so EA must be larger",
+                             params.source)
+    return out
 
 
 def servo_angle(s, chain: ChainParams, statics: ChainStatics, T=None):
@@ -231,15 +243,16 @@ class RoutedLaw:
         self.steps = 0
         if not self.linear:
             return
-        # the start: x(u) = cos(alpha - s(u)) fitted over the travel (Chebyshev, in w = (u - mid) *
-        # scale), as a polynomial in u - mid
+        # the start: x(u) = cos(alpha - s(u)) fitted over the travel at Chebyshev nodes, a
+        # polynomial in u whose constant is cos(alpha): at u = 0 the solve gives s = 0 exactly
         nodes = np.cos(np.pi * (np.arange(64) + 0.5) / 64)
         coef = np.empty((START_DEGREE + 1, len(self.chains)))
+        coef[0] = np.cos(alpha)
         for k, (chain, c) in enumerate(zip(self.chains, self.statics)):
             u = self._row.mid[k] + nodes / self._row.scale[k]
             x = np.cos(alpha[k] - reference_angle(u, chain, c))
-            coef[:, k] = (chebyshev.cheb2poly(chebyshev.chebfit(nodes, x, START_DEGREE))
-                          * self._row.scale[k] ** np.arange(START_DEGREE + 1))
+            basis = u[:, None] ** np.arange(1, START_DEGREE + 1)
+            coef[1:, k] = np.linalg.lstsq(basis, x - coef[0, k], rcond=None)[0]
         self._row.coef = coef
         self._col = SimpleNamespace(**{k: (v[..., None] if isinstance(v, np.ndarray) else v)
                                        for k, v in vars(self._row).items()})
@@ -248,7 +261,7 @@ class RoutedLaw:
                           for k, (chain, c) in enumerate(zip(self.chains, self.statics))], axis=-1)
         for steps in range(1, 5):
             self.steps = steps
-            x = np.polynomial.polynomial.polyval(grid - self._row.mid, coef)
+            x = np.polynomial.polynomial.polyval(grid, coef)
             if np.all(np.abs(np.diagonal(x, axis1=0, axis2=2)) < 1.0) and \
                     np.abs(self._fast(grid, self._row) - exact).max() <= FAST_TOLERANCE:
                 return
@@ -300,13 +313,12 @@ class RoutedLaw:
         costs more in page faults than the arithmetic on it)."""
         w, target, x, S, a, b, c = (np.empty(u.shape) for _ in range(7)) if work is None else work
         s = np.empty(u.shape) if out is None else out
-        np.subtract(u, k.mid, out=w)
         np.multiply(k.r, u, out=target)
         np.subtract(k.L0, target, out=target)                # L0 - r u
-        np.multiply(w, k.coef[-1], out=x)
+        np.multiply(u, k.coef[-1], out=x)
         for coef in k.coef[-2:0:-1]:
             x += coef
-            x *= w
+            x *= u
         x += k.coef[0]
         # within the travel the fit stays inside the cosine law's domain (checked when built)
         np.arccos(x, out=s)
