@@ -53,7 +53,7 @@ TOL_EQUILIBRIUM = units.rad(0.1)
 #: simulation step shortened to stay stable, the settling time
 NEAR_RIGID, NEAR_RIGID_STEP, SETTLE_S = 200.0, 2e-5, 1.0
 #: the twin as written settles until no joint moves faster than this (rad/s), or for at most
-#: TWIN_SETTLE_S: softer strands settle slower (EA = 50 N takes about 4 s)
+#: TWIN_SETTLE_S: softer strands settle slower
 TWIN_SETTLED, TWIN_SETTLE_S = 1e-6, 10.0
 #: inertials: relative, of the mass and of the largest tensor entry; the STEP round trip and the
 #: 6-7 significant digits the files keep
@@ -213,13 +213,17 @@ def _mj_name(mujoco, m, obj, i) -> str:
 
 
 def settle_twin(mujoco, m, d) -> None:
-    """Step the twin until it is at rest (every joint slower than :data:`TWIN_SETTLED`), at
-    most :data:`TWIN_SETTLE_S` of simulated time."""
+    """Step the twin until it is at rest (every joint slower than :data:`TWIN_SETTLED` at four
+    checks 0.05 s apart: not a swing's turning point), at most :data:`TWIN_SETTLE_S` of
+    simulated time."""
     check = max(1, int(0.05 / m.opt.timestep))
-    for i in range(int(TWIN_SETTLE_S / m.opt.timestep)):
+    still = 0
+    for i in range(1, int(TWIN_SETTLE_S / m.opt.timestep)):
         mujoco.mj_step(m, d)
-        if i >= check and i % check == 0 and np.abs(d.qvel).max() < TWIN_SETTLED:
-            return
+        if i % check == 0:
+            still = still + 1 if np.abs(d.qvel).max() < TWIN_SETTLED else 0
+            if still == 4:
+                return
 
 
 def mjcf_rows(export: Export, params: HandParams, hand: Hand, U: np.ndarray, settle: int) -> tuple[list[Row], dict]:

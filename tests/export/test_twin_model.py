@@ -37,9 +37,10 @@ def _twin(result):
     return m
 
 
-def _errors(m, hand, fractions=(0.25, 0.5, 0.75, 1.0), together=(0.3, 0.6, 1.0)) -> np.ndarray:
+def _errors(m, hand, fractions=(0.25, 0.5, 0.75, 1.0), together=(0.3, 0.6, 1.0), seconds=10.0) -> np.ndarray:
     """Max |twin - model| (rad) per joint over each servo alone at ``fractions`` of its travel
-    and all servos together at ``together``; the twin at rest (:data:`REST`) before it is read."""
+    and all servos together at ``together``; the twin at rest (:data:`REST`, within ``seconds``
+    of simulated time) before it is read."""
     d = mujoco.MjData(m)
     q_adr = [m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j.name)] for j in JOINTS]
     u_adr = [m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, s.name)] for s in SERVOS]
@@ -56,10 +57,13 @@ def _errors(m, hand, fractions=(0.25, 0.5, 0.75, 1.0), together=(0.3, 0.6, 1.0))
     for u in commands:
         mujoco.mj_resetDataKeyframe(m, d, 0)
         d.ctrl[:] = u
-        for i in range(int(10.0 / m.opt.timestep)):
+        still = 0       # at rest at consecutive checks over 0.2 s: not a swing's turning point
+        for i in range(1, int(seconds / m.opt.timestep)):
             mujoco.mj_step(m, d)
-            if i % every == 0 and i > 0 and np.abs(d.qvel).max() < REST:
-                break
+            if i % every == 0:
+                still = still + 1 if np.abs(d.qvel).max() < REST else 0
+                if still == 4:
+                    break
         assert np.abs(d.qvel).max() < REST, "the twin did not come to rest"
         err = np.maximum(err, np.abs(d.qpos[q_adr] - hand.forward(d.qpos[u_adr], compensated=True)))
     return err
@@ -94,6 +98,7 @@ def test_the_twin_sits_on_the_routed_compensation_across_the_ranges(hand_export,
         t = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_TENDON, st.name)
         m.tendon_stiffness[t], m.tendon_damping[t] = st.stiffness, st.damping
         m.tendon_lengthspring[t] = [0.0, st.slack_length]
-    err = _errors(m, Hand(params), fractions=(0.5, 1.0), together=(1.0,))
+    # soft strands settle slowly: at EA = 50 N the thumb takes about 9 s
+    err = _errors(m, Hand(params), fractions=(0.5, 1.0), together=(1.0,), seconds=20.0)
     worst = int(np.argmax(err))
     assert err[worst] < TOL, (mechanics, JOINTS[worst].name, math.degrees(err[worst]))
