@@ -248,7 +248,7 @@ class Hand:
         # blocks, chain-major as the analytic forward: the Newton steps' temporaries stay in the CPU cache
         q = np.empty((n, N_JOINTS))
         s = np.empty((N_SERVOS, _BLOCK))
-        work = np.empty((7, len(CHAINS), _BLOCK))
+        work = np.empty((8, len(CHAINS), _BLOCK))
         for i in range(0, n, _BLOCK):
             j = min(i + _BLOCK, n)
             uT, sT = flat[i:j].T, s[:, :j - i]

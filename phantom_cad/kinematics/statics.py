@@ -238,8 +238,11 @@ class RoutedLaw:
         hi = np.array([c.travel[1] for c in self.chains])
         sumsq, two, L0 = cf.chord_constants(d1, d2, alpha)
         gamma_t = np.array([c.gamma * c.t[-1] for c in self.statics])
+        # the fit holds on the travel (a hair beyond: rounding of the ends)
+        self._lo, self._hi = lo - 1e-12, hi + 1e-12
         self._row = SimpleNamespace(d1d2=d1 * d2, alpha=alpha, r=r, sumsq=sumsq, two=two, L0=L0, gamma_t=gamma_t,
-                                    mid=(lo + hi) / 2.0, scale=2.0 / np.maximum(hi - lo, 1e-300))
+                                    mid=(lo + hi) / 2.0, scale=2.0 / np.maximum(hi - lo, 1e-300),
+                                    lo=self._lo, hi=self._hi)
         self.steps = 0
         if not self.linear:
             return
@@ -263,7 +266,7 @@ class RoutedLaw:
             self.steps = steps
             x = np.polynomial.polynomial.polyval(grid, coef)
             if np.all(np.abs(np.diagonal(x, axis1=0, axis2=2)) < 1.0) and \
-                    np.abs(self._fast(grid, self._row) - exact).max() <= FAST_TOLERANCE:
+                    np.abs(self._fast(grid, self._row)[0] - exact).max() <= FAST_TOLERANCE:
                 return
         self.steps = 0                  # no fast path: every solve to convergence
 
@@ -278,19 +281,15 @@ class RoutedLaw:
 
     def reference_angles(self, u: np.ndarray, columns: bool = False, out: np.ndarray | None = None,
                          work=None) -> np.ndarray:
-        """s (..., 5) of servo angles u (..., 5) (see the class; ``work``: seven arrays of u's
+        """s (..., 5) of servo angles u (..., 5) (see the class; ``work``: eight arrays of u's
         shape the solve may use)."""
         if not self.steps:
             s = self._per_chain(reference_angle, u, columns)
         else:
             k = self._col if columns else self._row
-            s = self._fast(u, k, out, work)
-            w = (work[0] if work is not None else np.empty(u.shape))
-            np.subtract(u, k.mid, out=w)
-            w *= k.scale
-            np.abs(w, out=w)
-            if w.size and w.max() > 1.0 + 1e-12:
-                outside = w > 1.0 + 1e-12
+            s, beyond = self._fast(u, k, out, work, columns)
+            if beyond:
+                outside = (u < k.lo) | (u > k.hi)
                 s[outside] = self._per_chain(reference_angle, u, columns)[outside]
         if out is not None and s is not out:
             out[...] = s
@@ -306,13 +305,18 @@ class RoutedLaw:
                 out[..., k] = fn(x[..., k], chain, c)
         return out
 
-    def _fast(self, u, k, out=None, work=None):
-        """Newton steps from the fitted start (no preload: T = t s), in place on ``out`` and the
-        seven arrays of ``work`` (each of u's shape; allocated when not given): a batched forward
-        passes the same ones for every block, which then stay in the CPU cache (a fresh array
-        costs more in page faults than the arithmetic on it)."""
-        w, target, x, S, a, b, c = (np.empty(u.shape) for _ in range(7)) if work is None else work
+    def _fast(self, u, k, out=None, work=None, columns=False):
+        """(s, whether some u lies beyond its travel, where the fit does not hold): Newton steps
+        from the fitted start (no preload: T = t s), in place on ``out`` and the eight arrays of
+        ``work`` (each of u's shape; allocated when not given): a batched forward passes the same
+        ones for every block, which then stay in the CPU cache (a fresh array costs more in page
+        faults than the arithmetic on it)."""
+        L, target, x, S, a, b, c, w2 = (np.empty(u.shape) for _ in range(8)) if work is None else work
         s = np.empty(u.shape) if out is None else out
+        np.copyto(w2, u)                 # contiguous (a batched forward's u is a transposed view)
+        u = w2
+        axes = tuple(range(1, u.ndim)) if columns else tuple(range(u.ndim - 1))
+        beyond = bool(u.size) and bool(np.any(u.min(axis=axes) < self._lo) or np.any(u.max(axis=axes) > self._hi))
         np.multiply(k.r, u, out=target)
         np.subtract(k.L0, target, out=target)                # L0 - r u
         np.multiply(u, k.coef[-1], out=x)
@@ -326,7 +330,6 @@ class RoutedLaw:
         np.multiply(x, x, out=S)
         np.subtract(1.0, S, out=S)
         np.sqrt(S, out=S)                                    # sin(alpha - s)
-        L = w                                                # w is spent
         for i in range(self.steps):
             if i:   # (x, S) = (cos, sin)(alpha - s) after s moved by -c: second order is exact here
                 np.multiply(c, c, out=a)
@@ -344,14 +347,13 @@ class RoutedLaw:
             # g = (L0 - r u) - L + h, h = gamma t s L / S (the drive's stretch); with
             # dL/ds = -d1 d2 S / L: g' = gamma t L / S + h x / S + d1 d2 (S - gamma t s) / L
             np.divide(L, S, out=a)
-            np.multiply(s, a, out=b)
-            b *= k.gamma_t                                   # h
+            np.multiply(k.gamma_t, s, out=w2)                # gamma t s
+            np.multiply(w2, a, out=b)                        # h
             a *= k.gamma_t
             np.multiply(b, x, out=c)
             c /= S
             a += c
-            np.multiply(k.gamma_t, s, out=c)
-            np.subtract(S, c, out=c)
+            np.subtract(S, w2, out=c)
             c *= k.d1d2
             c /= L
             a += c                                           # g'
@@ -359,4 +361,4 @@ class RoutedLaw:
             c += b                                           # g
             c /= a
             s -= c
-        return s
+        return s, beyond
