@@ -197,3 +197,15 @@ def test_fast_solve_is_the_solve_to_convergence(params):
         assert np.abs(law.reference_angles(u[:, :5]) - exact).max() < 1e-12
     finally:
         law.steps = steps
+
+
+def test_too_soft_a_tendon_is_refused(document):
+    """Below about 45 N (default k_s and routing) the routed statics leave the middle DIP no
+    coupling: the hand is refused with one line naming EA (the paper's form allows 24 N)."""
+    document["mechanics"]["tendon_EA_N"] = 40.0
+    p = parse(document)
+    with pytest.raises(ParamError) as e:
+        Hand(p)
+    assert str(e.value).startswith("mechanics.tendon_EA_N = 40.0: ") and "middle DIP" in str(e.value)
+    assert "\n" not in str(e.value)
+    Hand(p, compensation="paper")

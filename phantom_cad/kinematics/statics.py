@@ -155,15 +155,15 @@ def hand_statics(params: HandParams) -> tuple[ChainStatics, ...]:
     m = params.mechanics
     out = tuple(chain_statics(c.radii, st, c.guide.d1, c.guide.d2, m.spring_k, m.tendon_EA, m.loop_preload)
                 for c, st in zip(params.chains, chain_strands(params)))
-    for chain, c in zip(params.chains, out):
-        worst = int(np.argmin(c.c[:, 1:].min(axis=1)))
-        k = int(np.argmin(c.c[worst, 1:])) + 1
-        if not c.c[worst, k] > 0.0:
-            raise ParamError("mechanics.tendon_EA_N", m.tendon_EA,
-                             f"with spring_k_N_per_m = {m.spring_k:g} the strands' stretch (the routed statics) "
-                             f"leaves {chain.digit} {chain.joints[k].upper()} a coupling of {c.c[worst, k]:.4g}: "
-                             f"a coupled joint must flex with its {chain.joints[0].upper()}, so EA must be larger",
-                             params.source)
+    # the smallest coupling of any coupled joint in any regime: the joint that goes first
+    value, chain, k = min(((float(c.c[:, k].min()), chain, k) for chain, c in zip(params.chains, out)
+                           for k in range(1, len(chain.radii))), key=lambda item: item[0])
+    if not value > 0.0:
+        raise ParamError("mechanics.tendon_EA_N", m.tendon_EA,
+                         f"with spring_k_N_per_m = {m.spring_k:g} the strands' stretch (the routed statics) "
+                         f"leaves {chain.digit} {chain.joints[k].upper()} a coupling of {value:.4g}: "
+                         f"a coupled joint must flex with its {chain.joints[0].upper()}, so EA must be larger",
+                         params.source)
     return out
 
 
@@ -262,11 +262,12 @@ class RoutedLaw:
         grid = lo + np.linspace(0.0, 1.0, 1025)[:, None] * (hi - lo)
         exact = np.stack([reference_angle(grid[:, k], chain, c)
                           for k, (chain, c) in enumerate(zip(self.chains, self.statics))], axis=-1)
+        start = sum(c * grid ** i for i, c in enumerate(coef))
+        if not np.all(np.abs(start) < 1.0):
+            return                      # no fast path (the start leaves the arccos's domain)
         for steps in range(1, 5):
             self.steps = steps
-            x = np.polynomial.polynomial.polyval(grid, coef)
-            if np.all(np.abs(np.diagonal(x, axis1=0, axis2=2)) < 1.0) and \
-                    np.abs(self._fast(grid, self._row)[0] - exact).max() <= FAST_TOLERANCE:
+            if np.abs(self._fast(grid, self._row)[0] - exact).max() <= FAST_TOLERANCE:
                 return
         self.steps = 0                  # no fast path: every solve to convergence
 
