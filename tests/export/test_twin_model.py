@@ -98,7 +98,7 @@ def test_the_twin_sits_on_the_routed_compensation_across_the_ranges(hand_export,
         t = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_TENDON, st.name)
         m.tendon_stiffness[t], m.tendon_damping[t] = st.stiffness, st.damping
         m.tendon_lengthspring[t] = [0.0, st.slack_length]
-    # soft strands settle slowly: at EA = 50 N the thumb takes about 9 s
-    err = _errors(m, Hand(params), fractions=(0.5, 1.0), together=(1.0,), seconds=20.0)
+    # soft strands settle slowly: at EA = 50 N every servo at full travel takes about 25 s
+    err = _errors(m, Hand(params), fractions=(0.5, 1.0), together=(1.0,), seconds=40.0)
     worst = int(np.argmax(err))
     assert err[worst] < TOL, (mechanics, JOINTS[worst].name, math.degrees(err[worst]))
