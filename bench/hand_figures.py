@@ -110,7 +110,7 @@ def _items(meshes, T, named=()):
 
 def postures(p, meshes, solids, out: Path) -> None:
     """The power grasp and the thumb's closest approach to each opposed fingertip, on the solids."""
-    h = make_hand(p)
+    h = make_hand(p, compensation="paper")     # as the power grasp's tests (tests/conftest.py)
     cmc = next(s.index for s in SERVOS if s.drive == "loop")
     # the hand without its forearm module and servo pulleys: the grasp pictures' close views
     hand_only = {n: m for n, m in meshes.items() if n != "forearm" and not n.startswith("servo_pulley_")}

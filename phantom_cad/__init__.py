@@ -2,8 +2,9 @@
 
     from phantom_cad import load_hand
     hand = load_hand()                      # params/phantom.toml
-    q = hand.forward(u, compensated=True)   # (..., 6) rad -> (..., 15) rad
+    q = hand.forward(u, compensated=True)   # (..., 6) rad -> (..., 15) rad, the printed routing's statics
     u = hand.inverse(q_d)                   # (..., 15) rad -> (..., 6) rad
+    paper = load_hand(compensation="paper") # the paper's eq. (11)-(14) instead
 
 This module is where the layers meet (docs/architecture.md): it loads the parameters with the
 effect library handed to the params layer (which checks a file's [effects.*] tables and loads its
@@ -23,9 +24,11 @@ from .params import load_params as _load_params
 __version__ = "0.1.0"
 
 
-def make_hand(params: HandParams) -> Hand:
-    """The kinematic model of validated parameters, with the fitted effects they carry (if any)."""
-    return Hand(params, build_effect_stack(params) if params.effects else None)
+def make_hand(params: HandParams, compensation: str | None = None) -> Hand:
+    """The kinematic model of validated parameters, with the fitted effects they carry (if any).
+    ``compensation``: "routed" (the printed routing's statics, the default without fitted effects)
+    or "paper" (eq. 11-14, the base of fitted effects)."""
+    return Hand(params, build_effect_stack(params) if params.effects else None, compensation)
 
 
 def load_params(path: str | os.PathLike | None = None) -> HandParams:
@@ -34,9 +37,10 @@ def load_params(path: str | os.PathLike | None = None) -> HandParams:
     return _load_params(path, effects=PARAMS_EFFECTS)
 
 
-def load_hand(path: str | os.PathLike | None = None) -> Hand:
-    """The kinematic model of the hand described by ``path`` (default: params/phantom.toml)."""
-    return make_hand(load_params(path))
+def load_hand(path: str | os.PathLike | None = None, compensation: str | None = None) -> Hand:
+    """The kinematic model of the hand described by ``path`` (default: params/phantom.toml);
+    ``compensation`` as for :func:`make_hand`."""
+    return make_hand(load_params(path), compensation)
 
 
 __all__ = ["load_hand", "load_params", "make_hand", "Hand", "HandParams", "ParamError", "__version__"]

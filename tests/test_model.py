@@ -44,7 +44,16 @@ def easy_document(document):
 
 @pytest.fixture
 def easy(document):
-    return Hand(parse(easy_document(document)))
+    """The easy hand with the paper's compensation, whose eq. (13)/(14) the known answers solve."""
+    return Hand(parse(easy_document(document)), compensation="paper")
+
+
+@pytest.fixture(scope="module")
+def paper_hand():
+    """The default hand with the paper's compensation (eq. 11-14)."""
+    from phantom_cad import load_params
+
+    return Hand(load_params(), compensation="paper")
 
 
 def test_cosine_law_known_answer(easy):
@@ -126,13 +135,13 @@ def test_thumb_compensation_known_answer(easy):
     assert q[0] == pytest.approx(q_ip, abs=1e-12)
 
 
-def test_compensation_satisfies_eq12(hand):
+def test_compensation_satisfies_eq12(paper_hand):
     # q_comp = q_ideal - b(q_comp): the deviation of eq. (12), evaluated on the actual angles
-    u = np.linspace(hand.u_min, hand.u_max, 25)
-    q_ideal = hand.forward(u)
-    q_comp = hand.forward(u, compensated=True)
-    k_s, EA = hand.params.mechanics.spring_k, hand.params.mechanics.tendon_EA
-    idx = hand.params.fingers["index"].chain
+    u = np.linspace(paper_hand.u_min, paper_hand.u_max, 25)
+    q_ideal = paper_hand.forward(u)
+    q_comp = paper_hand.forward(u, compensated=True)
+    k_s, EA = paper_hand.params.mechanics.spring_k, paper_hand.params.mechanics.tendon_EA
+    idx = paper_hand.params.fingers["index"].chain
     R_mcp, R_pip, R_dip = idx.radii
     L1, L2 = idx.path_lengths
     T = k_s * (R_dip * q_comp[:, 2] + R_pip * q_comp[:, 3] + R_mcp * q_comp[:, 4])     # eq. (11)
@@ -140,15 +149,15 @@ def test_compensation_satisfies_eq12(hand):
     assert np.allclose(q_ideal[:, 2] - q_comp[:, 2], T * (L1 + L2) / (EA * R_dip), atol=1e-14)
     assert np.array_equal(q_ideal[:, 4], q_comp[:, 4])  # MCP uncompensated
     assert np.array_equal(q_ideal[:, 14], q_comp[:, 14])  # CMC uncompensated
-    assert np.allclose(hand.bias(q_comp), q_ideal - q_comp, atol=1e-14)
+    assert np.allclose(paper_hand.bias(q_comp), q_ideal - q_comp, atol=1e-14)
 
 
-def test_default_hand_distal_error_is_paper_sized(hand):
+def test_default_hand_distal_error_is_paper_sized(paper_hand):
     # the default k_s / EA were chosen so the analytic model misses the index DIP by about
     # a degree on a uniform sweep, as the paper measured (1.15 deg MAE)
     u = np.zeros((201, 6))
-    u[:, 1] = np.linspace(hand.u_min[1], hand.u_max[1], 201)
-    diff = np.degrees(hand.forward(u) - hand.forward(u, compensated=True))
+    u[:, 1] = np.linspace(paper_hand.u_min[1], paper_hand.u_max[1], 201)
+    diff = np.degrees(paper_hand.forward(u) - paper_hand.forward(u, compensated=True))
     assert 0.8 < np.abs(diff[:, 2]).mean() < 1.5
     assert np.abs(diff[:, 2]).max() < 2.5
 

@@ -9,8 +9,10 @@ model applies (:class:`EffectStack`):
     coupling   q_chain = s * M(kappa)^-1 A  (eq. 13-14, per sample, closed form)
     joint      q += delta                   e.g. joint zero offsets
 
-The analytic model is the pipeline with no effect (kappa = 0). ``Hand.forward(u, compensated=True)``
-is the pipeline with kappa = the parameter file's k_s / EA. Parameters are held in *file units*
+The analytic model is the pipeline with no effect (kappa = 0). The paper's compensation
+(``Hand(params, compensation="paper").forward(u, compensated=True)``) is the pipeline with kappa =
+the parameter file's k_s / EA: fitted effects build on it (a calibrated hand's base; the routed
+compensation, the plain hand's default, is not an effect of this library). Parameters are held in *file units*
 (the unit is in the key, as everywhere in a parameter file: ``u2_deg``, ``compliance_per_m``).
 :func:`validate_effects` is the check of ``[effects.*]`` tables the params layer is handed
 (:data:`PARAMS_EFFECTS`). numpy only.

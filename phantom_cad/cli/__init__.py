@@ -91,9 +91,12 @@ def describe(hand) -> str:
     from ..units import deg, mm
 
     p = hand.params
+    m = p.mechanics
     out = [f"hand {p.name} ({p.side}), {p.source}", f"digest {p.digest}",
-           f"k_s = {p.mechanics.spring_k:g} N/m, EA = {p.mechanics.tendon_EA:g} N", ""]
-    out.append(f"{'chain':8s} {'L0 mm':>7s} {'r mm':>6s} {'travel deg':>14s}  ideal A / compensated M^-1 A")
+           f"k_s = {m.spring_k:g} N/m, EA = {m.tendon_EA:g} N, loop preload = {m.loop_preload:g} N, "
+           f"compensation: {hand.compensation}", ""]
+    comp_label = "routed (at rest)" if hand.compensation == "routed" else "the paper's M^-1 A"
+    out.append(f"{'chain':8s} {'L0 mm':>7s} {'r mm':>6s} {'travel deg':>14s}  ideal A / compensated, {comp_label}")
     for chain in p.chains:
         spec = chain.spec
         ideal = hand.coupling_ideal[spec.servo, list(spec.q_index)]
@@ -192,7 +195,7 @@ def params_opposition(params: Optional[Path] = ParamsOpt,
 def model_forward(
     inp: Path = typer.Option(..., "--in", help="CSV with columns u1..u6 (radians).", dir_okay=False),
     out: Path = typer.Option(..., "--out", help="CSV to write: u1..u6 and the model's q1..q15.", dir_okay=False),
-    compensated: bool = typer.Option(False, "--compensated", help="Spring + tendon-elasticity compensation (eq. 11-14)."),
+    compensated: bool = typer.Option(False, "--compensated", help="Compensated: the printed routing's statics (return-cord tension, the loops' and the drive's stretch; docs/transmission.md); with fitted effects in the file, the paper's eq. 11-14 and the effects."),
     degrees: bool = typer.Option(False, "--degrees", help="Angles in the input and output are degrees."),
     strict: bool = StrictOpt,
     params: Optional[Path] = ParamsOpt,

@@ -127,15 +127,19 @@ def compare(
     params: Optional[Path] = ParamsOpt,
     effects: Optional[str] = typer.Option(
         None, "--effects", help="Effects to fit and add to the analytic model (comma separated); none: the analytic "
-                                "model alone. Default: the parameter file's fitted effects, or else the paper's "
-                                "compensated model."),
+                                "model alone. Default: the parameter file's fitted effects, or else the compensated "
+                                "model (the printed routing's statics)."),
     report: Optional[Path] = typer.Option(None, "--report", help="Folder for report.md, metrics.json and PNGs (a new "
                                           "folder, or an earlier report, which is replaced)."),
+    compensation: Optional[str] = typer.Option(
+        None, "--compensation", help="The compensated model without --effects: routed (the printed routing's "
+                                     "statics, the default) or paper (eq. 11-14, as the paper's story)."),
     degrees: bool = DegreesOpt,
     plugin: Optional[List[Path]] = PluginOpt,
 ):
     """Residual = measured - model per joint: MAE / RMS / max before (analytic) and after (with the effects)."""
     from .. import load_hand
+    from ..errors import UserError
     from ..calibration.data import read_measurements
     from ..calibration.effects import History, run_pipeline
     from ..calibration.diagnosis_text import compare_text
@@ -143,7 +147,13 @@ def compare(
     from ..calibration.report import metrics
 
     _load_plugins(plugin)
+    if compensation not in (None, "routed", "paper"):
+        raise UserError(f"--compensation {compensation}: must be routed or paper")
     hand = load_hand(params)
+    if compensation is not None and compensation != hand.compensation:
+        if hand.effects:
+            raise UserError(f"--compensation {compensation}: a calibrated file's effects build on the paper's compensation")
+        hand = load_hand(params, compensation=compensation)
     m = read_measurements(data, degrees=degrees).require_joints()
     q_before = run_pipeline(hand, [], m.u, None, 0.0)
     fitted = None
@@ -160,7 +170,7 @@ def compare(
         label = "calibrated (" + " + ".join(hand.effects.names) + ")"
     else:
         q_after = hand.forward(m.u, compensated=True)
-        label = "compensated (eq. 11-14)"
+        label = "compensated (the routed statics)" if hand.compensation == "routed" else "compensated (eq. 11-14)"
     mb = metrics(m, q_before)
     ma = metrics(m, q_after) if q_after is not None else None
     lines = compare_text(m, mb, ma, label, fitted)

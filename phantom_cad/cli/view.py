@@ -212,7 +212,8 @@ class Viewer:
         self.sliders = tuple(sliders)
         self.compensated = gui.add_checkbox(
             "compensated", initial_value=False,
-            hint="off: analytic model (eq. 2-10); on: spring and tendon-elasticity compensation (eq. 11-14)")
+            hint="off: analytic model (eq. 2-10); on: the printed routing's statics (return-cord tension, "
+                 "the loops' and the drive's stretch; the paper's eq. 11-14 for a calibrated file)")
         self.compensated.on_update(lambda _event: self.update())
         with gui.add_folder("joint angles (deg)"):
             self.joints_md = gui.add_markdown("")

@@ -9,7 +9,9 @@ Every row compares what one source says with what another measures, at random se
 - the URDF's joint angles (read back from yourdfpy's link transforms) against ``q``; the MJCF's
   tendon twin settled under its six actuators (contacts and gravity off, tendons made near-rigid:
   stiffness x :data:`NEAR_RIGID`) against ``hand.forward`` at the servo angles it reached: the
-  routed tendons alone (no joint equality) must impose the model;
+  routed tendons alone (no joint equality) must impose the model; and the twin as written (the
+  file's EA and k_s) against ``hand.forward(u, compensated=True)``, the routed compensation: the
+  statics of the printed routing;
 - each joint axis against the bearing bores measured in the exported STEP solids;
 - URDF and MJCF inertials against the STEP solids' mass properties (mass: the slicer's filament
   estimate when the export was sliced, else volume x density x infill);
@@ -52,6 +54,9 @@ TOL_EQUILIBRIUM = units.rad(0.1)
 #: near-rigid: every tendon strand but the return cord this many times stiffer (and damped), the
 #: simulation step shortened to stay stable, the settling time
 NEAR_RIGID, NEAR_RIGID_STEP, SETTLE_S = 200.0, 2e-5, 1.0
+#: the twin as written settles until no joint moves faster than this (rad/s), or for at most
+#: TWIN_SETTLE_S: softer strands settle slower
+TWIN_SETTLED, TWIN_SETTLE_S = 1e-6, 10.0
 #: inertials: relative, of the mass and of the largest tensor entry; the STEP round trip and the
 #: 6-7 significant digits the files keep
 TOL_MASS, TOL_TENSOR = 1e-4, 1e-3
@@ -209,6 +214,20 @@ def _mj_name(mujoco, m, obj, i) -> str:
     return mujoco.mj_id2name(m, obj, i) or ""
 
 
+def settle_twin(mujoco, m, d) -> None:
+    """Step the twin until it is at rest (every joint slower than :data:`TWIN_SETTLED` at four
+    checks 0.05 s apart: not a swing's turning point), at most :data:`TWIN_SETTLE_S` of
+    simulated time."""
+    check = max(1, int(0.05 / m.opt.timestep))
+    still = 0
+    for i in range(1, int(TWIN_SETTLE_S / m.opt.timestep)):
+        mujoco.mj_step(m, d)
+        if i % check == 0:
+            still = still + 1 if np.abs(d.qvel).max() < TWIN_SETTLED else 0
+            if still == 4:
+                return
+
+
 def mjcf_rows(export: Export, params: HandParams, hand: Hand, U: np.ndarray, settle: int) -> tuple[list[Row], dict]:
     """The MJCF's rows, and its inertials by body (for :func:`inertial_rows`)."""
     import mujoco
@@ -276,10 +295,26 @@ def mjcf_rows(export: Export, params: HandParams, hand: Hand, U: np.ndarray, set
         for j in JOINTS:
             dq[j.name] = max(dq.get(j.name, 0.0), abs(d.qpos[m.jnt_qposadr[jid[j.name]]] - q[j.index]))
     m.tendon_stiffness[:], m.tendon_damping[:], m.opt.timestep = stiff, damp, step
-    m.opt.disableflags &= ~off
     if dq:
         rows.append(_row(f"MJCF twin settled (near-rigid tendons) = hand.forward(u) ({len(U[:settle])} commands)",
                          dq, TOL_EQUILIBRIUM, "rad"))
+    # the twin as written: its strands stretch as the routed compensation says
+    dq = {}
+    for u in U[:settle]:
+        mujoco.mj_resetDataKeyframe(m, d, max(key, 0))
+        for k, a in act.items():
+            d.ctrl[a] = u[k]
+        settle_twin(mujoco, m, d)
+        reached = np.array(u, float)
+        for k, i in hinge.items():
+            reached[k] = d.qpos[m.jnt_qposadr[i]] if i >= 0 else math.nan
+        q = hand.forward(reached, compensated=True)
+        for j in JOINTS:
+            dq[j.name] = max(dq.get(j.name, 0.0), abs(d.qpos[m.jnt_qposadr[jid[j.name]]] - q[j.index]))
+    m.opt.disableflags &= ~off
+    if dq:
+        rows.append(_row(f"MJCF twin settled (the file's EA, k_s) = hand.forward(u, compensated=True) "
+                         f"({len(U[:settle])} commands)", dq, TOL_EQUILIBRIUM, "rad"))
 
     # MuJoCo Menagerie's model test: 1 s of random controls, contacts on
     mujoco.mj_resetDataKeyframe(m, d, max(key, 0))

@@ -8,7 +8,8 @@ names, inertials and meshes as the URDF). What MuJoCo adds (docs/descriptions.md
   printed: no joint equality couples any joint. Every strand is a spatial tendon through sites at
   its anchors and via points, wrapping cylinders (class ``pulley``: group 4, no contact, no mass)
   at its pulleys, a side site choosing the side. A strand pulls and never pushes: its spring has
-  the dead band [0, rest length] (``springlength``), stiffness EA / rest length (a tendon) or k_s
+  the dead band [0, rest length] (``springlength``; a coupling loop's strand tied with the file's
+  loop preload P starts at rest length (1 - P / EA)), stiffness EA / rest length (a tendon) or k_s
   (the return cord, whose tension is then k_s sum R_i q_i, eq. 11), damping stiffness x
   :data:`~phantom_cad.export.robot.STRAND_TAU`.
 * **Servos**: each servo's pulley turns on a hinge (named after the servo, ``index_flexion``, ...,
@@ -184,7 +185,7 @@ def mjcf_spec(model: RobotModel, meshdir: str = "../meshes"):
     for st in model.strands:
         names, geoms = strand_names[st.name]
         t = spec.add_tendon(name=st.name, stiffness=st.stiffness, damping=st.damping,
-                            springlength=[0.0, st.rest_length], width=0.0003,
+                            springlength=[0.0, st.slack_length], width=0.0003,
                             rgba=list(RETURN_RGBA if st.kind == "return" else TENDON_RGBA))
         for k, e in enumerate(st.elements):
             if names[k] is not None:

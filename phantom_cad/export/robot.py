@@ -107,7 +107,8 @@ class ServoDrive:
 class Strand:
     """One strand of a routed tendon (``kinematics.routing``) as the simulator models it: a cord
     through its path elements that pulls (never pushes) with ``stiffness`` once longer than
-    ``rest_length``."""
+    ``spring_length``: its ``rest_length``, or for a coupling loop's strand tied with the file's
+    loop preload P, rest_length (1 - P / EA), so that it pulls with P at rest."""
     name: str
     tendon: str                  # the topology tendon ("index_mcp_pip", ...)
     kind: str                    # "drive", "coupling", "return"
@@ -116,6 +117,12 @@ class Strand:
     rest_length: float           # m: the routed length at rest (q = 0, u = 0)
     stiffness: float             # N/m: EA / rest length for a tendon, k_s for the return cord
     damping: float               # N s/m
+    spring_length: float | None = None     # m: where it starts to pull, when not rest_length
+
+    @property
+    def slack_length(self) -> float:
+        """Where the strand starts to pull (m)."""
+        return self.rest_length if self.spring_length is None else self.spring_length
 
 
 @dataclass(frozen=True)
@@ -194,8 +201,11 @@ def transmissions(params: HandParams) -> tuple[tuple[ServoDrive, ...], tuple[Str
         for st in r.strands:
             L = rest[st.name]
             k = params.mechanics.spring_k if r.stiffness == "k_s" else params.mechanics.tendon_EA / L
+            P = params.mechanics.loop_preload
+            # a preloaded loop's strands are tied short by their stretch under P
+            spring = L - P * L / params.mechanics.tendon_EA if (P > 0.0 and r.tendon.kind == "coupling") else None
             strands.append(Strand(st.name, r.name, r.tendon.kind, st.elements,
-                                  tuple(routing_paths.side_sites(params, st, mid)), L, k, k * STRAND_TAU))
+                                  tuple(routing_paths.side_sites(params, st, mid)), L, k, k * STRAND_TAU, spring))
     return tuple(drives), tuple(strands)
 
 

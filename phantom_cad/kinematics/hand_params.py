@@ -104,6 +104,9 @@ class Thumb:
 class Mechanics:
     spring_k: float   # k_s, N/m
     tendon_EA: float  # EA, N
+    #: tension (N) both strands of every coupling loop are tied with: they share the load until
+    #: one goes slack (kinematics.statics)
+    loop_preload: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -1,19 +1,24 @@
-"""The paper's kinematic model: servo angles u (6) <-> joint angles q (15).
+"""The kinematic model: servo angles u (6) <-> joint angles q (15).
 
 Forward, analytic (eq. 2-10):    q = H(u) u, q_ref = alpha - arccos(...), q_i = (R_ref / R_i) q_ref, q15 = g u6.
-Forward, compensated (eq. 11-14): q_comp = (M^-1 A) q_ref per tendon chain.
+Forward, compensated:             the statics of the printed routing (``compensation="routed"``,
+                                  the default: kinematics.statics, docs/transmission.md), or the
+                                  paper's eq. (11)-(14), q_comp = (M^-1 A) q_ref (``compensation="paper"``).
 Inverse, control law (eq. 15):    u* = H^+(clip(q_d) + b(clip(q_d))).
 
-Every digit's reachable set is a curve q = c s(u) with a constant vector c (A or M^-1 A,
-:meth:`Hand.coupling_vectors`) and the reference angle s = q_MCP (q_MP for the thumb). The
+Every digit's reachable set is a curve q = c s(u) with a constant vector c (A, M^-1 A or the
+routed coupling; :meth:`Hand.coupling_vectors` is the paper's) and the reference angle s = q_MCP
+(q_MP for the thumb); a loop preload makes the routed curve piecewise affine, q = c s + d. The
 control law (:meth:`Hand.control_law`) projects each digit's target onto its curve by least
 squares (s = c.q / c.c, which for a target on the curve is exactly eq. 15), clips s to the
-servo travel's image, and inverts the cosine law in closed form.
+servo travel's image, and inverts the servo's law in closed form: the cosine law, or with the
+routed compensation the cosine law with the drive's stretch.
 
 The model knows the parameters by duck typing (``params.chains``, ``params.thumb``,
 ``params.mechanics``): the kinematics layer never imports the params layer. Fitted effects
 (the calibration layer's EffectStack) are passed in by whoever loads them
-(``phantom_cad.load_hand``). All functions broadcast over any leading batch shape. numpy only.
+(``phantom_cad.load_hand``); they build on the paper's compensation. All functions broadcast
+over any leading batch shape. numpy only.
 """
 
 from __future__ import annotations
@@ -22,12 +27,15 @@ from __future__ import annotations
 import numpy as np
 
 from . import closed_form as cf
+from . import statics as st
 from .hand_params import HandParams
 from .topology import CHAINS, CMC_Q, CMC_SERVO, N_JOINTS, N_SERVOS, TENDON_SERVOS
 
 
 #: rows per block of a batched forward (a block's temporaries fit a core's L2 cache)
 _BLOCK = 8192
+#: the compensations ``Hand`` knows: the printed routing's statics, the paper's eq. (11)-(14)
+COMPENSATIONS = ("routed", "paper")
 
 
 class Hand:
@@ -36,16 +44,28 @@ class Hand:
     ``effects``: an object with ``forward(hand, u, compensated)`` and ``inverse(hand, q, compensated)``
     (the calibration layer's EffectStack) that replaces the plain model, or None. A parameter file
     that carries fitted effects must be given them: ``phantom_cad.load_hand`` does.
+
+    ``compensation``: what ``compensated=True`` means, ``"routed"`` (the statics of the printed
+    routing, :mod:`.statics`; the default) or ``"paper"`` (eq. 11-14). A hand with fitted effects
+    uses the paper's (the effects are fitted on it), which is its default.
     """
 
-    def __init__(self, params: HandParams, effects=None):
+    def __init__(self, params: HandParams, effects=None, compensation: str | None = None):
         if params.effects and not effects:
             raise ValueError(f"{params.source or 'these parameters'} carry fitted effects "
                              f"({', '.join(params.effects)}): build the hand with phantom_cad.load_hand "
                              "or pass effects=")
+        if compensation is None:
+            compensation = "paper" if effects else "routed"
+        if compensation not in COMPENSATIONS:
+            raise ValueError(f"compensation must be one of {', '.join(COMPENSATIONS)}, got {compensation!r}")
+        if effects and compensation != "paper":
+            raise ValueError("fitted effects build on the paper's compensation: use compensation='paper'")
         self.params = params
-        #: the fitted effects this hand applies in forward and inverse (None: the paper's model)
+        #: the fitted effects this hand applies in forward and inverse (None: the plain model)
         self.effects = effects or None
+        #: what ``compensated=True`` means: "routed" or "paper"
+        self.compensation = compensation
         chains = params.chains
         thumb = params.thumb
         self._d1 = np.array([c.guide.d1 for c in chains])
@@ -62,10 +82,16 @@ class Hand:
         self._coupling_constants = [cf.coupling_constants(c.radii, c.path_lengths) for c in chains]
         #: k_s / EA (1/m): the compliance of eq. (13)/(14) in the parameter file
         self.compliance = params.mechanics.spring_k / params.mechanics.tendon_EA
+        #: the routed statics of each chain (servo order), or None with the paper's compensation
+        self.statics = st.hand_statics(params) if compensation == "routed" else None
+        self._law = st.RoutedLaw(params.chains, self.statics) if self.statics is not None else None
+        self._linear = self.statics is None or all(c.linear for c in self.statics)
 
         #: (6, 15) maps the per-servo reference angles s to q: q = s @ P
         self.coupling_ideal = self.coupling_matrix(0.0)
-        self.coupling_compensated = self.coupling_matrix(self.compliance)
+        #: the compensation's coupling (with a loop preload, the routed one at rest)
+        self.coupling_compensated = (self.coupling_matrix(self.compliance) if self.statics is None else
+                                     self._routed_matrix([c.regime(0.0) for c in self.statics]))
         self._project = {False: _projection(self.coupling_ideal), True: _projection(self.coupling_compensated)}
 
         q_min = np.zeros(N_JOINTS)
@@ -79,9 +105,14 @@ class Hand:
         tendon = [c.travel for c in chains]
         self.u_min = np.array([t[0] for t in tendon] + [thumb.cmc_travel[0]])
         self.u_max = np.array([t[1] for t in tendon] + [thumb.cmc_travel[1]])
-        # image of the servo travel in reference-angle space
+        # image of the servo travel in reference-angle space (the routed compensation's own:
+        # the drive's stretch lowers s)
         self.s_min = self.reference_angles(self.u_min)
         self.s_max = self.reference_angles(self.u_max)
+        self._s_range = {False: (self.s_min, self.s_max), True: (self.s_min, self.s_max)}
+        if self.statics is not None:
+            self._s_range[True] = (self.reference_angles(self.u_min, compensated=True),
+                                   self.reference_angles(self.u_max, compensated=True))
 
     # -- eq. (13)/(14): the coupling vectors ------------------------------------
     def coupling_vectors(self, compliance) -> list[np.ndarray]:
@@ -95,6 +126,14 @@ class Hand:
             kappa = np.full(len(CHAINS), float(kappa))
         return [cf.coupling_vector(c.radii, c.path_lengths, kappa[..., k], constants)
                 for k, (c, constants) in enumerate(zip(self.params.chains, self._coupling_constants))]
+
+    def _routed_matrix(self, regimes) -> np.ndarray:
+        """(6, 15) P of the routed statics, each chain in the given regime."""
+        P = np.zeros((N_SERVOS, N_JOINTS))
+        for spec, c, m in zip(CHAINS, self.statics, regimes):
+            P[spec.servo, list(spec.q_index)] = c.c[m]
+        P[CMC_SERVO, CMC_Q] = 1.0
+        return P
 
     def coupling_matrix(self, compliance) -> np.ndarray:
         """(6, 15) P with q = s @ P for one compliance (scalar or per chain (5,)); the CMC row is 1."""
@@ -115,15 +154,32 @@ class Hand:
     def coupling(self, compensated: bool) -> np.ndarray:
         return self.coupling_compensated if compensated else self.coupling_ideal
 
+    def _couple_routed(self, s: np.ndarray) -> np.ndarray:
+        """q (..., 15) of the routed statics at reference angles s (..., 6), each chain in its regime."""
+        if self._linear:
+            return s @ self.coupling_compensated
+        q = np.empty(s.shape[:-1] + (N_JOINTS,))
+        for spec, c in zip(CHAINS, self.statics):
+            x = s[..., spec.servo]
+            m = c.regime(x)
+            q[..., list(spec.q_index)] = x[..., None] * c.c[m] + c.d[m]
+        q[..., CMC_Q] = s[..., CMC_SERVO]
+        return q
+
     # -- reference angles (eq. 6, 8, 9) ------------------------------------------
     def reference_angles(self, u: np.ndarray, radius: np.ndarray | None = None,
-                         out: np.ndarray | None = None) -> np.ndarray:
+                         out: np.ndarray | None = None, compensated: bool = False) -> np.ndarray:
         """s (..., 6): q_MCP / q_MP of each tendon chain (eq. 6, 8) and q15 = g u6 (eq. 9).
 
         ``radius`` overrides the servo pulley radii (an effective radius, (5,)). Beyond the
         cosine law's domain the joint stops folded at alpha (closed_form.reference_angle).
+        ``compensated`` with the routed compensation: the drive's stretch included (statics).
         """
         s = np.empty(np.shape(u)) if out is None else out
+        if compensated and self._law is not None:
+            s[..., TENDON_SERVOS] = self._law.reference_angles(u[..., TENDON_SERVOS])
+            np.multiply(u[..., CMC_SERVO], self._cmc_gain, out=s[..., CMC_SERVO])
+            return s
         coefficients = self._cosine if radius is None else None
         cf.reference_angle(u[..., TENDON_SERVOS], self._d1, self._d2, self._alpha,
                            self.servo_radius if radius is None else radius,
@@ -131,9 +187,13 @@ class Hand:
         np.multiply(u[..., CMC_SERVO], self._cmc_gain, out=s[..., CMC_SERVO])
         return s
 
-    def servo_angles(self, s: np.ndarray, radius: np.ndarray | None = None) -> np.ndarray:
+    def servo_angles(self, s: np.ndarray, radius: np.ndarray | None = None, compensated: bool = False) -> np.ndarray:
         """Inverse of :meth:`reference_angles` (``radius``: effective servo pulley radii)."""
         u = np.empty(np.shape(s))
+        if compensated and self._law is not None:
+            u[..., TENDON_SERVOS] = self._law.servo_angles(s[..., TENDON_SERVOS])
+            np.divide(s[..., CMC_SERVO], self._cmc_gain, out=u[..., CMC_SERVO])
+            return u
         u[..., TENDON_SERVOS] = cf.servo_angle(s[..., TENDON_SERVOS], self._d1, self._d2, self._alpha,
                                                self.servo_radius if radius is None else radius, self._chord)
         np.divide(s[..., CMC_SERVO], self._cmc_gain, out=u[..., CMC_SERVO])
@@ -158,6 +218,8 @@ class Hand:
         u = _as_batch(u, N_SERVOS, "u")
         if self.effects:  # fitted effects (phantom_cad.calibration.effects.EffectStack)
             return self.effects.forward(self, u, compensated)
+        if compensated and self.statics is not None:
+            return self._forward_routed(u)
         P = self.coupling(compensated)
         flat = u.reshape(-1, N_SERVOS)
         n = flat.shape[0]
@@ -178,6 +240,27 @@ class Hand:
             np.matmul(sT.T, P, out=q[i:j])
         return q.reshape(u.shape[:-1] + (N_JOINTS,))
 
+    def _forward_routed(self, u: np.ndarray) -> np.ndarray:
+        flat = u.reshape(-1, N_SERVOS)
+        n = flat.shape[0]
+        if n <= _BLOCK:
+            return self._couple_routed(self.reference_angles(u, compensated=True))
+        # blocks, chain-major as the analytic forward: the Newton steps' temporaries stay in the CPU cache
+        q = np.empty((n, N_JOINTS))
+        s = np.empty((N_SERVOS, _BLOCK))
+        work = np.empty((8, len(CHAINS), _BLOCK))
+        for i in range(0, n, _BLOCK):
+            j = min(i + _BLOCK, n)
+            uT, sT = flat[i:j].T, s[:, :j - i]
+            self._law.reference_angles(uT[TENDON_SERVOS], columns=True, out=sT[TENDON_SERVOS],
+                                       work=work[:, :, :j - i])
+            np.multiply(uT[CMC_SERVO], self._cmc_gain, out=sT[CMC_SERVO])
+            if self._linear:
+                np.matmul(sT.T, self.coupling_compensated, out=q[i:j])
+            else:
+                q[i:j] = self._couple_routed(sT.T)
+        return q.reshape(u.shape[:-1] + (N_JOINTS,))
+
     def inverse(self, q_d, compensated: bool = True) -> np.ndarray:
         """Control law (eq. 15): servo angles u* (..., 6) for target joint angles q_d (..., 15).
 
@@ -187,11 +270,44 @@ class Hand:
         q = _clip(_as_batch(q_d, N_JOINTS, "q_d"), self.q_min, self.q_max)
         if self.effects:  # the control law with the fitted effects inverted (docs/effects.md)
             return self.effects.inverse(self, q, compensated)
-        return self.control_law(q, self.coupling(compensated), projection=self._project[compensated])
+        if not (compensated and self.statics is not None):
+            return self.control_law(q, self.coupling(compensated), projection=self._project[compensated])
+        lo, hi = self._s_range[True]
+        s = q @ self._project[True] if self._linear else self._project_routed(q, lo, hi)
+        _clip(s, lo, hi, out=s)
+        u = self.servo_angles(s, compensated=True)
+        return _clip(u, self.u_min, self.u_max, out=u)
+
+    def _project_routed(self, q: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+        """s (..., 6): each digit's target projected onto its piecewise affine routed curve (the
+        nearest point over its regimes' segments within [lo, hi])."""
+        s = np.empty(q.shape[:-1] + (N_SERVOS,))
+        for spec, c in zip(CHAINS, self.statics):
+            x = q[..., list(spec.q_index)]
+            bounds = np.append(c.s_from, np.inf)
+            best = np.full(q.shape[:-1], np.inf)
+            for m in range(len(c.s_from)):
+                a, b = max(bounds[m], lo[spec.servo]), min(bounds[m + 1], hi[spec.servo])
+                if a > b:
+                    continue
+                t = np.clip((x - c.d[m]) @ c.c[m] / (c.c[m] @ c.c[m]), a, b)
+                err = np.sum((x - t[..., None] * c.c[m] - c.d[m]) ** 2, axis=-1)
+                better = err < best
+                best = np.where(better, err, best)
+                s[..., spec.servo] = np.where(better, t, s[..., spec.servo])
+        s[..., CMC_SERVO] = q[..., CMC_Q]
+        return s
 
     def jacobian(self, u, compensated: bool = False) -> np.ndarray:
         """dq/du (..., 15, 6) of the model without effects."""
         u = _as_batch(u, N_SERVOS, "u")
+        if compensated and self.statics is not None:
+            J = np.zeros(u.shape[:-1] + (N_JOINTS, N_SERVOS))
+            for spec, chain, c in zip(CHAINS, self.params.chains, self.statics):
+                s, rate = st.reference_angle(u[..., spec.servo], chain, c, rate=True)
+                J[..., list(spec.q_index), spec.servo] = np.asarray(rate)[..., None] * c.c[c.regime(s)]
+            J[..., CMC_Q, CMC_SERVO] = self._cmc_gain
+            return J
         rate = np.empty(u.shape)
         rate[..., TENDON_SERVOS] = cf.reference_angle_rate(u[..., TENDON_SERVOS], self._d1, self._d2,
                                                            self._alpha, self.servo_radius)

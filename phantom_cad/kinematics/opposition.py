@@ -12,7 +12,8 @@ overlap) and the contact direction v (thumb to finger). The contact is *pad to p
 within ``PAD_CONE`` of the thumb pad's outward normal and -v within it of the finger pad's
 (``frames.T_distal_pad``: 45 deg from the palmar face toward the tip; a 45 deg cone spans the
 palmar face to the very tip). The joint angles are the model's at the commands
-(``hand.forward(u, compensated=True)``), over a grid of each servo's travel.
+(``hand.forward(u, compensated=True)``: the hand's compensation, the routed statics unless the file
+carries fitted effects), over a grid of each servo's travel.
 
 * ``reach(hand)``: per finger, the smallest pad-to-pad gap over the commands (<= 0: the pads meet
   at some command; by continuity the contact gap 0 is passed on the way from rest) and how

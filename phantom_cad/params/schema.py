@@ -29,6 +29,9 @@ __all__ = ["SCHEMA_VERSION", "EffectLibrary", "plugin_paths", "parse", "Guide", 
            "Thumb", "Mechanics", "Palm", "ServoBody", "Hardware", "Print", "Cad", "HandParams"]
 
 SCHEMA_VERSION = 1
+#: the largest coupling-loop preload (N) a file may ask for: a tenth of a 0.6 mm braided line's
+#: breaking load, and many times the return cord's pull on the loops
+MAX_LOOP_PRELOAD = 20.0
 
 class EffectLibrary(Protocol):
     """What :func:`parse` needs from an effect library to read a file's ``plugins`` and
@@ -286,7 +289,8 @@ def parse(document: Mapping[str, Any], source: str | None = None,
     thumb = _thumb(root.table("thumb"), hand_length)
 
     m = root.table("mechanics")
-    mechanics = Mechanics(m.number("spring_k_N_per_m", ge=0), m.number("tendon_EA_N", gt=0))
+    mechanics = Mechanics(m.number("spring_k_N_per_m", ge=0), m.number("tendon_EA_N", gt=0),
+                          m.number("loop_preload_N", ge=0, le=MAX_LOOP_PRELOAD, default=0.0))
     m.done()
     _check_compliance(mechanics, fingers, thumb, source)
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import tomli_w
 
-from phantom_cad import load_hand
+from phantom_cad import Hand, load_hand, load_params
 from phantom_cad.calibration.diagnose import diagnose
 from phantom_cad.params import DEFAULT_PARAMS, load_document
 
@@ -44,7 +44,8 @@ def test_a_calibrated_camera_scale_never_enters_the_hand(tmp_path):
     doc["effects"] = {"camera_scale": {f"q{J + 1}_relative": SCALE}}
     path = tmp_path / "calibrated.toml"
     path.write_text(tomli_w.dumps(doc))
-    plain, cal = load_hand(), load_hand(path)
+    # a calibrated hand builds on the paper's compensation: the plain hand to compare with is that one
+    plain, cal = Hand(load_params(), compensation="paper"), load_hand(path)
     rng = np.random.default_rng(0)
     u = rng.uniform(plain.u_min, plain.u_max, (50, 6))
     for compensated in (False, True):

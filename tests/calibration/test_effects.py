@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from phantom_cad import ParamError, load_params, make_hand
+from phantom_cad import Hand, ParamError, load_params, make_hand
 from phantom_cad.calibration.effects import PARAMS_EFFECTS, get_effect, run_pipeline
 from phantom_cad.params import dump_params, parse
 from phantom_cad.canon import plain as _plain
@@ -96,7 +96,14 @@ def test_tendon_elasticity_known_answer(hand):
     assert expected[0] == pytest.approx(q_mcp(0.9))
 
 
-def test_tendon_elasticity_at_the_file_ratio_is_the_papers_compensation(hand):
+@pytest.fixture(scope="module")
+def paper():
+    """The default hand with the paper's compensation (eq. 11-14), the base fitted effects build on."""
+    return Hand(load_params(), compensation="paper")
+
+
+def test_tendon_elasticity_at_the_file_ratio_is_the_papers_compensation(paper):
+    hand = paper
     u = np.zeros((5, 6))
     u[:, :] = np.linspace(0.1, 1.2, 5)[:, None] * (hand.u_max / hand.u_max.max())
     q = run_pipeline(hand, [(get_effect("tendon_elasticity"), np.array([K_S / EA]))], u, None, 0.0)
@@ -135,7 +142,8 @@ def test_no_effects_no_stack(hand):
     assert hand.effects is None
 
 
-def test_effects_reach_forward_and_compensated_semantics(hand):
+def test_effects_reach_forward_and_compensated_semantics(paper):
+    hand = paper
     u = np.linspace(hand.u_min, hand.u_max, 7)
     same = with_effects({"tendon_elasticity": {"compliance_per_m": K_S / EA}})
     assert np.allclose(same.forward(u, compensated=True), hand.forward(u, compensated=True), atol=1e-12)
