@@ -544,3 +544,23 @@ def test_the_cmc_base_keeps_clear_of_the_palms_heel(tmp_path, capsys, document):
             ">= print.hole_clearance_mm = 0.2 mm")
     for code, err, files in runs:
         assert (code, err, files) == (2, [want], ["hand.toml"])
+
+
+def test_tendons_too_soft_for_the_routed_statics(tmp_path, capsys, document):
+    """The model's compensation is the printed routing's statics (kinematics.statics): each loop
+    carries the return cord's pull on every joint beyond it and stretches over its whole strand, so
+    it takes back more of a coupled joint's motion than the paper's eq. (13) says. At EA = 35 N the
+    middle finger's DIP would extend while its MCP flexes (eq. 13 alone still gives it a positive
+    coupling down to about 24 N): ``params validate`` and ``build`` refuse the file, as ``Hand``
+    would; at 50 N it validates."""
+    document["mechanics"]["tendon_EA_N"] = 35.0
+    parse(document)                                   # eq. (13)'s own check passes
+    path, runs = _refused_by_the_command_line(tmp_path, capsys, document)
+    for code, err, files in runs:
+        assert code == 2 and files == ["hand.toml"] and len(err) == 1, (code, err, files)
+        assert err[0].startswith(f"error: {path}: mechanics.tendon_EA_N = 35.0: with spring_k_N_per_m = 200 the "
+                                 "strands' stretch (the routed statics) leaves middle DIP a coupling of -0.1"), err
+    from phantom_cad.cad import preflight
+
+    document["mechanics"]["tendon_EA_N"] = 50.0
+    preflight.check(parse(document))

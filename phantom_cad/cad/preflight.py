@@ -26,7 +26,9 @@ def check(params: HandParams) -> None:
     CMC pulley's cavity a wall under the dorsal face; and if the routing model finds no clamp
     position for a loop or a drive (``routing.routes`` raises the ParamError: a joint's travel too
     large for its loop's pulleys and carrier), or a finger drive's coupler has no room in its palm
-    channel or does not come out at the service angle (``couplers.couplers``), or if the palm's heel
+    channel or does not come out at the service angle (``couplers.couplers``), or if the tendons are
+    too soft for the routed statics to couple every joint (``statics.hand_statics``: what ``Hand``
+    computes, so a file that validates makes a model), or if the palm's heel
     reaches past the metacarpal block's front; and if the thenar's cuts (journal, cavity, turn) come
     within two perimeters of a finger socket's magnet pockets (``thenar.socket_pocket_gap``), or a
     servo's flange screw pilot opens above the forearm module's top (``forearm_layout.pilot_headroom``),
@@ -34,7 +36,7 @@ def check(params: HandParams) -> None:
     from ..kinematics import couplers
     from ..kinematics import forearm_layout as FL
     from ..kinematics import frames as F
-    from ..kinematics import routing
+    from ..kinematics import routing, statics
     from ..kinematics import thenar as TH
 
     src = params.source
@@ -92,3 +94,4 @@ def check(params: HandParams) -> None:
                              "limiters)", src)
     routing.routes(params)
     couplers.couplers(params)
+    statics.hand_statics(params)
