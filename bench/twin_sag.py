@@ -26,23 +26,15 @@ def main(folder: Path) -> None:
     import mujoco
 
     from phantom_cad import load_hand
-    from phantom_cad.kinematics.topology import JOINTS, SERVOS
+    from phantom_cad.export import twin
+    from phantom_cad.kinematics.topology import JOINTS
 
     hand = load_hand()
     m = mujoco.MjModel.from_xml_path(str(folder / "description" / "mjcf" / "scene.xml"))
     m.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT
     d = mujoco.MjData(m)
-    q_adr = [m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j.name)] for j in JOINTS]
-    u_adr = [m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, s.name)] for s in SERVOS]
-    lo, hi = m.actuator_ctrlrange[:, 0], m.actuator_ctrlrange[:, 1]
-    commands = []
-    for k in range(len(SERVOS)):
-        for f in (0.5, 1.0):
-            u = lo.copy()
-            u[k] += f * (hi[k] - lo[k])
-            commands.append(u)
-    commands += [lo + f * (hi - lo) for f in (0.5, 1.0)]
-    every = int(0.05 / m.opt.timestep)
+    q_adr, u_adr = twin.addresses(mujoco, m)
+    commands = twin.sweep(m.actuator_ctrlrange[:, 0], m.actuator_ctrlrange[:, 1], (0.5, 1.0), (0.5, 1.0))
     print("| gravity along (palm frame) | " + " | ".join(KINDS) + " |")
     print("|---|" + "---|" * len(KINDS))
     for axis in range(3):
@@ -53,13 +45,7 @@ def main(folder: Path) -> None:
             for u in commands:
                 mujoco.mj_resetDataKeyframe(m, d, 0)
                 d.ctrl[:] = u
-                still = 0
-                for i in range(1, int(10.0 / m.opt.timestep)):
-                    mujoco.mj_step(m, d)
-                    if i % every == 0:
-                        still = still + 1 if np.abs(d.qvel).max() < 1e-5 else 0
-                        if still == 4:
-                            break
+                twin.settle(mujoco, m, d, 1e-5, 10.0)
                 err = np.maximum(err, np.abs(d.qpos[q_adr] - hand.forward(d.qpos[u_adr], compensated=True)))
             cells = [math.degrees(max(err[j.index] for j in JOINTS if j.key == key)) for key in KINDS.values()]
             print(f"| {'+-'[sign < 0]}{'xyz'[axis]} | " + " | ".join(f"{c:.2f}" for c in cells) + " |")

@@ -28,8 +28,9 @@ KINDS = {"MCP": ("mcp",), "PIP": ("pip",), "DIP": ("dip",), "thumb MP": ("mp",),
 def errors(kind: str, folder: Path) -> dict[str, np.ndarray]:
     import mujoco
 
+    from phantom_cad.export import twin
     from phantom_cad.kinematics.model import Hand
-    from phantom_cad.kinematics.topology import JOINTS, SERVOS
+    from phantom_cad.kinematics.topology import JOINTS
     from phantom_cad.params import parse
     from tests.support.hands import hand_document
 
@@ -38,28 +39,14 @@ def errors(kind: str, folder: Path) -> dict[str, np.ndarray]:
     m = mujoco.MjModel.from_xml_path(str(folder / "description" / "mjcf" / "scene.xml"))
     m.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT | mujoco.mjtDisableBit.mjDSBL_GRAVITY
     d = mujoco.MjData(m)
-    q_adr = [m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j.name)] for j in JOINTS]
-    u_adr = [m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, s.name)] for s in SERVOS]
-    lo, hi = m.actuator_ctrlrange[:, 0], m.actuator_ctrlrange[:, 1]
-    commands = []
-    for k in range(len(SERVOS)):
-        for f in (0.25, 0.5, 0.75, 1.0):
-            u = lo.copy()
-            u[k] += f * (hi[k] - lo[k])
-            commands.append(u)
-    commands += [lo + f * (hi - lo) for f in (0.3, 0.6, 1.0)]
+    q_adr, u_adr = twin.addresses(mujoco, m)
+    commands = twin.sweep(m.actuator_ctrlrange[:, 0], m.actuator_ctrlrange[:, 1], (0.25, 0.5, 0.75, 1.0),
+                          (0.3, 0.6, 1.0))
     err = {c: np.zeros(len(JOINTS)) for c in hands}
-    every = int(0.05 / m.opt.timestep)
     for u in commands:
         mujoco.mj_resetDataKeyframe(m, d, 0)
         d.ctrl[:] = u
-        still = 0       # at rest at four checks 0.05 s apart: not a swing's turning point
-        for i in range(1, int(10.0 / m.opt.timestep)):
-            mujoco.mj_step(m, d)
-            if i % every == 0:
-                still = still + 1 if np.abs(d.qvel).max() < 1e-6 else 0
-                if still == 4:
-                    break
+        twin.settle(mujoco, m, d, 1e-6, 10.0)
         for c, hand in hands.items():
             model = hand.forward(d.qpos[u_adr], compensated=True)
             err[c] = np.maximum(err[c], np.abs(d.qpos[q_adr] - model))

@@ -43,6 +43,7 @@ from ..kinematics.hand_params import HandParams
 from ..kinematics.model import Hand
 from ..kinematics.topology import CMC_Q, JOINTS, LINK_NAMES, SERVOS, joint
 from ..kinematics.vectors import clipped_acos
+from . import twin
 from .pipeline import export_problem
 
 #: poses: position (mm) and rotation (deg) tolerances of the issue
@@ -214,20 +215,6 @@ def _mj_name(mujoco, m, obj, i) -> str:
     return mujoco.mj_id2name(m, obj, i) or ""
 
 
-def settle_twin(mujoco, m, d) -> None:
-    """Step the twin until it is at rest (every joint slower than :data:`TWIN_SETTLED` at four
-    checks 0.05 s apart: not a swing's turning point), at most :data:`TWIN_SETTLE_S` of
-    simulated time."""
-    check = max(1, int(0.05 / m.opt.timestep))
-    still = 0
-    for i in range(1, int(TWIN_SETTLE_S / m.opt.timestep)):
-        mujoco.mj_step(m, d)
-        if i % check == 0:
-            still = still + 1 if np.abs(d.qvel).max() < TWIN_SETTLED else 0
-            if still == 4:
-                return
-
-
 def mjcf_rows(export: Export, params: HandParams, hand: Hand, U: np.ndarray, settle: int) -> tuple[list[Row], dict]:
     """The MJCF's rows, and its inertials by body (for :func:`inertial_rows`)."""
     import mujoco
@@ -304,7 +291,7 @@ def mjcf_rows(export: Export, params: HandParams, hand: Hand, U: np.ndarray, set
         mujoco.mj_resetDataKeyframe(m, d, max(key, 0))
         for k, a in act.items():
             d.ctrl[a] = u[k]
-        settle_twin(mujoco, m, d)
+        twin.settle(mujoco, m, d, TWIN_SETTLED, TWIN_SETTLE_S)
         reached = np.array(u, float)
         for k, i in hinge.items():
             reached[k] = d.qpos[m.jnt_qposadr[i]] if i >= 0 else math.nan

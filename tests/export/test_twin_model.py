@@ -18,8 +18,9 @@ import math
 import numpy as np
 import pytest
 
+from phantom_cad.export import twin
 from phantom_cad.kinematics.model import Hand
-from phantom_cad.kinematics.topology import JOINTS, SERVOS
+from phantom_cad.kinematics.topology import JOINTS
 from phantom_cad.params import parse
 from tests.support.hands import HANDS, hand_document
 
@@ -42,28 +43,12 @@ def _errors(m, hand, fractions=(0.25, 0.5, 0.75, 1.0), together=(0.3, 0.6, 1.0),
     and all servos together at ``together``; the twin at rest (:data:`REST`, within ``seconds``
     of simulated time) before it is read."""
     d = mujoco.MjData(m)
-    q_adr = [m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j.name)] for j in JOINTS]
-    u_adr = [m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, s.name)] for s in SERVOS]
-    lo, hi = m.actuator_ctrlrange[:, 0], m.actuator_ctrlrange[:, 1]
-    commands = []
-    for k in range(len(SERVOS)):
-        for f in fractions:
-            u = lo.copy()
-            u[k] += f * (hi[k] - lo[k])
-            commands.append(u)
-    commands += [lo + f * (hi - lo) for f in together]
+    q_adr, u_adr = twin.addresses(mujoco, m)
     err = np.zeros(len(JOINTS))
-    every = int(0.05 / m.opt.timestep)
-    for u in commands:
+    for u in twin.sweep(m.actuator_ctrlrange[:, 0], m.actuator_ctrlrange[:, 1], fractions, together):
         mujoco.mj_resetDataKeyframe(m, d, 0)
         d.ctrl[:] = u
-        still = 0       # at rest at consecutive checks over 0.2 s: not a swing's turning point
-        for i in range(1, int(seconds / m.opt.timestep)):
-            mujoco.mj_step(m, d)
-            if i % every == 0:
-                still = still + 1 if np.abs(d.qvel).max() < REST else 0
-                if still == 4:
-                    break
+        twin.settle(mujoco, m, d, REST, seconds)
         assert np.abs(d.qvel).max() < REST, "the twin did not come to rest"
         err = np.maximum(err, np.abs(d.qpos[q_adr] - hand.forward(d.qpos[u_adr], compensated=True)))
     return err
