@@ -66,6 +66,17 @@ def servo_angle(q_ref, d1, d2, alpha, r, constants=None):
     return (L0 - L) / r
 
 
+def stretched_servo_angle(q_ref, alpha, r, stretch, constants):
+    """The servo angle that puts the reference joint at q_ref when the drive stretches:
+    u = (L0 - L + stretch L / sin(alpha - q_ref)) / r, ``stretch`` the drive's stretch per unit
+    of L / sin(alpha - q_ref) (its tension over its moment arm d1 d2 sin / L, times L_d / EA;
+    kinematics.statics). ``constants``: :func:`chord_constants`."""
+    sumsq, two_d1d2, L0 = constants
+    phi = alpha - q_ref
+    L = np.sqrt(sumsq - two_d1d2 * np.cos(phi))
+    return (L0 - L + stretch * L / np.sin(phi)) / r
+
+
 def reference_angle_rate(u, d1, d2, alpha, r):
     """d q_ref / d u = r L / (d1 d2 sin(phi)), phi the current included angle."""
     L = chord_rest(d1, d2, alpha) - r * u

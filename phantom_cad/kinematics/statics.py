@@ -171,12 +171,11 @@ def servo_angle(s, chain: ChainParams, statics: ChainStatics, T=None):
     """u of reference angle s: (L0 - L(s) + F_d(s) L_d / EA) / r, in closed form. ``T`` the
     return cord's tension at s, when known."""
     g = chain.guide
-    phi = g.alpha - s
-    L = np.sqrt(g.d1 * g.d1 + g.d2 * g.d2 - 2.0 * g.d1 * g.d2 * np.cos(phi))
     if T is None:
         m = statics.regime(s)
         T = statics.t[m] * s + statics.t0[m]
-    return (g.L0 - L + statics.gamma * T * L / np.sin(phi)) / chain.servo_radius
+    return cf.stretched_servo_angle(s, g.alpha, chain.servo_radius, statics.gamma * T,
+                                    cf.chord_constants(g.d1, g.d2, g.alpha))
 
 
 def reference_angle(u, chain: ChainParams, statics: ChainStatics, rate: bool = False):
@@ -276,9 +275,7 @@ class RoutedLaw:
         if not self.linear:
             return self._per_chain(servo_angle, s, columns)
         k = self._col if columns else self._row
-        phi = k.alpha - s
-        L = np.sqrt(k.sumsq - k.two * np.cos(phi))
-        return (k.L0 - L + k.gamma_t * s * L / np.sin(phi)) / k.r
+        return cf.stretched_servo_angle(s, k.alpha, k.r, k.gamma_t * s, (k.sumsq, k.two, k.L0))
 
     def reference_angles(self, u: np.ndarray, columns: bool = False, out: np.ndarray | None = None,
                          work=None) -> np.ndarray:
