@@ -10,7 +10,8 @@ beside the fit-test coupon (``gauge/``). The plate's outline, seen from above:
   parameter file's Table I ranges rounded up to a step), each ``face_length`` long: every face
   turns by one step from the one before, so the corners lie on a circle of ``radius`` (the
   longest finger's length beyond its MCP: the gauge spans the image a finger does);
-* a chord back to the origin closes the outline (not a reference face).
+* two radii of that circle close the outline (a slice of it; they are not reference faces): the
+  corners next to them stay 82.5 degrees wide, so the marks keep clear of them.
 
 Each reference face but the datum carries its angle as marks engraved in the top face: one
 dimple per step (15 degrees: one, 90 degrees: six), in a row along the face's middle.
@@ -47,7 +48,8 @@ COLOR = (0.45, 0.65, 0.85)
 class AngleGauge:
     """The angle gauge of a hand's parameters (see the module doc). Refuses (ParamError) a hand
     whose joint ranges reach 180 degrees less a step (the outline would not close convex), or
-    whose faces are too short for their marks."""
+    whose faces are too short for their marks (or whose marks would come within a dimple's radius
+    of an edge)."""
 
     name = NAME
     color = COLOR
@@ -65,6 +67,11 @@ class AngleGauge:
             raise ParamError("fingers.*.length_fraction", round(self.radius, 3),
                              f"the angle gauge's faces ({self.face_length:.1f} mm, from the longest finger) are "
                              f"shorter than their marks need ({need:.1f} mm)", params.source)
+        wall = self.mark_clearance()
+        if wall < MARK_DIAMETER / 2.0:
+            raise ParamError("fingers.*.length_fraction", round(self.radius, 3),
+                             f"the angle gauge's marks leave {wall:.2f} mm of wall to its outline, less than "
+                             f"{MARK_DIAMETER / 2.0:g} mm", params.source)
 
     # -- dimensions (mm, degrees) ----------------------------------------------------
     @property
@@ -99,12 +106,15 @@ class AngleGauge:
 
     @cached_property
     def corners(self) -> np.ndarray:
-        """The outline's corners (n + 1, 2): the origin, then the end of each reference face."""
+        """The outline's corners (n + 2, 2): the origin, the end of each reference face, then the
+        circle's centre."""
         pts = [np.zeros(2)]
         for a in self.angles_deg:
             t = math.radians(a)
             pts.append(pts[-1] + self.face_length * np.array([math.cos(t), math.sin(t)]))
-        return np.array(pts)
+        # the centre: the datum's midpoint moved inward by the chord's distance from the centre
+        centre = np.array([self.face_length / 2.0, self.radius * math.cos(math.radians(STEP_DEG) / 2.0)])
+        return np.array([*pts, centre])
 
     def normal(self, angle_deg: float) -> np.ndarray:
         """The outward normal (x, y) of the reference face at ``angle_deg``: the datum's, (0, -1),
@@ -125,6 +135,19 @@ class AngleGauge:
             for i in range(k):
                 out.append(tuple(mid + (i - (k - 1) / 2.0) * MARK_PITCH * along))
         return out
+
+    def mark_clearance(self) -> float:
+        """The least distance (mm) from a dimple's centre to an edge of the outline (less its radius:
+        how much wall it leaves)."""
+        c = self.corners
+        edges = list(zip(c, np.roll(c, -1, axis=0)))
+        out = math.inf
+        for p in self.marks():
+            for a, b in edges:
+                d = (b - a) / np.linalg.norm(b - a)
+                e = np.asarray(p) - a
+                out = min(out, abs(float(d[0] * e[1] - d[1] * e[0])))
+        return out - MARK_DIAMETER / 2.0
 
     def area(self) -> float:
         """The outline's area (shoelace)."""

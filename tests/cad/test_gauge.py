@@ -2,9 +2,9 @@
 
 Known answers by hand from the parameter document: the outline's corners lie on a circle of the
 longest finger's length beyond its MCP (hand_length_mm x the proximal, middle and distal fractions
-of the middle finger), one corner every 15 degrees; so the plate is n triangles of the circle's
-centre less the one on the chord, 0.5 R^2 (n sin 15 - sin 15 n), two palm walls thick, less one
-dimple per step on every face but the datum (n (n - 1) / 2 in all).
+of the middle finger), one corner every 15 degrees, and two radii close it; so the plate is n
+triangles of the circle's centre, 0.5 R^2 n sin 15, two palm walls thick, less one dimple per step
+on every face but the datum (n (n - 1) / 2 in all).
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ def _expected(doc):
     angles = [15.0 * k for k in range(n + 1)]
     faces = n + 1
     t = 2.0 * doc["palm"]["wall_mm"]
-    area = 0.5 * R * R * (faces * math.sin(math.radians(15.0)) - math.sin(math.radians(15.0 * faces)))
+    area = 0.5 * R * R * faces * math.sin(math.radians(15.0))
     dimples = faces * (faces - 1) // 2
     return angles, R, t, area * t - dimples * math.pi * 0.75 ** 2 * 0.6
 
@@ -73,7 +73,24 @@ def test_reference_faces_measured_on_the_solid(gauge, document):
     for a in angles:
         assert a in measured, (a, sorted(measured))
         assert measured[a] == pytest.approx(2 * R * math.sin(math.radians(7.5)) * t, rel=1e-9)
-    assert len(sides) == len(angles) + 1            # and the closing chord
+    assert len(sides) == len(angles) + 2            # and the two closing radii
+    assert g.verify(shape) == []
+
+
+def test_gauge_of_the_170_mm_hand():
+    """params/examples/small.toml: shorter fingers, shorter faces; every dimple stays inside."""
+    from phantom_cad import load_params
+    from phantom_cad.canon import plain
+    from phantom_cad.cad.gauge import AngleGauge
+    from phantom_cad.params import DEFAULT_PARAMS
+
+    small = load_params(DEFAULT_PARAMS.parent / "examples" / "small.toml")
+    g = AngleGauge(small)
+    angles, R, t, volume = _expected(plain(small.document))
+    assert R == pytest.approx(170.0 * (0.266 + 0.170 + 0.108)) and list(g.angles_deg) == angles
+    assert g.mark_clearance() > 1.0
+    shape = g.build()
+    assert shape.volume == pytest.approx(volume, rel=1e-9)
     assert g.verify(shape) == []
 
 
