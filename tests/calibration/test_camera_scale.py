@@ -158,3 +158,23 @@ def test_camera_scales_replace_a_hand_effect_on_evidence(hand):
     fitted = out["effects"]["camera_scale"]["parameters"]
     for j in range(15):
         assert fitted[f"{Q_COLUMNS[j]}_relative"]["value"] == pytest.approx(c[j], abs=0.004), Q_COLUMNS[j]
+
+
+@pytest.mark.slow       # the command line, in a process of its own
+def test_the_calibrated_file_keeps_the_hand_effect(spread, tmp_path):
+    """What diagnose selected, fitted and written by `fit`: the file carries the tendon's
+    compliance (the control law compensates it) and no camera scale."""
+    from phantom_cad.calibration.data import write_measurements
+    from phantom_cad.calibration.labels import Labels
+
+    from ._cli import run_cli
+
+    d, out = spread
+    m = d.measurements
+    write_measurements(tmp_path / "data.csv", m.u, m.q, sweep=Labels(m.sweep_ids, m.sweep), q_columns=m.q_columns)
+    r = run_cli("fit", tmp_path / "data.csv", "--effects", ",".join(out["selected"]), "--out", tmp_path / "cal.toml")
+    assert r.returncode == 0, r.stderr
+    effects = load_document(tmp_path / "cal.toml")["effects"]
+    assert "camera_scale" not in effects
+    assert effects["tendon_elasticity"]["compliance_per_m"] == pytest.approx(0.15, abs=0.01)
+    assert "tendon_elasticity" in load_hand(tmp_path / "cal.toml").effects.names
