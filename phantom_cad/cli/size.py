@@ -16,7 +16,8 @@ GRASP_DIAMETER = 35.0
 #: the 95th-percentile adult palm at the reference hand (mm): breadth, and thickness with the heel
 #: (tests/cad/test_human_scale.py), scaled with the hand length
 PALM_ENVELOPE = (95.0, 35.0)
-#: a human forearm's breadth near the wrist at the reference hand (mm), scaled with the hand length
+#: the breadth (mm) a forearm module within a human forearm may take at the reference hand, scaled with
+#: the hand length (a design target, docs/sizing.md)
 FOREARM_BREADTH = 80.0
 
 
@@ -109,8 +110,9 @@ def report(p, searched: bool) -> list[str]:
         xs.append((T[:3, :3] @ e.T)[0] + T[0, 3])
     xs = np.concatenate(xs) * 1e3
     fa = float(xs.max() - xs.min())
-    out.append(f"forearm module: the servos span {fa:.0f} mm across; a human forearm is about "
-               f"{FOREARM_BREADTH * k:.0f} mm broad here{' (wider: docs/sizing.md, limitations)' if fa > FOREARM_BREADTH * k else ''}")
+    wide = " (wider: docs/sizing.md, limitations)" if fa > FOREARM_BREADTH * k else ""
+    out.append(f"forearm module: the servos span {fa:.0f} mm across; the target within a human forearm is "
+               f"{FOREARM_BREADTH * k:.0f} mm at this hand length{wide}")
     walls = {"palm.wall_mm": p.palm.wall, "cad.cheek_mm": p.cad.cheek}
     thinnest = min(walls, key=walls.get)
     out.append(f"thinnest designed wall: {thinnest} = {mm(walls[thinnest]):g} mm (the rules' minimum "
