@@ -284,3 +284,47 @@ def test_a_sized_hand_builds(tmp_path, part_cache):
     dump_params(got.document, path)
     result = build_hand(path, tmp_path / "export", cache_dir=part_cache, jobs=2, slice=False, render=False)
     assert result.params_digest == got.params.digest and result.hand == "sized_160"
+
+
+def test_pulley_radii_keep_the_ratio_inside_the_boss():
+    assert S.pulley_radii((5.0, 4.0, 5.0), 16.0, 1.8, 1.5) == (5.0, 4.0, 5.0)
+    r = S.pulley_radii((5.0, 4.0, 5.0), 9.0, 1.8, 1.5)
+    assert max(r) == pytest.approx(9.0 / 2 - 0.75, abs=1e-3) and r[0] / r[1] == pytest.approx(5 / 4, abs=1e-3)
+    # the smallest would no longer clear the axle bore and half a cord
+    assert all(math.isnan(v) for v in S.pulley_radii((5.0, 4.0, 5.0), 6.0, 1.8, 1.5))
+
+
+def test_section_moves_the_target_inside_the_bounds():
+    assert S.section(15.26, 12.2, 16.0) == 15.5
+    assert S.section(11.0, 12.2, 16.0) == 12.5
+    assert S.section(17.0, 12.2, 15.605) == 15.5
+    assert math.isnan(S.section(14.0, 12.2, 12.4))
+
+
+def test_palm_thickness_is_the_thinnest_that_keeps_the_turn():
+    """At 150 mm the reference's palm scaled (18.5 mm) leaves the thumb drive's turn short of its
+    wall under the dorsal face: the solver raises it to the first half millimetre that keeps it."""
+    from phantom_cad.kinematics import frames as F
+    from phantom_cad.kinematics import thenar as TH
+    from phantom_cad.sizing import palm_thickness
+
+    doc = build_document(Person(150.0, 65.0))
+    t = doc["palm"]["thickness_mm"]
+    assert t > S.scaled(24.0, 150.0)
+    assert palm_thickness(doc) == t
+
+    def turn(thickness):
+        d = dict(doc, palm=dict(doc["palm"], thickness_mm=thickness))
+        p = parse(d)
+        return TH.thenar_margins(p, F.T_palm_thumb_cmc_base(p))["turn"]
+    assert turn(t) >= 0.0 > turn(t - S.STEP)
+
+
+def test_the_nearest_length_that_works_is_where_the_rules_start_to_hold():
+    from phantom_cad.sizing import nearest_length
+
+    n = nearest_length(Person(100.0, 75.0), preflight.check)
+    assert n is not None and 100.0 < n < 150.0
+    preflight.check(parse(build_document(Person(n, 75.0))))
+    with pytest.raises(Exception):
+        preflight.check(parse(build_document(Person(n - 1.0, 75.0))))
