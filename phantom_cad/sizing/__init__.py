@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 from ..errors import ParamError, UserError
-from ..kinematics.dimensions import digit_entry, printed_hole
+from ..kinematics.dimensions import FLANK, digit_entry, printed_hole
 from ..kinematics.hand_params import HandParams
 from ..kinematics.topology import DIGITS, FINGERS, chain
 from ..params import DEFAULT_PARAMS, load_document, parse
@@ -75,8 +75,10 @@ def _check_range(person: Person) -> None:
         raise UserError(f"--side {person.side}: must be right or left")
 
 
-def _refuse(digit: str, seg: str, length: float, given: bool, fraction: float, floor: float, ceiling: float,
-            factor: float, clearance: float, why: str) -> UserError:
+def _refuse(digit: str, seg: str, length: float, given: bool, floor: float, ceiling: float, factor: float,
+            clearance: float, why: str) -> UserError:
+    """The thickness a digit needs does not fit in one of its phalanges: Infeasible (:func:`size`
+    names the nearest hand length) or, for a measured phalanx, the measured length that works."""
     rule = (f"the {digit} {seg} phalanx ({length:.2f} mm) leaves the {digit} at most {ceiling:.2f} mm thick (its "
             f"two joint bosses and clearances must fit in it), the {digit} needs at least {floor:.2f} mm ({why})")
     if not given:
@@ -138,21 +140,21 @@ def build_document(person: Person) -> dict:
             ratio = max(r["pulley_radius_mm"].values()) / min(r["pulley_radius_mm"].values())
             t_floor = max(bearing[1], 2.0 * (ratio * (axle_bore + cord / 2.0) + cord / 2.0))
             w_floor = S.digit_width_floor(cl, cad["cheek_mm"], hw["tendon_diameter_mm"], cad["spring_diameter_mm"],
-                                          0.8)
+                                          FLANK * 1e3)
             why = f"the joint bearing ({bearing[1]:g} mm) and pulleys outside the axle bore"
         else:
             t_floor = S.finger_thickness_floor(magnet, doc["palm"]["wall_mm"], hw["tendon_diameter_mm"], cl,
                                                pr["magnet_clearance_mm"], comp, bearing[1])
             w_floor = S.finger_width_floor(magnet, doc["palm"]["wall_mm"], cl, pr["magnet_clearance_mm"], comp,
-                                           cad["cheek_mm"], hw["tendon_diameter_mm"], cad["spring_diameter_mm"], 0.8)
+                                           cad["cheek_mm"], hw["tendon_diameter_mm"], cad["spring_diameter_mm"],
+                                           FLANK * 1e3)
             why = (f"the tendon enters its base below two {magnet[0]:g} x {magnet[1]:g} mm magnet pockets, one "
                    f"palm wall above the palmar face")
         thick = S.section(r["thickness_mm"] * hl / S.REFERENCE_LENGTH, t_floor, ceiling)
         if math.isnan(thick):
             far = spec.keys[spec.segments.index(seg)] if spec.segments.index(seg) < len(spec.keys) else None
             factor = 1.5 if far is not None and limits[far] > math.pi / 2.0 else 1.0
-            raise _refuse(d, seg, lengths[d][seg], seg in given, r["length_fraction"][seg], S.up(t_floor + 1e-6),
-                          ceiling, factor, cl, why)
+            raise _refuse(d, seg, lengths[d][seg], seg in given, S.up(t_floor + 1e-6), ceiling, factor, cl, why)
         w_target = given.get("width", r["width_mm"] * person.hand_breadth / S.REFERENCE_BREADTH)
         if d == "thumb":
             w_ceiling = 2.0 * (lengths[d]["metacarpal"] - thick / 2.0 - cl)
@@ -160,9 +162,10 @@ def build_document(person: Person) -> dict:
             w_ceiling = S.MAX_FINGER_PITCH * 1e3 - S.PITCH_CLEARANCE
         width = S.section(w_target, w_floor, w_ceiling)
         if math.isnan(width):
+            why = (f"its metacarpal, {lengths[d]['metacarpal']:.2f} mm, holds the CMC hub of half its width"
+                   if d == "thumb" else "the finger pitch's largest less the room between flexed fingers")
             raise Infeasible(f"the {d} must be at least {w_floor:.2f} mm wide (its clevis and magnet pockets) and "
-                             f"at most {w_ceiling:.2f} mm (its metacarpal, {lengths[d]['metacarpal']:.2f} mm, holds the "
-                             "CMC hub of half its width)")
+                             f"at most {w_ceiling:.2f} mm ({why})")
         widths[d] = width
         radii = S.pulley_radii(tuple(r["pulley_radius_mm"][k] for k in spec.keys), thick, axle_bore, cord)
         if math.isnan(radii[0]):

@@ -1,7 +1,7 @@
 """The size-dependent choices of a parameter file, each solved from a person's measurements and
 the rules the file must keep (``params.rules``, ``params.schema``), not scaled from the default.
-Numbers in millimetres and degrees, as the file writes them; each function is one choice.
-numpy-free but for :func:`cmc_placement`."""
+Numbers in millimetres and degrees, as the file writes them (the rules' constants, SI, are converted
+where used); each function is one choice."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import math
 
 from ..kinematics import closed_form as cf
 from ..kinematics.dimensions import printed_hole, slot_back
-from ..params.rules import MAX_FINGER_PITCH
+from ..params.rules import MAX_FINGER_PITCH, MIN_WALL
 
 #: the reference hand: params/phantom.toml, a 50th-percentile adult man (docs/sizing.md)
 REFERENCE_LENGTH = 189.0
@@ -77,7 +77,7 @@ def finger_width_floor(magnet: tuple[float, float], wall: float, clearance: floa
     outside each across its base (params.rules._magnets), and the clevis slot between two cheeks
     holding a loop's hub and the tongue with its return groove (params.rules._joints)."""
     pocket = printed_hole(magnet[0] + 2.0 * magnet_clearance, compensation)
-    magnets = 2.0 * pocket + wall + 2.0 * 0.8
+    magnets = 2.0 * pocket + wall + 2.0 * MIN_WALL * 1e3
     return max(magnets, digit_width_floor(clearance, cheek, tendon, spring, flank))
 
 
