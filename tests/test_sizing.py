@@ -201,6 +201,19 @@ def test_bad_arguments_are_one_error_line(tmp_path, capsys, argv, words):
     assert not out.exists()
 
 
+def test_a_hand_whose_thumb_misses_a_pad_is_refused(tmp_path, capsys):
+    """150 mm long and 105 mm broad, the reference placement scaled: the ring's pad never faces the
+    thumb's; the line names it and the breadth of the reference's proportion, which works."""
+    out = tmp_path / "hand.toml"
+    code, _, err = run(["size", "--hand-length", 150, "--hand-breadth", 105, "--out", out, "--no-search"], capsys)
+    lines = err.splitlines()
+    assert code == 2 and len(lines) == 1, err
+    assert "the ring pad never faces the thumb's" in lines[0] and "nearest that works: --hand-breadth 67" in lines[0]
+    assert not out.exists()
+    code, _, err = run(["size", "--hand-length", 150, "--hand-breadth", 67, "--out", out, "--no-search"], capsys)
+    assert code == 0 and out.exists(), err
+
+
 def test_a_user_file_is_not_replaced(tmp_path, capsys):
     out = tmp_path / "mine.toml"
     out.write_text("my notes\n")

@@ -269,12 +269,19 @@ def _margin(params: HandParams) -> float:
     return min(reach[f].margin for f in opposition.OPPOSED)
 
 
+#: the placement searches (population, generations) tried in turn, one seed each, while the best
+#: placement leaves the opposition margin below zero: ``params opposition --solve``'s, then larger
+#: ones (the landscape has several optima: docs/opposition.md)
+SEARCHES = ((8, 60), (12, 80), (12, 80))
+
+
 def size(person: Person, check: Callable[[HandParams], None] | None = None, search: bool = True,
-         seed: int = 0) -> Sizing:
+         seed: int = 0, searches: int = len(SEARCHES)) -> Sizing:
     """The person's validated parameter file. ``check``: what else a file must pass (the CAD
     layer's ``preflight.check``); ``search``: search the CMC placement (seconds) rather than keep
-    the reference's scaled with the hand length. Of the two placements, the one with the larger
-    opposition margin that validates is kept. A UserError or ParamError (one line) when nothing
+    the reference's scaled with the hand length, with up to ``searches`` of :data:`SEARCHES` (seeds
+    ``seed``, ``seed + 1``, ...) while the margin stays below zero. Of the placements, the one with
+    the larger opposition margin that validates is kept. A UserError or ParamError (one line) when nothing
     validates."""
     check = check or (lambda p: None)
     try:
@@ -287,27 +294,34 @@ def size(person: Person, check: Callable[[HandParams], None] | None = None, sear
         nearest = (f"--hand-length {found:g}" if found is not None else
                    f"none between {HAND_LENGTH_RANGE[0]:g} and {HAND_LENGTH_RANGE[1]:g} mm with these segments")
         raise UserError(f"--hand-length {person.hand_length:g}: {rule}; nearest that works: {nearest}") from None
-    candidates = [(doc, False)]
-    if search:
-        from ..kinematics import opposition
-        from ..kinematics.model import Hand
-
-        sol = opposition.solve(Hand(start), seed=seed, constraint=opposition.thenar_constraint(start))
-        solved = copy.deepcopy(doc)
-        solved["palm"]["thumb_cmc_offset_mm"] = [round(v * 1e3, 4) for v in sol.offset]
-        solved["palm"]["thumb_cmc_axis_deg"] = [round(math.degrees(v), 4) for v in sol.axis]
-        candidates.append((solved, True))
     best, error = None, None
-    for d, searched in candidates:
+
+    def consider(d: dict, searched: bool) -> None:
+        nonlocal best, error
         try:
             p = parse(d)
             check(p)
         except ParamError as exc:
             error = error or exc
-            continue
+            return
         m = _margin(p)
         if best is None or m > best.margin + 1e-9:
             best = Sizing(d, p, m, searched)
+
+    consider(doc, False)
+    if search:
+        from ..kinematics import opposition
+        from ..kinematics.model import Hand
+
+        for k, (population, generations) in enumerate(SEARCHES[:searches]):
+            if k and best is not None and best.margin >= 0.0:
+                break
+            sol = opposition.solve(Hand(start), seed=seed + k, population=population, generations=generations,
+                                   constraint=opposition.thenar_constraint(start))
+            solved = copy.deepcopy(doc)
+            solved["palm"]["thumb_cmc_offset_mm"] = [round(v * 1e3, 4) for v in sol.offset]
+            solved["palm"]["thumb_cmc_axis_deg"] = [round(math.degrees(v), 4) for v in sol.axis]
+            consider(solved, True)
     if best is None:
         raise error
     if not best.margin >= 0.0:
@@ -327,14 +341,14 @@ def opposition_refusal(person: Person, best: Sizing, check, search: bool, seed: 
     reach = opposition.reach(Hand(best.params))
     worst = min(opposition.OPPOSED, key=lambda f: reach[f].margin)
     what = ("never faces the thumb's" if not math.isfinite(reach[worst].gap) or reach[worst].gap > 0.0
-            else f"meets the thumb's at {math.degrees(reach[worst].margin):+.1f} deg, outside the "
+            else f"meets the thumb's {-math.degrees(reach[worst].margin):.1f} deg outside the "
                  f"{math.degrees(opposition.PAD_CONE):g} deg pad cone")
     rule = (f"--hand-length {person.hand_length:g} --hand-breadth {person.hand_breadth:g}: the {worst} pad {what} "
             f"(opposition margin {math.degrees(best.margin):+.1f} deg, must be >= 0 for index, middle and ring)")
     breadth = round(person.hand_length * S.REFERENCE_BREADTH / S.REFERENCE_LENGTH)
     if breadth != person.hand_breadth:
         try:
-            size(replace(person, hand_breadth=breadth), check, search, seed)
+            size(replace(person, hand_breadth=breadth), check, search, seed, searches=1)
             return f"{rule}; nearest that works: --hand-breadth {breadth:g} (the reference hand's proportion)"
         except UserError:
             pass
