@@ -97,7 +97,9 @@ def report(p, searched: bool) -> list[str]:
                "palm (built and closed on by tests/cad)")
     x0, x1 = (mm(v) for v in FL.metacarpal_x(p))
     pts = TH.thenar_points(p, F.T_palm_thumb_cmc_base(p))
-    xt = min(float(v[:, 0].min()) for v in pts.values()) * 1e3
+    # only the journal and the turn set how far radial the thenar block reaches (the pulley's cavity
+    # opens where it reaches past them: kinematics.thenar.thenar_points)
+    xt = min(float(pts[k][:, 0].min()) for k in ("journal", "turn")) * 1e3
     breadth = max(x1, xt) - min(x0, xt)
     thick = mm(p.palm.thickness + p.palm.heel_height)
     env_b, env_t = (v * k for v in PALM_ENVELOPE)
