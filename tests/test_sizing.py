@@ -341,3 +341,10 @@ def test_the_nearest_length_that_works_is_where_the_rules_start_to_hold():
     preflight.check(parse(build_document(Person(n, 75.0))))
     with pytest.raises(Exception):
         preflight.check(parse(build_document(Person(n - 1.0, 75.0))))
+
+
+def test_a_left_hand_is_the_right_one_mirrored():
+    right = build_document(Person(205.0, 95.0))
+    left = build_document(Person(205.0, 95.0, side="left"))
+    assert left["hand"]["side"] == "left" and dict(left, hand=right["hand"]) == right
+    preflight.check(parse(left))
