@@ -285,18 +285,11 @@ def test_the_command_writes_a_file_that_validates(tmp_path, argv):
     assert out.read_text().startswith("# phantom-cad size:")
 
 
-@pytest.mark.slow
-def test_a_sized_hand_builds(tmp_path, part_cache):
-    """One sized hand, 160 x 72 mm, built by the build pipeline: it raises BuildError when a part
-    fails its verification or parts intersect at the rest pose."""
-    from phantom_cad.export.pipeline import build_hand
-    from phantom_cad.params.io import dump_params
-
-    got = size(Person(160.0, 72.0, name="sized_160"), check=preflight.check)
-    path = tmp_path / "sized_160.toml"
-    dump_params(got.document, path)
-    result = build_hand(path, tmp_path / "export", cache_dir=part_cache, jobs=2, slice=False, render=False)
-    assert result.params_digest == got.params.digest and result.hand == "sized_160"
+def test_a_sized_hand_builds(sized_hand):
+    """One sized hand, 160 x 72 mm (tests/conftest.py), built by the build pipeline: it raises
+    BuildError when a part fails its verification or parts intersect at the rest pose."""
+    doc, result = sized_hand
+    assert result.params_digest == parse(doc).digest and result.hand == doc["hand"]["name"]
 
 
 def test_pulley_radii_keep_the_ratio_inside_the_boss():
