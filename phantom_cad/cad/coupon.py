@@ -24,8 +24,10 @@ from functools import cached_property
 
 import numpy as np
 
+from ..canon import plain
 from ..kinematics.hand_params import HandParams
 from .parts.common import Tolerances, as_solid, box, cylinder
+from .print_aid import PrintAid
 
 
 #: the coupon's name (its files: coupon/fit_coupon.step, .stl, .md)
@@ -60,15 +62,31 @@ class Feature:
                 "through": self.through, "check": self.check, "tune": self.tune}
 
 
-class FitCoupon:
+class FitCoupon(PrintAid):
     """The fit-test coupon of a hand's parameters (see the module doc)."""
 
+    kind = "coupon"
     name = NAME
+    title = "the fit-test coupon"
     color = COLOR
+    listed = ("features",)
 
     def __init__(self, params: HandParams):
-        self.params = params
+        super().__init__(params)
         self.tol = Tolerances(params)
+
+    @staticmethod
+    def inputs(params: HandParams) -> dict:
+        """The print settings, the hardware and the wall it is made of."""
+        doc = params.document
+        return {"print": plain(doc["print"]), "hardware": plain(doc["hardware"]),
+                "palm_wall_mm": doc["palm"]["wall_mm"], "name": params.name}
+
+    def subtitle(self) -> str:
+        return f"{len(self.features)} holes at the hand's tolerances; see {NAME}.md"
+
+    def meta(self) -> dict:
+        return {"features": [ft.as_dict() for ft in self.features]}
 
     # -- dimensions (mm) --------------------------------------------------------
     @property

@@ -27,10 +27,12 @@ from functools import cached_property
 
 import numpy as np
 
+from ..canon import plain
 from ..errors import ParamError
 from ..kinematics.hand_params import HandParams
 from ..kinematics.topology import FINGERS
 from .parts.common import as_solid, bd, cylinder, mm
+from .print_aid import PrintAid
 
 #: the gauge's name (its files: gauge/angle_gauge.step, .stl, .md)
 NAME = "angle_gauge"
@@ -45,17 +47,20 @@ MARK_INSET = 4.0
 COLOR = (0.45, 0.65, 0.85)
 
 
-class AngleGauge:
+class AngleGauge(PrintAid):
     """The angle gauge of a hand's parameters (see the module doc). Refuses (ParamError) a hand
     whose joint ranges reach 180 degrees less a step (the outline would not close convex), or
     whose faces are too short for their marks (or whose marks would come within a dimple's radius
     of an edge)."""
 
+    kind = "gauge"
     name = NAME
+    title = "the angle gauge"
     color = COLOR
+    listed = ("faces",)
 
     def __init__(self, params: HandParams):
-        self.params = params
+        super().__init__(params)
         top = self.angles_deg[-1]
         if top + STEP_DEG >= 180.0:
             raise ParamError("fingers.*.limits_rad", round(math.radians(self.largest_limit_deg), 6),
@@ -189,6 +194,21 @@ class AngleGauge:
             if not any(abs(f - a) < 1e-6 for f in found):
                 out.append(f"{NAME}: no side face at {a:g} degrees from the datum (found {found})")
         return out
+
+    @staticmethod
+    def inputs(params: HandParams) -> dict:
+        """The fingers and the thumb (lengths, joint limits), the hand's length, the wall it is made
+        of and the STL tolerance."""
+        doc = params.document
+        return {"hand": plain(doc["hand"]), "fingers": plain(doc["fingers"]), "thumb": plain(doc["thumb"]),
+                "palm_wall_mm": doc["palm"]["wall_mm"], "stl_tolerance_m": params.print.stl_tolerance,
+                "name": params.name}
+
+    def subtitle(self) -> str:
+        return f"reference faces at {', '.join(f'{a:g}' for a in self.angles_deg)} degrees; see {NAME}.md"
+
+    def meta(self) -> dict:
+        return {"faces": self.faces()}
 
     def faces(self) -> list[dict]:
         """The reference faces, for the manifest and the sheet."""

@@ -60,16 +60,14 @@ def build(
             h, rem = divmod(int(totals["print_time_s"]), 3600)
             typer.echo(f"estimated print: {h} h {rem // 60} min, {totals['filament_g']:.0f} g filament "
                        f"(PrusaSlicer defaults; layer height and infill from params)")
-        coupon = result.manifest.get("coupon", {})
-        if coupon:
-            est = coupon.get("print")
-            when = f" ({est['time_s'] / 60:.0f} min, {est['filament_g']:.1f} g)" if est else ""
-            typer.echo(f"print first: {result.out_dir / coupon['stl']}{when}, the fit-test coupon: tune [print] "
-                       f"with it ({result.out_dir / coupon['sheet']})")
-        gauge = result.manifest.get("gauge", {})
-        if gauge:
-            typer.echo(f"before calibrating: {result.out_dir / gauge['stl']}, the angle gauge: measure the camera's "
-                       f"scale on it ({result.out_dir / gauge['sheet']}; docs/calibration.md)")
+        for kind, what in (("coupon", "print first: {stl}{when}, the fit-test coupon: tune [print] with it ({sheet})"),
+                           ("gauge", "before calibrating: {stl}{when}, the angle gauge: measure the camera's scale "
+                                     "on it ({sheet}; docs/calibration.md)")):
+            aid = result.manifest.get(kind, {})
+            if aid:
+                est = aid.get("print")
+                when = f" ({est['time_s'] / 60:.0f} min, {est['filament_g']:.1f} g)" if est else ""
+                typer.echo(what.format(stl=result.out_dir / aid["stl"], when=when, sheet=result.out_dir / aid["sheet"]))
 
 
 def main() -> None:  # pragma: no cover - convenience entry point: python -m phantom_cad.cli.build

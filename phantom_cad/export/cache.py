@@ -95,27 +95,11 @@ def cad_versions() -> dict[str, str | None]:
     }
 
 
-def coupon_key(params: HandParams) -> str:
-    """The fit-test coupon's key: the print settings, the hardware and the wall it is made of."""
-    doc = params.document
+def aid_key(params: HandParams, aid) -> str:
+    """A print aid's key (``cad.print_aid.PrintAid``: what it reads of the parameters)."""
     return sha256(canonical({
         "pipeline": PIPELINE_VERSION,
-        "coupon": {"print": plain(doc["print"]), "hardware": plain(doc["hardware"]),
-                   "palm_wall_mm": doc["palm"]["wall_mm"], "name": params.name},
-        "code": code_digest(),
-        "versions": cad_versions(),
-    }))
-
-
-def gauge_key(params: HandParams) -> str:
-    """The angle gauge's key: the fingers and the thumb (lengths, joint limits), the hand's length,
-    the wall it is made of and the STL tolerance."""
-    doc = params.document
-    return sha256(canonical({
-        "pipeline": PIPELINE_VERSION,
-        "gauge": {"hand": plain(doc["hand"]), "fingers": plain(doc["fingers"]), "thumb": plain(doc["thumb"]),
-                  "palm_wall_mm": doc["palm"]["wall_mm"], "stl_tolerance_m": params.print.stl_tolerance,
-                  "name": params.name},
+        aid.kind: aid.inputs(params),
         "code": code_digest(),
         "versions": cad_versions(),
     }))
@@ -135,12 +119,14 @@ def part_key(params: HandParams, name: str, part_inputs: Mapping[str, Any]) -> s
 
 #: the files of every part entry (render.png too unless the build was --no-render)
 PART_FILES = ("part.brep", "part.step", "part.stl", "part.3mf", "mesh.npz", "visual.stl", "collision.npz")
-#: the files of the fit-test coupon's entry (render.png too unless the build was --no-render)
-COUPON_FILES = ("fit_coupon.step", "fit_coupon.stl", "fit_coupon.md")
-#: the files of the angle gauge's entry (render.png too unless the build was --no-render)
-GAUGE_FILES = ("angle_gauge.step", "angle_gauge.stl", "angle_gauge.md")
 #: the files of every assembly entry (render.png too unless the build was --no-render)
 ASSEMBLY_FILES = ("hand_assembly.step", "interference.json")
+
+
+def aid_files(aid) -> tuple[str, ...]:
+    """A print aid's files in its cache entry and its export folder (render.png too unless the build
+    was --no-render)."""
+    return tuple(f"{aid.name}{ext}" for ext in (".step", ".stl", ".md"))
 
 
 def seal(entry: Path) -> None:
@@ -227,21 +213,13 @@ class Cache:
     def part_meta(self, key: str) -> dict:
         return json.loads((self.part_dir(key) / "meta.json").read_text())
 
-    # fit-test coupon ----------------------------------------------------------
-    def coupon_dir(self, key: str) -> Path:
-        return self.root / "coupon" / key
+    # print aids (cad.print_aid) ---------------------------------------------------
+    def aid_dir(self, aid, key: str) -> Path:
+        return self.root / aid.kind / key
 
-    def coupon_problem(self, key: str, render: bool = True) -> str | None:
-        """Why the coupon entry ``key`` cannot be served (None: it can): see :func:`entry_problem`."""
-        return entry_problem(self.coupon_dir(key), COUPON_FILES + (("render.png",) if render else ()))
-
-    # angle gauge ---------------------------------------------------------------
-    def gauge_dir(self, key: str) -> Path:
-        return self.root / "gauge" / key
-
-    def gauge_problem(self, key: str, render: bool = True) -> str | None:
-        """Why the gauge entry ``key`` cannot be served (None: it can): see :func:`entry_problem`."""
-        return entry_problem(self.gauge_dir(key), GAUGE_FILES + (("render.png",) if render else ()))
+    def aid_problem(self, aid, key: str, render: bool = True) -> str | None:
+        """Why the print aid's entry ``key`` cannot be served (None: it can): see :func:`entry_problem`."""
+        return entry_problem(self.aid_dir(aid, key), aid_files(aid) + (("render.png",) if render else ()))
 
     # assembly ---------------------------------------------------------------
     def assembly_dir(self, key: str) -> Path:

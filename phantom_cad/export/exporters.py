@@ -22,6 +22,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
+from ..cad.coupon import FitCoupon
+from ..cad.gauge import AngleGauge
+from ..cad.print_aids import AIDS
 from ..kinematics.hand_params import HandParams
 from . import cache as cache_mod
 
@@ -47,9 +50,8 @@ class ExportContext:
     estimates: dict[str, dict | None]
     slicer_info: dict
     ini: str                        # slicer/config.ini
-    coupon_key: str
-    coupon_estimate: dict | None
-    gauge_key: str
+    aid_keys: dict[str, str]        # print aid kind -> its cache key
+    aid_estimates: dict[str, dict | None]   # print aid kind -> PrusaSlicer's estimate (None: not sliced)
     #: waits for the assembly's workers and returns its cache folder (``pipeline._Build.assembly``)
     finish_assembly: Callable[[], Path]
     #: the manifest, once the Manifest exporter has written it
@@ -61,11 +63,8 @@ class ExportContext:
     def part_dir(self, name: str) -> Path:
         return self.cache.part_dir(self.keys[name])
 
-    def coupon_dir(self) -> Path:
-        return self.cache.coupon_dir(self.coupon_key)
-
-    def gauge_dir(self) -> Path:
-        return self.cache.gauge_dir(self.gauge_key)
+    def aid_dir(self, aid) -> Path:
+        return self.cache.aid_dir(aid, self.aid_keys[aid.kind])
 
     def assembly_dir(self) -> Path:
         """The assembly's cache folder (the STEP, the picture); the first call waits for the workers
@@ -163,42 +162,43 @@ class PartRenders(Exporter):
             _copy(ctx.part_dir(Path(rel).stem) / "render.png", stage, rel)
 
 
-class Coupon(Exporter):
-    """The fit-test coupon (cad.coupon): STEP, STL, the maker's sheet, its picture."""
+class PrintAidFiles(Exporter):
+    """A print aid (cad.print_aids): STEP, STL, the maker's sheet and its picture, in its folder;
+    one subclass per aid."""
+
+    @property
+    @abc.abstractmethod
+    def aid(self):
+        """The aid's class (cad.print_aid.PrintAid)."""
+
+    def writes(self, ctx):
+        a = self.aid
+        out = [f"{a.kind}/{f}" for f in cache_mod.aid_files(a)]
+        if ctx.render and (ctx.aid_dir(a) / "render.png").is_file():
+            out.append(f"{a.kind}/{a.name}.png")
+        return out
+
+    def write(self, ctx, stage):
+        a = self.aid
+        (stage / a.kind).mkdir()
+        for f in cache_mod.aid_files(a):
+            _copy(ctx.aid_dir(a) / f, stage, f"{a.kind}/{f}")
+        if f"{a.kind}/{a.name}.png" in self.writes(ctx):
+            _copy(ctx.aid_dir(a) / "render.png", stage, f"{a.kind}/{a.name}.png")
+
+
+class Coupon(PrintAidFiles):
+    """The fit-test coupon (cad.coupon)."""
 
     name = "fit coupon"
-
-    def writes(self, ctx):
-        out = [f"coupon/{f}" for f in cache_mod.COUPON_FILES]
-        if ctx.render and (ctx.coupon_dir() / "render.png").is_file():
-            out.append("coupon/fit_coupon.png")
-        return out
-
-    def write(self, ctx, stage):
-        (stage / "coupon").mkdir()
-        for f in cache_mod.COUPON_FILES:
-            _copy(ctx.coupon_dir() / f, stage, f"coupon/{f}")
-        if "coupon/fit_coupon.png" in self.writes(ctx):
-            _copy(ctx.coupon_dir() / "render.png", stage, "coupon/fit_coupon.png")
+    aid = FitCoupon
 
 
-class Gauge(Exporter):
-    """The angle gauge (cad.gauge): STEP, STL, the maker's sheet, its picture."""
+class Gauge(PrintAidFiles):
+    """The angle gauge (cad.gauge)."""
 
     name = "angle gauge"
-
-    def writes(self, ctx):
-        out = [f"gauge/{f}" for f in cache_mod.GAUGE_FILES]
-        if ctx.render and (ctx.gauge_dir() / "render.png").is_file():
-            out.append("gauge/angle_gauge.png")
-        return out
-
-    def write(self, ctx, stage):
-        (stage / "gauge").mkdir()
-        for f in cache_mod.GAUGE_FILES:
-            _copy(ctx.gauge_dir() / f, stage, f"gauge/{f}")
-        if "gauge/angle_gauge.png" in self.writes(ctx):
-            _copy(ctx.gauge_dir() / "render.png", stage, "gauge/angle_gauge.png")
+    aid = AngleGauge
 
 
 class SlicerConfig(Exporter):
@@ -365,15 +365,12 @@ class Manifest(Exporter):
             stage=stage, params=ctx.params, params_path=ctx.params_path, names=ctx.names, keys=ctx.keys,
             metas=ctx.metas, poses=ctx.poses, estimates=ctx.estimates, slicer_info=ctx.slicer_info,
             interference=ctx.interference, contacts=ctx.contacts, bom=ctx.bom())
-        coupon = json.loads((ctx.coupon_dir() / "meta.json").read_text(encoding="utf-8"))
-        man["coupon"] = {"step": "coupon/fit_coupon.step", "stl": "coupon/fit_coupon.stl",
-                         "sheet": "coupon/fit_coupon.md",
-                         **{k: coupon[k] for k in ("volume_mm3", "mass_g", "bbox_mm", "features")},
-                         "print": ctx.coupon_estimate}
-        gauge = json.loads((ctx.gauge_dir() / "meta.json").read_text(encoding="utf-8"))
-        man["gauge"] = {"step": "gauge/angle_gauge.step", "stl": "gauge/angle_gauge.stl",
-                        "sheet": "gauge/angle_gauge.md",
-                        **{k: gauge[k] for k in ("volume_mm3", "mass_g", "bbox_mm", "faces")}}
+        for aid in AIDS:
+            meta = json.loads((ctx.aid_dir(aid) / "meta.json").read_text(encoding="utf-8"))
+            base = f"{aid.kind}/{aid.name}"
+            man[aid.kind] = {"step": f"{base}.step", "stl": f"{base}.stl", "sheet": f"{base}.md",
+                             **{k: meta[k] for k in ("volume_mm3", "mass_g", "bbox_mm", *aid.listed)},
+                             "print": ctx.aid_estimates[aid.kind]}
         if ctx.has_description:
             from .description import summary
 

@@ -4,9 +4,9 @@
     result = build_hand("params/phantom.toml", "exports/phantom")
 
 Writes ``exports/<hand>/`` (see docs/exports.md): ``step/<part>.step``,
-``step/hand_assembly.step``, ``stl/<part>.stl`` (print orientation), ``coupon/`` (the fit-test
-coupon: ``fit_coupon.step``, ``.stl``, ``.md``, ``.png``; :mod:`phantom_cad.cad.coupon`), ``gauge/``
-(the angle gauge: ``angle_gauge.step``, ``.stl``, ``.md``, ``.png``; :mod:`phantom_cad.cad.gauge`), ``bom.csv``,
+``step/hand_assembly.step``, ``stl/<part>.stl`` (print orientation), ``coupon/`` and ``gauge/``
+(the print aids, :mod:`phantom_cad.cad.print_aids`: the fit-test coupon ``fit_coupon.step``, ``.stl``,
+``.md``, ``.png`` and the angle gauge ``angle_gauge.*``), ``bom.csv``,
 ``routing.json`` (every tendon's path, ``kinematics.routing``; docs/transmission.md),
 ``manifest.json``, ``renders/*.png`` and ``slicer/config.ini``.
 
@@ -132,22 +132,21 @@ class _Build:
                 self.log(f"cache: {n} entry {self.keys[n][:12]} not served ({problem}); rebuilding it")
                 cache.discard(cache.part_dir(self.keys[n]))
             self.missing.append(n)
-        # the fit-test coupon (cad.coupon), cached like a part
-        self.coupon_key = cache_mod.coupon_key(params)
-        problem = cache.coupon_problem(self.coupon_key, render)
-        if problem not in (None, "missing"):
-            self.log(f"cache: fit coupon entry {self.coupon_key[:12]} not served ({problem}); rebuilding it")
-            cache.discard(cache.coupon_dir(self.coupon_key))
-        self.coupon_missing = problem is not None
-        #: PrusaSlicer's estimate of the coupon (None unless sliced)
-        self.coupon_estimate: dict | None = None
-        # the angle gauge (cad.gauge), cached like the coupon
-        self.gauge_key = cache_mod.gauge_key(params)
-        problem = cache.gauge_problem(self.gauge_key, render)
-        if problem not in (None, "missing"):
-            self.log(f"cache: angle gauge entry {self.gauge_key[:12]} not served ({problem}); rebuilding it")
-            cache.discard(cache.gauge_dir(self.gauge_key))
-        self.gauge_missing = problem is not None
+        # the print aids (cad.print_aids: the fit-test coupon, the angle gauge), cached like parts
+        from ..cad.print_aids import AIDS
+
+        self.aids = AIDS
+        self.aid_keys = {a.kind: cache_mod.aid_key(params, a) for a in AIDS}
+        self.aid_missing = []
+        for a in AIDS:
+            problem = cache.aid_problem(a, self.aid_keys[a.kind], render)
+            if problem not in (None, "missing"):
+                self.log(f"cache: {a.title} entry {self.aid_keys[a.kind][:12]} not served ({problem}); rebuilding it")
+                cache.discard(cache.aid_dir(a, self.aid_keys[a.kind]))
+            if problem is not None:
+                self.aid_missing.append(a)
+        #: PrusaSlicer's estimate of each print aid (None unless sliced)
+        self.aid_estimates: dict[str, dict | None] = {a.kind: None for a in AIDS}
 
     def get_pool(self) -> ProcessPoolExecutor:
         if self.pool is None:
@@ -164,8 +163,8 @@ class _Build:
 
     # 1. parts ------------------------------------------------------------------------
     def parts(self) -> dict[str, dict]:
-        """Build the missing parts, and the fit-test coupon and the angle gauge when they are
-        missing, into the cache; return {name: timings} of the parts built."""
+        """Build the missing parts, and the print aids (the fit-test coupon, the angle gauge) when
+        they are missing, into the cache; return {name: timings} of the parts built."""
         part_timings: dict[str, dict] = {}
         missing = self.missing
         doc = plain(self.document)
@@ -173,12 +172,10 @@ class _Build:
                                         "assembly_module": self.asm.__name__,
                                         "cache_root": str(self.cache.root), "render": self.render})
                 for n in missing]
-        if self.coupon_missing:     # one more job, last: the smallest
-            jobs.append((pool_mod.coupon_worker, {"key": self.coupon_key, "document": doc, "source": str(self.path),
-                                                  "cache_root": str(self.cache.root), "render": self.render}))
-        if self.gauge_missing:
-            jobs.append((pool_mod.gauge_worker, {"key": self.gauge_key, "document": doc, "source": str(self.path),
-                                                 "cache_root": str(self.cache.root), "render": self.render}))
+        for a in self.aid_missing:      # after the parts: the smallest jobs last
+            jobs.append((pool_mod.aid_worker, {"kind": a.kind, "key": self.aid_keys[a.kind], "document": doc,
+                                               "source": str(self.path), "cache_root": str(self.cache.root),
+                                               "render": self.render}))
         if not jobs:
             return part_timings
         if missing:
@@ -192,8 +189,8 @@ class _Build:
             except BrokenProcessPool as exc:
                 raise BuildError(f"a worker process died while building {missing} "
                                  f"(crash in OCP?): {exc}; {self.out} was left untouched") from exc
-        gauge = results.pop() if self.gauge_missing else {"ok": True}
-        coupon = results.pop() if self.coupon_missing else {"ok": True}
+        aids = results[len(missing):]
+        results = results[:len(missing)]
         failures = []
         for r in results:
             if r["ok"]:
@@ -202,12 +199,9 @@ class _Build:
                 failures.append(PartFailure(**r["failure"]))
         if failures:
             raise BuildError(f"{len(failures)} part(s) failed; {self.out} was left untouched", failures)
-        if not coupon["ok"]:
-            raise BuildError(f"the fit-test coupon failed; {self.out} was left untouched",
-                             [PartFailure(**coupon["failure"])])
-        if not gauge["ok"]:
-            raise BuildError(f"the angle gauge failed; {self.out} was left untouched",
-                             [PartFailure(**gauge["failure"])])
+        for a, r in zip(self.aid_missing, aids):
+            if not r["ok"]:
+                raise BuildError(f"{a.title} failed; {self.out} was left untouched", [PartFailure(**r["failure"])])
         return part_timings
 
     # 2. assembly: poses, STEP, render, interference -------------------------------------
@@ -298,8 +292,10 @@ class _Build:
         info: dict[str, Any] = {"used": True, "program": "PrusaSlicer", "version": version,
                                 "config": "slicer/config.ini"}
 
+        aids = {a.name: a for a in self.aids}
+
         def one(n):
-            stl_path = (cache.coupon_dir(self.coupon_key) / "fit_coupon.stl" if n is None
+            stl_path = (cache.aid_dir(aids[n], self.aid_keys[aids[n].kind]) / f"{n}.stl" if n in aids
                         else cache.part_dir(keys[n]) / "part.stl")
             skey = slicer.estimate_key(stl_path.read_bytes(), ini, version)
             est, problem = cache.read_slice(skey)
@@ -315,13 +311,14 @@ class _Build:
             return n, dict(sorted(est.items()))     # the same key order as a cache hit
 
         with ThreadPoolExecutor(max_workers=self.jobs) as tp:
-            for n, est in tp.map(one, [*names, None]):     # None: the fit-test coupon
-                if n is None:
-                    self.coupon_estimate = est
+            for n, est in tp.map(one, [*names, *aids]):
+                if n in aids:
+                    self.aid_estimates[aids[n].kind] = est
                 else:
                     estimates[n] = est
         bad = [PartFailure(part=n, error=e["error"], check="slice")
-               for n, e in [*estimates.items(), ("fit_coupon", self.coupon_estimate)] if e and "error" in e]
+               for n, e in [*estimates.items(), *((a.name, self.aid_estimates[a.kind]) for a in self.aids)]
+               if e and "error" in e]
         if bad:
             raise BuildError(f"slicing failed; {self.out} was left untouched", bad)
         return estimates, info
@@ -338,8 +335,8 @@ class _Build:
         ctx = ExportContext(
             params=self.params, params_path=self.path, asm=self.asm, names=self.names, keys=self.keys,
             cache=self.cache, render=self.render, metas=metas, poses=poses, contacts=contacts, interference=inter,
-            estimates=estimates, slicer_info=slicer_info, ini=ini, coupon_key=self.coupon_key,
-            coupon_estimate=self.coupon_estimate, gauge_key=self.gauge_key, finish_assembly=finish_assembly)
+            estimates=estimates, slicer_info=slicer_info, ini=ini, aid_keys=self.aid_keys,
+            aid_estimates=self.aid_estimates, finish_assembly=finish_assembly)
         out.parent.mkdir(parents=True, exist_ok=True)
         stage = out.parent / f".{out.name}.{os.getpid()}.tmp"
         if stage.exists():

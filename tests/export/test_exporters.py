@@ -62,3 +62,9 @@ def test_the_rviz_yaml_is_written_as_rviz_writes_it():
         "    Fixed Frame: palm\n"
         "    Background Color: '48; 48; 48'\n"
         "  Empty: []\n")
+
+
+def test_every_print_aid_has_its_exporter():
+    from phantom_cad.cad.print_aids import AIDS
+
+    assert [e.aid for e in EXPORTERS if isinstance(e, exporters.PrintAidFiles)] == list(AIDS)
