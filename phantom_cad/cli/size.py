@@ -99,7 +99,7 @@ def report(p, searched: bool) -> list[str]:
     pts = TH.thenar_points(p, F.T_palm_thumb_cmc_base(p))
     # only the journal and the turn set how far radial the thenar block reaches (the pulley's cavity
     # opens where it reaches past them: kinematics.thenar.thenar_points)
-    xt = min(float(pts[k][:, 0].min()) for k in ("journal", "turn")) * 1e3
+    xt = mm(min(float(pts[k][:, 0].min()) for k in ("journal", "turn")))
     breadth = max(x1, xt) - min(x0, xt)
     thick = mm(p.palm.thickness + p.palm.heel_height)
     env_b, env_t = (v * k for v in PALM_ENVELOPE)
@@ -110,7 +110,7 @@ def report(p, searched: bool) -> list[str]:
     for s, T in FL.forearm_servos(p).items():
         e = FL.servo_envelope(p, s)
         xs.append((T[:3, :3] @ e.T)[0] + T[0, 3])
-    xs = np.concatenate(xs) * 1e3
+    xs = mm(np.concatenate(xs))
     fa = float(xs.max() - xs.min())
     wide = " (wider: docs/sizing.md, limitations)" if fa > FOREARM_BREADTH * k else ""
     out.append(f"forearm module: the servos span {fa:.0f} mm across; the target within a human forearm is "

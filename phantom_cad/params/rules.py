@@ -145,7 +145,14 @@ def _magnets(c, fingers, palm, hardware, printing, cad) -> None:
                          "flexion limiter sits under each finger base", c.source)
 
 
-def _base_room(a: tuple[float, float, float], b: tuple[float, float, float], base_length: float) -> float:
+def base_room(a: tuple[float, float, float], b: tuple[float, float, float], base_length: float) -> float:
+    """Room between two neighbouring finger bases (``kinematics.dimensions.finger_columns`` a and b,
+    m): the nearer of each magnet face (base_length behind its MCP) to the other's column
+    centreline, where the face lies beside that column (behind its MCP); inf where neither does."""
+    return min(_face_room(a, b, base_length), _face_room(b, a, base_length))
+
+
+def _face_room(a: tuple[float, float, float], b: tuple[float, float, float], base_length: float) -> float:
     """Distance from the centre of finger a's magnet face (base_length behind its MCP) to finger
     b's column centreline, when that face lies beside b's column (behind b's MCP); inf if not."""
     ax, ay, pa = a
@@ -163,8 +170,7 @@ def _guides(c, fingers, thumb, palm, hardware, printing, cad) -> None:
     for a, b in zip(names, names[1:]):
         # adjacent finger bases converge toward the arc centre, and the stepped heads put one face
         # behind the other: each magnet face must clear the neighbour's column
-        room = min(_base_room(cols[a], cols[b], cad.finger_base_length),
-                   _base_room(cols[b], cols[a], cad.finger_base_length))
+        room = base_room(cols[a], cols[b], cad.finger_base_length)
         need = (fingers[a].width + fingers[b].width) / 2.0 + printing.hole_clearance
         if room < need - 1e-12:
             raise c.error("finger_base_length_mm", cad.finger_base_length / MM,

@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass
 from typing import Callable
 
+from .. import units
 from ..errors import ParamError, UserError
 from ..kinematics.dimensions import FLANK, digit_entry, printed_hole
 from ..kinematics.hand_params import HandParams
@@ -140,14 +141,14 @@ def build_document(person: Person) -> dict:
             ratio = max(r["pulley_radius_mm"].values()) / min(r["pulley_radius_mm"].values())
             t_floor = max(bearing[1], 2.0 * (ratio * (axle_bore + cord / 2.0) + cord / 2.0))
             w_floor = S.digit_width_floor(cl, cad["cheek_mm"], hw["tendon_diameter_mm"], cad["spring_diameter_mm"],
-                                          FLANK * 1e3)
+                                          units.mm(FLANK))
             why = f"the joint bearing ({bearing[1]:g} mm) and pulleys outside the axle bore"
         else:
             t_floor = S.finger_thickness_floor(magnet, doc["palm"]["wall_mm"], hw["tendon_diameter_mm"], cl,
                                                pr["magnet_clearance_mm"], comp, bearing[1])
             w_floor = S.finger_width_floor(magnet, doc["palm"]["wall_mm"], cl, pr["magnet_clearance_mm"], comp,
                                            cad["cheek_mm"], hw["tendon_diameter_mm"], cad["spring_diameter_mm"],
-                                           FLANK * 1e3)
+                                           units.mm(FLANK))
             why = (f"the tendon enters its base below two {magnet[0]:g} x {magnet[1]:g} mm magnet pockets, one "
                    f"palm wall above the palmar face")
         thick = S.section(r["thickness_mm"] * hl / S.REFERENCE_LENGTH, t_floor, ceiling)
@@ -159,7 +160,7 @@ def build_document(person: Person) -> dict:
         if d == "thumb":
             w_ceiling = 2.0 * (lengths[d]["metacarpal"] - thick / 2.0 - cl)
         else:
-            w_ceiling = S.MAX_FINGER_PITCH * 1e3 - S.PITCH_CLEARANCE
+            w_ceiling = units.mm(S.MAX_FINGER_PITCH) - S.PITCH_CLEARANCE
         width = S.section(w_target, w_floor, w_ceiling)
         if math.isnan(width):
             why = (f"its metacarpal, {lengths[d]['metacarpal']:.2f} mm, holds the CMC hub of half its width"
@@ -319,8 +320,8 @@ def size(person: Person, check: Callable[[HandParams], None] | None = None, sear
             sol = opposition.solve(Hand(start), seed=seed + k, population=population, generations=generations,
                                    constraint=opposition.thenar_constraint(start))
             solved = copy.deepcopy(doc)
-            solved["palm"]["thumb_cmc_offset_mm"] = [round(v * 1e3, 4) for v in sol.offset]
-            solved["palm"]["thumb_cmc_axis_deg"] = [round(math.degrees(v), 4) for v in sol.axis]
+            solved["palm"]["thumb_cmc_offset_mm"] = [round(float(units.mm(v)), 4) for v in sol.offset]
+            solved["palm"]["thumb_cmc_axis_deg"] = [round(float(units.deg(v)), 4) for v in sol.axis]
             consider(solved, True)
     if best is None:
         raise error
@@ -341,10 +342,10 @@ def opposition_refusal(person: Person, best: Sizing, check, search: bool, seed: 
     reach = opposition.reach(Hand(best.params))
     worst = min(opposition.OPPOSED, key=lambda f: reach[f].margin)
     what = ("never faces the thumb's" if not math.isfinite(reach[worst].gap) or reach[worst].gap > 0.0
-            else f"meets the thumb's {-math.degrees(reach[worst].margin):.1f} deg outside the "
-                 f"{math.degrees(opposition.PAD_CONE):g} deg pad cone")
+            else f"meets the thumb's {-units.deg(reach[worst].margin):.1f} deg outside the "
+                 f"{units.deg(opposition.PAD_CONE):g} deg pad cone")
     rule = (f"--hand-length {person.hand_length:g} --hand-breadth {person.hand_breadth:g}: the {worst} pad {what} "
-            f"(opposition margin {math.degrees(best.margin):+.1f} deg, must be >= 0 for index, middle and ring)")
+            f"(opposition margin {units.deg(best.margin):+.1f} deg, must be >= 0 for index, middle and ring)")
     breadth = round(person.hand_length * S.REFERENCE_BREADTH / S.REFERENCE_LENGTH)
     if breadth != person.hand_breadth:
         try:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 
+from .. import units
 from ..kinematics import closed_form as cf
 from ..kinematics.dimensions import printed_hole, slot_back
 from ..params.rules import MAX_FINGER_PITCH, MIN_WALL
@@ -77,7 +78,7 @@ def finger_width_floor(magnet: tuple[float, float], wall: float, clearance: floa
     outside each across its base (params.rules._magnets), and the clevis slot between two cheeks
     holding a loop's hub and the tongue with its return groove (params.rules._joints)."""
     pocket = printed_hole(magnet[0] + 2.0 * magnet_clearance, compensation)
-    magnets = 2.0 * pocket + wall + 2.0 * MIN_WALL * 1e3
+    magnets = 2.0 * pocket + wall + 2.0 * units.mm(MIN_WALL)
     return max(magnets, digit_width_floor(clearance, cheek, tendon, spring, flank))
 
 
@@ -129,7 +130,7 @@ def guide(reference: tuple[float, float, float], thickness: float, tendon: float
     <= T/2 + 2 r_hole) and its relief stays within ``base_room`` behind the joint (the finger base,
     or the thumb metacarpal's arm). NaN where no d1 or d2 fits."""
     d1, d2, alpha = reference
-    c, s = math.cos(math.radians(alpha) / 2.0), math.sin(math.radians(alpha) / 2.0)
+    c, s = math.cos(units.rad(alpha) / 2.0), math.sin(units.rad(alpha) / 2.0)
     r_hole = tendon / 2.0 + clearance
     d2_lo = thickness / 2.0 + clearance + eyelet / 2.0
     d2_hi = (thickness / 2.0 - r_hole) / c
@@ -151,13 +152,13 @@ def servo_travel(d1: float, d2: float, alpha: float, r: float, radii: tuple[floa
     domain (q_ref < alpha)."""
     c = cf.ideal_coupling(radii)
     q_ref = min(lim / float(k) for lim, k in zip(limits, c))
-    return down(math.degrees(float(cf.servo_angle(q_ref, d1, d2, math.radians(alpha), r))))
+    return down(units.deg(float(cf.servo_angle(q_ref, d1, d2, units.rad(alpha), r))))
 
 
 def finger_pitch(widths: tuple[float, ...]) -> float:
     """MCP to MCP along the palm arc (mm): the widest finger and the default's clearance between
     flexed neighbours (:data:`PITCH_CLEARANCE`), at most the palm layout's MAX_FINGER_PITCH."""
-    return min(up(max(widths) + PITCH_CLEARANCE), MAX_FINGER_PITCH * 1e3)
+    return min(up(max(widths) + PITCH_CLEARANCE), units.mm(MAX_FINGER_PITCH))
 
 
 def scaled(reference: float, hand_length: float, step: float = STEP) -> float:
@@ -175,19 +176,19 @@ def palm_layout(widths: dict[str, float], metacarpals: dict[str, float], arc_off
     column: params.rules._guides); at the palm layout's largest pitch, the wider of a pair that
     still touches is narrowed instead. ``metacarpals`` and ``widths`` in finger order."""
     from ..kinematics.dimensions import finger_columns
-    from ..params.rules import _base_room
+    from ..params.rules import base_room
 
     names = list(widths)
     widths = dict(widths)
     pitch = finger_pitch(tuple(widths.values()))
-    top = MAX_FINGER_PITCH * 1e3
+    top = units.mm(MAX_FINGER_PITCH)
     while True:
-        cols = dict(zip(names, finger_columns(pitch * 1e-3, math.radians(arc_offset),
-                                              [metacarpals[n] * 1e-3 for n in names])))
+        cols = dict(zip(names, finger_columns(units.m(pitch), units.rad(arc_offset),
+                                              [units.m(metacarpals[n]) for n in names])))
         tight = None
         for a, b in zip(names, names[1:]):
-            room = min(_base_room(cols[a], cols[b], base_length * 1e-3), _base_room(cols[b], cols[a], base_length * 1e-3))
-            if room * 1e3 < (widths[a] + widths[b]) / 2.0 + clearance - 1e-9:
+            room = base_room(cols[a], cols[b], units.m(base_length))
+            if units.mm(room) < (widths[a] + widths[b]) / 2.0 + clearance - 1e-9:
                 tight = (a, b)
                 break
         if tight is None:
