@@ -197,3 +197,25 @@ def test_pose_imports_no_cad_library():
             "    assert e.code == 0, e.code\n"
             "assert not any(m.split('.')[0] in ('build123d', 'OCP', 'cadquery', 'mujoco') for m in sys.modules)\n")
     subprocess.run([sys.executable, "-c", code], check=True, capture_output=True)
+
+
+def test_the_docs_table_is_what_pose_prints():
+    """docs/postures.md's table (bench/posture_figures.py) against the library on the default hand:
+    the commands to 0.1 deg, the max error to 0.01 deg, the verdict."""
+    from pathlib import Path
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "postures.md").read_text()
+    rows = {}
+    for line in doc.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 6 and cells[1].startswith("`"):
+            rows[cells[1].strip("`")] = cells
+    library = P.load(HAND)
+    assert list(rows) == list(library)
+    for name, cells in rows.items():
+        r = P.pose(HAND, library[name])
+        assert cells[2] == r.posture.description
+        assert cells[3] == ", ".join(f"{v:.1f}" for v in np.degrees(r.u))
+        assert cells[4] == f"{np.degrees(r.max_error):.2f} ({JOINT_NAMES[r.worst]})"
+        assert cells[5].startswith("yes" if r.reached else "no")
+        assert ("stopped at the thumb's contact" in cells[5]) == (r.contact is not None and not r.refused)
