@@ -219,3 +219,24 @@ def test_the_docs_table_is_what_pose_prints():
         assert cells[4] == f"{np.degrees(r.max_error):.2f} ({JOINT_NAMES[r.worst]})"
         assert cells[5].startswith("yes" if r.reached else "no")
         assert ("stopped at the thumb's contact" in cells[5]) == (r.contact is not None and not r.refused)
+
+
+#: the library postures a hand does not make, as docs/postures.md says
+NOT_MADE = {"params/examples/slender.toml": {"thumbs_up": "refused", "gun": "refused", "six": "refused"},
+            "params/examples/small.toml": {"opposition_index": "not reachable", "opposition_middle": "not reachable"}}
+
+
+@pytest.mark.parametrize("path", sorted(NOT_MADE))
+def test_the_example_hands_make_the_postures_docs_say(path):
+    from pathlib import Path
+
+    hand = load_hand(Path(__file__).resolve().parents[1] / path)
+    got = {}
+    for name, posture in P.load(hand).items():
+        r = P.pose(hand, posture)
+        if not r.reached:
+            got[name] = "refused" if r.refused else "not reachable"
+            if not r.refused:
+                excess = math.degrees(r.max_error - posture.tolerance)
+                assert 0.9 <= excess <= 2.0, (name, excess)
+    assert got == NOT_MADE[path]
