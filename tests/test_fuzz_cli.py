@@ -65,6 +65,7 @@ COMMANDS = {
     "fit": ["fit", "{IN}", "--effects", "joint_offset", "--out", "{OUT}", "-p", "{P}"],
     "build": ["build", "--no-slice", "--no-render", "--out", "{OUT}", "-p", "{P}"],
     "demo": ["demo", "--no-slice", "--out", "{OUT}", "-p", "{P}"],
+    "pose": ["pose", "fist", "-p", "{P}"],
 }
 READS_DATA = [c for c, a in COMMANDS.items() if "{IN}" in a]
 WRITES = [c for c, a in COMMANDS.items() if "{OUT}" in a]

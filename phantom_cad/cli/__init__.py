@@ -316,6 +316,9 @@ app.command("check")(check)
 from .size import size as _size  # noqa: E402
 
 app.command("size")(_size)
+from .pose import pose as _pose  # noqa: E402
+
+app.command("pose")(_pose)
 
 
 def main(argv: Optional[list[str]] = None) -> None:

@@ -99,6 +99,18 @@ def _chain(params: HandParams, digit: str, q: np.ndarray, origin_y: float):
     return a, b, np.hstack([zeros, n]), r, centres
 
 
+def _rz(q15: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """Rz(q15) of each command's points (the CMC's own rotation)."""
+    c, s = np.cos(q15), np.sin(q15)
+    if p.ndim == 3:
+        c, s = c[:, None], s[:, None]
+    out = np.empty_like(p)
+    out[..., 0] = c * p[..., 0] - s * p[..., 1]
+    out[..., 1] = s * p[..., 0] + c * p[..., 1]
+    out[..., 2] = p[..., 2]
+    return out
+
+
 def _apply(T: np.ndarray, p: np.ndarray, w: float = 1.0) -> np.ndarray:
     return p @ T[:3, :3].T + (T[:3, 3] if w else 0.0)
 
@@ -133,14 +145,7 @@ class ThumbTips:
 
     def _rz(self, p):
         """Rz(q15) of each command's points (the CMC's own rotation)."""
-        c, s = np.cos(self.q15), np.sin(self.q15)
-        if p.ndim == 3:
-            c, s = c[:, None], s[:, None]
-        out = np.empty_like(p)
-        out[..., 0] = c * p[..., 0] - s * p[..., 1]
-        out[..., 1] = s * p[..., 0] + c * p[..., 1]
-        out[..., 2] = p[..., 2]
-        return out
+        return _rz(self.q15, p)
 
     def placed(self, T0: np.ndarray) -> Tips:
         return Tips(_apply(T0, self._rz(self.a)), _apply(T0, self._rz(self.b)),
@@ -166,6 +171,24 @@ def thumb_tips(hand, n1: int = 21, n6: int = 21) -> ThumbTips:
     t = np.linspace(0.0, 1.0, 8)[None, :, None]
     body = np.concatenate([e0[:, None] + t * (e1 - e0)[:, None] for e0, e1 in zip(ends, ends[1:])], axis=1)
     return ThumbTips(a, b, nrm, q[:, CMC_Q].copy(), r, u[:, [s1, s6]], body, p.thumb.thickness / 2.0)
+
+
+def tip_gaps(hand, u) -> np.ndarray:
+    """(n, 4): the gap (m; < 0 overlapping) between the thumb's tip capsule and each finger's
+    (:data:`FINGERS` order) at the commands u (n, 6), the joint angles the model's at them (right-hand
+    frames, the file's CMC placement)."""
+    u = np.atleast_2d(np.asarray(u, float))
+    q = hand.forward(u, compensated=True)
+    p = hand.params
+    T0 = F.thumb_cmc_placement(p.palm.thumb_cmc_offset, p.palm.thumb_cmc_axis)
+    a, b, _, r, _ = _chain(p, THUMB, q, p.thumb.metacarpal)
+    a, b = _apply(T0, _rz(q[:, CMC_Q], a)), _apply(T0, _rz(q[:, CMC_Q], b))
+    out = np.empty((len(u), len(FINGERS)))
+    for k, f in enumerate(FINGERS):
+        fa, fb, _, fr, _ = _chain(p, f, q, 0.0)
+        T = F.T_palm_finger_base(p, f)
+        out[:, k] = segment_distance(a, b, _apply(T, fa), _apply(T, fb))[0] - r - fr
+    return out
 
 
 def segment_distance(p1, q1, p2, q2):
