@@ -118,3 +118,100 @@ def test_the_force_is_affine_in_the_stall_torque(params, posture):
     f0, f1, f2 = (np.array([x.force for x in force.fingertip_forces(params, posture, t)]) for t in (0.0, 0.2, 0.4))
     assert f2 - f1 == pytest.approx(f1 - f0, rel=1e-12)
     assert np.all(f0 < 0.0)     # without the servo the return cord pulls the pads off the plates
+
+
+# -- the servo catalogue ------------------------------------------------------------
+
+def test_the_default_file_writes_out_the_scs0009(params):
+    from phantom_cad.params import servos
+
+    entry = servos.CATALOGUE[servos.DEFAULT]
+    assert params.servo.model is None and servos.named(params.servo) == servos.DEFAULT
+    assert params.servo.stall_torque == entry.stall_torque_Nm
+    assert [round(v * 1e3, 9) for v in params.servo.body] == list(entry.body_mm)
+    assert round(params.servo.flange_span * 1e3, 9) == entry.flange_span_mm
+
+
+def test_a_file_names_a_catalogue_servo_and_its_own_numbers_win():
+    from phantom_cad.params import servos
+
+    doc = hand_document("default")
+    doc["servo"] = {"model": "mg90s", "stall_torque_Nm": 0.2}
+    got = parse(doc).servo
+    entry = servos.CATALOGUE["mg90s"]
+    assert got.model == "mg90s" and got.stall_torque == 0.2
+    assert got.speed == pytest.approx(math.radians(entry.speed_deg_s))
+    assert [v * 1e3 for v in got.body] == pytest.approx(entry.body_mm)
+
+
+@pytest.mark.parametrize("servo, message", [
+    ({"model": "sg90"}, "servo.model = 'sg90': must be one of: scs0009, mg90s, xl330-m288"),
+    ({"model": "xl330-m288"}, "servo.flange_span_mm = None: is required: the catalogue's xl330-m288"),
+])
+def test_a_bad_servo_is_one_line(servo, message):
+    from phantom_cad.params import ParamError
+
+    doc = hand_document("default")
+    doc["servo"] = servo
+    with pytest.raises(ParamError) as err:
+        parse(doc)
+    assert message in str(err.value) and "\n" not in str(err.value)
+
+
+# -- the command --------------------------------------------------------------------
+
+def _run(capsys, *args):
+    from phantom_cad.cli import main
+
+    with pytest.raises(SystemExit) as exit_:
+        main(["force", *args])
+    out = capsys.readouterr()
+    return exit_.value.code, out.out, out.err
+
+
+def test_the_command_prints_the_model_at_half_travel(capsys, params, posture):
+    import json
+
+    code, out, _ = _run(capsys, "--json")
+    assert code == 0
+    got = json.loads(out)
+    assert got["servo"] == "scs0009" and got["stall_torque_Nm"] == 0.226
+    for f in force.fingertip_forces(params, posture):
+        assert got["digits"][f.digit]["force_N"] == pytest.approx(f.force, abs=1e-6)
+    code, out, _ = _run(capsys)
+    assert code == 0 and out.splitlines()[2].split()[:2] == ["thumb", f"{got['digits']['thumb']['force_N']:.2f}"]
+
+
+def test_the_command_scales_with_a_catalogue_servo(capsys):
+    import json
+
+    half = json.loads(_run(capsys, "--json")[1])["digits"]
+    xl = json.loads(_run(capsys, "--json", "--servo", "xl330-m288")[1])["digits"]
+    assert xl["index"]["drive_tension_N"] == pytest.approx(half["index"]["drive_tension_N"] * 0.52 / 0.226)
+    assert xl["index"]["force_N"] > 2.0 * half["index"]["force_N"]
+
+
+@pytest.mark.parametrize("args, message", [
+    (("--u", "1,2"), "--u '1,2': must be 6 comma-separated angles in degrees"),
+    (("--u", "100,0,0,0,0,0"), "--u: u1 = 100 deg is outside its travel [0, 81.5] deg"),
+    (("--q", "0,0,0,0,0,0,0,0,0,0,0,0,0,0,100"), "--q: q15 = 100 deg is outside Table I's [0, 89.9544] deg"),
+    (("--u", "0,0,0,0,0,0", "--q", "0"), "--u and --q: give the posture one way"),
+    (("--servo", "sg90"), "--servo 'sg90': not in the catalogue (scs0009, mg90s, xl330-m288)"),
+])
+def test_bad_input_is_one_error_line(capsys, args, message):
+    code, out, err = _run(capsys, *args)
+    assert code == 2 and out == ""
+    assert err.startswith("error: ") and message in err and err.count("\n") == 1
+
+
+def test_force_imports_no_cad_library():
+    import subprocess
+    import sys
+
+    code = ("import sys; from phantom_cad.cli import main\n"
+            "try:\n"
+            "    main(['force'])\n"
+            "except SystemExit as e:\n"
+            "    assert e.code == 0, e.code\n"
+            "assert not any(m.split('.')[0] in ('build123d', 'OCP', 'cadquery', 'mujoco') for m in sys.modules)\n")
+    subprocess.run([sys.executable, "-c", code], check=True, capture_output=True)

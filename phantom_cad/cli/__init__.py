@@ -316,6 +316,9 @@ app.command("check")(check)
 from .size import size as _size  # noqa: E402
 
 app.command("size")(_size)
+from .force import force as _force  # noqa: E402
+
+app.command("force")(_force)
 
 
 def main(argv: Optional[list[str]] = None) -> None:
