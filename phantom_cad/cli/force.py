@@ -49,7 +49,7 @@ def force(
 
     from .. import load_hand
     from ..errors import UserError
-    from ..kinematics.force import fingertip_forces
+    from ..kinematics.force import drive_give, fingertip_forces
     from ..kinematics.topology import N_JOINTS, N_SERVOS, Q_COLUMNS, U_COLUMNS
     from ..params import servos as catalogue
     from ..units import DEG
@@ -83,6 +83,12 @@ def force(
         posture = "every servo at half its travel" if u is None else "the servo commands given"
     forces = fingertip_forces(p, joints, torque)
     tau = p.servo.stall_torque if torque is None else torque
+    # the servo turns on past contact by the drive's give (and the loops', a few degrees more: the
+    # twin, docs/force.md) before it stalls; with less travel left it stops short of its stall torque
+    need = {f.digit: drive_give(p, f.digit, f.drive_tension) + p.servo.stall_error for f in forces}
+    left = ({} if commands is None else
+            {c.digit: float(hand.u_max[c.spec.servo] - commands[c.spec.servo]) for c in p.chains})
+    short = [d for d in left if left[d] < need[d]]
     source = servo or catalogue.named(p.servo) or "the file's [servo]"
     if as_json:
         typer.echo(json.dumps({
@@ -94,13 +100,19 @@ def force(
                                  "loop_tensions_N": [round(v, 6) for v in f.loop_tensions],
                                  "joint_torques_Nm": [round(v, 6) for v in f.joint_torques],
                                  **({"cmc_torque_Nm": round(f.cmc_torque, 6)} if f.cmc_torque is not None else {}),
+                                 "travel_needed_deg": round(need[f.digit] / DEG, 6),
+                                 **({"travel_left_deg": round(left[f.digit] / DEG, 6)} if left else {}),
                                  "table_ii_N": TABLE_II[f.digit]} for f in forces}}, indent=1))
         return
     typer.echo(f"{p.name} ({p.side}): {source}, stall torque {tau:g} N m; posture: {posture}")
     typer.echo(f"{'digit':7s} {'force N':>8s} {'drive N':>8s} {'return N':>9s}  {'Table II N':>10s}")
     for f in forces:
         typer.echo(f"{f.digit:7s} {f.force:8.2f} {f.drive_tension:8.2f} {f.return_tension:9.2f}  "
-                   f"{TABLE_II[f.digit]:10.2f}")
+                   f"{TABLE_II[f.digit]:10.2f}{'  *' if f.digit in short else ''}")
+    for d in short:
+        typer.echo(f"* {d}: its servo needs more than {need[d] / DEG:.1f} deg of travel past contact to stall (the "
+                   f"drive's stretch and the stall error), and has {left[d] / DEG:.1f}: it presses with less",
+                   err=True)
     thumb = forces[0]
     if thumb.cmc_torque is not None and abs(thumb.cmc_torque) > p.servo.stall_torque * p.thumb.cmc_gain:
         typer.echo(f"warning: the thumb's plate turns the CMC with {abs(thumb.cmc_torque):.3f} N m, more than "

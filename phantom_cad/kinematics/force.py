@@ -34,6 +34,7 @@ from . import closed_form as cf
 from .frames import T_distal_pad
 from .hand_params import HandParams
 from .link_frames import link_transforms
+from .statics import chain_strands
 from .topology import CHAINS, N_JOINTS, digit_links, joint
 
 #: a flexion joint turns its child by +q about the child frame's -x (docs/frames.md)
@@ -111,3 +112,13 @@ def fingertip_forces(params: HandParams, q, stall_torque: float | None = None) -
     """:func:`digit_force` of every digit (thumb first) at joint angles q (15,)."""
     return tuple(digit_force(params, q, c.digit, stall_torque) for c in CHAINS)
 
+
+
+def drive_give(params: HandParams, digit: str, tension: float) -> float:
+    """The servo angle (rad) the drive's stretch alone takes at ``tension`` (N): T L_d / (EA r), L_d
+    its rest length (the routing model's). A servo that has less of its travel left past contact
+    reaches the end of it before its stall torque, and presses with less than :func:`digit_force`
+    (the loops' give takes more still)."""
+    k = next(i for i, c in enumerate(CHAINS) if c.digit == digit)
+    chain = params.digit(digit).chain
+    return tension * chain_strands(params)[k].drive / (params.mechanics.tendon_EA * chain.servo_radius)
