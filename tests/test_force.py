@@ -215,3 +215,11 @@ def test_force_imports_no_cad_library():
             "    assert e.code == 0, e.code\n"
             "assert not any(m.split('.')[0] in ('build123d', 'OCP', 'cadquery', 'mujoco') for m in sys.modules)\n")
     subprocess.run([sys.executable, "-c", code], check=True, capture_output=True)
+
+
+def test_size_reports_the_forces_at_half_travel(params, posture):
+    from phantom_cad.cli.size import report
+
+    line = report(params, searched=False)[-1]
+    assert line.startswith("fingertip force at half travel")
+    assert line.endswith(", ".join(f"{f.digit} {f.force:.2f}" for f in force.fingertip_forces(params, posture)))
