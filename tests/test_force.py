@@ -14,7 +14,7 @@ from phantom_cad import Hand, load_params
 from phantom_cad.kinematics import force
 from phantom_cad.kinematics.frames import T_distal_pad, fingertip
 from phantom_cad.kinematics.link_frames import link_transforms
-from phantom_cad.kinematics.topology import CHAINS, DIGITS, N_JOINTS, digit_links
+from phantom_cad.kinematics.topology import CMC_Q, DIGITS, N_JOINTS, chain, digit_links
 from phantom_cad.params import parse
 from tests.support.hands import hand_document
 
@@ -65,12 +65,11 @@ def test_the_force_does_the_virtual_work_of_the_tendons(params, posture, digit):
     """Flex the chain by ds along the figure-eight coupling (q_k += (R_0 / R_k) ds): the drive
     shortens by dc (the chord by the law of cosines), the return cord lengthens by R.A ds, the pad
     moves into the plate by n.dp. At equilibrium F_d dc - T R.A ds = f n.dp."""
-    chain = params.digit(digit).chain
-    spec = chain.spec
-    R = np.asarray(chain.radii)
+    c = params.digit(digit).chain
+    R = np.asarray(c.radii)
     A = R[0] / R
-    g = chain.guide
-    idx = list(spec.q_index)
+    g = c.guide
+    idx = list(c.spec.q_index)
 
     def chord(q0):
         return math.sqrt(g.d1 ** 2 + g.d2 ** 2 - 2.0 * g.d1 * g.d2 * math.cos(g.alpha - q0))
@@ -83,7 +82,7 @@ def test_the_force_does_the_virtual_work_of_the_tendons(params, posture, digit):
     (p_lo, _), (p_hi, _), (_, n) = _pad(params, lo, digit), _pad(params, hi, digit), _pad(params, posture, digit)
     into = float(n @ (p_hi - p_lo)) / (2 * h)
     T = params.mechanics.spring_k * float(R @ posture[idx])
-    drive = params.servo.stall_torque / chain.servo_radius
+    drive = params.servo.stall_torque / c.servo_radius
     expected = (drive * shortening - T * float(R @ A)) / into
     got = force.digit_force(params, posture, digit)
     assert got.force == pytest.approx(expected, rel=1e-7)
@@ -93,8 +92,7 @@ def test_the_force_does_the_virtual_work_of_the_tendons(params, posture, digit):
 
 @pytest.mark.parametrize("digit", DIGITS)
 def test_the_levers_are_the_pads_normal_velocity(params, posture, digit):
-    spec = next(c for c in CHAINS if c.digit == digit)
-    joints = list(spec.q_index) + ([14] if digit == "thumb" else [])
+    joints = list(chain(digit).q_index) + ([CMC_Q] if digit == "thumb" else [])
     _, n, levers = force.pad_levers(params, posture, digit)
     h = 1e-6
     for k, i in enumerate(joints):

@@ -35,7 +35,7 @@ from .frames import T_distal_pad
 from .hand_params import HandParams
 from .link_frames import link_transforms
 from .statics import chain_strands
-from .topology import CHAINS, N_JOINTS, digit_links, joint
+from .topology import CHAINS, N_JOINTS, chain, digit_links, joint
 
 #: a flexion joint turns its child by +q about the child frame's -x (docs/frames.md)
 FLEXION_AXIS = np.array([-1.0, 0.0, 0.0])
@@ -74,7 +74,7 @@ def pad_levers(params: HandParams, q, digit: str) -> tuple[np.ndarray, np.ndarra
     T = link_transforms(params, q, mirrored=False)
     pad = T[digit_links(digit)[-1].name] @ T_distal_pad(params, digit)
     p, n = pad[:3, 3], pad[:3, 2]
-    spec = next(c for c in CHAINS if c.digit == digit)
+    spec = chain(digit)
     levers = []
     for name in spec.joint_names:
         child = T[joint(name).child]
@@ -90,12 +90,12 @@ def digit_force(params: HandParams, q, digit: str, stall_torque: float | None = 
     """The fingertip force of ``digit`` at joint angles q (15,) with its servo at ``stall_torque``
     (N m; default the file's ``servo.stall_torque_Nm``): the module's statics."""
     q = np.asarray(q, dtype=float)
-    chain = params.digit(digit).chain
+    c = params.digit(digit).chain
     tau = params.servo.stall_torque if stall_torque is None else float(stall_torque)
-    R = np.asarray(chain.radii)
-    qc = q[list(chain.spec.q_index)]
-    g = chain.guide
-    F_d = tau / chain.servo_radius
+    R = np.asarray(c.radii)
+    qc = q[list(c.spec.q_index)]
+    g = c.guide
+    F_d = tau / c.servo_radius
     drive = F_d * float(cf.drive_moment_arm(qc[0], g.d1, g.d2, g.alpha))
     T = float(cf.return_tension(params.mechanics.spring_k, R, qc))
     _, _, levers = pad_levers(params, q, digit)
@@ -119,6 +119,5 @@ def drive_give(params: HandParams, digit: str, tension: float) -> float:
     its rest length (the routing model's). A servo that has less of its travel left past contact
     reaches the end of it before its stall torque, and presses with less than :func:`digit_force`
     (the loops' give takes more still)."""
-    k = next(i for i, c in enumerate(CHAINS) if c.digit == digit)
-    chain = params.digit(digit).chain
-    return tension * chain_strands(params)[k].drive / (params.mechanics.tendon_EA * chain.servo_radius)
+    strands = chain_strands(params)[chain(digit).servo]       # servo order
+    return tension * strands.drive / (params.mechanics.tendon_EA * params.digit(digit).chain.servo_radius)
