@@ -56,6 +56,7 @@ def _readonly(d):
 COMMANDS = {
     "params validate": ["params", "validate", "{P}"],
     "params show": ["params", "show", "-p", "{P}"],
+    "force": ["force", "-p", "{P}"],
     "model forward": ["model", "forward", "--in", "{IN}", "--out", "{OUT}", "-p", "{P}"],
     "model inverse": ["model", "inverse", "--in", "{IN}", "--out", "{OUT}", "-p", "{P}"],
     "simulate": ["simulate", "--points", "3", "--out", "{OUT}", "-p", "{P}"],

@@ -270,7 +270,8 @@ def test_the_command_writes_a_file_that_validates(tmp_path, argv):
     proc = subprocess.run([sys.executable, "-m", "phantom_cad", "size", *argv, "--out", str(out)],
                           capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
-    for words in ("reach at full travel", "opposition", "power grasp", "palm:", "thinnest designed wall"):
+    for words in ("reach at full travel", "opposition", "power grasp", "palm:", "thinnest designed wall",
+                  "fingertip force at half travel"):
         assert words in proc.stdout
     proc = subprocess.run([sys.executable, "-m", "phantom_cad", "params", "validate", str(out)],
                           capture_output=True, text=True)

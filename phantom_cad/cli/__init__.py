@@ -320,6 +320,10 @@ from .pose import pose as _pose  # noqa: E402
 
 app.command("pose")(_pose)
 
+from .force import force as _force  # noqa: E402
+
+app.command("force")(_force)
+
 
 def main(argv: Optional[list[str]] = None) -> None:
     """Entry point. Every failure is one line on stderr and nothing else:

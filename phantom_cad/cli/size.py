@@ -119,4 +119,10 @@ def report(p, searched: bool) -> list[str]:
     thinnest = min(walls, key=walls.get)
     out.append(f"thinnest designed wall: {thinnest} = {mm(walls[thinnest]):g} mm (the rules' minimum "
                f"{mm(MIN_WALL):g} mm, two perimeters; the built parts' walls are measured by phantom-cad build)")
+    from ..kinematics.force import fingertip_forces
+    from .force import default_commands
+
+    forces = fingertip_forces(p, hand.forward(default_commands(hand), compensated=True))
+    out.append("fingertip force at half travel, servos stalled (N; phantom-cad force, docs/force.md): "
+               + ", ".join(f"{f.digit} {f.force:.2f}" for f in forces))
     return out

@@ -77,6 +77,18 @@ def stretched_servo_angle(q_ref, alpha, r, stretch, constants):
     return (L0 - L + stretch * L / np.sin(phi)) / r
 
 
+def drive_moment_arm(q_ref, d1, d2, alpha):
+    """The drive chord's moment arm about the reference joint at q_ref: d1 d2 sin(alpha - q_ref) / L,
+    L the chord (eq. 5): the rate at which the chord shortens as the joint flexes, -dL/dq_ref."""
+    phi = alpha - q_ref
+    return d1 * d2 * np.sin(phi) / np.sqrt(d1 * d1 + d2 * d2 - 2.0 * d1 * d2 * np.cos(phi))
+
+
+def return_tension(spring_k, radii, q):
+    """Eq. (11): the return cord's tension T = k_s sum_i R_i q_i over one chain's joints (q (..., n))."""
+    return spring_k * (np.asarray(q, dtype=float) @ np.asarray(radii, dtype=float))
+
+
 def reference_angle_rate(u, d1, d2, alpha, r):
     """d q_ref / d u = r L / (d1 d2 sin(phi)), phi the current included angle."""
     L = chord_rest(d1, d2, alpha) - r * u

@@ -142,6 +142,8 @@ class ServoBody:
     #: position error (rad) at which the servo's controller gives its stall torque: the
     #: simulation's position gain kp = stall_torque / stall_error
     stall_error: float = 1.0 * DEG
+    #: the catalogue servo the file names (``[servo] model``), or None: the file's own numbers
+    model: str | None = None
 
 
 @dataclass(frozen=True)

@@ -59,13 +59,14 @@ LINK_PARENTS: dict[str, tuple[str, str]] = {ln.name: (ln.parent, _transform_name
                                             for ln in LINKS if ln.parent is not None}
 
 
-def link_transforms(params: HandParams, q=None) -> dict[str, np.ndarray]:
-    """T_palm_link (metres) of every link at joint angles q (None = rest), mirrored for a left hand."""
+def link_transforms(params: HandParams, q=None, mirrored: bool = True) -> dict[str, np.ndarray]:
+    """T_palm_link (metres) of every link at joint angles q (None = rest), mirrored for a left hand
+    (``mirrored=False``: the right hand's frames whatever the side, for what a mirror leaves alone)."""
     joints = joint_transforms(params, q)
     out = {"palm": np.eye(4)}
     for name, (parent, jname) in LINK_PARENTS.items():   # topology order: parents first
         out[name] = out[parent] @ joints[jname]
-    if params.side == "left":
+    if mirrored and params.side == "left":
         out = {k: mirror(v) for k, v in out.items()}
     return out
 

@@ -22,7 +22,7 @@ from ..kinematics.hand_params import (Cad, ChainParams, Finger, Guide, HandParam
 from ..kinematics.topology import FINGERS
 from ..units import DEG, G_PER_CM3, MM
 from .errors import ParamError
-from . import rules
+from . import rules, servos
 from .reader import TomlTable
 
 __all__ = ["SCHEMA_VERSION", "EffectLibrary", "plugin_paths", "parse", "Guide", "ChainParams", "Finger",
@@ -255,6 +255,30 @@ def _cad(c: TomlTable, hand_length: float, fingers: Mapping[str, Finger], thumb:
     return cad
 
 
+def _servo(s: TomlTable) -> ServoBody:
+    """``[servo]``: the file's numbers, or a catalogue servo's (``model``, :mod:`.servos`) for
+    those it leaves out."""
+    model = s.string("model", servos.names()) if "model" in s.data else None
+    given = servos.CATALOGUE[model].values() if model else {}
+
+    def number(key: str, **bounds) -> float:
+        if key not in s.data and model and key not in given:
+            raise s.error(key, None, f"is required: the catalogue's {model} ({servos.CATALOGUE[model].title}) has "
+                          "no mounting ears, and the printed pocket holds a servo by its ears")
+        return s.number(key, **bounds, **({"default": given[key]} if key in given else {}))
+
+    if "body_mm" in s.data or not model:
+        body = s.vector("body_mm", 3, gt=0)
+    else:
+        body = tuple(s.check_number(f"body_mm[{i}]", v, gt=0) for i, v in enumerate(given["body_mm"]))
+    out = ServoBody(tuple(v * MM for v in body),
+                    number("flange_span_mm", gt=0) * MM, number("screw_diameter_mm", gt=0) * MM,
+                    number("stall_torque_Nm", gt=0, le=100.0), number("speed_deg_s", gt=0, le=1e4) * DEG,
+                    s.number("stall_error_deg", gt=0, le=30.0, default=1.0) * DEG, model)
+    s.done()
+    return out
+
+
 def parse(document: Mapping[str, Any], source: str | None = None,
           effects: EffectLibrary | None = None) -> HandParams:
     """Validate a parsed parameter document and build the frozen :class:`HandParams`.
@@ -321,12 +345,7 @@ def parse(document: Mapping[str, Any], source: str | None = None,
                              f"must be < palm.finger_pitch_mm = {palm.finger_pitch / MM:g} "
                              "(adjacent fingers would overlap)", source)
 
-    s = root.table("servo")
-    servo = ServoBody(tuple(v * MM for v in s.vector("body_mm", 3, gt=0)),
-                  s.number("flange_span_mm", gt=0) * MM, s.number("screw_diameter_mm", gt=0) * MM,
-                  s.number("stall_torque_Nm", gt=0, le=100.0), s.number("speed_deg_s", gt=0, le=1e4) * DEG,
-                  s.number("stall_error_deg", gt=0, le=30.0, default=1.0) * DEG)
-    s.done()
+    servo = _servo(root.table("servo"))
     if servo.flange_span <= servo.body[0]:
         raise ParamError("servo.flange_span_mm", servo.flange_span / MM,
                          f"must exceed the body length servo.body_mm[0] = {servo.body[0] / MM:g}", source)
