@@ -65,6 +65,12 @@ SEPARATING_EXPERIMENTS = {
     frozenset({"tendon_elasticity", "pulley_radius_error"}):
         "measure the MCP of the same finger (a pulley radius error moves the MCP, elasticity leaves it at "
         "the model), or the PIP and DIP together (a radius error keeps the 4:5:4 joint ratio, elasticity bends it)",
+    frozenset({"routed_elasticity", "tendon_elasticity"}):
+        "measure the MCP of the same finger over the whole travel (the routed stretch lowers it through the "
+        "drive's stretch, the paper's eq. 13 leaves it at the model), with the PIP and DIP",
+    frozenset({"routed_elasticity", "pulley_radius_error"}):
+        "measure the PIP and DIP with the MCP of the same finger (a radius error keeps the joints' ratios, "
+        "the strands' stretch bends them, the distal joints most)",
     frozenset({"tendon_elasticity", "friction_hysteresis"}):
         "sweep in both directions: friction flips sign with the direction of motion, elasticity does not",
     frozenset({"tendon_slack", "joint_offset"}):
