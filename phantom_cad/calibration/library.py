@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..kinematics.memo import memoised
 from ..kinematics.statics import hand_statics, reference_angle
 from ..kinematics.topology import CHAINS, CMC_SERVO, DISTAL_JOINTS, JOINTS, N_SERVOS, SERVOS, TENDON_SERVOS, servo_joints
 from ..units import DEG
@@ -360,11 +361,17 @@ class DriveFriction(Effect):
     invertible = True
 
 
+_ROUTED: dict = {}
+
+
 def routed_statics(hand, scale) -> tuple:
     """The routed statics of every tendon chain (servo order) with the strands' compliance k_s / EA
     scaled by ``scale`` (5,) (kinematics.statics.hand_statics; not checked: a fit may try a scale
-    that leaves a joint no coupling and must be free to move away from it)."""
-    return hand_statics(hand.params, scale, check=False)
+    that leaves a joint no coupling and must be free to move away from it). Memoised: a fit's
+    Jacobian evaluates many parameter steps at one scale."""
+    scale = np.asarray(scale, dtype=float)
+    return memoised(_ROUTED, (hand.params.digest, scale.tobytes()),
+                    lambda: hand_statics(hand.params, scale, check=False), cap=64)
 
 
 def routed_reference_angles(hand, statics, u_eff, radius_scale) -> np.ndarray:
