@@ -381,7 +381,14 @@ def routed_reference_angles(hand, statics, u_eff, radius_scale) -> np.ndarray:
     s = np.empty(u_eff.shape)
     u = u_eff[:, TENDON_SERVOS] * radius_scale
     for k, (chain, c) in enumerate(zip(hand.params.chains, statics)):
-        s[:, k] = reference_angle(u[:, k], chain, c)
+        if c.linear:
+            # at u = 0 no tension, no stretch: s = 0 exactly. A recording sweeps one servo at a
+            # time, so most of a chain's rows are at rest and only the others are solved
+            moved = u[:, k] != 0.0
+            s[:, k] = 0.0
+            s[moved, k] = reference_angle(u[moved, k], chain, c)
+        else:
+            s[:, k] = reference_angle(u[:, k], chain, c)
     s[:, CMC_SERVO] = u_eff[:, CMC_SERVO] * hand.params.thumb.cmc_gain
     return s
 
