@@ -7,7 +7,8 @@ largest |twin - model| (degrees) per joint kind.
     python bench/twin_vs_model.py default=exports/phantom left=exports/phantom_left \\
         hand_length_170=exports/<170 mm hand>
 
-Each name is one of tests.support.hands.HANDS (its parameters), each folder its export.
+Each name is one of tests.support.hands.HANDS (its parameters) or a parameter file (``*.toml``,
+e.g. one ``phantom-cad size`` wrote), each folder its export.
 """
 
 from __future__ import annotations
@@ -34,7 +35,12 @@ def errors(kind: str, folder: Path) -> dict[str, np.ndarray]:
     from phantom_cad.params import parse
     from tests.support.hands import hand_document
 
-    params = parse(hand_document(kind))
+    if kind.endswith(".toml"):
+        from phantom_cad.params.io import load_params
+
+        params = load_params(kind)
+    else:
+        params = parse(hand_document(kind))
     hands = {c: Hand(params, compensation=c) for c in ("routed", "paper")}
     m = mujoco.MjModel.from_xml_path(str(folder / "description" / "mjcf" / "scene.xml"))
     m.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT | mujoco.mjtDisableBit.mjDSBL_GRAVITY

@@ -78,6 +78,30 @@ def hand_export(hand_build, shared_root, part_cache):
     return get
 
 
+#: the sized hand of the tests: `phantom-cad size --hand-length 160 --hand-breadth 72`
+SIZED_HAND = (160.0, 72.0, "sized_160")
+
+
+@pytest.fixture(scope="session")
+def sized_hand(shared_root, part_cache):
+    """(document, BuildResult) of :data:`SIZED_HAND`: sized as ``phantom-cad size`` does (the CMC
+    placement searched, the preflight rules checked), written to the run's folder and built with
+    the run's part cache, unsliced; made once per run."""
+    def make():
+        from phantom_cad.cad import preflight
+        from phantom_cad.export.pipeline import build_hand
+        from phantom_cad.params.io import dump_params
+        from phantom_cad.sizing import Person, size
+
+        length, breadth, name = SIZED_HAND
+        got = size(Person(length, breadth, name=name), check=preflight.check)
+        path = shared_root / f"{name}.toml"
+        dump_params(got.document, path)
+        return got.document, build_hand(path, shared_root / "exports" / name, cache_dir=part_cache, jobs=2,
+                                         slice=False)
+    return shared.once(shared_root, f"export-{SIZED_HAND[2]}", make)
+
+
 @pytest.fixture(scope="session")
 def hand_entries(hand_export, part_cache):
     """``hand_entries(kind)`` -> {name: part cache entry} of every part of a hand ``hand_export``
@@ -150,7 +174,7 @@ def power_grasps(hand_parts, shared_root):
 #: session fixtures that build a whole hand or every part of one: a test that uses any of them
 #: (directly or through another fixture) is in the slow tier (`make test`, not `make test-fast`)
 SLOW_FIXTURES = frozenset({
-    "hand_build", "hand_export", "hand_entries", "hand_parts", "hand_meshes", "power_grasps",    # here
+    "hand_build", "hand_export", "hand_entries", "hand_parts", "hand_meshes", "power_grasps", "sized_hand",  # here
     "built", "placed",                                   # tests/cad/conftest.py
     "pkg", "standin_build",                              # tests/export/conftest.py (the stand-in through workers)
     "part_cache",                                        # a build that shares the run's cache

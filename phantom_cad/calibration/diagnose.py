@@ -18,6 +18,12 @@ with dIC < 0: the others fail already; their held-out ratio is None). The best p
 the hand passes any more, on what the hand's effects leave (then the backward step may drop hand
 effects they make redundant): a 15-parameter per-joint scale would otherwise absorb the hand's
 elasticity and radius errors, and the control law, which never applies it, would lose them.
+For the same reason a measurement effect replaces a hand effect only on evidence of its own: when
+the backward step after it drops a hand effect it duplicates exactly (calibration/identify.py), its
+parameters on the joints none of those hand effects can move (a scale on the MCPs, which no tendon
+stretch produces) must pass the forward step's rule on their own; if they do not, both explain the
+data, the hand effects stay (the control law needs them), the measurement effect is withdrawn, and
+the report names the pair and the experiment that separates them (the angle gauge under the camera).
 Candidates whose dIC is within
 AMBIGUITY_IC of the winner's are reported as indistinguishable on these data, with the experiment
 that separates them.
@@ -85,12 +91,24 @@ SEPARATING_EXPERIMENTS = {
         "reverse the direction in the middle of the travel: friction opens a loop at every reversal, slack "
         "only near the start",
 }
+#: what separates a hand effect from a measurement error that duplicates it on the recorded sweeps
+GAUGE_EXPERIMENT = ("photograph the printed angle gauge (phantom-cad build writes it beside the parts, gauge/) in "
+                    "the finger's plane with the same camera and fit the camera's scale on its known angles first "
+                    "(docs/calibration.md): a scale the gauge shows is the camera's, what is left after it is the hand's")
+SEPARATING_EXPERIMENTS.update({
+    frozenset({name, "camera_scale"}): GAUGE_EXPERIMENT + "; or sweep again with a weight on the fingertip: a tendon's "
+    "stretch grows with its tension, a camera's scale does not"
+    for name in ("tendon_elasticity", "tendon_elasticity_per_finger")})
 DEFAULT_EXPERIMENT = ("sweep the whole travel in both directions in fine steps and measure every joint of the "
                       "chain (MCP included)")
 
 
 def separating_experiment(a: str, b: str) -> str:
-    return SEPARATING_EXPERIMENTS.get(frozenset({a, b}), DEFAULT_EXPERIMENT)
+    if frozenset({a, b}) in SEPARATING_EXPERIMENTS:
+        return SEPARATING_EXPERIMENTS[frozenset({a, b})]
+    if MEASUREMENT in {get_effect(a).stage, get_effect(b).stage}:
+        return GAUGE_EXPERIMENT
+    return DEFAULT_EXPERIMENT
 
 
 @dataclass
@@ -164,6 +182,21 @@ class Diagnosis:
             out["after"] = signature_report(measured_features(sig["after"], left, self.noise), best_after, REGISTRY)
         return out
 
+    def ambiguities_json(self, sig: dict | None = None) -> list[dict]:
+        """The ambiguities; a hand effect kept over a measurement effect carries whether the analytic
+        model's residual has its declared signature (``signature``: matching and mismatching features)."""
+        out = []
+        for a in self.ambiguities:
+            a = dict(a)
+            if a.get("kind") == "hand_or_measurement":
+                sig = sig or self.signatures()
+                vb = verdict(self.before, self.noise)
+                left = [c for c, pj in vb["per_joint"].items() if not pj["consistent"]]
+                rep = signature_report(measured_features(sig["before"], left, self.noise), a["kept"], REGISTRY)
+                a["signature"] = None if rep is None else {k: rep.get(k) for k in ("matches", "mismatches")}
+            out.append(a)
+        return out
+
     @property
     def ranking(self) -> list[Candidate]:
         return self.rounds[0] if self.rounds else []
@@ -221,7 +254,7 @@ class Diagnosis:
             "effects": effects,
             "ranking": [c.to_json() for c in self.ranking],
             "rounds": [[c.to_json() for c in r] for r in self.rounds],
-            "ambiguities": self.ambiguities,
+            "ambiguities": self.ambiguities_json(sig),
             "identifiability": [c.to_json() for c in combinations(self.after)],
             "per_joint": self.per_joint(),
             "made_worse": self.made_worse(),
@@ -339,10 +372,36 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
     base = pool.fit(Model(hand, current, problem))
     heldout_cache: dict[tuple, float] = {}
 
+    def evidence(prev: FitResult, effect: str, hand_effects: list[str], n_eff: float) -> dict:
+        """Whether the measurement effect ``effect`` shows where none of ``hand_effects`` reaches: its
+        parameters on the joints none of theirs moves, added to ``prev`` (the model before it), must
+        pass the forward step's rule (dIC < 0 and held-out ratio < HELDOUT_RATIO)."""
+        reach = {j for n in hand_effects for p in get_effect(n).parameters(hand) for j in p.joints}
+        own = {j for p in get_effect(effect).parameters(hand) for j in p.joints}
+        model = Model(hand, [*prev.model.names, effect], problem, {effect: own - reach})
+        joints = [Q_COLUMNS[j] for j in sorted({j for k, _, p in model.free if model.names[k] == effect
+                                                for j in p.joints} - reach)]
+        out = {"outside": {"joints": joints, "delta_ic": None, "heldout_ratio": None}, "passes": False, "text": ""}
+        if model.p == prev.model.p:
+            return out
+        res = pool.fit(model, model.start(prev))
+        dic = delta_ic(prev, res, n_eff)
+        out["outside"]["delta_ic"] = round(dic, 3)
+        if dic < 0:
+            held([(prev.model, prev), (model, res)])
+            base_held = heldout_cache[prev.model.key]
+            ratio = heldout_cache[model.key] / base_held if base_held > 0 else 1.0
+            out["outside"]["heldout_ratio"] = round(ratio, 6)
+            out["passes"] = bool(ratio < HELDOUT_RATIO)
+            out["text"] = (f"; {effect} replaced it on evidence of its own: on the joints {', '.join(hand_effects)} "
+                           f"cannot move ({', '.join(joints)}) it passes alone (dIC {dic:+.1f}, held-out ratio "
+                           f"{ratio:.3f})")
+        return out
+
     def held(jobs: list[tuple[Model, FitResult]]) -> None:
         """The held-out sums of squares of (model, the fit to start from), into heldout_cache."""
-        todo = {model.names: (model, model.start(start_from)) for model, start_from in jobs
-                if model.names not in heldout_cache}
+        todo = {model.key: (model, model.start(start_from)) for model, start_from in jobs
+                if model.key not in heldout_cache}
         for key, sse in zip(todo, pool.heldout(list(todo.values()))):
             heldout_cache[key] = sse
 
@@ -351,6 +410,7 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
     saturated: FitResult | None = None           # the whole hand family at once (n_eff's floor)
     n_floor = 0.0                                # the floor, once a round has used it
     seen: set[frozenset] = set()                 # the models the rounds ended with
+    withheld: set[str] = set()                   # measurement effects withdrawn for lack of evidence
     directions_seen = {int(v) for v in np.unique(m.direction)}
     if not ({1, -1} <= directions_seen):
         notes.append("the data move in one direction only: direction-dependent effects (friction) cannot be "
@@ -360,11 +420,12 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
     hand_names = [n for n in names if n not in measurement]
     family = "hand" if set(names) - measurement else "measurement"
     for _ in range(MAX_ROUNDS):
-        candidates = [n for n in names if n not in current and (n in measurement) == (family == "measurement")]
+        candidates = [n for n in names if n not in current and n not in withheld
+                      and (n in measurement) == (family == "measurement")]
         models = []
         for n in candidates:
-            model = Model(hand, current + [n], problem)
-            if model.p == base.model.p:
+            model = Model(hand, _with(current, n, len(start)), problem)
+            if not any(model.names[k] == n for k, _, _ in model.free):
                 if not rounds:
                     notes.append(f"{n}: no parameter is identifiable from these data (not scored)")
                 continue
@@ -385,11 +446,11 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
             passing_ic = [(model, res) for (_, model, res), d in zip(fits, dics) if d < 0]
             if passing_ic:
                 held([(base.model, base)] + passing_ic)
-            base_held = heldout_cache.get(base.model.names)
+            base_held = heldout_cache.get(base.model.key)
             out = []
             for (n, model, res), dic in zip(fits, dics):
                 if dic < 0:
-                    ratio_h = heldout_cache[model.names] / base_held if base_held > 0 else 1.0
+                    ratio_h = heldout_cache[model.key] / base_held if base_held > 0 else 1.0
                 else:
                     ratio_h = float("nan")      # not run
                 passes = bool(dic < 0 and ratio_h < HELDOUT_RATIO)
@@ -426,7 +487,11 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
                     "delta_ic": [round(best.delta_ic, 3), round(other.delta_ic, 3)],
                     "experiment": separating_experiment(best.effect, other.effect),
                 })
-        current.append(best.effect)
+        before_best = (list(current), base)
+        replaced = [c for c in current if c not in _with(current, best.effect, len(start))]
+        current[:] = _with(current, best.effect, len(start))
+        for name in replaced:
+            notes.append(f"{best.effect} replaced {name}: a model holds one form of the tendon's stretch")
         base = best.result
         if family == "measurement":
             # the measurement's own error is now modelled: the hand's physics it masked may show
@@ -434,7 +499,26 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
             # friction band, is found only on the residual the scales leave)
             family = "hand"
         base, dropped = _prune(hand, problem, current, base, len(start), pool, n_floor)
-        duplicates = _duplicated(best, dropped)
+        duplicates, exact = _duplicated(best, dropped)
+        if exact:
+            ev = evidence(before_best[1], best.effect, exact, best.n_eff)
+            if not ev["passes"]:
+                # no evidence of its own: the hand effects it duplicates stay, the control law needs them
+                for name in exact:
+                    ambiguities.append({
+                        "round": len(rounds), "effects": [name, best.effect], "kind": "hand_or_measurement",
+                        "kept": name, "withdrawn": best.effect,
+                        "mae_deg": {"with_hand_effect": round(mae(before_best[1]), 5),
+                                    "with_measurement_instead": round(mae(base), 5)},
+                        "outside": ev["outside"],
+                        "experiment": separating_experiment(name, best.effect),
+                    })
+                current[:], base = before_best
+                withheld.add(best.effect)
+                family = "measurement"
+                continue
+            for name in exact:
+                duplicates[name] += ev["text"]
         for name, dic in dropped:
             notes.append(f"{name} was dropped after {best.effect} was added: the model without it scores "
                          f"better (dIC {dic:+.1f}); what it explained is explained by the others"
@@ -467,7 +551,17 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
                      noise, hand)
 
 
-def _duplicated(best: Candidate, dropped) -> dict[str, str]:
+def _with(current: list[str], name: str, keep: int) -> list[str]:
+    """``current`` with ``name`` added and, when it models the tendon's stretch (Effect.stretch), the
+    selected effects of the other form taken out (not the first ``keep``, the user's start): the
+    routed and the paper's form describe the same strands, and both at once would fit any spread
+    of the stretch over the joints by mixing them."""
+    form = get_effect(name).stretch
+    return [c for i, c in enumerate(current)
+            if i < keep or not form or get_effect(c).stretch in (None, form)] + [name]
+
+
+def _duplicated(best: Candidate, dropped) -> tuple[dict[str, str], list[str]]:
     """{hand effect dropped: the sentence that says so} for the hand effects a measurement effect
     just added duplicates on these data: exactly (their parameters and the measurement's form a
     combination the fit with both cannot separate, calibration/identify.py) or nearly (with the
@@ -476,18 +570,21 @@ def _duplicated(best: Candidate, dropped) -> dict[str, str]:
     almost as a camera's per-joint scales do, the cosine law's curvature alone tells them apart).
     The backward step keeps the simpler model, the measurement side; said so, because if the hand
     has the effect the calibrated control law lacks it (a uniform tendon compliance scales each
-    distal joint by a constant: on a sweep it is a per-joint scale of the camera)."""
+    distal joint by a constant: on a sweep it is a per-joint scale of the camera).
+    Also returns the names duplicated exactly."""
     if not dropped or get_effect(best.effect).stage != MEASUREMENT:
-        return {}
-    out = {}
+        return {}, []
+    out, exact = {}, []
     combos = combinations(best.result)
     lacks = ("the measurement side is kept as the simpler model, so a calibrated control law lacks {name}; "
-             "if the hand has it, calibrate the measurement on known angles and fit with --effects {name}")
+             "if the hand has it, calibrate the camera on the angle gauge first (docs/calibration.md) and fit "
+             "with --effects {name}")
     for name, _ in dropped:
         for c in combos:
             keys = list(c.weights)
             if any(k.startswith(f"{name}.") for k in keys) and any(k.startswith(f"{best.effect}.") for k in keys):
                 shown = " ".join(f"{w:+.2f} {k}" for k, w in list(c.weights.items())[:4])
+                exact.append(name)
                 out[name] = (f"; but the data cannot tell {name} from {best.effect} (not identifiable together: "
                              f"{shown}{' ...' if len(keys) > 4 else ''}): " + lacks.format(name=name))
                 break
@@ -499,7 +596,7 @@ def _duplicated(best: Candidate, dropped) -> dict[str, str]:
                              f"its uncertainty {near.inflation ** 0.5:.0f}-fold): " + lacks.format(name=name)
                              + ("; " + experiment_text(near.experiment) if near.experiment else
                                 "; no recording of one servo separates them better than these data do"))
-    return out
+    return out, exact
 
 
 def _simplify(hand, problem, current: list[str], base: FitResult, keep: int, pool: FitPool, n_floor: float = 0.0):

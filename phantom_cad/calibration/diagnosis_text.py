@@ -70,7 +70,10 @@ def diagnosis_text(d, result) -> list[str]:
         for k, v in result["effects"][name]["parameters"].items():
             out.append(f"  {name}.{k} = {v['value']:.5g} " + (f"+- {v['std']:.2g}" if v["identifiable"]
                                                              else "(not identifiable alone: see below)"))
-    for a in d.ambiguities:
+    for a in result["ambiguities"]:
+        if a.get("kind") == "hand_or_measurement":
+            out.append(hand_or_measurement_text(a))
+            continue
         out.append(f"ambiguous (round {a['round']}): {a['effects'][0]} and {a['effects'][1]} explain the residual "
                    f"equally well (dIC {a['delta_ic'][0]:.1f} vs {a['delta_ic'][1]:.1f}); kept {a['effects'][0]}. "
                    f"To separate them: {a['experiment']}")
@@ -94,6 +97,20 @@ def diagnosis_text(d, result) -> list[str]:
     if result["outliers_count"]:
         out.append(outlier_text(result["outliers"], result["robust"], result["outliers_count"]))
     return out
+
+
+def hand_or_measurement_text(a: dict) -> str:
+    """The sentence of a hand effect kept over a measurement effect that explains the data as well."""
+    kept, gone, mae = a["kept"], a["withdrawn"], a["mae_deg"]
+    joints = ", ".join(a["outside"]["joints"]) or "none measured"
+    sig = a.get("signature")
+    matched = (f"; the analytic model's residual has {kept}'s signature" if sig and not sig["mismatches"] else
+               f"; the analytic model's residual differs from {kept}'s signature in: {', '.join(sig['mismatches'])}"
+               if sig else "")
+    return (f"both explain the data (round {a['round']}): {kept} (the hand; MAE {mae['with_hand_effect']:.3f} deg) "
+            f"and {gone} (the measurement; MAE {mae['with_measurement_instead']:.3f} deg in its place). {gone} shows "
+            f"nothing of its own on the joints {kept} cannot move ({joints}), so {kept} is kept: the control law "
+            f"needs it{matched}. To separate them: {a['experiment']}")
 
 
 def verdict_lines(result) -> list[str]:

@@ -109,14 +109,22 @@ class Problem:
 
 
 class Model:
-    """The analytic model plus effects, with the data-identifiable parameters free."""
+    """The analytic model plus effects, with the data-identifiable parameters free.
 
-    def __init__(self, hand, names, problem: Problem):
+    ``only``: {effect name: joint indices}: that effect's parameters are free only where one of
+    their joints is among them (the rest held at 0), e.g. a camera's scales on the joints a hand
+    effect cannot move. ``key`` names the model (its effects, and the restriction if any)."""
+
+    def __init__(self, hand, names, problem: Problem, only: dict | None = None):
         self.hand = hand
         self.names = tuple(names)
+        self.only = tuple(sorted((n, tuple(sorted(int(j) for j in js))) for n, js in (only or {}).items()))
+        self.key = (self.names, self.only) if self.only else self.names
         self.effects: list[Effect] = [get_effect(n) for n in self.names]
         self.plists: list[list[Param]] = [e.parameters(hand) for e in self.effects]
-        self.active = [np.array([identifiable(p, problem) for p in pl], dtype=bool) for pl in self.plists]
+        allowed = dict(self.only)
+        self.active = [np.array([identifiable(p, problem) and (n not in allowed or bool(set(p.joints) & set(allowed[n])))
+                                 for p in pl], dtype=bool) for n, pl in zip(self.names, self.plists)]
         self.free: list[tuple[int, int, Param]] = [
             (k, i, p) for k, pl in enumerate(self.plists) for i, p in enumerate(pl) if self.active[k][i]]
         self.lower = np.array([p.lower for _, _, p in self.free])

@@ -244,6 +244,10 @@ class Effect:
     #: compensation (``Hand.forward(u, compensated=False)`` leaves it out), and a hand with it uses
     #: the routed servo law and coupling in its control law
     routed: bool = False
+    #: the form of the tendon's stretch the effect models ("paper": eq. 13; "routed": the routing's
+    #: statics), or None: diagnose keeps one form in a model (a candidate of the other form is
+    #: scored in place of the selected one)
+    stretch: str | None = None
 
     def parameters(self, hand) -> list[Param]:
         raise NotImplementedError

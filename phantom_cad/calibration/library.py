@@ -78,6 +78,7 @@ class PulleyRadiusError(Effect):
 class TendonElasticity(Effect):
     name = "tendon_elasticity"
     stage = "tension"
+    stretch = "paper"
     order = 30
     explanation = ("distal joints (PIP, DIP, thumb IP) lag in proportion to flexion, the MCP does not, the same "
                    "in both directions: the return spring's tension stretches the tendon (eq. 11-14)")
@@ -108,6 +109,7 @@ class TendonElasticity(Effect):
 class TendonElasticityPerFinger(Effect):
     name = "tendon_elasticity_per_finger"
     stage = "tension"
+    stretch = "paper"
     order = 31
     simpler = "tendon_elasticity"
     explanation = ("distal joints lag in proportion to flexion, the MCP does not, by a different amount on each "
@@ -417,6 +419,7 @@ _CHAIN_JOINTS = tuple(sorted(i for c in CHAINS for i in c.q_index))
 class RoutedElasticity(Effect):
     name = "routed_elasticity"
     stage = "tension"
+    stretch = "routed"
     #: before the paper's form: both replace the base k_s / EA, what the other adds stays
     order = 28
     routed = True
@@ -447,6 +450,7 @@ class RoutedElasticity(Effect):
 class RoutedElasticityPerFinger(Effect):
     name = "routed_elasticity_per_finger"
     stage = "tension"
+    stretch = "routed"
     order = 29
     routed = True
     simpler = "routed_elasticity"

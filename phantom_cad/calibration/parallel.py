@@ -5,8 +5,9 @@ information criterion, and the trials of the backward step are independent of ea
 :class:`FitPool` runs them on the machine's cores. Its workers are forked after the data are
 prepared, so they inherit the hand, the problem and its folds, the registered effects (a user's
 ``--plugin`` included) and the loss of the fits (``robust_loss``); a task is only the effect names
-and the starting point, and a result only arrays. Each result is the one :func:`~.fitting.fit`
-computes in the parent (the same code on the same data: the same bytes whichever worker ran it).
+(and the restriction of their parameters, if any) and the starting point, and a result only
+arrays. Each result is the one :func:`~.fitting.fit` computes in the parent (the same code on the
+same data: the same bytes whichever worker ran it).
 
 Where fork is missing (Windows, macOS's default) or with one CPU the tasks run in this process.
 A task that raises in a worker is run again here, so that the error is the genuine one
@@ -32,10 +33,10 @@ _FAILED = "failed"
 
 
 def _run(state: dict, task) -> tuple:
-    kind, names, key, x0, uncertainty = task
+    kind, names, only, key, x0, uncertainty = task
     hand, problems = state["hand"], state["problems"]
     problem = problems["all"]
-    model = Model(hand, names, problem)
+    model = Model(hand, names, problem, dict(only))
     if kind == "fit":
         res = fit(model, problem, x0, uncertainty)
         return res.theta, res.std, res.residual, res.jtj
@@ -90,11 +91,12 @@ class FitPool:
 
     def fits(self, jobs: list[tuple[Model, np.ndarray | None]]) -> list[FitResult]:
         """fit(model, problem, x0) of each (model, x0), models on this pool's problem."""
-        tasks = [("fit", model.names, None, x0, True) for model, x0 in jobs]
+        tasks = [("fit", model.names, model.only, None, x0, True) for model, x0 in jobs]
         out = [FitResult(model, theta, std, residual, self.problem, jtj=jtj)
                for (model, _), (theta, std, residual, jtj) in zip(jobs, self._map(tasks))]
         for res in out:
-            self.fitted.setdefault(res.model.names, res)
+            if not res.model.only:          # a restricted model is not the model its names say
+                self.fitted.setdefault(res.model.names, res)
         return out
 
     def fit(self, model: Model, x0=None) -> FitResult:
@@ -103,6 +105,6 @@ class FitPool:
     def heldout(self, jobs: list[tuple[Model, np.ndarray | None]]) -> list[float]:
         """The held-out sum of squares of each (model, x0): fitted on each fold from x0, scored on
         the other (fitting.heldout_fold), the two folds summed."""
-        tasks = [("heldout", model.names, k, x0, False) for model, x0 in jobs for k in (0, 1)]
+        tasks = [("heldout", model.names, model.only, k, x0, False) for model, x0 in jobs for k in (0, 1)]
         sse = [r[0] for r in self._map(tasks)]
         return [sse[2 * i] + sse[2 * i + 1] for i in range(len(jobs))]

@@ -313,6 +313,9 @@ app.command("view")(view)
 from .check import check  # noqa: E402
 
 app.command("check")(check)
+from .size import size as _size  # noqa: E402
+
+app.command("size")(_size)
 
 
 def main(argv: Optional[list[str]] = None) -> None:

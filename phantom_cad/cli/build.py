@@ -66,6 +66,10 @@ def build(
             when = f" ({est['time_s'] / 60:.0f} min, {est['filament_g']:.1f} g)" if est else ""
             typer.echo(f"print first: {result.out_dir / coupon['stl']}{when}, the fit-test coupon: tune [print] "
                        f"with it ({result.out_dir / coupon['sheet']})")
+        gauge = result.manifest.get("gauge", {})
+        if gauge:
+            typer.echo(f"before calibrating: {result.out_dir / gauge['stl']}, the angle gauge: measure the camera's "
+                       f"scale on it ({result.out_dir / gauge['sheet']}; docs/calibration.md)")
 
 
 def main() -> None:  # pragma: no cover - convenience entry point: python -m phantom_cad.cli.build

@@ -7,6 +7,7 @@ Layout (default root ``.cache`` in the working directory, or ``$PHANTOM_CAD_CACH
                               visual.stl, collision.npz (the robot description's, metres),
                               render.png, meta.json
     .cache/coupon/<key>/      the fit-test coupon: fit_coupon.step, .stl, .md, render.png, meta.json
+    .cache/gauge/<key>/       the angle gauge: angle_gauge.step, .stl, .md, render.png, meta.json
     .cache/assembly/<key>/    hand_assembly.step, render.png, interference.json, meta.json
     .cache/slice/<key>.json   PrusaSlicer estimates of one STL with one config, and their SHA-256
     .cache/mjcf/<key>.json    a compiled MJCF (export/mjcf.py) of one robot model and its meshes,
@@ -106,6 +107,20 @@ def coupon_key(params: HandParams) -> str:
     }))
 
 
+def gauge_key(params: HandParams) -> str:
+    """The angle gauge's key: the fingers and the thumb (lengths, joint limits), the hand's length,
+    the wall it is made of and the STL tolerance."""
+    doc = params.document
+    return sha256(canonical({
+        "pipeline": PIPELINE_VERSION,
+        "gauge": {"hand": plain(doc["hand"]), "fingers": plain(doc["fingers"]), "thumb": plain(doc["thumb"]),
+                  "palm_wall_mm": doc["palm"]["wall_mm"], "stl_tolerance_m": params.print.stl_tolerance,
+                  "name": params.name},
+        "code": code_digest(),
+        "versions": cad_versions(),
+    }))
+
+
 def part_key(params: HandParams, name: str, part_inputs: Mapping[str, Any]) -> str:
     return sha256(canonical({
         "pipeline": PIPELINE_VERSION,
@@ -122,6 +137,8 @@ def part_key(params: HandParams, name: str, part_inputs: Mapping[str, Any]) -> s
 PART_FILES = ("part.brep", "part.step", "part.stl", "part.3mf", "mesh.npz", "visual.stl", "collision.npz")
 #: the files of the fit-test coupon's entry (render.png too unless the build was --no-render)
 COUPON_FILES = ("fit_coupon.step", "fit_coupon.stl", "fit_coupon.md")
+#: the files of the angle gauge's entry (render.png too unless the build was --no-render)
+GAUGE_FILES = ("angle_gauge.step", "angle_gauge.stl", "angle_gauge.md")
 #: the files of every assembly entry (render.png too unless the build was --no-render)
 ASSEMBLY_FILES = ("hand_assembly.step", "interference.json")
 
@@ -217,6 +234,14 @@ class Cache:
     def coupon_problem(self, key: str, render: bool = True) -> str | None:
         """Why the coupon entry ``key`` cannot be served (None: it can): see :func:`entry_problem`."""
         return entry_problem(self.coupon_dir(key), COUPON_FILES + (("render.png",) if render else ()))
+
+    # angle gauge ---------------------------------------------------------------
+    def gauge_dir(self, key: str) -> Path:
+        return self.root / "gauge" / key
+
+    def gauge_problem(self, key: str, render: bool = True) -> str | None:
+        """Why the gauge entry ``key`` cannot be served (None: it can): see :func:`entry_problem`."""
+        return entry_problem(self.gauge_dir(key), GAUGE_FILES + (("render.png",) if render else ()))
 
     # assembly ---------------------------------------------------------------
     def assembly_dir(self, key: str) -> Path:

@@ -49,6 +49,7 @@ class ExportContext:
     ini: str                        # slicer/config.ini
     coupon_key: str
     coupon_estimate: dict | None
+    gauge_key: str
     #: waits for the assembly's workers and returns its cache folder (``pipeline._Build.assembly``)
     finish_assembly: Callable[[], Path]
     #: the manifest, once the Manifest exporter has written it
@@ -62,6 +63,9 @@ class ExportContext:
 
     def coupon_dir(self) -> Path:
         return self.cache.coupon_dir(self.coupon_key)
+
+    def gauge_dir(self) -> Path:
+        return self.cache.gauge_dir(self.gauge_key)
 
     def assembly_dir(self) -> Path:
         """The assembly's cache folder (the STEP, the picture); the first call waits for the workers
@@ -176,6 +180,25 @@ class Coupon(Exporter):
             _copy(ctx.coupon_dir() / f, stage, f"coupon/{f}")
         if "coupon/fit_coupon.png" in self.writes(ctx):
             _copy(ctx.coupon_dir() / "render.png", stage, "coupon/fit_coupon.png")
+
+
+class Gauge(Exporter):
+    """The angle gauge (cad.gauge): STEP, STL, the maker's sheet, its picture."""
+
+    name = "angle gauge"
+
+    def writes(self, ctx):
+        out = [f"gauge/{f}" for f in cache_mod.GAUGE_FILES]
+        if ctx.render and (ctx.gauge_dir() / "render.png").is_file():
+            out.append("gauge/angle_gauge.png")
+        return out
+
+    def write(self, ctx, stage):
+        (stage / "gauge").mkdir()
+        for f in cache_mod.GAUGE_FILES:
+            _copy(ctx.gauge_dir() / f, stage, f"gauge/{f}")
+        if "gauge/angle_gauge.png" in self.writes(ctx):
+            _copy(ctx.gauge_dir() / "render.png", stage, "gauge/angle_gauge.png")
 
 
 class SlicerConfig(Exporter):
@@ -347,6 +370,10 @@ class Manifest(Exporter):
                          "sheet": "coupon/fit_coupon.md",
                          **{k: coupon[k] for k in ("volume_mm3", "mass_g", "bbox_mm", "features")},
                          "print": ctx.coupon_estimate}
+        gauge = json.loads((ctx.gauge_dir() / "meta.json").read_text(encoding="utf-8"))
+        man["gauge"] = {"step": "gauge/angle_gauge.step", "stl": "gauge/angle_gauge.stl",
+                        "sheet": "gauge/angle_gauge.md",
+                        **{k: gauge[k] for k in ("volume_mm3", "mass_g", "bbox_mm", "faces")}}
         if ctx.has_description:
             from .description import summary
 
@@ -357,7 +384,7 @@ class Manifest(Exporter):
 
 #: every output of a build, in the order the pipeline writes them (see the module doc)
 EXPORTERS: tuple[Exporter, ...] = (
-    PartSolids(), PrintProjects(), PartRenders(), Coupon(), SlicerConfig(),
+    PartSolids(), PrintProjects(), PartRenders(), Coupon(), Gauge(), SlicerConfig(),
     DescriptionMeshes(), Urdf(), Mjcf(), RosPackage(), Bom(), Routing(),
     AssemblyStep(), AssemblyRender(),
     Manifest(),

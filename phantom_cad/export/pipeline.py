@@ -5,7 +5,8 @@
 
 Writes ``exports/<hand>/`` (see docs/exports.md): ``step/<part>.step``,
 ``step/hand_assembly.step``, ``stl/<part>.stl`` (print orientation), ``coupon/`` (the fit-test
-coupon: ``fit_coupon.step``, ``.stl``, ``.md``, ``.png``; :mod:`phantom_cad.cad.coupon`), ``bom.csv``,
+coupon: ``fit_coupon.step``, ``.stl``, ``.md``, ``.png``; :mod:`phantom_cad.cad.coupon`), ``gauge/``
+(the angle gauge: ``angle_gauge.step``, ``.stl``, ``.md``, ``.png``; :mod:`phantom_cad.cad.gauge`), ``bom.csv``,
 ``routing.json`` (every tendon's path, ``kinematics.routing``; docs/transmission.md),
 ``manifest.json``, ``renders/*.png`` and ``slicer/config.ini``.
 
@@ -140,6 +141,13 @@ class _Build:
         self.coupon_missing = problem is not None
         #: PrusaSlicer's estimate of the coupon (None unless sliced)
         self.coupon_estimate: dict | None = None
+        # the angle gauge (cad.gauge), cached like the coupon
+        self.gauge_key = cache_mod.gauge_key(params)
+        problem = cache.gauge_problem(self.gauge_key, render)
+        if problem not in (None, "missing"):
+            self.log(f"cache: angle gauge entry {self.gauge_key[:12]} not served ({problem}); rebuilding it")
+            cache.discard(cache.gauge_dir(self.gauge_key))
+        self.gauge_missing = problem is not None
 
     def get_pool(self) -> ProcessPoolExecutor:
         if self.pool is None:
@@ -156,8 +164,8 @@ class _Build:
 
     # 1. parts ------------------------------------------------------------------------
     def parts(self) -> dict[str, dict]:
-        """Build the missing parts, and the fit-test coupon when it is missing, into the cache;
-        return {name: timings} of the parts built."""
+        """Build the missing parts, and the fit-test coupon and the angle gauge when they are
+        missing, into the cache; return {name: timings} of the parts built."""
         part_timings: dict[str, dict] = {}
         missing = self.missing
         doc = plain(self.document)
@@ -168,6 +176,9 @@ class _Build:
         if self.coupon_missing:     # one more job, last: the smallest
             jobs.append((pool_mod.coupon_worker, {"key": self.coupon_key, "document": doc, "source": str(self.path),
                                                   "cache_root": str(self.cache.root), "render": self.render}))
+        if self.gauge_missing:
+            jobs.append((pool_mod.gauge_worker, {"key": self.gauge_key, "document": doc, "source": str(self.path),
+                                                 "cache_root": str(self.cache.root), "render": self.render}))
         if not jobs:
             return part_timings
         if missing:
@@ -181,6 +192,7 @@ class _Build:
             except BrokenProcessPool as exc:
                 raise BuildError(f"a worker process died while building {missing} "
                                  f"(crash in OCP?): {exc}; {self.out} was left untouched") from exc
+        gauge = results.pop() if self.gauge_missing else {"ok": True}
         coupon = results.pop() if self.coupon_missing else {"ok": True}
         failures = []
         for r in results:
@@ -193,6 +205,9 @@ class _Build:
         if not coupon["ok"]:
             raise BuildError(f"the fit-test coupon failed; {self.out} was left untouched",
                              [PartFailure(**coupon["failure"])])
+        if not gauge["ok"]:
+            raise BuildError(f"the angle gauge failed; {self.out} was left untouched",
+                             [PartFailure(**gauge["failure"])])
         return part_timings
 
     # 2. assembly: poses, STEP, render, interference -------------------------------------
@@ -324,7 +339,7 @@ class _Build:
             params=self.params, params_path=self.path, asm=self.asm, names=self.names, keys=self.keys,
             cache=self.cache, render=self.render, metas=metas, poses=poses, contacts=contacts, interference=inter,
             estimates=estimates, slicer_info=slicer_info, ini=ini, coupon_key=self.coupon_key,
-            coupon_estimate=self.coupon_estimate, finish_assembly=finish_assembly)
+            coupon_estimate=self.coupon_estimate, gauge_key=self.gauge_key, finish_assembly=finish_assembly)
         out.parent.mkdir(parents=True, exist_ok=True)
         stage = out.parent / f".{out.name}.{os.getpid()}.tmp"
         if stage.exists():

@@ -232,6 +232,54 @@ def coupon_worker(task: dict) -> dict:
         return {"ok": False, "failure": failure_from(task.get("name", "fit_coupon"), exc, None).__dict__}
 
 
+def gauge_worker(task: dict) -> dict:
+    """Build, verify and export the angle gauge (``cad.gauge``) into its cache entry: STEP, STL (as
+    built: it prints flat side down), the maker's sheet and a picture."""
+    from ..cad import gauge as gauge_mod
+    from ..cad import verify
+
+    try:
+        params = parse(task["document"], source=task["source"])
+        from . import render, step_stl
+
+        g = gauge_mod.AngleGauge(params)
+        shape = g.build()
+        verify.check_solid(gauge_mod.NAME, shape)
+        problems = g.verify(shape)
+        volume = float(shape.volume)
+        if abs(volume - g.volume()) > 1e-6 * g.volume():
+            problems.append(f"{gauge_mod.NAME}: volume {volume:.4f} mm^3, closed form {g.volume():.4f}")
+        if problems:
+            raise verify.CheckError(gauge_mod.NAME, "verify", "; ".join(problems))
+        cache = Cache(task["cache_root"])
+        final = cache.gauge_dir(task["key"])
+        tmp = cache.staging(final)
+        step = step_stl.step_bytes(shape, label=gauge_mod.NAME, color=g.color)
+        (tmp / "angle_gauge.step").write_bytes(step)
+        v, f = step_stl.tessellate(shape, units.mm(params.print.stl_tolerance))
+        stl, mesh_checks = _checked_stl(gauge_mod.NAME, v, f, volume)
+        (tmp / "angle_gauge.stl").write_bytes(stl)
+        (tmp / "angle_gauge.md").write_text(g.table(), encoding="utf-8")
+        if task.get("render", True):
+            render.render_png([render.MeshItem(gauge_mod.NAME, v, f, tuple(g.color), closed=True)], tmp / "render.png",
+                              title=f"{gauge_mod.NAME}  (print orientation)",
+                              subtitle=f"reference faces at {', '.join(f'{a:g}' for a in g.angles_deg)} degrees; "
+                                       "see angle_gauge.md",
+                              size_px=700, bed=True)
+        meta = {"name": gauge_mod.NAME, "volume_mm3": volume, "bbox_mm": _bbox(v),
+                "mass_g": mass_g(volume, params.print),
+                "stl": {"sha256": sha256(stl), "bytes": len(stl), **mesh_checks},
+                "faces": g.faces()}
+        (tmp / "meta.json").write_text(json.dumps(jsonable(meta), indent=1, sort_keys=True))
+        seal(tmp)
+        Cache.commit(tmp, final)
+        return {"ok": True}
+    except BaseException as exc:  # report, never crash the pool
+        c = Cache(task["cache_root"])
+        shutil.rmtree(c.staging_path(c.gauge_dir(task["key"])), ignore_errors=True)
+        return {"ok": False, "failure": failure_from(task.get("name", "angle_gauge"), exc, None).__dict__}
+
+
 def assembly_step_worker(task: dict) -> dict:
     """hand_assembly.step from the cached BREPs placed at the rest pose."""
     try:

@@ -76,11 +76,12 @@ def test_the_default_hand_is_all_green(export):
 
 def test_the_fist_row_reports_the_fingertips_distances(export):
     """The fist row (every tendon servo at the end of its travel) reports each fingertip's distance
-    to the palm and never fails; its numbers agree with trimesh's on the exported visual meshes,
-    posed by the URDF (yourdfpy) at the model's joint angles: the least distance from either
-    mesh's vertices to the other's surface, which the tessellation (stl_tolerance 0.02 mm) and the
-    row's 0.1 mm rounding bound."""
+    to the palm and never fails; its numbers agree with manifold3d's on the exported visual meshes
+    (loaded by trimesh), posed by the URDF (yourdfpy) at the model's joint angles: the least
+    distance between the two surfaces (``min_gap``, triangle to triangle), which the tessellation
+    (stl_tolerance 0.02 mm) and the row's 0.1 mm rounding bound."""
     import build123d as bd
+    import manifold3d
     import trimesh
     import yourdfpy
 
@@ -108,11 +109,13 @@ def test_the_fist_row_reports_the_fingertips_distances(export):
         m.apply_scale(1e3)
         meshes[n] = m
 
-    def distance(a, b):
-        return min(float(trimesh.proximity.closest_point(b, a.vertices)[1].min()),
-                   float(trimesh.proximity.closest_point(a, b.vertices)[1].min()))
+    def solid(m):
+        return manifold3d.Manifold(manifold3d.Mesh(vert_properties=np.asarray(m.vertices, np.float32),
+                                                   tri_verts=np.asarray(m.faces, np.uint32)))
 
-    measured = [distance(meshes[f"{f}_distal"], meshes["palm"]) for f in FINGERS]
+    palm = solid(meshes["palm"])
+    assert palm.status() == manifold3d.Error.NoError
+    measured = [palm.min_gap(solid(meshes[f"{f}_distal"]), 100.0) for f in FINGERS]     # beyond 100 mm: 100
     assert reported == pytest.approx(measured, abs=0.1)
     assert min(measured) > 10.0         # the curl of Table I: no fingertip comes within 10 mm
 

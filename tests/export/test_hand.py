@@ -196,6 +196,28 @@ def test_exported_coupon(hand):
     assert all(f"| {k} |" in sheet for k in holes)
 
 
+def test_exported_gauge(hand):
+    """The export's angle gauge, read back: the STL with trimesh (watertight, on the bed, the STEP's
+    volume), the STEP with build123d, the manifest's faces (0 to 105 degrees for params/phantom.toml,
+    whose PIPs reach 92.2), the maker's sheet."""
+    from build123d import import_step
+
+    result, man = hand
+    out, g = result.out_dir, man["gauge"]
+    for rel in (g["step"], g["stl"], g["sheet"], "gauge/angle_gauge.png"):
+        assert (out / rel).is_file() and man["files"][rel]["kind"] == "gauge", rel
+    step = import_step(str(out / g["step"]))
+    assert len(step.solids()) == 1 and step.volume == pytest.approx(g["volume_mm3"], rel=1e-6)
+    mesh = trimesh.load(out / g["stl"], force="mesh")
+    assert mesh.is_watertight and mesh.is_volume
+    assert mesh.bounds[0][2] == pytest.approx(0.0, abs=1e-4)
+    assert mesh.volume == pytest.approx(step.volume, rel=1e-2)
+    assert [f["angle_deg"] for f in g["faces"]] == [15.0 * k for k in range(8)]
+    assert [f["marks"] for f in g["faces"]] == list(range(8))
+    sheet = (out / g["sheet"]).read_text()
+    assert all(f"| {a:g} |" in sheet for a in range(0, 106, 15))
+
+
 def test_verify_part_problem_refuses_the_part(hand_build, monkeypatch, tmp_path):
     """A problem reported by phantom_cad.cad.verify.verify_part fails the part with its text."""
     from phantom_cad.cad import verify as check

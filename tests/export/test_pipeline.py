@@ -53,7 +53,8 @@ def test_layout_and_manifest_checksums(standin_build):
         | {f"print/{n}.3mf" for n in names} | {f"renders/{n}.png" for n in names} \
         | {"step/hand_assembly.step", "renders/hand_assembly.png", "bom.csv", "routing.json", "manifest.json",
            "slicer/config.ini"} \
-        | {f"coupon/fit_coupon.{ext}" for ext in ("step", "stl", "md", "png")}
+        | {f"coupon/fit_coupon.{ext}" for ext in ("step", "stl", "md", "png")} \
+        | {f"gauge/angle_gauge.{ext}" for ext in ("step", "stl", "md", "png")}
     assert set(tree(out)) == expected
     man = json.loads((out / "manifest.json").read_text())
     assert set(man["files"]) == expected - {"manifest.json"}
@@ -351,6 +352,8 @@ def test_cli_builds(standin, standin_build, tmp_path):
     assert man["coupon"]["print"] is None
     # the build says to print the fit-test coupon first, and where its sheet is
     assert f"print first: {tmp_path / 'o' / 'coupon' / 'fit_coupon.stl'}, the fit-test coupon" in res.output
+    # and where the angle gauge is, to calibrate the camera on before the hand is diagnosed
+    assert f"before calibrating: {tmp_path / 'o' / 'gauge' / 'angle_gauge.stl'}, the angle gauge" in res.output
 
 
 def test_demo_without_prusa_slicer(hand_build, tmp_path, monkeypatch):

@@ -1,11 +1,12 @@
 """Twin = model: the MJCF twin of an export, settled under its six servos (gravity and contacts
 off), against ``hand.forward(u, compensated=True)`` (the routed compensation) evaluated at the
 servo angles the twin reached, every joint within 0.1 degree: each servo swept alone over its
-travel and all together, on the default, left and 170 mm hands; and with the loop preload and EA
-at the ends of their ranges (20 N; EA = 50 N, just above the 45 N below which the routed statics
-leave the middle DIP no coupling), whose twins are the exported MJCF with its tendons' stiffness,
-damping and spring length set from the export's own strand records
-(``export.robot.transmissions`` of the changed parameters: what the writer would put there).
+travel and all together, on the default, left and 170 mm hands and a hand `phantom-cad size`
+made; and with the loop preload and EA at the ends of their ranges (20 N; EA = 50 N, just above
+the 45 N below which the routed statics leave the middle DIP no coupling), whose twins are the
+exported MJCF with its tendons' stiffness, damping and spring length set from the export's own
+strand records (``export.robot.transmissions`` of the changed parameters: what the writer would
+put there).
 
 The known answer is MuJoCo's equilibrium of the routed strands; the model never sees the MJCF.
 The paper's eq. (11)-(14) miss it by degrees (docs/transmission.md), which the same loop shows.
@@ -66,6 +67,15 @@ def test_the_twin_sits_on_the_routed_compensation(hand_export, kind):
     # the paper's lumped form is not the printed hand's statics: degrees off on the fingers
     paper = _errors(m, Hand(params, compensation="paper"), fractions=(1.0,), together=())
     assert math.degrees(paper.max()) > 2.0
+
+
+@pytest.mark.slow
+def test_the_twin_of_a_sized_hand_sits_on_the_routed_compensation(sized_hand):
+    """The hand ``phantom-cad size`` makes for 160 x 72 mm (tests/conftest.py)."""
+    doc, result = sized_hand
+    err = _errors(_twin(result), Hand(parse(doc)))
+    worst = int(np.argmax(err))
+    assert err[worst] < TOL, (JOINTS[worst].name, math.degrees(err[worst]))
 
 
 @pytest.mark.slow

@@ -1,0 +1,343 @@
+"""`phantom-cad size` (phantom_cad.sizing, phantom_cad/cli/size.py): each solver against a closed
+form or the validator, the sized files validating over the supported range, the reference hand's
+own measurements giving back params/phantom.toml, and every impossible, contradictory or malformed
+input refused with one error line, exit 2, nothing written."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import pytest
+
+from phantom_cad.cad import preflight
+from phantom_cad.cli import main
+from phantom_cad.kinematics import closed_form as cf
+from phantom_cad.kinematics.topology import DIGITS, FINGERS, chain
+from phantom_cad.params import parse
+from phantom_cad.params.rules import MAX_FINGER_PITCH
+from phantom_cad.sizing import Person, build_document, size, template
+from phantom_cad.sizing import solvers as S
+from phantom_cad.kinematics.dimensions import digit_entry
+
+
+def entry(doc, digit):
+    return digit_entry(doc, digit)
+
+
+# -- solvers -------------------------------------------------------------------
+
+def test_the_reference_is_the_default_file():
+    assert template()["hand"]["hand_length_mm"] == S.REFERENCE_LENGTH
+
+
+@pytest.mark.parametrize("digit", DIGITS)
+def test_servo_travel_reaches_the_first_limit(digit):
+    """The default file's travels are the servo angle at which the first joint meets its Table I
+    limit, to the half degree below; the model maps the travel inside every limit and half a
+    degree more past one."""
+    t = entry(template(), digit)
+    spec = chain(digit)
+    radii = tuple(t["pulley_radius_mm"][k] for k in spec.keys)
+    limits = tuple(t["limits_rad"][k][1] for k in spec.keys)
+    g = t["guide"]
+    hi = S.servo_travel(g["d1_mm"], g["d2_mm"], g["alpha_deg"], t["servo_pulley_radius_mm"], radii, limits)
+    assert hi == t["servo_travel_deg"][1]
+    c = cf.ideal_coupling(radii)
+
+    def q(u_deg):
+        return c * float(cf.reference_angle(math.radians(u_deg), g["d1_mm"], g["d2_mm"], math.radians(g["alpha_deg"]),
+                                            t["servo_pulley_radius_mm"]))
+    assert all(q(hi) <= limits)
+    assert any(q(hi + S.STEP) > limits)
+
+
+def test_thickness_limit_is_the_phalanx_rule(document):
+    """At 165 mm the default's index distal phalanx (16.005 mm) holds at most 16.005 - 0.4 mm of
+    thickness (two joint bosses of half the thickness and a clearance each): the validator accepts
+    a hair under it and refuses a hair over (the message of a 165 mm default file)."""
+    lengths = {s: f * 165.0 for s, f in document["fingers"]["index"]["length_fraction"].items()}
+    limits = {k: v[1] for k, v in document["fingers"]["index"]["limits_rad"].items()}
+    t, seg = S.thickness_limit(lengths, chain("index").segments, limits, chain("index").keys, 0.2)
+    assert seg == "distal" and t == pytest.approx(0.097 * 165.0 - 0.4)
+    # the proximal phalanx's far joint (PIP, 92 deg) flexes past 90 deg: 1.5 T + 0.4 < L
+    lengths["distal"] = lengths["middle"] = 100.0
+    t, seg = S.thickness_limit(lengths, chain("index").segments, limits, chain("index").keys, 0.2)
+    assert seg == "proximal" and t == pytest.approx((0.245 * 165.0 - 0.4) / 1.5)
+    document["hand"]["hand_length_mm"] = 165.0
+    for k in ("index", "middle", "ring", "pinky"):
+        document["fingers"][k]["path_length_mm"]["mcp_pip"] = 45.0
+    document["fingers"]["index"]["thickness_mm"] = 15.5
+    with pytest.raises(Exception, match="distal phalanx"):
+        document["fingers"]["index"]["thickness_mm"] = 15.7
+        parse(document)
+
+
+def test_finger_floors_are_the_magnet_and_clevis_rules(document):
+    """Closed forms with the default hardware: two 5.4 mm pockets (5 mm magnets, 0.1 mm clearance a
+    side, 0.2 mm compensation) one 2.4 mm wall apart and 0.8 mm outside each: 14.8 mm wide; the
+    tendon one 2.4 mm wall above the palmar face, its 2 mm relief below the pockets: 12.2 mm thick;
+    the validator refuses a pinky just under each."""
+    args = ((5.0, 3.0), 2.4, 0.6, 0.2, 0.1, 0.2)
+    assert S.finger_thickness_floor(*args, 7.0) == pytest.approx(2 * (2.4 + 1.0 + 2.7))
+    assert S.finger_width_floor((5.0, 3.0), 2.4, 0.2, 0.1, 0.2, 2.4, 0.6, 1.5, 0.8) == pytest.approx(14.8)
+    document["fingers"]["pinky"]["width_mm"] = 14.7
+    with pytest.raises(Exception, match="magnet"):
+        parse(document)
+
+
+def test_guides_keep_the_reference_where_they_fit_and_the_rules_where_not():
+    assert S.guide((12.0, 10.0, 100.0), 16.0, 0.6, 0.2, 1.2, 13.0) == (12.0, 10.0, 100.0)
+    d1, d2, alpha = S.guide((12.0, 10.0, 100.0), 12.5, 0.6, 0.2, 1.2, 13.0)
+    c = math.cos(math.radians(alpha) / 2)
+    assert 12.5 / 2 + 0.2 + 0.6 <= d2 and d2 * c <= 12.5 / 2 - 0.5 and d1 * c <= 12.5 / 2 + 1.0
+
+
+def test_path_length_keeps_the_wrap_and_the_crossed_span():
+    assert S.path_length(46.305, 1.695, 5.0, 4.0) == 48.0
+    # a phalanx barely longer than its pulleys: the crossed span binds
+    assert S.path_length(20.0, -5.0, 5.0, 4.0) == math.ceil(math.sqrt(20.0 ** 2 - 9.0 ** 2))
+
+
+def test_palm_layout_gives_the_default_pitch_and_clears_the_bases(document):
+    from phantom_cad.kinematics.dimensions import finger_columns
+    from phantom_cad.params.rules import _base_room
+
+    widths = {f: document["fingers"][f]["width_mm"] for f in FINGERS}
+    meta = {f: document["fingers"][f]["length_fraction"]["metacarpal"] * 189.0 for f in FINGERS}
+    assert S.palm_layout(widths, meta, 5.0, 13.0, 0.2) == (20.5, widths)
+    big = {f: 18.5 for f in FINGERS}
+    meta = {f: v * 230.0 / 189.0 for f, v in meta.items()}
+    pitch, w = S.palm_layout(big, meta, 5.0, 13.0, 0.2)
+    assert pitch <= MAX_FINGER_PITCH * 1e3
+    cols = finger_columns(pitch * 1e-3, math.radians(5.0), [meta[f] * 1e-3 for f in FINGERS])
+    for (a, b), ca, cb in zip(zip(FINGERS, FINGERS[1:]), cols, cols[1:]):
+        room = min(_base_room(ca, cb, 13e-3), _base_room(cb, ca, 13e-3)) * 1e3
+        assert room >= (w[a] + w[b]) / 2 + 0.2 - 1e-9
+
+
+# -- the sized files -------------------------------------------------------------
+
+def test_the_reference_measurements_give_the_default_file():
+    """The default hand's own measurements (189 mm, the 85 mm breadth of the 50th-percentile man its
+    widths were chosen for, its fractions) give back params/phantom.toml, value for value."""
+    doc = build_document(Person(189.0, 85.0, name="phantom"))
+    assert doc == template()
+
+
+@pytest.mark.parametrize("hl", [150.0, 160.0, 170.0, 189.0, 205.0, 215.0, 230.0])
+@pytest.mark.parametrize("breadth", [65.0, 85.0, 105.0])
+def test_every_size_in_the_range_validates(hl, breadth):
+    """Across the supported range, the reference's placement scaled (what the search starts
+    from and falls back on) makes a file that passes `params validate`'s rules."""
+    p = parse(build_document(Person(hl, breadth)))
+    preflight.check(p)
+    assert p.palm.finger_pitch <= MAX_FINGER_PITCH + 1e-12
+
+
+def test_measured_segments_are_used():
+    doc = build_document(Person(180.0, 80.0, segments={"index": {"proximal": 40.5, "middle": 23.0, "distal": 17.5,
+                                                                  "width": 16.0},
+                                                        "thumb": {"metacarpal": 45.0, "proximal": 31.0,
+                                                                  "distal": 25.0}}))
+    assert doc["fingers"]["index"]["length_fraction"]["proximal"] * 180.0 == pytest.approx(40.5, abs=1e-3)
+    assert doc["thumb"]["length_fraction"]["metacarpal"] * 180.0 == pytest.approx(45.0, abs=1e-3)
+    assert doc["fingers"]["index"]["width_mm"] == 16.0
+    preflight.check(parse(doc))
+
+
+# -- refusals ------------------------------------------------------------------------
+
+def run(argv, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main([str(a) for a in argv])
+    cap = capsys.readouterr()
+    return exit_.value.code, cap.out, cap.err
+
+
+SEGMENTS = {
+    "middle longer than the hand": ("[middle]\nproximal = 60\nmiddle = 40\ndistal = 30\n", "middle finger"),
+    "unknown key": ("[index]\nproximal = 40\nnail = 3\n", "unknown key"),
+    "unknown table": ("[toe]\nproximal = 40\n", "unknown table"),
+    "negative length": ("[index]\nproximal = -40\n", "must be > 0"),
+    "missing value": ("[index]\nproximal =\n", "not valid TOML"),
+    "a string": ("[index]\nproximal = \"forty\"\n", "must be a length"),
+    "a finger's metacarpal": ("[index]\nmetacarpal = 70\n", "unknown key"),
+    "distal too short": ("[pinky]\ndistal = 9\n", "pinky distal phalanx"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(SEGMENTS))
+def test_bad_segments_are_one_error_line(tmp_path, capsys, case):
+    text, words = SEGMENTS[case]
+    seg = tmp_path / "person.toml"
+    seg.write_text(text)
+    out = tmp_path / "hand.toml"
+    code, stdout, err = run(["size", "--hand-length", 170, "--hand-breadth", 75, "--segments", seg, "--out", out,
+                             "--no-search"], capsys)
+    lines = err.splitlines()
+    assert code == 2 and len(lines) == 1 and lines[0].startswith("error: "), err
+    assert words in lines[0]
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--hand-length", 100, "--hand-breadth", 75], "distal phalanx"),
+    (["--hand-length", 500, "--hand-breadth", 75], "nearest that works: --hand-length 400"),
+    (["--hand-length", 170, "--hand-breadth", 40], "nearest that works: --hand-breadth 65"),
+    (["--hand-length", -170, "--hand-breadth", 75], "nearest that works: --hand-length 50"),
+    (["--hand-length", "nan", "--hand-breadth", 75], "must lie in"),
+    (["--hand-length", 170], "--hand-breadth"),
+    (["--hand-length", 170, "--hand-breadth", 75, "--side", "up"], "right or left"),
+    (["--hand-length", 170, "--hand-breadth", 75, "--name", "a b"], "--name"),
+])
+def test_bad_arguments_are_one_error_line(tmp_path, capsys, argv, words):
+    out = tmp_path / "hand.toml"
+    code, stdout, err = run(["size", *argv, "--out", out, "--no-search"], capsys)
+    lines = err.splitlines()
+    assert code == 2 and len(lines) == 1 and lines[0].startswith("error: "), err
+    assert words in lines[0]
+    assert not out.exists()
+
+
+def test_a_hand_whose_thumb_misses_a_pad_is_refused(tmp_path, capsys):
+    """150 mm long and 105 mm broad, the reference placement scaled: the ring's pad never faces the
+    thumb's; the line names it and the breadth of the reference's proportion, which works."""
+    out = tmp_path / "hand.toml"
+    code, _, err = run(["size", "--hand-length", 150, "--hand-breadth", 105, "--out", out, "--no-search"], capsys)
+    lines = err.splitlines()
+    assert code == 2 and len(lines) == 1, err
+    assert "the ring pad never faces the thumb's" in lines[0] and "nearest that works: --hand-breadth 67" in lines[0]
+    assert not out.exists()
+    code, _, err = run(["size", "--hand-length", 150, "--hand-breadth", 67, "--out", out, "--no-search"], capsys)
+    assert code == 0 and out.exists(), err
+
+
+def test_a_user_file_is_not_replaced(tmp_path, capsys):
+    out = tmp_path / "mine.toml"
+    out.write_text("my notes\n")
+    code, _, err = run(["size", "--hand-length", 170, "--hand-breadth", 75, "--out", out, "--no-search"], capsys)
+    assert code == 2 and "refusing to replace" in err
+    assert out.read_text() == "my notes\n"
+
+
+def test_size_imports_no_cad_library(tmp_path):
+    code = ("import sys; from phantom_cad.cli import main\n"
+            "try:\n"
+            f"    main(['size', '--hand-length', '170', '--hand-breadth', '75', '--out', {str(tmp_path / 'h.toml')!r}, "
+            "'--no-search'])\n"
+            "except SystemExit as e:\n"
+            "    assert e.code == 0, e.code\n"
+            "assert not any(m.split('.')[0] in ('build123d', 'OCP', 'cadquery') for m in sys.modules)\n")
+    subprocess.run([sys.executable, "-c", code], check=True)
+
+
+# -- the command, with the placement search (seconds a hand) -----------------------
+
+@pytest.mark.slow
+def test_the_reference_measurements_give_the_default_hand():
+    """With the search, the default hand's own measurements give its joint limits, coupling ratios
+    and opposition: every joint limit and coupling ratio as the file's, the pads meeting within
+    1 mm and the margin within 0.5 deg of params/phantom.toml's."""
+    from phantom_cad import load_hand
+    from phantom_cad.kinematics import opposition
+    from phantom_cad.kinematics.model import Hand
+
+    ref = load_hand()
+    got = size(Person(189.0, 85.0, name="phantom"), check=preflight.check)
+    hand = Hand(got.params)
+    assert hand.q_max == pytest.approx(ref.q_max) and hand.q_min == pytest.approx(ref.q_min)
+    assert hand.coupling_compensated == pytest.approx(ref.coupling_compensated, abs=1e-3)
+    a, b = opposition.reach(hand), opposition.reach(ref)
+    for f in opposition.OPPOSED:
+        assert a[f].gap == pytest.approx(b[f].gap, abs=1e-3)
+        assert a[f].margin == pytest.approx(b[f].margin, abs=math.radians(0.5))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("argv", [
+    ["--hand-length", 160, "--hand-breadth", 72],
+    ["--hand-length", 205, "--hand-breadth", 95, "--side", "left"],
+    ["--hand-length", 180, "--hand-breadth", 80, "--segments", "{SEG}"],
+], ids=["160x72", "205x95-left", "segments"])
+def test_the_command_writes_a_file_that_validates(tmp_path, argv):
+    seg = tmp_path / "person.toml"
+    seg.write_text("[index]\nproximal = 40.5\nmiddle = 23.0\ndistal = 17.5\n"
+                   "[thumb]\nmetacarpal = 45.0\nproximal = 31.0\ndistal = 25.0\n")
+    out = tmp_path / "person_hand.toml"
+    argv = [str(a).replace("{SEG}", str(seg)) for a in argv]
+    proc = subprocess.run([sys.executable, "-m", "phantom_cad", "size", *argv, "--out", str(out)],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    for words in ("reach at full travel", "opposition", "power grasp", "palm:", "thinnest designed wall"):
+        assert words in proc.stdout
+    proc = subprocess.run([sys.executable, "-m", "phantom_cad", "params", "validate", str(out)],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0 and proc.stdout.startswith("OK"), proc.stderr
+    from phantom_cad.kinematics import opposition
+    from phantom_cad.kinematics.model import Hand
+    from phantom_cad.params import load_params
+
+    reach = opposition.reach(Hand(load_params(out)))
+    assert all(reach[f].gap <= 0.0 for f in opposition.OPPOSED)
+    # what a second run writes over is its own output
+    assert out.read_text().startswith("# phantom-cad size:")
+
+
+def test_a_sized_hand_builds(sized_hand):
+    """One sized hand, 160 x 72 mm (tests/conftest.py), built by the build pipeline: it raises
+    BuildError when a part fails its verification or parts intersect at the rest pose."""
+    doc, result = sized_hand
+    assert result.params_digest == parse(doc).digest and result.hand == doc["hand"]["name"]
+
+
+def test_pulley_radii_keep_the_ratio_inside_the_boss():
+    assert S.pulley_radii((5.0, 4.0, 5.0), 16.0, 1.8, 1.5) == (5.0, 4.0, 5.0)
+    r = S.pulley_radii((5.0, 4.0, 5.0), 9.0, 1.8, 1.5)
+    assert max(r) == pytest.approx(9.0 / 2 - 0.75, abs=1e-3) and r[0] / r[1] == pytest.approx(5 / 4, abs=1e-3)
+    # the smallest would no longer clear the axle bore and half a cord
+    assert all(math.isnan(v) for v in S.pulley_radii((5.0, 4.0, 5.0), 6.0, 1.8, 1.5))
+
+
+def test_section_moves_the_target_inside_the_bounds():
+    assert S.section(15.26, 12.2, 16.0) == 15.5
+    assert S.section(11.0, 12.2, 16.0) == 12.5
+    assert S.section(17.0, 12.2, 15.605) == 15.5
+    assert math.isnan(S.section(14.0, 12.2, 12.4))
+
+
+def test_palm_thickness_is_the_thinnest_that_keeps_the_turn():
+    """At 150 mm the reference's palm scaled (18.5 mm) leaves the thumb drive's turn short of its
+    wall under the dorsal face: the solver raises it to the first half millimetre that keeps it."""
+    from phantom_cad.kinematics import frames as F
+    from phantom_cad.kinematics import thenar as TH
+    from phantom_cad.sizing import palm_thickness
+
+    doc = build_document(Person(150.0, 65.0))
+    t = doc["palm"]["thickness_mm"]
+    assert t > S.scaled(24.0, 150.0)
+    assert palm_thickness(doc) == t
+
+    def turn(thickness):
+        d = dict(doc, palm=dict(doc["palm"], thickness_mm=thickness))
+        p = parse(d)
+        return TH.thenar_margins(p, F.T_palm_thumb_cmc_base(p))["turn"]
+    assert turn(t) >= 0.0 > turn(t - S.STEP)
+
+
+def test_the_nearest_length_that_works_is_where_the_rules_start_to_hold():
+    from phantom_cad.sizing import nearest_length
+
+    n = nearest_length(Person(100.0, 75.0), preflight.check)
+    assert n is not None and 100.0 < n < 150.0
+    preflight.check(parse(build_document(Person(n, 75.0))))
+    with pytest.raises(Exception):
+        preflight.check(parse(build_document(Person(n - 1.0, 75.0))))
+
+
+def test_a_left_hand_is_the_right_one_mirrored():
+    right = build_document(Person(205.0, 95.0))
+    left = build_document(Person(205.0, 95.0, side="left"))
+    assert left["hand"]["side"] == "left" and dict(left, hand=right["hand"]) == right
+    preflight.check(parse(left))
