@@ -71,6 +71,12 @@ SEPARATING_EXPERIMENTS = {
     frozenset({"tendon_elasticity", "pulley_radius_error"}):
         "measure the MCP of the same finger (a pulley radius error moves the MCP, elasticity leaves it at "
         "the model), or the PIP and DIP together (a radius error keeps the 4:5:4 joint ratio, elasticity bends it)",
+    frozenset({"routed_elasticity", "tendon_elasticity"}):
+        "measure the MCP of the same finger over the whole travel (the routed stretch lowers it through the "
+        "drive's stretch, the paper's eq. 13 leaves it at the model), with the PIP and DIP",
+    frozenset({"routed_elasticity", "pulley_radius_error"}):
+        "measure the PIP and DIP with the MCP of the same finger (a radius error keeps the joints' ratios, "
+        "the strands' stretch bends them, the distal joints most)",
     frozenset({"tendon_elasticity", "friction_hysteresis"}):
         "sweep in both directions: friction flips sign with the direction of motion, elasticity does not",
     frozenset({"tendon_slack", "joint_offset"}):
@@ -418,8 +424,8 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
                       and (n in measurement) == (family == "measurement")]
         models = []
         for n in candidates:
-            model = Model(hand, current + [n], problem)
-            if model.p == base.model.p:
+            model = Model(hand, _with(current, n, len(start)), problem)
+            if not any(model.names[k] == n for k, _, _ in model.free):
                 if not rounds:
                     notes.append(f"{n}: no parameter is identifiable from these data (not scored)")
                 continue
@@ -482,7 +488,10 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
                     "experiment": separating_experiment(best.effect, other.effect),
                 })
         before_best = (list(current), base)
-        current.append(best.effect)
+        replaced = [c for c in current if c not in _with(current, best.effect, len(start))]
+        current[:] = _with(current, best.effect, len(start))
+        for name in replaced:
+            notes.append(f"{best.effect} replaced {name}: a model holds one form of the tendon's stretch")
         base = best.result
         if family == "measurement":
             # the measurement's own error is now modelled: the hand's physics it masked may show
@@ -540,6 +549,16 @@ def _select(hand, m: Measurements, names, start, full: Problem, step: int, probl
                      f"MAE and parameters below are of that fit")
     return Diagnosis(m, before, base, current[len(start):], rounds, ambiguities, [n for n in notes if n],
                      noise, hand)
+
+
+def _with(current: list[str], name: str, keep: int) -> list[str]:
+    """``current`` with ``name`` added and, when it models the tendon's stretch (Effect.stretch), the
+    selected effects of the other form taken out (not the first ``keep``, the user's start): the
+    routed and the paper's form describe the same strands, and both at once would fit any spread
+    of the stretch over the joints by mixing them."""
+    form = get_effect(name).stretch
+    return [c for i, c in enumerate(current)
+            if i < keep or not form or get_effect(c).stretch in (None, form)] + [name]
 
 
 def _duplicated(best: Candidate, dropped) -> tuple[dict[str, str], list[str]]:

@@ -202,6 +202,10 @@ class Context:
         #: the tendon's compliance k_s / EA (1/m) that converts a tension change into a deviation
         mech = hand.params.mechanics
         self.compliance_ref = mech.spring_k / mech.tendon_EA
+        #: the routed statics per tendon chain (kinematics.statics.ChainStatics, servo order) a routed
+        #: elasticity put in the model, and their compliance scale (5,); None: the paper's coupling
+        self.routed = None
+        self.routed_scale = None
         self.q: np.ndarray | None = None            # joint angles (N, 15), after the coupling
 
     @property
@@ -236,6 +240,14 @@ class Effect:
     #: the effect this one is a variant of (more parameters, same physics): diagnose prefers it
     #: whenever the variant's extra parameters do not pay
     simpler: str | None = None
+    #: the effect puts the routed statics (kinematics/statics.py) in the model: it is part of the
+    #: compensation (``Hand.forward(u, compensated=False)`` leaves it out), and a hand with it uses
+    #: the routed servo law and coupling in its control law
+    routed: bool = False
+    #: the form of the tendon's stretch the effect models ("paper": eq. 13; "routed": the routing's
+    #: statics), or None: diagnose keeps one form in a model (a candidate of the other form is
+    #: scored in place of the selected one)
+    stretch: str | None = None
 
     def parameters(self, hand) -> list[Param]:
         raise NotImplementedError

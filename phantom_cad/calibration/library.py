@@ -2,7 +2,8 @@
 
     servo      backlash, drive_friction (plays on the drive), tendon_slack (a dead band)
     reference  pulley_radius_error
-    tension    tendon_elasticity, tendon_elasticity_per_finger, friction_hysteresis (capstan)
+    tension    tendon_elasticity, tendon_elasticity_per_finger (the paper's eq. 13), routed_elasticity,
+               routed_elasticity_per_finger (the printed routing's statics), friction_hysteresis (capstan)
     joint      joint_offset
     measurement camera_scale
 
@@ -13,6 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..kinematics.memo import memoised
+from ..kinematics.statics import hand_statics, reference_angle
 from ..kinematics.topology import CHAINS, CMC_SERVO, DISTAL_JOINTS, JOINTS, N_SERVOS, SERVOS, TENDON_SERVOS, servo_joints
 from ..units import DEG
 from .framework import CHAIN_SERVOS, MEASUREMENT, Context, Effect, Param, Runs, Signature, register_effect
@@ -75,6 +78,7 @@ class PulleyRadiusError(Effect):
 class TendonElasticity(Effect):
     name = "tendon_elasticity"
     stage = "tension"
+    stretch = "paper"
     order = 30
     explanation = ("distal joints (PIP, DIP, thumb IP) lag in proportion to flexion, the MCP does not, the same "
                    "in both directions: the return spring's tension stretches the tendon (eq. 11-14)")
@@ -105,6 +109,7 @@ class TendonElasticity(Effect):
 class TendonElasticityPerFinger(Effect):
     name = "tendon_elasticity_per_finger"
     stage = "tension"
+    stretch = "paper"
     order = 31
     simpler = "tendon_elasticity"
     explanation = ("distal joints lag in proportion to flexion, the MCP does not, by a different amount on each "
@@ -356,3 +361,110 @@ class DriveFriction(Effect):
 
     #: the control law aims at the middle of the band (u = u_eff), as for backlash and friction
     invertible = True
+
+
+_ROUTED: dict = {}
+
+
+def routed_statics(hand, scale) -> tuple:
+    """The routed statics of every tendon chain (servo order) with the strands' compliance k_s / EA
+    scaled by ``scale`` (5,) (kinematics.statics.hand_statics; not checked: a fit may try a scale
+    that leaves a joint no coupling and must be free to move away from it). Memoised: a fit's
+    Jacobian evaluates many parameter steps at one scale."""
+    scale = np.asarray(scale, dtype=float)
+    return memoised(_ROUTED, (hand.params.digest, scale.tobytes()),
+                    lambda: hand_statics(hand.params, scale, check=False), cap=64)
+
+
+def routed_reference_angles(hand, statics, u_eff, radius_scale) -> np.ndarray:
+    """s (N, 6): the routed servo law's reference angles (the drive's stretch included) at u_eff
+    (N, 6) with the effective servo radii r * radius_scale (the law reads r u only, so the
+    command is scaled instead); s6 = g u6."""
+    s = np.empty(u_eff.shape)
+    u = u_eff[:, TENDON_SERVOS] * radius_scale
+    for k, (chain, c) in enumerate(zip(hand.params.chains, statics)):
+        if c.linear:
+            # at u = 0 no tension, no stretch: s = 0 exactly. A recording sweeps one servo at a
+            # time, so most of a chain's rows are at rest and only the others are solved
+            moved = u[:, k] != 0.0
+            s[:, k] = 0.0
+            s[moved, k] = reference_angle(u[moved, k], chain, c)
+        else:
+            s[:, k] = reference_angle(u[:, k], chain, c)
+    s[:, CMC_SERVO] = u_eff[:, CMC_SERVO] * hand.params.thumb.cmc_gain
+    return s
+
+
+def apply_routed(ctx: Context, scale) -> None:
+    """Put the routed statics with compliance scale ``scale`` (5,) in the model: the reference
+    angles become the routed servo law's (the drive stretches), the coupling the routed one
+    (pipeline.couple). It replaces the base k_s / EA of the paper's form, as tendon_elasticity does
+    (what other tension-stage effects add stays); friction then stretches strands of compliance
+    scale x the file's k_s / EA."""
+    scale = np.asarray(scale, dtype=float)
+    ctx.routed_scale = scale
+    ctx.routed = routed_statics(ctx.hand, scale)
+    ctx.s = routed_reference_angles(ctx.hand, ctx.routed, ctx.u_eff, ctx.radius_scale)
+    ctx.compliance -= ctx.compliance_base
+    ctx.compliance_base = 0.0
+    mech = ctx.params.mechanics
+    ctx.compliance_ref = np.where(scale > 0.0, scale * mech.spring_k / mech.tendon_EA, ctx.compliance_ref)
+
+
+#: the joints of the tendon chains: the routed stretch moves the MCP (the drive) as well as the distal joints
+_CHAIN_JOINTS = tuple(sorted(i for c in CHAINS for i in c.q_index))
+
+
+@register_effect
+class RoutedElasticity(Effect):
+    name = "routed_elasticity"
+    stage = "tension"
+    stretch = "routed"
+    #: before the paper's form: both replace the base k_s / EA, what the other adds stays
+    order = 28
+    routed = True
+    explanation = ("every joint of each chain lags in proportion to the return spring's tension, the distal "
+                   "joints most, the MCP by the drive's stretch, the same in both directions: the strands of "
+                   "the printed routing stretch more (or less) than the file's k_s / EA says")
+    formula = ("the routed statics (docs/transmission.md, kinematics/statics.py) with the strands' compliance "
+               "k_s / EA scaled by c: T = k_s sum R_i q_i, loop k carries (n - 1 - k) T and the drive n T R_0 / arm, "
+               "each strand stretching over its whole length by F L c / EA; fitted: c (1 = the file's k_s / EA)")
+    signature = ("negative on PIP/DIP/IP and smaller on MCP/MP, growing with flexion, zero on the CMC; no "
+                 "direction dependence")
+    reference = "the routed compensation of docs/transmission.md (eq. 11 for T; Hooke's law per strand)"
+    leaves = Signature(direction="same", at_rest="zero", trend="grows", joints="all", reversal="none",
+                       digits="all")
+    # only k_s / EA is seen in joint angles (gravity off): softer strands and a stiffer return
+    # cord are the same scale
+
+    def parameters(self, hand):
+        return [Param("compliance_scale", 0.0, 5.0, (0.5, 2.0), False, _CHAIN_JOINTS, True,
+                      "the strands' compliance k_s / EA over the file's (1: as the file says; 2: strands half "
+                      "as stiff or a return cord twice as stiff)")]
+
+    def apply(self, ctx, x):
+        apply_routed(ctx, np.full(len(CHAINS), x[0]))
+
+
+@register_effect
+class RoutedElasticityPerFinger(Effect):
+    name = "routed_elasticity_per_finger"
+    stage = "tension"
+    stretch = "routed"
+    order = 29
+    routed = True
+    simpler = "routed_elasticity"
+    explanation = ("every joint of each chain lags in proportion to the return spring's tension, by a different "
+                   "amount on each finger: each finger's strands (or return cord) have their own compliance "
+                   "(the routed statics per finger)")
+    formula = "routed_elasticity with one compliance scale c_k per tendon chain (5 values; replaces the common one)"
+    signature = ("as routed_elasticity, its size different from finger to finger; no direction dependence")
+    reference = "the routed compensation of docs/transmission.md, one strand compliance per finger"
+    leaves = Signature(direction="same", at_rest="zero", trend="grows", joints="all", reversal="none")
+
+    def parameters(self, hand):
+        return [Param(f"{c.digit}_scale", 0.0, 5.0, (0.5, 2.0), False, c.q_index, True,
+                      f"the {c.digit} strands' compliance k_s / EA over the file's") for c in CHAINS]
+
+    def apply(self, ctx, x):
+        apply_routed(ctx, x)

@@ -5,14 +5,17 @@ model applies (:class:`EffectStack`):
     servo      u_eff = f(u)                 e.g. tendon slack (dead band)
     reference  r_eff = r * radius_scale     e.g. pulley radius error; then s = cosine law (eq. 6, 8)
     tension    kappa = k_s / EA felt by the chain's elastic tendon segments
-               (tendon elasticity, eq. 11-14; friction along the tendon path)
-    coupling   q_chain = s * M(kappa)^-1 A  (eq. 13-14, per sample, closed form)
+               (tendon elasticity, eq. 11-14; friction along the tendon path); or the routed
+               statics at a fitted compliance scale (routed elasticity: s then from their servo law)
+    coupling   q_chain = s * M(kappa)^-1 A  (eq. 13-14, per sample, closed form); with the routed
+               statics, their coupling plus what kappa adds to A
     joint      q += delta                   e.g. joint zero offsets
 
 The analytic model is the pipeline with no effect (kappa = 0). The paper's compensation
 (``Hand(params, compensation="paper").forward(u, compensated=True)``) is the pipeline with kappa =
-the parameter file's k_s / EA: fitted effects build on it (a calibrated hand's base; the routed
-compensation, the plain hand's default, is not an effect of this library). Parameters are held in *file units*
+the parameter file's k_s / EA: fitted effects build on it (a calibrated hand's base), unless they
+hold a routed elasticity, whose scale 1 is the plain hand's default, the routed compensation (a
+calibrated hand's ``compensation`` is then "routed"). Parameters are held in *file units*
 (the unit is in the key, as everywhere in a parameter file: ``u2_deg``, ``compliance_per_m``).
 :func:`validate_effects` is the check of ``[effects.*]`` tables the params layer is handed
 (:data:`PARAMS_EFFECTS`). numpy only.
@@ -25,10 +28,15 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from ..kinematics.topology import N_JOINTS, N_SERVOS
+from dataclasses import replace
+
+from ..kinematics.model import couple_routed, project_routed
+from ..kinematics.statics import servo_angle
+from ..kinematics.topology import CMC_SERVO, N_JOINTS, N_SERVOS, TENDON_SERVOS
 from ..params.errors import ParamError
 from ..params.schema import plugin_paths
 from . import library as _library  # noqa: F401  (the built-in effects are registered before any name is looked up)
+from .library import routed_reference_angles
 from .framework import MEASUREMENT, STAGES, Context, Effect, History, get_effect, has_invert
 from .plugins import load_plugin
 
@@ -58,7 +66,7 @@ def run_pipeline(hand, items: Sequence[tuple[Effect, np.ndarray]], u, direction=
     for eff, x in items:
         if eff.stage == "tension":
             eff.apply(ctx, x)
-    ctx.q = couple(hand, ctx.s, ctx.compliance)
+    ctx.q = couple(hand, ctx.s, ctx.compliance, ctx.routed)
     for stage in ("joint", MEASUREMENT):
         if stage in stage_of:
             for eff, x in items:
@@ -73,9 +81,15 @@ def reference_angles(hand, u_eff: np.ndarray, radius_scale) -> np.ndarray:
     return hand.reference_angles(u_eff, hand.servo_radius * radius_scale)
 
 
-def couple(hand, s: np.ndarray, compliance: np.ndarray) -> np.ndarray:
-    """q (N, 15) from s (N, 6) with the compliance each chain feels per sample (N, 5): eq. (13)/(14)."""
-    return hand.couple(s, hand.coupling_vectors(compliance))
+def couple(hand, s: np.ndarray, compliance: np.ndarray, routed=None) -> np.ndarray:
+    """q (N, 15) from s (N, 6) with the compliance each chain feels per sample (N, 5): eq. (13)/(14).
+    ``routed``: the routed statics a routed elasticity put in the model (Context.routed), whose
+    coupling then replaces the analytic one; what the paper's form adds with ``compliance`` (friction,
+    a paper compliance fitted with it) is added to it."""
+    q = hand.couple(s, hand.coupling_vectors(compliance))
+    if routed is not None:
+        q += couple_routed(routed, s) - s @ hand.coupling_ideal
+    return q
 
 
 # ---------------------------------------------------------------------------
@@ -117,7 +131,8 @@ class EffectStack:
     Semantics (docs/effects.md): every fitted effect applies to ``forward`` and ``inverse``; the
     ``compensated`` flag selects the spring/elasticity compensation, whose compliance is the fitted
     ``tendon_elasticity`` one when present (``fit`` always writes it, 0 when the data show none),
-    else the [mechanics] k_s / EA. The direction of motion is unknown to ``Hand``: friction is left
+    else the [mechanics] k_s / EA; a fitted routed elasticity adds the routed statics at its scale
+    (:attr:`compensation`). The direction of motion is unknown to ``Hand``: friction is left
     out (the control law aims at the middle of the hysteresis band). Measurement-stage effects (a
     camera's scale) describe the data, not the hand: ``forward`` applies them only with
     ``measured=True`` (to compare with measurements) and ``inverse`` never.
@@ -135,8 +150,13 @@ class EffectStack:
     def __bool__(self) -> bool:
         return bool(self.items)
 
+    @property
+    def compensation(self) -> str:
+        """"routed" when a fitted effect puts the routed statics in the model, else "paper"."""
+        return "routed" if any(e.routed for e, _ in self.items) else "paper"
+
     def _items(self, compensated: bool, measured: bool = False):
-        return [it for it in self.items if (compensated or it[0].name != "tendon_elasticity")
+        return [it for it in self.items if (compensated or not (it[0].name == "tendon_elasticity" or it[0].routed))
                 and (measured or it[0].stage != MEASUREMENT)]
 
     def _base(self, hand, compensated: bool) -> float:
@@ -187,15 +207,36 @@ class EffectStack:
         for eff, x in items:
             if eff.stage == "servo":
                 eff.apply(ends, x)
-        s_ends = hand.reference_angles(ends.u_eff, radius)
-        # project, clip, invert the cosine law with the effective radius, clip to the travel
-        u = hand.control_law(q, hand.coupling_matrix(ctx.compliance[0]),
-                             (s_ends.min(axis=0), s_ends.max(axis=0)), radius)
+        if ctx.routed is None:
+            s_ends = hand.reference_angles(ends.u_eff, radius)
+            # project, clip, invert the cosine law with the effective radius, clip to the travel
+            u = hand.control_law(q, hand.coupling_matrix(ctx.compliance[0]),
+                                 (s_ends.min(axis=0), s_ends.max(axis=0)), radius)
+        else:
+            u = _routed_control_law(hand, ctx, q, routed_reference_angles(hand, ctx.routed, ends.u_eff,
+                                                                          ctx.radius_scale))
         for eff, x in reversed(items):
             if eff.stage == "servo":
                 u = eff.invert(hand, u, x)
         u = np.clip(u, hand.u_min, hand.u_max)
         return u.reshape(shape[:-1] + (N_SERVOS,))
+
+
+def _routed_control_law(hand, ctx: Context, q: np.ndarray, s_ends: np.ndarray) -> np.ndarray:
+    """u_eff (N, 6) for targets q (N, 15) on the routed statics a routed elasticity put in ``ctx``
+    (forward: pipeline.couple): each digit's target projected onto its curve (the routed coupling
+    plus what the paper's form adds with the context's compliance, constant per chain here), s
+    clipped to the travel's image ``s_ends`` (2, 6), the routed servo law inverted with the
+    effective radius, clipped to the travel."""
+    ideal, extra = hand.coupling_vectors(0.0), hand.coupling_vectors(ctx.compliance[0])
+    curves = [replace(c, c=c.c + (v - a)) for c, v, a in zip(ctx.routed, extra, ideal)]
+    lo, hi = s_ends.min(axis=0), s_ends.max(axis=0)
+    s = np.clip(project_routed(curves, q, lo, hi), lo, hi)
+    u = np.empty(s.shape)
+    for k, (chain, c) in enumerate(zip(hand.params.chains, ctx.routed)):
+        u[:, k] = servo_angle(s[:, k], chain, c) / ctx.radius_scale[k]
+    u[:, CMC_SERVO] = s[:, CMC_SERVO] / hand.params.thumb.cmc_gain
+    return np.clip(u, hand.u_min, hand.u_max)
 
 
 def build_effect_stack(params) -> EffectStack:

@@ -3,7 +3,7 @@
 Every servo is swept over its travel, flexing then extending, the others held at 0 (one sweep
 per servo, id ``u1``..``u6``). The truth is the analytic model plus the hidden effects; when
 ``tendon_elasticity`` is hidden the truth is the paper's compensated model with the hidden
-compliance k_s / EA. Each hidden parameter is drawn uniformly from its effect's ``typical`` range
+compliance k_s / EA (with ``routed_elasticity``, the routed statics at the hidden scale). Each hidden parameter is drawn uniformly from its effect's ``typical`` range
 (a random sign for signed ones) unless given explicitly; noise is Gaussian per measured cell.
 Two independent random streams (effects, noise) come from the seed: same seed, same file.
 """

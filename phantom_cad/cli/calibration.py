@@ -152,7 +152,8 @@ def compare(
     hand = load_hand(params)
     if compensation is not None and compensation != hand.compensation:
         if hand.effects:
-            raise UserError(f"--compensation {compensation}: a calibrated file's effects build on the paper's compensation")
+            raise UserError(f"--compensation {compensation}: a calibrated file's effects build on the "
+                            f"{hand.compensation} compensation")
         hand = load_hand(params, compensation=compensation)
     m = read_measurements(data, degrees=degrees).require_joints()
     q_before = run_pipeline(hand, [], m.u, None, 0.0)

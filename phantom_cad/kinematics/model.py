@@ -17,7 +17,8 @@ routed compensation the cosine law with the drive's stretch.
 The model knows the parameters by duck typing (``params.chains``, ``params.thumb``,
 ``params.mechanics``): the kinematics layer never imports the params layer. Fitted effects
 (the calibration layer's EffectStack) are passed in by whoever loads them
-(``phantom_cad.load_hand``); they build on the paper's compensation. All functions broadcast
+(``phantom_cad.load_hand``); they build on the compensation they name (the routed statics with a
+routed elasticity among them, else the paper's). All functions broadcast
 over any leading batch shape. numpy only.
 """
 
@@ -47,7 +48,8 @@ class Hand:
 
     ``compensation``: what ``compensated=True`` means, ``"routed"`` (the statics of the printed
     routing, :mod:`.statics`; the default) or ``"paper"`` (eq. 11-14). A hand with fitted effects
-    uses the paper's (the effects are fitted on it), which is its default.
+    uses the one they were fitted with (``effects.compensation``: "routed" when they hold a routed
+    elasticity, else "paper"), which is its default.
     """
 
     def __init__(self, params: HandParams, effects=None, compensation: str | None = None):
@@ -55,12 +57,14 @@ class Hand:
             raise ValueError(f"{params.source or 'these parameters'} carry fitted effects "
                              f"({', '.join(params.effects)}): build the hand with phantom_cad.load_hand "
                              "or pass effects=")
+        # fitted effects name their own compensation: a routed elasticity the routed statics, else the paper's
+        fitted = getattr(effects, "compensation", "paper") if effects else None
         if compensation is None:
-            compensation = "paper" if effects else "routed"
+            compensation = fitted or "routed"
         if compensation not in COMPENSATIONS:
             raise ValueError(f"compensation must be one of {', '.join(COMPENSATIONS)}, got {compensation!r}")
-        if effects and compensation != "paper":
-            raise ValueError("fitted effects build on the paper's compensation: use compensation='paper'")
+        if fitted and compensation != fitted:
+            raise ValueError(f"these fitted effects build on the {fitted} compensation: use compensation='{fitted}'")
         self.params = params
         #: the fitted effects this hand applies in forward and inverse (None: the plain model)
         self.effects = effects or None
@@ -158,13 +162,7 @@ class Hand:
         """q (..., 15) of the routed statics at reference angles s (..., 6), each chain in its regime."""
         if self._linear:
             return s @ self.coupling_compensated
-        q = np.empty(s.shape[:-1] + (N_JOINTS,))
-        for spec, c in zip(CHAINS, self.statics):
-            x = s[..., spec.servo]
-            m = c.regime(x)
-            q[..., list(spec.q_index)] = x[..., None] * c.c[m] + c.d[m]
-        q[..., CMC_Q] = s[..., CMC_SERVO]
-        return q
+        return couple_routed(self.statics, s)
 
     # -- reference angles (eq. 6, 8, 9) ------------------------------------------
     def reference_angles(self, u: np.ndarray, radius: np.ndarray | None = None,
@@ -273,30 +271,10 @@ class Hand:
         if not (compensated and self.statics is not None):
             return self.control_law(q, self.coupling(compensated), projection=self._project[compensated])
         lo, hi = self._s_range[True]
-        s = q @ self._project[True] if self._linear else self._project_routed(q, lo, hi)
+        s = q @ self._project[True] if self._linear else project_routed(self.statics, q, lo, hi)
         _clip(s, lo, hi, out=s)
         u = self.servo_angles(s, compensated=True)
         return _clip(u, self.u_min, self.u_max, out=u)
-
-    def _project_routed(self, q: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-        """s (..., 6): each digit's target projected onto its piecewise affine routed curve (the
-        nearest point over its regimes' segments within [lo, hi])."""
-        s = np.empty(q.shape[:-1] + (N_SERVOS,))
-        for spec, c in zip(CHAINS, self.statics):
-            x = q[..., list(spec.q_index)]
-            bounds = np.append(c.s_from, np.inf)
-            best = np.full(q.shape[:-1], np.inf)
-            for m in range(len(c.s_from)):
-                a, b = max(bounds[m], lo[spec.servo]), min(bounds[m + 1], hi[spec.servo])
-                if a > b:
-                    continue
-                t = np.clip((x - c.d[m]) @ c.c[m] / (c.c[m] @ c.c[m]), a, b)
-                err = np.sum((x - t[..., None] * c.c[m] - c.d[m]) ** 2, axis=-1)
-                better = err < best
-                best = np.where(better, err, best)
-                s[..., spec.servo] = np.where(better, t, s[..., spec.servo])
-        s[..., CMC_SERVO] = q[..., CMC_Q]
-        return s
 
     def jacobian(self, u, compensated: bool = False) -> np.ndarray:
         """dq/du (..., 15, 6) of the model without effects."""
@@ -352,6 +330,38 @@ class Hand:
         q_lo = self.forward(self.u_min, compensated)
         q_hi = self.forward(self.u_max, compensated)
         return np.minimum(q_lo, q_hi), np.maximum(q_lo, q_hi)
+
+
+def couple_routed(statics, s: np.ndarray) -> np.ndarray:
+    """q (..., 15) of routed statics (one :class:`~.statics.ChainStatics` per tendon chain, servo
+    order) at reference angles s (..., 6), each chain in its regime; the CMC's q15 = s6."""
+    q = np.empty(s.shape[:-1] + (N_JOINTS,))
+    for spec, c in zip(CHAINS, statics):
+        q[..., list(spec.q_index)] = c.joints(s[..., spec.servo])
+    q[..., CMC_Q] = s[..., CMC_SERVO]
+    return q
+
+
+def project_routed(statics, q: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """s (..., 6): each digit's target q (..., 15) projected onto its piecewise affine routed curve
+    (``statics`` as for :func:`couple_routed`; the nearest point over its regimes' segments within
+    [lo, hi], (6,))."""
+    s = np.empty(q.shape[:-1] + (N_SERVOS,))
+    for spec, c in zip(CHAINS, statics):
+        x = q[..., list(spec.q_index)]
+        bounds = np.append(c.s_from, np.inf)
+        best = np.full(q.shape[:-1], np.inf)
+        for m in range(len(c.s_from)):
+            a, b = max(bounds[m], lo[spec.servo]), min(bounds[m + 1], hi[spec.servo])
+            if a > b:
+                continue
+            t = np.clip((x - c.d[m]) @ c.c[m] / (c.c[m] @ c.c[m]), a, b)
+            err = np.sum((x - t[..., None] * c.c[m] - c.d[m]) ** 2, axis=-1)
+            better = err < best
+            best = np.where(better, err, best)
+            s[..., spec.servo] = np.where(better, t, s[..., spec.servo])
+    s[..., CMC_SERVO] = q[..., CMC_Q]
+    return s
 
 
 def _projection(P: np.ndarray) -> np.ndarray:

@@ -81,6 +81,14 @@ class ChainStatics:
         """The regime index of each reference angle."""
         return np.searchsorted(self.s_from, s, side="right") - 1
 
+    def joints(self, s) -> np.ndarray:
+        """q (..., n) of reference angles s (...): c s + d in each one's regime."""
+        s = np.asarray(s, dtype=float)
+        if self.linear:
+            return s[..., None] * self.c[-1]
+        m = self.regime(s)
+        return s[..., None] * self.c[m] + self.d[m]
+
 
 _STRANDS: dict = {}
 
@@ -148,13 +156,23 @@ def chain_statics(radii, strands: ChainStrands, d1: float, d2: float, spring_k: 
     return ChainStatics(np.array(s_from), np.array(cs), np.array(ds), np.array(ts), np.array(t0s), gamma)
 
 
-def hand_statics(params: HandParams) -> tuple[ChainStatics, ...]:
+def hand_statics(params: HandParams, scale=None, check: bool = True) -> tuple[ChainStatics, ...]:
     """:func:`chain_statics` of every tendon chain (servo order) with the file's k_s, EA and loop
-    preload. A ParamError naming EA when the strands' stretch takes back all of a coupled joint's
-    motion in some regime (it would stand still or extend while its reference joint flexes)."""
+    preload. ``scale``: per chain (5,), or one for all, the strands' compliance k_s / EA as a
+    multiple of the file's (the strands of chain k have EA / scale[k]; 0: rigid strands), as a
+    calibration fits it. ``check``: a ParamError naming EA when the strands' stretch takes back
+    all of a coupled joint's motion in some regime (it would stand still or extend while its
+    reference joint flexes)."""
     m = params.mechanics
-    out = tuple(chain_statics(c.radii, st, c.guide.d1, c.guide.d2, m.spring_k, m.tendon_EA, m.loop_preload)
-                for c, st in zip(params.chains, chain_strands(params)))
+    scales = np.broadcast_to(np.asarray(1.0 if scale is None else scale, dtype=float), (len(params.chains),))
+    # a scale of 0 is rigid strands: EA infinite (every stretch term is then 0), as is one so
+    # small that EA / scale overflows
+    with np.errstate(over="ignore", divide="ignore"):
+        ea = m.tendon_EA / scales
+    out = tuple(chain_statics(c.radii, st, c.guide.d1, c.guide.d2, m.spring_k, e, m.loop_preload)
+                for c, st, e in zip(params.chains, chain_strands(params), ea))
+    if not check:
+        return out
     # the smallest coupling of any coupled joint in any regime: the joint that goes first
     value, chain, k = min(((float(c.c[:, k].min()), chain, k) for chain, c in zip(params.chains, out)
                            for k in range(1, len(chain.radii))), key=lambda item: item[0])

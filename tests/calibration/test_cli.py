@@ -115,7 +115,7 @@ def test_compare_prints_metrics(workflow):
     (["simulate", "--effects", "gravity", "--out", "{dir}/x.csv"],
      "error: --effects gravity: unknown effect 'gravity' (known: tendon_slack, pulley_radius_error, "
      "tendon_elasticity, tendon_elasticity_per_finger, friction_hysteresis, joint_offset, camera_scale, "
-     "backlash, drive_friction, or none)"),
+     "backlash, drive_friction, routed_elasticity, routed_elasticity_per_finger, or none)"),
     (["simulate", "--effects", "tendon_slack", "--effect-param", "friction_hysteresis.mu=0.1", "--out", "{dir}/x.csv"],
      "error: --effect-param friction_hysteresis.*: effect 'friction_hysteresis' is not in --effects"),
     (["simulate", "--effects", "friction_hysteresis", "--effect-param", "friction_hysteresis.mu=3", "--out",

@@ -174,7 +174,7 @@ def test_inverse_inverts_the_effects(hand):
     ({"warp_drive": {"x": 1.0}},
      "effects.warp_drive = 'warp_drive': unknown effect (known: tendon_slack, pulley_radius_error, "
      "tendon_elasticity, tendon_elasticity_per_finger, friction_hysteresis, joint_offset, camera_scale, "
-     "backlash, drive_friction)"),
+     "backlash, drive_friction, routed_elasticity, routed_elasticity_per_finger)"),
     ({"friction_hysteresis": {"mu": 2.0}},
      "effects.friction_hysteresis.mu = 2.0: must lie in [0, 1] (physical bounds: friction coefficient of "
      "the tendon on its pulleys and guides)"),

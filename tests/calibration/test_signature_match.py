@@ -17,7 +17,8 @@ from .test_noise_floor import OFFSETS, analytic, eccentric_data, measure, sweeps
 from .test_plugin import compliant
 
 LIBRARY = ("tendon_slack", "pulley_radius_error", "tendon_elasticity", "tendon_elasticity_per_finger",
-           "friction_hysteresis", "joint_offset", "camera_scale", "backlash", "drive_friction")
+           "friction_hysteresis", "joint_offset", "camera_scale", "backlash", "drive_friction", "routed_elasticity",
+           "routed_elasticity_per_finger")
 PERIODIC = ("the residual is periodic in u with period 40 deg: no library effect predicts that; "
             "look at the servo horn / pulley eccentricity")
 
