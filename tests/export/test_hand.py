@@ -170,21 +170,29 @@ def test_mass_estimates(hand):
         assert man["files"][f"stl/{p['name']}.stl"]["sha256"]
 
 
-def test_exported_coupon(hand):
-    """The export's fit-test coupon, read back: the STL with trimesh (watertight, on the bed, the
-    STEP's volume), the STEP with build123d, the manifest's holes by hand, the maker's sheet."""
+def _read_back_print_aid(out, man, kind: str, name: str) -> dict:
+    """A print aid's manifest entry, after reading its files back: every file listed with its kind,
+    the STEP one solid of the manifest's volume (build123d), the STL watertight, on the bed and of
+    the STEP's volume (trimesh)."""
     from build123d import import_step
 
-    result, man = hand
-    out, c = result.out_dir, man["coupon"]
-    for rel in (c["step"], c["stl"], c["sheet"], "coupon/fit_coupon.png"):
-        assert (out / rel).is_file() and man["files"][rel]["kind"] == "coupon", rel
-    step = import_step(str(out / c["step"]))
-    assert len(step.solids()) == 1 and step.volume == pytest.approx(c["volume_mm3"], rel=1e-6)
-    mesh = trimesh.load(out / c["stl"], force="mesh")
+    e = man[kind]
+    for rel in (e["step"], e["stl"], e["sheet"], f"{kind}/{name}.png"):
+        assert (out / rel).is_file() and man["files"][rel]["kind"] == kind, rel
+    step = import_step(str(out / e["step"]))
+    assert len(step.solids()) == 1 and step.volume == pytest.approx(e["volume_mm3"], rel=1e-6)
+    mesh = trimesh.load(out / e["stl"], force="mesh")
     assert mesh.is_watertight and mesh.is_volume
     assert mesh.bounds[0][2] == pytest.approx(0.0, abs=1e-4)
     assert mesh.volume == pytest.approx(step.volume, rel=1e-2)
+    return e
+
+
+def test_exported_coupon(hand):
+    """The export's fit-test coupon, read back: the STL with trimesh (watertight, on the bed, the
+    STEP's volume), the STEP with build123d, the manifest's holes by hand, the maker's sheet."""
+    result, man = hand
+    out, c = result.out_dir, _read_back_print_aid(result.out_dir, man, "coupon", "fit_coupon")
     # by hand from params/phantom.toml: 7 mm bearing - 0.05 interference + 0.2 compensation; 0.6 mm
     # tendon + 2 x 0.2 clearance, not compensated; 5 mm magnet + 2 x 0.1 + 0.2
     holes = {f["key"]: f for f in c["features"]}
@@ -200,18 +208,8 @@ def test_exported_gauge(hand):
     """The export's angle gauge, read back: the STL with trimesh (watertight, on the bed, the STEP's
     volume), the STEP with build123d, the manifest's faces (0 to 105 degrees for params/phantom.toml,
     whose PIPs reach 92.2), the maker's sheet."""
-    from build123d import import_step
-
     result, man = hand
-    out, g = result.out_dir, man["gauge"]
-    for rel in (g["step"], g["stl"], g["sheet"], "gauge/angle_gauge.png"):
-        assert (out / rel).is_file() and man["files"][rel]["kind"] == "gauge", rel
-    step = import_step(str(out / g["step"]))
-    assert len(step.solids()) == 1 and step.volume == pytest.approx(g["volume_mm3"], rel=1e-6)
-    mesh = trimesh.load(out / g["stl"], force="mesh")
-    assert mesh.is_watertight and mesh.is_volume
-    assert mesh.bounds[0][2] == pytest.approx(0.0, abs=1e-4)
-    assert mesh.volume == pytest.approx(step.volume, rel=1e-2)
+    out, g = result.out_dir, _read_back_print_aid(result.out_dir, man, "gauge", "angle_gauge")
     assert [f["angle_deg"] for f in g["faces"]] == [15.0 * k for k in range(8)]
     assert [f["marks"] for f in g["faces"]] == list(range(8))
     sheet = (out / g["sheet"]).read_text()
