@@ -111,10 +111,10 @@ def _who(row: dict) -> str:
 
 
 def order_lines(params: HandParams, rows: list[dict], filament_g: float | None = None,
-                sliced: bool = False) -> list[dict]:
+                sliced: bool = False, parts: tuple[str, ...] = ()) -> list[dict]:
     """The order lines of a hand from its assembly rows (``assembly.bill_of_materials``), in the
-    catalogue's category order. ``filament_g``: the printed parts' filament (g), from the slicer
-    when ``sliced``, else the solids' mass; None: no filament line."""
+    catalogue's category order. ``filament_g``: the printed ``parts``' filament (g), from the
+    slicer when ``sliced``, else their estimated mass; None: no filament line."""
     hw = params.hardware
     g = lambda v: f"{units.mm(v):g}"  # noqa: E731
     by_item: dict[str, list[dict]] = defaultdict(list)
@@ -166,10 +166,11 @@ def order_lines(params: HandParams, rows: list[dict], filament_g: float | None =
             lines.append(_item(key, round(sum(c for c, _ in cuts) / 1000.0, 3),
                                "cut: " + "; ".join(f"{c:g} mm {who}" for c, who in cuts), **dims))
     if filament_g is not None:
-        how = ("the printed parts: the slicer's filament mass" if sliced else
-               "the printed parts, not sliced: their estimated mass (volume x density x infill); "
+        how = ("the slicer's filament mass" if sliced else
+               "not sliced: their estimated mass (volume x density x infill); "
                "phantom-cad build --slice gives the slicer's filament mass")
-        lines.append(_item("filament", round(filament_g, 1), how))
+        lines.append(_item("filament", round(filament_g, 1), f"the {len(parts)} printed parts ({', '.join(parts)}): "
+                           + how))
     for item, rs in by_item.items():      # what the catalogue has no item for: listed, not priced
         for r in rs:
             lines.append(_line(OTHER, item, r["spec"], r["quantity"], "pcs", 1, None, r["used_in"]))

@@ -89,7 +89,8 @@ class ExportContext:
         return self._model
 
     def bom(self) -> list[dict]:
-        """assembly.bill_of_materials, made once: what the parts use (the order lines are made of it)."""
+        """assembly.bill_of_materials, made once: what the parts use (the manifest lists it, the
+        order lines are made of it)."""
         if self._bom is None:
             self._bom = list(self.asm.bill_of_materials(self.params))
         return self._bom
@@ -110,7 +111,7 @@ class ExportContext:
                 grams = sum(self.estimates[n]["filament_g"] for n in self.names)
             else:
                 grams = sum(mass_g(self.metas[n]["volume_mm3"], self.params.print) for n in self.names)
-            self._order = purchase.order_lines(self.params, self.bom(), grams, self.sliced)
+            self._order = purchase.order_lines(self.params, self.bom(), grams, self.sliced, tuple(self.names))
         return self._order
 
 
@@ -330,7 +331,8 @@ class Bom(Exporter):
 
 
 class BomMarkdown(Exporter):
-    """The orderable bill of materials by category, with the totals, as Markdown."""
+    """The orderable bill of materials by category, with the totals and the assembly list, as
+    Markdown."""
 
     name = "BOM (Markdown)"
 
@@ -340,7 +342,8 @@ class BomMarkdown(Exporter):
     def write(self, ctx, stage):
         from .bom import bom_md
 
-        (stage / "bom.md").write_text(bom_md(ctx.order(), ctx.params.name, ctx.sliced), encoding="utf-8")
+        (stage / "bom.md").write_text(bom_md(ctx.order(), ctx.bom(), ctx.params.name, ctx.sliced),
+                                       encoding="utf-8")
 
 
 class Routing(Exporter):
@@ -398,7 +401,7 @@ class Manifest(Exporter):
         man = manifest_mod.build_manifest(
             stage=stage, params=ctx.params, params_path=ctx.params_path, names=ctx.names, keys=ctx.keys,
             metas=ctx.metas, poses=ctx.poses, estimates=ctx.estimates, slicer_info=ctx.slicer_info,
-            interference=ctx.interference, contacts=ctx.contacts, bom=ctx.order())
+            interference=ctx.interference, contacts=ctx.contacts, bom=ctx.bom())
         for aid in AIDS:
             meta = json.loads((ctx.aid_dir(aid) / "meta.json").read_text(encoding="utf-8"))
             base = f"{aid.kind}/{aid.name}"

@@ -41,7 +41,7 @@ def test_every_part_exported(hand):
     assert (result.out_dir / "renders" / "hand_assembly.png").stat().st_size > 20_000
     # the measured verification (phantom_cad.cad.verify) ran on every part and passed
     assert {p["checks"]["verify_part"] for p in man["parts"]} == {"ok"}
-    assert (result.out_dir / "bom.csv").read_text().startswith("item,spec,quantity,used_in")
+    assert (result.out_dir / "bom.csv").read_text().startswith("category,item,specification,quantity,unit,")
 
 
 def test_stls_watertight_manifold_on_the_bed(hand):
