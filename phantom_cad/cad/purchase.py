@@ -121,8 +121,9 @@ def order_lines(params: HandParams, rows: list[dict], filament_g: float | None =
     for r in rows:
         by_item[r["item"]].append(r)
     lines: list[dict] = []
-    n_servos = sum(r["quantity"] for r in by_item.pop("servo", []))
-    lines += _electronics(params, n_servos)
+    unknown: list[dict] = []        # rows whose spec names no size this module reads
+    if (n_servos := sum(r["quantity"] for r in by_item.pop("servo", []))):
+        lines += _electronics(params, n_servos)
     if (bearings := by_item.pop("bearing", [])):
         dims = tuple(round(units.mm(v), 6) for v in (hw.bearing_bore, hw.bearing_outer, hw.bearing_width))
         lines.append(_item("bearing", sum(r["quantity"] for r in bearings), "; ".join(r["used_in"] for r in bearings),
@@ -130,23 +131,28 @@ def order_lines(params: HandParams, rows: list[dict], filament_g: float | None =
                            o=g(hw.bearing_outer), w=g(hw.bearing_width)))
     pins: dict[float, list[dict]] = defaultdict(list)
     for r in by_item.pop("axle", []):
-        pins[_num(r"([0-9.]+) mm long", r["spec"])].append(r)
+        if (length := _num(r"([0-9.]+) mm long", r["spec"])) is None:
+            unknown.append(r)
+        else:
+            pins[length].append(r)
     for length in sorted(pins):
         rs = pins[length]
         lines.append(_item("pin", sum(r["quantity"] for r in rs), "; ".join(r["used_in"] for r in rs),
                            d=g(hw.axle_diameter), l=f"{length:g}"))
     screws: dict[tuple[str, float | None], list[dict]] = defaultdict(list)
     for r in by_item.pop("screw", []):
-        if "set screw" in r["spec"]:
-            screws["set_screw", _num(r"x ([0-9.]+)", r["spec"])].append(r)
-        elif "horn screw" in r["spec"]:
+        length = _num(r"x ([0-9.]+)", r["spec"])
+        engage = _num(r"([0-9.]+) mm thread engagement", r["spec"])
+        if "horn screw" in r["spec"]:
             screws["horn_screw", None].append(r)
-        elif (length := _num(r"x ([0-9.]+)", r["spec"])) is not None:
-            screws["self_tapping", length].append(r)
-        else:
+        elif length is not None:
+            screws["set_screw" if "set screw" in r["spec"] else "self_tapping", length].append(r)
+        elif engage is not None:
             # through the servo's ear into its pilot: the longest sold length that does not bottom out
-            reach = _num(r"([0-9.]+) mm thread engagement", r["spec"]) + units.mm(params.cad.servo_ear_thickness)
+            reach = engage + units.mm(params.cad.servo_ear_thickness)
             screws["self_tapping", max(v for v in SCREW_LENGTHS if v <= reach + 1e-9)].append(r)
+        else:
+            unknown.append(r)
     kinds = ("self_tapping", "set_screw", "horn_screw")
     for key, length in sorted(screws, key=lambda k: (kinds.index(k[0]), k[1] or 0.0)):
         rs = screws[key, length]
@@ -161,7 +167,12 @@ def order_lines(params: HandParams, rows: list[dict], filament_g: float | None =
     for key, item, pattern, dims in (
             ("line", "tendon", r", ([0-9.]+) mm$", {"t": g(hw.tendon_diameter)}),
             ("elastic", "cable spring", r"\(([0-9.]+) mm cut\)", {"d": g(params.cad.spring_diameter)})):
-        cuts = [(_num(pattern, r["spec"]) * r["quantity"], _who(r)) for r in by_item.pop(item, [])]
+        cuts = []
+        for r in by_item.pop(item, []):
+            if (cut := _num(pattern, r["spec"])) is None:
+                unknown.append(r)
+            else:
+                cuts.append((cut * r["quantity"], _who(r)))
         if cuts:
             lines.append(_item(key, round(sum(c for c, _ in cuts) / 1000.0, 3),
                                "cut: " + "; ".join(f"{c:g} mm {who}" for c, who in cuts), **dims))
@@ -171,9 +182,9 @@ def order_lines(params: HandParams, rows: list[dict], filament_g: float | None =
                "phantom-cad build --slice gives the slicer's filament mass")
         lines.append(_item("filament", round(filament_g, 1), f"the {len(parts)} printed parts ({', '.join(parts)}): "
                            + how))
-    for item, rs in by_item.items():      # what the catalogue has no item for: listed, not priced
-        for r in rs:
-            lines.append(_line(OTHER, item, r["spec"], r["quantity"], "pcs", 1, None, r["used_in"]))
+    # what the catalogue has no item for: listed, not priced
+    for r in unknown + [r for rs in by_item.values() for r in rs]:
+        lines.append(_line(OTHER, r["item"], r["spec"], r["quantity"], "pcs", 1, None, r["used_in"]))
     order = {c: i for i, c in enumerate(catalogue()["categories"] + [OTHER])}
     return sorted(lines, key=lambda ln: order[ln["category"]])   # stable: the order above within a category
 

@@ -141,3 +141,11 @@ def test_naming_another_servo_changes_its_lines_pockets_and_force_together(docum
     # (the MG90S's body moves the forearm's servos a little: the routing, so the forces, by < 0.01 %)
     for d, f in json.loads(r.output)["digits"].items():
         assert fb_["digits"][d]["force_N"] == pytest.approx(f["force_N"], rel=1e-4), d
+
+
+def test_a_row_the_catalogue_has_no_item_for_is_listed_unpriced(hand):
+    rows = [{"item": "axle", "spec": "a pin of no stated length", "quantity": 2, "used_in": "somewhere"},
+            {"item": "washer", "spec": "M2 washer", "quantity": 4, "used_in": "elsewhere"}]
+    lines = purchase.order_lines(hand.params, rows)
+    assert [(ln["category"], ln["item"], ln["quantity"], ln["line_cost"]) for ln in lines] == [
+        ("other", "axle", 2, None), ("other", "washer", 4, None)]
