@@ -59,6 +59,7 @@ class ExportContext:
     _assembly_dir: Path | None = field(default=None, repr=False)
     _model: Any = field(default=None, repr=False)
     _bom: list | None = field(default=None, repr=False)
+    _order: list | None = field(default=None, repr=False)
 
     def part_dir(self, name: str) -> Path:
         return self.cache.part_dir(self.keys[name])
@@ -88,10 +89,30 @@ class ExportContext:
         return self._model
 
     def bom(self) -> list[dict]:
-        """assembly.bill_of_materials, made once (the BOM and the manifest list it)."""
+        """assembly.bill_of_materials, made once: what the parts use (the manifest lists it, the
+        order lines are made of it)."""
         if self._bom is None:
             self._bom = list(self.asm.bill_of_materials(self.params))
         return self._bom
+
+    @property
+    def sliced(self) -> bool:
+        """Whether the slicer estimated every part."""
+        return all(self.estimates.get(n) is not None for n in self.names)
+
+    def order(self) -> list[dict]:
+        """The orderable lines (cad.purchase) of :meth:`bom`, made once: the filament by the
+        slicer's mass when sliced, else by the parts' estimated mass (manifest.mass_g)."""
+        if self._order is None:
+            from ..cad import purchase
+            from .manifest import mass_g
+
+            if self.sliced:
+                grams = sum(self.estimates[n]["filament_g"] for n in self.names)
+            else:
+                grams = sum(mass_g(self.metas[n]["volume_mm3"], self.params.print) for n in self.names)
+            self._order = purchase.order_lines(self.params, self.bom(), grams, self.sliced, tuple(self.names))
+        return self._order
 
 
 class Exporter(abc.ABC):
@@ -296,7 +317,7 @@ class RosPackage(_DescriptionPart):
 
 
 class Bom(Exporter):
-    """assembly.bill_of_materials as CSV."""
+    """The orderable bill of materials (cad.purchase) as CSV."""
 
     name = "BOM"
 
@@ -306,7 +327,23 @@ class Bom(Exporter):
     def write(self, ctx, stage):
         from .bom import bom_csv
 
-        (stage / "bom.csv").write_text(bom_csv(ctx.bom()), encoding="utf-8")
+        (stage / "bom.csv").write_text(bom_csv(ctx.order()), encoding="utf-8")
+
+
+class BomMarkdown(Exporter):
+    """The orderable bill of materials by category, with the totals and the assembly list, as
+    Markdown."""
+
+    name = "BOM (Markdown)"
+
+    def writes(self, ctx):
+        return ["bom.md"]
+
+    def write(self, ctx, stage):
+        from .bom import bom_md
+
+        (stage / "bom.md").write_text(bom_md(ctx.order(), ctx.bom(), ctx.params.name, ctx.sliced),
+                                       encoding="utf-8")
 
 
 class Routing(Exporter):
@@ -382,7 +419,7 @@ class Manifest(Exporter):
 #: every output of a build, in the order the pipeline writes them (see the module doc)
 EXPORTERS: tuple[Exporter, ...] = (
     PartSolids(), PrintProjects(), PartRenders(), Coupon(), Gauge(), SlicerConfig(),
-    DescriptionMeshes(), Urdf(), Mjcf(), RosPackage(), Bom(), Routing(),
+    DescriptionMeshes(), Urdf(), Mjcf(), RosPackage(), Bom(), BomMarkdown(), Routing(),
     AssemblyStep(), AssemblyRender(),
     Manifest(),
 )

@@ -28,6 +28,13 @@ class CatalogueServo:
     screw_diameter_mm: float | None
     #: what the datasheet says, briefly (where the numbers come from)
     source: str
+    #: the bus the servo is driven over: "feetech-scs" (half-duplex TTL serial bus), "dynamixel-ttl"
+    #: (ROBOTIS TTL multidrop bus) or "pwm" (a hobby servo's pulse input); the BOM's electronics
+    #: follow it (``cad.purchase``)
+    bus: str
+    #: stall current (A) at ``voltage``: sizes the power supply; and where it comes from
+    stall_current_A: float
+    current_source: str
 
     def values(self) -> dict[str, object]:
         """The ``[servo]`` numbers this entry gives a file that names it (the ones it has)."""
@@ -46,15 +53,23 @@ KGF_CM = 0.0980665
 CATALOGUE: dict[str, CatalogueServo] = {
     "scs0009": CatalogueServo(
         "Feetech SCS0009", 0.226, 600.0, 6.0, (23.2, 12.1, 25.3), 32.3, 2.0,
-        "Feetech SCS0009 datasheet: 2.3 kgf cm stall, 0.10 s / 60 deg no-load, at 6 V (4.8-6 V)"),
+        "Feetech SCS0009 datasheet: 2.3 kgf cm stall, 0.10 s / 60 deg no-load, at 6 V (4.8-6 V)",
+        bus="feetech-scs", stall_current_A=1.0,
+        current_source="[assumed] the datasheet gives no stall current: 1.0 A taken for a 2.3 kgf cm micro "
+                       "servo at 6 V; measure yours"),
     "mg90s": CatalogueServo(
         "TowerPro MG90S", round(2.2 * KGF_CM, 4), 750.0, 6.0, (22.8, 12.2, 28.5), 32.5, 2.0,
         "TowerPro MG90S datasheet: 2.2 kgf cm stall, 0.08 s / 60 deg no-load, at 6 V "
-        "(1.8 kgf cm and 0.10 s / 60 deg at 4.8 V); 22.8 x 12.2 x 28.5 mm"),
+        "(1.8 kgf cm and 0.10 s / 60 deg at 4.8 V); 22.8 x 12.2 x 28.5 mm",
+        bus="pwm", stall_current_A=1.0,
+        current_source="[assumed] the datasheet gives no stall current: 1.0 A taken for a 2.2 kgf cm micro "
+                       "servo at 6 V; measure yours"),
     "xl330-m288": CatalogueServo(
         "ROBOTIS Dynamixel XL330-M288-T", 0.52, 618.0, 5.0, (34.0, 20.0, 26.0), None, None,
         "ROBOTIS e-Manual, XL330-M288-T: 0.52 N m stall and 103 rev/min no-load at 5.0 V "
-        "(0.60 N m, 123 rev/min at 6 V); 20 x 34 x 26 mm; mounted by the case's screw holes, no ears"),
+        "(0.60 N m, 123 rev/min at 6 V); 20 x 34 x 26 mm; mounted by the case's screw holes, no ears",
+        bus="dynamixel-ttl", stall_current_A=1.47,
+        current_source="ROBOTIS e-Manual, XL330-M288-T: 0.52 N m at 5.0 V, 1.47 A"),
 }
 
 #: the servo params/phantom.toml's numbers are (it writes them out rather than naming it)

@@ -41,7 +41,7 @@ def test_every_part_exported(hand):
     assert (result.out_dir / "renders" / "hand_assembly.png").stat().st_size > 20_000
     # the measured verification (phantom_cad.cad.verify) ran on every part and passed
     assert {p["checks"]["verify_part"] for p in man["parts"]} == {"ok"}
-    assert (result.out_dir / "bom.csv").read_text().startswith("item,spec,quantity,used_in")
+    assert (result.out_dir / "bom.csv").read_text().startswith("category,item,specification,quantity,unit,")
 
 
 def test_stls_watertight_manifold_on_the_bed(hand):
@@ -261,3 +261,120 @@ def test_the_same_parameters_give_the_same_bytes_whoever_built_the_parts(hand_bu
     a, b = tree(result.out_dir), tree(again.out_dir)
     assert sorted(a) == sorted(b)
     assert [k for k in a if a[k] != b[k]] == []
+
+
+# -- the orderable BOM -----------------------------------------------------------------------------
+
+def _bom(out) -> list[dict]:
+    import csv
+    import io
+
+    return list(csv.DictReader(io.StringIO((out / "bom.csv").read_text(encoding="utf-8"))))
+
+
+def _axis_lines(faces, radius: float) -> set:
+    """The distinct axis lines of the cylindrical faces of ``radius`` (a hole through two cheeks,
+    or split in faces, is one line)."""
+    out = set()
+    for c in faces:
+        if abs(c["radius"] - radius) <= 1e-3:
+            d = c["direction"] * np.sign(c["direction"][np.argmax(np.abs(c["direction"]))])
+            foot = c["point"] - np.dot(c["point"], d) * d
+            out.add((tuple(np.round(d, 3)), tuple(np.round(foot, 1))))
+    return out
+
+
+def test_bom_lines_match_what_the_built_parts_hold(hand, hand_parts):
+    """Each bought part's quantity, counted on the exported solids, not read from the BOM's own
+    rows: bearing seats, pressed axle holes (one pin each, of the digit's width), magnet pockets,
+    self-tapping pilot holes; the servos (one per servo pulley part), the coupling loops' set
+    screws and the split drives' crimp stops from the routing; every printed part in the
+    filament line, its mass the slicer's (or the parts' estimate)."""
+    from phantom_cad.cad import measure
+    from phantom_cad.cad.parts.common import Tolerances
+    from phantom_cad.kinematics import couplers, routing
+
+    result, man = hand
+    params, solids = hand_parts("default")
+    t = Tolerances(params)
+    counts = {"seat": 0, "magnet": 0, "pilot": 0}
+    pins: dict[float, int] = {}
+    digit = {p["name"]: p["digit"] for p in man["parts"]}
+    for name, solid in solids.items():
+        faces = measure.cylinders(solid)
+        counts["seat"] += len(_axis_lines(faces, t.bearing_seat / 2.0))
+        counts["magnet"] += len(measure.circular_pockets(solid, t.magnet_pocket_d / 2.0, faces=faces))
+        counts["pilot"] += len(measure.circular_pockets(solid, t.screw_pilot / 2.0, faces=faces))
+        if (n := len(_axis_lines(faces, t.axle_press / 2.0))):
+            width = round(params.digit(digit[name]).width * 1e3, 6)
+            pins[width] = pins.get(width, 0) + n
+    lines = _bom(result.out_dir)
+    qty = lambda item: [float(r["quantity"]) for r in lines if r["item"] == item]  # noqa: E731
+    assert qty("ball bearing") == [counts["seat"]] and counts["seat"] > 0
+    assert qty("magnet") == [counts["magnet"]] and counts["magnet"] > 0
+    assert qty("self-tapping screw") == [counts["pilot"]] and counts["pilot"] > 0
+    assert {float(r["specification"].split()[-2]): float(r["quantity"]) for r in lines
+            if r["item"] == "dowel pin"} == pins
+    n_servos = len([n for n in solids if n.startswith("servo_pulley_")])
+    assert qty("servo") == qty("servo cable") == [n_servos]
+    assert qty("horn screw") == [2 * n_servos]
+    assert qty("set screw") == [len([r for r in routing.routes(params) if r.tendon.kind == "coupling"])]
+    assert qty("crimp sleeve") == [len(couplers.couplers(params))]
+    # every printed part is in the filament line, by the slicer's filament (or the estimated mass)
+    (fil,) = [r for r in lines if r["item"] == "filament"]
+    names = [p["name"] for p in man["parts"]]
+    assert fil["used_in"].startswith(f"the {len(names)} printed parts ({', '.join(names)}): ")
+    grams = sum(p["print"]["filament_g"] if result.sliced else p["mass_g"] for p in man["parts"])
+    assert float(fil["quantity"]) == pytest.approx(grams, abs=0.05)
+    assert ("slicer's filament mass" in fil["used_in"]) == result.sliced
+
+
+def test_bom_md_totals_add_up_from_bom_csv(hand):
+    """bom.md's per-category and hand totals, recomputed from bom.csv's lines; each line's cost
+    its packs times its pack's price, and the packs enough for the quantity."""
+    import re
+
+    result, man = hand
+    lines = _bom(result.out_dir)
+    md = (result.out_dir / "bom.md").read_text(encoding="utf-8")
+    per: dict[str, float] = {}
+    for r in lines:
+        q, pack, packs = float(r["quantity"]), float(r["pack_size"]), int(r["packs"])
+        assert packs * pack >= q > (packs - 1) * pack, r
+        cost = float(r["line_cost"])
+        assert cost == pytest.approx(packs * pack * float(r["unit_price"]), abs=0.01), r
+        per[r["category"]] = per.get(r["category"], 0.0) + cost
+        assert r["specification"] in md and r["used_in"].replace("|", "/") in md
+    cur = lines[0]["currency"]
+    for c, v in per.items():
+        assert f"| {c} | {v:.2f} {cur} |" in md
+        assert f"\n{c[0].upper()}{c[1:]}: {v:.2f} {cur}\n" in md
+    assert re.search(rf"\| \*\*hand\*\* \| \*\*{sum(per.values()):.2f} {cur}\*\* \|", md)
+    # bom.md ends with the assembly list, the manifest's bom
+    assembly_list = md[md.index("# Assembly list"):]
+    assert all(f"\n| {r['item']} | {r['spec']} | {r['quantity']} | " in assembly_list for r in man["bom"])
+
+
+def test_docs_bom_md_is_the_default_hands(hand):
+    """docs/bom.md ends with the default hand's bom.md as an unsliced `phantom-cad build` writes
+    it (the test hand may be sliced: its filament is then replaced by the parts' estimated mass,
+    as the build computes it without the slicer)."""
+    from phantom_cad.cad import purchase
+    from phantom_cad.cad.materials import bill_of_materials
+    from phantom_cad.export.bom import bom_md
+    from tests.conftest import ROOT
+
+    result, man = hand
+    params = load_params()
+    grams = sum(p["mass_g"] for p in man["parts"])
+    rows = bill_of_materials(params)
+    assert man["bom"] == rows
+    lines = purchase.order_lines(params, rows, grams, False, tuple(p["name"] for p in man["parts"]))
+    if not result.sliced:       # then the build wrote exactly these lines
+        assert (result.out_dir / "bom.md").read_text(encoding="utf-8") == bom_md(lines, rows, params.name, False)
+    doc = (ROOT / "docs" / "bom.md").read_text(encoding="utf-8")
+    marker = "<!-- the default hand's bom.md"
+    generated = doc[doc.index("\n", doc.index(marker)) + 2:]
+    assert generated == bom_md(lines, rows, params.name, False, level=2), (
+        "docs/bom.md is out of date: replace its last section with the default hand's bom.md "
+        "(phantom-cad build, unsliced), its headings one level down")

@@ -7,7 +7,9 @@ bar rotated by 90 degrees, files re-read by independent readers (trimesh, build1
 
 from __future__ import annotations
 
+import csv
 import hashlib
+import io
 import json
 import math
 import shutil
@@ -51,7 +53,8 @@ def test_layout_and_manifest_checksums(standin_build):
     assert result.parts == names
     expected = {f"step/{n}.step" for n in names} | {f"stl/{n}.stl" for n in names} \
         | {f"print/{n}.3mf" for n in names} | {f"renders/{n}.png" for n in names} \
-        | {"step/hand_assembly.step", "renders/hand_assembly.png", "bom.csv", "routing.json", "manifest.json",
+        | {"step/hand_assembly.step", "renders/hand_assembly.png", "bom.csv", "bom.md", "routing.json",
+           "manifest.json",
            "slicer/config.ini"} \
         | {f"coupon/fit_coupon.{ext}" for ext in ("step", "stl", "md", "png")} \
         | {f"gauge/angle_gauge.{ext}" for ext in ("step", "stl", "md", "png")}
@@ -153,13 +156,23 @@ def test_assembly_step_has_every_part_placed(standin_build, standin):
 
 
 def test_bom_csv(standin_build):
+    """The stand-in's two rows (two bearings, one servo) become the servo's line, its electronics,
+    the bearings' line and the filament (the slicer's mass when sliced, else the parts' estimated
+    mass); the manifest lists the assembly's rows, bom.md ends with them."""
     result, _ = standin_build
-    lines = (result.out_dir / "bom.csv").read_text().splitlines()
-    assert lines[0] == "item,spec,quantity,used_in"
+    rows = list(csv.DictReader(io.StringIO((result.out_dir / "bom.csv").read_text())))
     hw = load_document(DEFAULT_PARAMS)["hardware"]["bearing"]
-    assert lines[1] == f"bearing,{hw['bore_mm']:g}x{hw['outer_mm']:g},2,index_proximal"
+    bearing = next(r for r in rows if r["item"] == "ball bearing")
+    assert bearing["specification"].endswith(f"{hw['bore_mm']:g} x {hw['outer_mm']:g} x {hw['width_mm']:g} mm, shielded")
+    assert (bearing["quantity"], bearing["used_in"]) == ("2", "index_proximal")
+    assert [r["quantity"] for r in rows if r["item"] in ("servo", "servo cable")] == ["1", "1"]
     man = json.loads((result.out_dir / "manifest.json").read_text())
-    assert [r["item"] for r in man["bom"]] == ["bearing", "servo"]
+    sliced = all(p["print"] for p in man["parts"])
+    grams = sum(p["print"]["filament_g"] if sliced else p["mass_g"] for p in man["parts"])
+    assert float(next(r for r in rows if r["item"] == "filament")["quantity"]) == pytest.approx(grams, abs=0.05)
+    assert [r["item"] for r in man["bom"]] == ["bearing", "servo"]     # the assembly list
+    md = (result.out_dir / "bom.md").read_text()
+    assert "## Totals" in md and "## Assembly list" in md and "| servo | stand-in | 1 | palm |" in md
 
 
 @pytest.mark.slow
