@@ -25,7 +25,11 @@ from .kinematics.topology import FINGERS, JOINT_NAMES, N_JOINTS
 
 #: the keypoints that fix the wrist frame: the wrist, the index MCP and the middle MCP
 FRAME_KEYPOINTS = (RC.WRIST, RC.digit_keypoints(FINGERS[0])[0], RC.digit_keypoints(FINGERS[1])[0])
-#: a keypoint set whose wrist frame is this flat (m; the three points nearly on a line) is refused
+#: the wrist to the middle MCP of a human hand, m (about 0.07 for an adult's): keypoints outside
+#: are not in metres
+PALM_LENGTH = (0.02, 0.3)
+#: a frame whose wrist, index MCP and middle MCP span a triangle of sides shorter than this (m,
+#: about: the square root of twice its area) has no palm plane and is refused
 DEGENERATE = 1e-6
 
 
@@ -156,16 +160,15 @@ def operator_frame(points: np.ndarray, side: str) -> np.ndarray:
 
     p = points - points[:, RC.WRIST:RC.WRIST + 1]
     w, i, m = (p[:, k] for k in FRAME_KEYPOINTS)
+    flat = np.flatnonzero(np.linalg.norm(np.cross(i - w, m - w), axis=1) < DEGENERATE ** 2)
+    if len(flat):
+        raise UserError(f"frame {int(flat[0])}: the wrist, index MCP and middle MCP keypoints lie on a line "
+                        "(no palm plane)")
     tri = np.stack([w, i, m], axis=1)
-    centred = tri - tri.mean(axis=1, keepdims=True)
-    normal = np.linalg.svd(centred)[2][:, 2]
+    normal = np.linalg.svd(tri - tri.mean(axis=1, keepdims=True))[2][:, 2]
     x = w - m
     x = x - np.sum(x * normal, axis=1, keepdims=True) * normal
     length = np.linalg.norm(x, axis=1)
-    if (length < DEGENERATE).any() or (np.linalg.norm(np.cross(i - w, m - w), axis=1) < DEGENERATE ** 2).any():
-        k = int(np.flatnonzero((length < DEGENERATE) | (np.linalg.norm(np.cross(i - w, m - w), axis=1)
-                                                         < DEGENERATE ** 2))[0])
-        raise UserError(f"frame {k}: the wrist, index MCP and middle MCP keypoints lie on a line (no palm plane)")
     x = x / length[:, None]
     z = np.cross(x, normal)
     flip = np.sum(z * (i - m), axis=1) < 0
@@ -200,13 +203,17 @@ def retarget(hand, points: np.ndarray, method: str = "vector") -> Retargeted:
                         "dex-retargeting==0.5.0 torch)") from None
     params = hand.params
     model = kinematic_model(params, tip_frames(params))
+    p = root_frame(np.asarray(points, float), params.side, RC.origin_keypoint(model))
+    palm = np.median(np.linalg.norm(p[:, FRAME_KEYPOINTS[2]] - p[:, RC.WRIST], axis=1))
+    if not PALM_LENGTH[0] <= palm <= PALM_LENGTH[1]:
+        raise UserError(f"keypoints: the wrist to the middle MCP is {palm:.4g} (median of the frames): keypoints "
+                        f"are in metres, where it is {PALM_LENGTH[0]:g}-{PALM_LENGTH[1]:g}")
     with tempfile.TemporaryDirectory(prefix="phantom-retarget-") as tmp:
         urdf = Path(tmp) / f"{model.name}.urdf"
         urdf.write_bytes(urdf_bytes(model, None, f"{model.name} hand ({model.side}), kinematics only"))
         doc = RC.config(model, method, str(urdf))
         table = dict(doc["retargeting"], low_pass_alpha=1.0)   # each frame's own result, unfiltered
         retargeting = RetargetingConfig.from_dict(table).build()
-    p = root_frame(np.asarray(points, float), params.side, doc["frame"]["origin_keypoint"])
     indices = np.asarray(retargeting.optimizer.target_link_human_indices)
     names = list(retargeting.joint_names)
     order = [names.index(n) for n in JOINT_NAMES]

@@ -159,6 +159,8 @@ def _run(argv, capsys):
     (lambda p: p.with_suffix(".csv").write_text("1,2,3\n"), "rows of 3 columns"),
     (lambda p: p.with_suffix(".csv").write_text(",".join(["0"] * 62 + [""]) + "\n"), "1 of 1 frames have NaN"),
     (lambda p: p.with_suffix(".csv").write_text(",".join(["x"] * 63) + "\n"), "no keypoint rows"),
+    (lambda p: np.save(p.with_suffix(".npy"), np.zeros((2, 21, 3))), "lie on a line (no palm plane)"),
+    (lambda p: np.save(p.with_suffix(".npy"), 1000.0 * H.sequence(["open"])[0]), "keypoints are in metres"),
 ])
 def test_bad_keypoint_files_fail_in_one_line(tmp_path, capsys, make, says):
     make(tmp_path / "kp")
