@@ -15,7 +15,7 @@ $(STAMP): pyproject.toml
 
 install: $(STAMP)
 
-# System tools the checks use (PrusaSlicer, urdfdom's check_urdf): Debian packages,
+# System tools the checks use (PrusaSlicer, urdfdom's check_urdf, Chromium, colcon and ament_cmake): Debian packages,
 # installed when missing and we are root (as on CI); otherwise the tests that need
 # them say so and skip, and the demo builds everything but the print estimates.
 sysdeps:

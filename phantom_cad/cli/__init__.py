@@ -324,6 +324,10 @@ from .force import force as _force  # noqa: E402
 
 app.command("force")(_force)
 
+from .retarget import retarget as _retarget  # noqa: E402
+
+app.command("retarget")(_retarget)
+
 
 def main(argv: Optional[list[str]] = None) -> None:
     """Entry point. Every failure is one line on stderr and nothing else:

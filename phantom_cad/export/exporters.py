@@ -316,6 +316,23 @@ class RosPackage(_DescriptionPart):
         description.write_package(folder, ctx.robot_model(), ctx.params.digest)
 
 
+class RetargetingConfigs(_DescriptionPart):
+    """The description's dex-retargeting configs (export/retargeting.py), on its local URDF."""
+
+    name = "retargeting configs"
+
+    def files(self, ctx, description):
+        from . import retargeting
+
+        return retargeting.config_files(ctx.robot_model())
+
+    def write_into(self, ctx, folder):
+        from . import description, retargeting
+
+        model = ctx.robot_model()
+        retargeting.write_configs(folder, model, description.urdf_files(model)[1])
+
+
 class Bom(Exporter):
     """The orderable bill of materials (cad.purchase) as CSV."""
 
@@ -421,5 +438,6 @@ EXPORTERS: tuple[Exporter, ...] = (
     PartSolids(), PrintProjects(), PartRenders(), Coupon(), Gauge(), SlicerConfig(),
     DescriptionMeshes(), Urdf(), Mjcf(), RosPackage(), Bom(), BomMarkdown(), Routing(),
     AssemblyStep(), AssemblyRender(),
+    RetargetingConfigs(),
     Manifest(),
 )

@@ -209,15 +209,9 @@ def transmissions(params: HandParams) -> tuple[tuple[ServoDrive, ...], tuple[Str
     return tuple(drives), tuple(strands)
 
 
-def robot_model(params: HandParams, metas: dict[str, dict], tips: dict[str, tuple[str, np.ndarray]],
-                estimates: dict[str, dict | None] | None = None) -> RobotModel:
-    """The robot model of a built hand: ``metas`` the part metas (by link name), ``tips`` the
-    fingertip frames (``assembly.tip_frames``), ``estimates`` the slicer's per-part estimates."""
-    estimates = estimates or {}
-    links = [RobotLink(ln.name, inertial(metas[ln.name], params.print, estimates.get(ln.name)), ln.name,
-                       tuple(float(c) for c in metas[ln.name]["color"]),
-                       collision_stems(ln.name, int(metas[ln.name]["collision_pieces"])))
-             for ln in LINKS]
+def _joints(params: HandParams, tips: dict[str, tuple[str, np.ndarray]]) -> list[RobotJoint]:
+    """The joints of the tree, in the order of its links (topology order, then the fingertip frames):
+    the 15 revolute joints with their drives, the fixed mounts and the tip frames' fixed joints."""
     rest = LF.link_transforms(params, None)              # T_palm_link, mirrored for a left hand
     revolute = {j["name"]: j for j in LF.joints(params)}
     drives = _drives(params)
@@ -233,10 +227,31 @@ def robot_model(params: HandParams, metas: dict[str, dict], tips: dict[str, tupl
             origin = np.linalg.inv(rest[parent]) @ rest[ln.name]
             joints.append(RobotJoint(f"{ln.name}_joint", "fixed", parent, ln.name, origin))
     for frame, (parent, T) in tips.items():
-        links.append(RobotLink(frame, None, None))
         joints.append(RobotJoint(f"{frame}_joint", "fixed", parent, frame, np.asarray(T, float)))
+    return joints
+
+
+def robot_model(params: HandParams, metas: dict[str, dict], tips: dict[str, tuple[str, np.ndarray]],
+                estimates: dict[str, dict | None] | None = None) -> RobotModel:
+    """The robot model of a built hand: ``metas`` the part metas (by link name), ``tips`` the
+    fingertip frames (``assembly.tip_frames``), ``estimates`` the slicer's per-part estimates."""
+    estimates = estimates or {}
+    links = [RobotLink(ln.name, inertial(metas[ln.name], params.print, estimates.get(ln.name)), ln.name,
+                       tuple(float(c) for c in metas[ln.name]["color"]),
+                       collision_stems(ln.name, int(metas[ln.name]["collision_pieces"])))
+             for ln in LINKS]
+    links += [RobotLink(frame, None, None) for frame in tips]
+    joints = _joints(params, tips)
     drives, strands = transmissions(params)
     adjacent = [(j.parent, j.child) for j in joints if j.type == "revolute" or j.child in LINK_NAMES]
     # the CMC pulley turns inside the palm's cavity (within the palm's collision solids)
     adjacent.append((JOINTS[CMC_Q].parent, CMC_PULLEY))
     return RobotModel(params.name, params.side, tuple(links), tuple(joints), drives, strands, tuple(adjacent))
+
+
+def kinematic_model(params: HandParams, tips: dict[str, tuple[str, np.ndarray]]) -> RobotModel:
+    """The robot model's kinematic tree alone, made without building a part: the same links,
+    joints (origins, axes, limits, mimics) and fingertip frames as :func:`robot_model`'s, no
+    inertial, mesh or transmission (what retargeting's URDF needs)."""
+    links = tuple(RobotLink(name, None, None) for name in (*LINK_NAMES, *tips))
+    return RobotModel(params.name, params.side, links, tuple(_joints(params, tips)))

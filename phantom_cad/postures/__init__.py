@@ -205,12 +205,18 @@ def first_contact(hand, u_from: np.ndarray, u_to: np.ndarray) -> Contact | None:
     return Contact(FINGERS[finger], float(lo))
 
 
+def command(hand, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(the target clipped into the workspace, the control law's servo commands for it): joint
+    targets (..., 15) rad onto the six servos, within their travel."""
+    lo, hi = hand.workspace(compensated=True)
+    clipped = np.clip(target, lo, hi)
+    return clipped, hand.inverse(clipped, compensated=True)
+
+
 def pose(hand, posture: Posture) -> Pose:
     """Clip the target into the workspace, run the control law, stop or refuse at the first contact
     of the thumb with a finger on the way from rest (the servos at the start of their travel)."""
-    lo, hi = hand.workspace(compensated=True)
-    clipped = np.clip(posture.target, lo, hi)
-    u_law = hand.inverse(clipped, compensated=True)
+    clipped, u_law = command(hand, posture.target)
     rest = hand.u_min.copy()
     contact = first_contact(hand, rest, u_law)
     u = u_law if contact is None or posture.on_contact == "refuse" else rest + contact.fraction * (u_law - rest)

@@ -35,7 +35,7 @@ def test_cmake_installs_every_folder_and_file(pkg):
     dirs = set(re.search(r"install\(DIRECTORY ([^)]*?) DESTINATION", text).group(1).split())
     files = set(re.search(r"install\(FILES ([^)]*?) DESTINATION", text).group(1).split())
     on_disk = {p.name for p in pkg.iterdir() if p.is_dir()}
-    assert dirs == on_disk == {"launch", "meshes", "mjcf", "rviz", "urdf"}
+    assert dirs == on_disk == {"config", "launch", "meshes", "mjcf", "rviz", "urdf"}
     assert all((pkg / f).is_file() for f in files) and {"LICENSE", "CHANGELOG.md"} <= files
 
 
