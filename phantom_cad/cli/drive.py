@@ -19,13 +19,14 @@ ParamsOpt = typer.Option(None, "--params", "-p", help="Parameter file (default: 
                          dir_okay=False)
 ZeroOpt = typer.Option(None, "--zero", help="The zero file (default: the parameter file's name with "
                        ".zero.json).", dir_okay=False)
+TimeoutOpt = typer.Option(None, "--timeout", help="How long a servo has to answer, ms (default 100).")
 SpeedOpt = typer.Option(None, "--speed", help="Ramp speed, deg/s (at most the servo's rated speed).")
 
 
-def _open(port, baud, params, zero_file=None, need_zero: bool = False):
+def _open(port, baud, params, zero_file=None, need_zero: bool = False, timeout=None):
     """(driver, hand) on the port; the zero file read when ``need_zero``."""
     from .. import load_hand
-    from ..drive.bus import Bus
+    from ..drive.bus import TIMEOUT, Bus
     from ..drive.driver import Driver, family_of, read_zero
     from ..drive.protocol import DriveError
 
@@ -34,7 +35,7 @@ def _open(port, baud, params, zero_file=None, need_zero: bool = False):
     zero = read_zero(zero_path(hand, zero_file)) if need_zero else None
     if port is None:
         raise DriveError("drive: give the bus adapter's serial port with --port (e.g. /dev/ttyUSB0)")
-    bus = Bus(port, baud or family.baud, family.big_endian)
+    bus = Bus(port, baud or family.baud, family.big_endian, TIMEOUT if timeout is None else timeout / 1e3)
     try:
         return Driver(bus, hand, zero), hand
     except BaseException:
@@ -60,14 +61,15 @@ def _angles(u) -> str:
 
 
 @drive_app.command("scan")
-def scan(port: Optional[str] = PortOpt, baud: Optional[int] = BaudOpt, params: Optional[Path] = ParamsOpt,
+def scan(port: Optional[str] = PortOpt, baud: Optional[int] = BaudOpt,
+         timeout: Optional[float] = TimeoutOpt, params: Optional[Path] = ParamsOpt,
          max_id: int = typer.Option(10, "--max-id", help="Ping IDs 0..N (253 for all).", min=0, max=253)):
     """Find the servos on the bus: ID, model number, firmware, and which of the hand's servos each is.
     Exit 2 if one of the six is missing."""
     from ..drive.protocol import DriveError
     from ..kinematics.topology import SERVOS
 
-    driver, _ = _open(port, baud, params)
+    driver, _ = _open(port, baud, params, timeout=timeout)
     with driver.bus:
         found = driver.scan(max_id)
     for i, model, fw, label in found:
@@ -83,9 +85,10 @@ def scan(port: Optional[str] = PortOpt, baud: Optional[int] = BaudOpt, params: O
 def assign_ids(servo: str = typer.Argument(..., help="The servo to number (u1..u6); connect it alone."),
                from_id: Optional[int] = typer.Option(None, "--from", help="Its present ID (default: the "
                                                      "factory ID).", min=0, max=253),
-               port: Optional[str] = PortOpt, baud: Optional[int] = BaudOpt, params: Optional[Path] = ParamsOpt):
+               port: Optional[str] = PortOpt, baud: Optional[int] = BaudOpt,
+         timeout: Optional[float] = TimeoutOpt, params: Optional[Path] = ParamsOpt):
     """Give the one servo on the bus the ID of a servo of the hand (u3 gets ID 3)."""
-    driver, _ = _open(port, baud, params)
+    driver, _ = _open(port, baud, params, timeout=timeout)
     with driver.bus:
         new = driver.assign_id(servo, driver.family.factory_id if from_id is None else from_id)
     typer.echo(f"servo {servo}: ID {new}")
@@ -93,20 +96,22 @@ def assign_ids(servo: str = typer.Argument(..., help="The servo to number (u1..u
 
 @drive_app.command("torque")
 def torque(state: str = typer.Argument(..., help="on or off"), port: Optional[str] = PortOpt,
-           baud: Optional[int] = BaudOpt, params: Optional[Path] = ParamsOpt):
+           baud: Optional[int] = BaudOpt,
+         timeout: Optional[float] = TimeoutOpt, params: Optional[Path] = ParamsOpt):
     """Torque on (hold) or off (limp: the pulleys turn by hand, for tensioning) on every servo."""
     from ..drive.protocol import DriveError
 
     if state not in ("on", "off"):
         raise DriveError(f"torque: {state!r}: expected on or off")
-    driver, _ = _open(port, baud, params)
+    driver, _ = _open(port, baud, params, timeout=timeout)
     with driver.bus:
         driver.torque(state == "on")
     typer.echo(f"torque {state} on every servo")
 
 
 @drive_app.command("zero")
-def zero(port: Optional[str] = PortOpt, baud: Optional[int] = BaudOpt, params: Optional[Path] = ParamsOpt,
+def zero(port: Optional[str] = PortOpt, baud: Optional[int] = BaudOpt,
+         timeout: Optional[float] = TimeoutOpt, params: Optional[Path] = ParamsOpt,
          zero_file: Optional[Path] = ZeroOpt,
          reverse: str = typer.Option("", "--reverse", help="Servos whose count falls as the digit flexes "
                                      "(u2,u5): mounted the other way round."),
@@ -124,7 +129,7 @@ def zero(port: Optional[str] = PortOpt, baud: Optional[int] = BaudOpt, params: O
     for n in names:
         if n not in labels:
             raise DriveError(f"--reverse {n!r}: not a servo (servos: {', '.join(labels)})")
-    driver, hand = _open(port, baud, params)
+    driver, hand = _open(port, baud, params, timeout=timeout)
     with driver.bus:
         z = driver.set_zero(tuple(-1 if s.label in names else 1 for s in SERVOS), torque_limit)
     path = zero_path(hand, zero_file)
@@ -139,6 +144,7 @@ def move(u: list[float] = typer.Argument(..., help="Six servo angles u1..u6 (rad
          clip: bool = typer.Option(False, "--clip", help="Clip angles outside the travel into it "
                                    "(default: refuse the command)."),
          speed: Optional[float] = SpeedOpt, port: Optional[str] = PortOpt, baud: Optional[int] = BaudOpt,
+         timeout: Optional[float] = TimeoutOpt,
          params: Optional[Path] = ParamsOpt, zero_file: Optional[Path] = ZeroOpt):
     """Ramp the six servos to the given angles, checked against the travel in the parameter file."""
     import numpy as np
@@ -150,7 +156,7 @@ def move(u: list[float] = typer.Argument(..., help="Six servo angles u1..u6 (rad
     if len(u) != 6:
         raise DriveError(f"move: give six servo angles u1..u6, not {len(u)}")
     target = np.asarray(u, float) * (DEG if degrees else 1.0)
-    driver, _ = _open(port, baud, params, zero_file, need_zero=True)
+    driver, _ = _open(port, baud, params, zero_file, need_zero=True, timeout=timeout)
     with driver.bus:
         got = driver.move(target, _speed(driver, speed, MOVE_SPEED), clip=clip)
     typer.echo(f"at {_angles(got)}")
@@ -161,6 +167,7 @@ def pose(name: str = typer.Argument(..., help="A posture's name (phantom-cad pos
          postures: Optional[Path] = typer.Option(None, "--postures", help="A TOML file of more postures.",
                                                  dir_okay=False),
          speed: Optional[float] = SpeedOpt, port: Optional[str] = PortOpt, baud: Optional[int] = BaudOpt,
+         timeout: Optional[float] = TimeoutOpt,
          params: Optional[Path] = ParamsOpt, zero_file: Optional[Path] = ZeroOpt):
     """Ramp the servos to a named posture's commands (the control law, as phantom-cad pose prints them);
     a posture the library refuses is not sent."""
@@ -168,7 +175,7 @@ def pose(name: str = typer.Argument(..., help="A posture's name (phantom-cad pos
     from ..drive.driver import MOVE_SPEED
     from ..drive.protocol import DriveError
 
-    driver, hand = _open(port, baud, params, zero_file, need_zero=True)
+    driver, hand = _open(port, baud, params, zero_file, need_zero=True, timeout=timeout)
     with driver.bus:
         library = P.load(hand, postures)
         if name not in library:
@@ -184,6 +191,7 @@ def pose(name: str = typer.Argument(..., help="A posture's name (phantom-cad pos
 @drive_app.command("sweep")
 def sweep(out: Path = typer.Option(..., "--out", help="The measurement CSV to write.", dir_okay=False),
           speed: Optional[float] = SpeedOpt, port: Optional[str] = PortOpt, baud: Optional[int] = BaudOpt,
+         timeout: Optional[float] = TimeoutOpt,
           params: Optional[Path] = ParamsOpt, zero_file: Optional[Path] = ZeroOpt):
     """The calibration sweep: each servo in turn up its travel and back at a set speed, the others at
     rest, recording every servo's own position and the time into the measurement CSV (docs/measurements.md)
@@ -198,7 +206,7 @@ def sweep(out: Path = typer.Option(..., "--out", help="The measurement CSV to wr
     from .calibration import CSV_MARKER, check_output
 
     check_output(out, CSV_MARKER, "a CSV written by phantom-cad")
-    driver, hand = _open(port, baud, params, zero_file, need_zero=True)
+    driver, hand = _open(port, baud, params, zero_file, need_zero=True, timeout=timeout)
     with driver.bus:
         v = _speed(driver, speed, SWEEP_SPEED)
         t, labels, u = driver.sweep(v)

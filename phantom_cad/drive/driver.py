@@ -39,6 +39,8 @@ RATE = 50.0
 #: default speeds (deg/s): a move, and a sweep (slow, for the camera)
 MOVE_SPEED = 90.0
 SWEEP_SPEED = 30.0
+#: how long a move waits at its end for the servos to reach the goal (s)
+SETTLE = 0.5
 ZERO_FORMAT = "phantom-cad drive zero 1"
 
 
@@ -245,7 +247,17 @@ class Driver:
                 _sleep_until(t0 + k / RATE)
                 if sample is not None:
                     sample(time.monotonic() - t0)
-            return self.positions()
+            goal = self.to_counts(target)
+            for k in range(steps + 1, steps + 1 + math.ceil(SETTLE * RATE)):
+                if np.abs(self.present() - goal).max() <= 1:
+                    break
+                _sleep_until(t0 + k / RATE)
+                if sample is not None:     # the end of the ramp, where the servos catch up: sampled too
+                    sample(time.monotonic() - t0)
+            end = self.positions()
+            if sample is not None:
+                sample(time.monotonic() - t0)
+            return end
         except DriveError as exc:
             raise self.stopped(exc) from None
 

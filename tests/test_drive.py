@@ -1,0 +1,209 @@
+"""``phantom-cad drive`` end to end on the simulated bus (phantom_cad/drive/simbus.py: a
+pseudo-terminal answering the Feetech protocol as six servos would): scan, zero, move, pose and
+sweep through the command line; each fault (a missing servo, a timeout, a corrupt checksum, a servo
+reporting overload) one ``error:`` line and exit 2, and a sweep stopped by one writes nothing; the
+sweep loads in compare and diagnose; and no command sequence puts a servo's goal outside its travel."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from phantom_cad import load_hand
+from phantom_cad import postures as P
+from phantom_cad.calibration.data import read_measurements, write_table
+from phantom_cad.cli import main
+from phantom_cad.drive.bus import Bus
+from phantom_cad.drive.driver import Driver, family_of, read_zero
+from phantom_cad.drive.protocol import DriveError
+from phantom_cad.drive.simbus import Fault, SimBus
+from phantom_cad.kinematics.topology import Q_COLUMNS, SERVOS
+from phantom_cad.units import DEG
+
+HAND = load_hand()
+FAMILY = family_of(HAND.params)[1]
+RES = FAMILY.span_deg * DEG / FAMILY.counts     # rad per count, from the catalogue
+FAST = "600"                                    # deg/s: the SCS0009's rated speed, the tests' ramps
+
+
+#: ms: the simulated servos answer within a millisecond, but a loaded test machine may delay its thread
+TIMEOUT = "1000"
+
+
+def run(argv, capsys):
+    argv = [str(a) for a in argv]
+    if argv[0] == "drive" and "--port" in argv and "--timeout" not in argv:
+        argv[2:2] = ["--timeout", TIMEOUT]
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    cap = capsys.readouterr()
+    return exit_.value.code, cap.out, cap.err
+
+
+@pytest.fixture
+def bus():
+    with SimBus(FAMILY) as sim:
+        yield sim
+
+
+@pytest.fixture
+def zeroed(bus, tmp_path, capsys):
+    """The simulated hand zeroed: (sim, zero file)."""
+    path = tmp_path / "zero.json"
+    code, out, err = run(["drive", "zero", "--port", bus.port, "--zero", path], capsys)
+    assert (code, err) == (0, ""), err
+    return bus, path
+
+
+def in_travel(sim, zero) -> bool:
+    """Every goal each simulated servo was given, as an angle, inside its servo's travel."""
+    for s in SERVOS:
+        goals = np.array(sim.servo(s.bus_id).goals, float)
+        u = zero.signs[s.index] * (goals - zero.counts[s.index]) * RES
+        if goals.size and not ((u >= HAND.u_min[s.index] - 1e-12) & (u <= HAND.u_max[s.index] + 1e-12)).all():
+            return False
+    return True
+
+
+def test_scan_finds_the_six_servos(bus, capsys):
+    code, out, err = run(["drive", "scan", "--port", bus.port, "--max-id", "7", "--timeout", "200"], capsys)
+    assert code == 0 and err == ""
+    for s in SERVOS:
+        assert f"ID {s.bus_id:3d}  model 9  firmware 3.10  {s.label}" in out
+    assert "all 6 servos answer" in out
+
+
+def test_zero_move_pose_sweep(zeroed, tmp_path, capsys):
+    sim, zero_file = zeroed
+    zero = read_zero(zero_file)
+    # the servos were at the middle of their counts when zeroed (the simulated servos start there)
+    assert zero.counts == (FAMILY.counts // 2,) * 6 and zero.signs == (1,) * 6
+    # the zero wrote each servo's travel as its angle limits
+    s3 = sim.servo(3)
+    assert s3._get(s3.table.max_angle) == FAMILY.counts // 2 + math.floor(HAND.u_max[2] / RES)
+
+    target = [5.0, 10.0, 20.0, 30.0, 40.0, 50.0]
+    code, out, err = run(["drive", "move", "--port", sim.port, "--zero", zero_file, "--degrees", "--speed", FAST,
+                          "--", *target], capsys)
+    assert code == 0 and err == ""
+    got = np.array([sim.servo(s.bus_id).goals[-1] for s in SERVOS]) - zero.counts
+    assert np.allclose(got * RES, np.radians(target), atol=RES / 2 + 1e-12)
+
+    library = P.load(HAND)
+    code, out, err = run(["drive", "pose", "fist", "--port", sim.port, "--zero", zero_file, "--speed", FAST], capsys)
+    assert code == 0 and err == ""
+    u = P.pose(HAND, library["fist"]).u
+    got = np.array([sim.servo(s.bus_id).goals[-1] for s in SERVOS]) - zero.counts
+    assert np.allclose(got * RES, u, atol=RES / 2 + 1e-12)
+
+    out_csv = tmp_path / "sweep.csv"
+    code, out, err = run(["drive", "sweep", "--out", out_csv, "--port", sim.port, "--zero", zero_file,
+                          "--speed", FAST], capsys)
+    assert code == 0 and err == "", err
+    m = read_measurements(out_csv)
+    assert m.sweep_ids == tuple(s.label for s in SERVOS) and m.measured.all() and np.isnan(m.q).all()
+    assert np.all(np.diff(m.t) > 0)
+    for s in SERVOS:    # each sweep moves its own servo over the travel, up then down, the others at rest
+        rows = m.sweep == s.index
+        assert m.u[rows, s.index].max() == pytest.approx(HAND.u_max[s.index], abs=2 * RES)
+        assert m.u[rows, s.index][-1] == pytest.approx(HAND.u_min[s.index], abs=2 * RES)
+        assert np.abs(np.delete(m.u[rows], s.index, axis=1) - np.delete(HAND.u_min, s.index)).max() < 2 * RES
+    assert in_travel(sim, zero)
+
+    # the camera's angles (here the model's) merged by time, then compare and diagnose read it as it is
+    cam = tmp_path / "camera.csv"
+    q = HAND.forward(m.u, compensated=True)
+    # the camera's frames half-way between the sweep's samples, plus one at its first sample: linear
+    # interpolation back at the samples is the mean of the two frames around each
+    t_cam = np.concatenate([m.t[:1], (m.t[1:] + m.t[:-1]) / 2, m.t[-1:] + 1.0])
+    q_cam = np.concatenate([q[:1], (q[1:] + q[:-1]) / 2, q[-1:]])
+    write_table(cam, {"t": t_cam, **{c: q_cam[:, j] for j, c in enumerate(Q_COLUMNS)}})
+    merged = tmp_path / "merged.csv"
+    code, out, err = run(["drive", "merge", "--sweep", out_csv, "--angles", cam, "--out", merged], capsys)
+    assert code == 0, err
+    mm = read_measurements(merged)
+    assert mm.q_columns == Q_COLUMNS
+    w = (m.t[1:-1] - t_cam[1:-2]) / (t_cam[2:-1] - t_cam[1:-2])
+    expect = q_cam[1:-2] + w[:, None] * (q_cam[2:-1] - q_cam[1:-2])
+    assert np.allclose(mm.q[1:-1], expect, atol=1e-9) and np.allclose(mm.q[0], q[0], atol=1e-12)
+    code, out, err = run(["compare", merged], capsys)
+    assert code == 0, err
+    code, out, err = run(["diagnose", merged], capsys)
+    assert code == 0, err
+
+
+def test_a_command_outside_the_travel_is_refused(zeroed, capsys):
+    sim, zero_file = zeroed
+    code, out, err = run(["drive", "move", "--port", sim.port, "--zero", zero_file, "--degrees",
+                          "--", 0, 0, 120, 0, 0, 0], capsys)
+    assert code == 2 and err.count("\n") == 1 and err.startswith("error: servo u3: 120.00 deg is outside its travel")
+    assert all(not s.goals for s in sim.servos)
+    code, out, err = run(["drive", "move", "--port", sim.port, "--zero", zero_file, "--degrees", "--clip",
+                          "--speed", FAST, "--", 0, 0, 120, 0, 0, 0], capsys)
+    assert code == 0
+    assert sim.servo(3).goals[-1] == FAMILY.counts // 2 + math.floor(HAND.u_max[2] / RES)
+
+
+FAULTS = {"missing": "no answer", "timeout": "no answer", "checksum": "corrupt status packet",
+          "overload": "reports overload"}
+
+
+@pytest.mark.parametrize("kind", sorted(FAULTS))
+def test_each_fault_is_one_error_line_and_a_sweep_writes_nothing(zeroed, tmp_path, capsys, kind):
+    sim, zero_file = zeroed
+    # after the zero: a missing servo from the first packet; the others part way through the sweep
+    sim.faults.append(Fault(kind, 4, after=sim.servo(4).seen + (0 if kind == "missing" else 40)))
+    out_csv = tmp_path / "sweep.csv"
+    code, out, err = run(["drive", "sweep", "--out", out_csv, "--port", sim.port, "--zero", zero_file,
+                          "--speed", FAST], capsys)
+    assert code == 2 and err.count("\n") == 1, err
+    assert err.startswith("error: servo u4 (ID 4) on ") and FAULTS[kind] in err
+    assert "Traceback" not in err
+    assert not out_csv.exists() and not list(tmp_path.glob(".sweep.csv*"))
+    if kind == "missing":
+        assert all(not s.goals for s in sim.servos)        # nothing was moved
+    if kind == "overload":
+        assert "torque off on every servo" in err
+        deadline = time.monotonic() + 2.0      # the broadcast has no answer: the simulated bus's thread takes it
+        while any(s.mem[s.table.torque_enable] for s in sim.servos) and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert all(s.mem[s.table.torque_enable] == 0 for s in sim.servos)
+    elif kind != "missing":
+        assert "hold their last goal" in err
+    assert in_travel(sim, read_zero(zero_file))
+
+
+def test_no_port_is_one_error_line(tmp_path, capsys):
+    code, out, err = run(["drive", "scan", "--port", tmp_path / "ttyNONE"], capsys)
+    assert code == 2 and err.count("\n") == 1 and err.startswith(f"error: port {tmp_path / 'ttyNONE'}: cannot be opened")
+    code, out, err = run(["drive", "scan"], capsys)
+    assert code == 2 and "--port" in err
+
+
+POSES = {n: P.pose(HAND, p).u for n, p in P.load(HAND).items() if n in ("fist", "two", "opposition_index")}
+angle = st.one_of(st.floats(-4.0, 4.0), st.just(math.nan), st.just(math.inf), st.floats(-1.0, 2.0))
+command = st.one_of(st.tuples(st.just("move"), st.lists(angle, min_size=6, max_size=6), st.booleans()),
+                    st.tuples(st.just("pose"), st.sampled_from(sorted(POSES)), st.just(False)))
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.lists(command, min_size=1, max_size=4))
+def test_no_command_sequence_drives_a_servo_outside_its_travel(zeroed, commands):
+    sim, zero_file = zeroed
+    zero = read_zero(zero_file)
+    with Bus(sim.port, FAMILY.baud, FAMILY.big_endian, float(TIMEOUT) / 1e3) as b:
+        d = Driver(b, HAND, zero)
+        for kind, value, clip in commands:
+            u = POSES[value] if kind == "pose" else value
+            try:
+                d.move(u, d.speed(600.0), clip=clip)
+            except DriveError as exc:
+                u = np.asarray(u)
+                ok = np.isfinite(u).all() and ((u >= HAND.u_min) & (u <= HAND.u_max)).all()
+                assert (not clip or not np.isfinite(u).all()) and not ok, exc
+    assert in_travel(sim, zero)
