@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -207,3 +208,26 @@ def test_no_command_sequence_drives_a_servo_outside_its_travel(zeroed, commands)
                 ok = np.isfinite(u).all() and ((u >= HAND.u_min) & (u <= HAND.u_max)).all()
                 assert (not clip or not np.isfinite(u).all()) and not ok, exc
     assert in_travel(sim, zero)
+
+
+def test_assign_ids_numbers_the_one_servo_on_the_bus(capsys):
+    with SimBus(FAMILY, ids=[FAMILY.factory_id]) as sim:
+        code, out, err = run(["drive", "assign-ids", "u3", "--port", sim.port], capsys)
+        assert (code, err) == (0, "") and "servo u3: ID 3" in out
+        assert [s.servo_id for s in sim.servos] == [3]
+        code, out, err = run(["drive", "assign-ids", "u4", "--port", sim.port, "--timeout", "200"], capsys)
+        assert code == 2 and err.startswith(f"error: no servo answers at ID {FAMILY.factory_id} on {sim.port}")
+        code, out, err = run(["drive", "scan", "--port", sim.port, "--max-id", "6", "--timeout", "200"], capsys)
+        assert code == 2 and "ID   3  model 9" in out and err.count("\n") == 1
+        assert "servo u1 (ID 1)" in err and "servo u3" not in err
+
+
+def test_a_servo_without_a_bus_is_refused(tmp_path, capsys):
+    from phantom_cad.params import servos
+
+    text = (Path(HAND.params.source).read_text()).replace("[servo]\n", '[servo]\nmodel = "mg90s"\n', 1)
+    params = tmp_path / "pwm.toml"
+    params.write_text(text)
+    code, out, err = run(["drive", "scan", "--port", "/dev/null", "--params", params], capsys)
+    assert code == 2 and err.count("\n") == 1 and "[servo] is mg90s, not a bus servo" in err
+    assert "mg90s" not in servos.BUS

@@ -48,7 +48,8 @@ def family_of(params) -> tuple[str, catalogue.BusFamily]:
     """The bus family of the parameter file's servo; DriveError for a servo without one."""
     name = catalogue.named(params.servo)
     if name not in catalogue.BUS:
-        raise DriveError(f"{params.source}: [servo] is {name or 'a servo of the file own'}, not a bus servo "
+        what = name or "the file's own servo"
+        raise DriveError(f"{params.source}: [servo] is {what}, not a bus servo "
                          f"phantom-cad drive speaks to (it drives: {', '.join(catalogue.BUS)})")
     key = catalogue.BUS[name]
     return key, catalogue.BUS_FAMILIES[key]
@@ -189,11 +190,12 @@ class Driver:
         if servo is None:
             raise DriveError(f"no servo {label!r} (servos: {', '.join(s.label for s in SERVOS)})")
         if not self.bus.ping(old_id):
-            raise DriveError(f"no servo answers at ID {old_id} on {self.bus.port}: connect the one servo to "
-                             f"number, alone (a new servo has ID {self.family.factory_id})")
+            raise DriveError(f"no servo answers at ID {old_id} on {self.bus.port}: connect the servo to number "
+                             f"alone, and give its present ID with --from (a new servo has ID "
+                             f"{self.family.factory_id})")
         if old_id != servo.bus_id and self.bus.ping(servo.bus_id):
             raise DriveError(f"ID {servo.bus_id} ({label}) already answers on {self.bus.port}: connect only the "
-                             "servo to number")
+                             "servo to number, alone on the bus")
         if old_id != servo.bus_id:
             self._eeprom(old_id, self.table.id, bytes([servo.bus_id]), servo.bus_id)
         if not self.bus.ping(servo.bus_id):
