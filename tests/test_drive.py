@@ -95,6 +95,13 @@ def test_zero_move_pose_sweep(zeroed, tmp_path, capsys):
     got = np.array([sim.servo(s.bus_id).goals[-1] for s in SERVOS]) - zero.counts
     assert np.allclose(got * RES, np.radians(target), atol=RES / 2 + 1e-12)
 
+    # torque off: limp, the goals as they were; on: held where they are
+    for state in ("off", "on"):
+        code, out, err = run(["drive", "torque", state, "--port", sim.port, "--zero", zero_file], capsys)
+        assert (code, err) == (0, "") and all(s.mem[s.table.torque_enable] == (state == "on") for s in sim.servos)
+    held = np.array([sim.servo(s.bus_id).goals[-1] for s in SERVOS]) - zero.counts
+    assert np.allclose(held * RES, np.radians(target), atol=1.5 * RES)
+
     library = P.load(HAND)
     code, out, err = run(["drive", "pose", "fist", "--port", sim.port, "--zero", zero_file, "--speed", FAST], capsys)
     assert code == 0 and err == ""
@@ -189,7 +196,8 @@ def test_no_port_is_one_error_line(tmp_path, capsys):
 POSES = {n: P.pose(HAND, p).u for n, p in P.load(HAND).items() if n in ("fist", "two", "opposition_index")}
 angle = st.one_of(st.floats(-4.0, 4.0), st.just(math.nan), st.just(math.inf), st.floats(-1.0, 2.0))
 command = st.one_of(st.tuples(st.just("move"), st.lists(angle, min_size=6, max_size=6), st.booleans()),
-                    st.tuples(st.just("pose"), st.sampled_from(sorted(POSES)), st.just(False)))
+                    st.tuples(st.just("pose"), st.sampled_from(sorted(POSES)), st.just(False)),
+                    st.tuples(st.just("hold"), st.none(), st.just(False)))
 
 
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
@@ -200,6 +208,9 @@ def test_no_command_sequence_drives_a_servo_outside_its_travel(zeroed, commands)
     with Bus(sim.port, FAMILY.baud, FAMILY.big_endian, float(TIMEOUT) / 1e3) as b:
         d = Driver(b, HAND, zero)
         for kind, value, clip in commands:
+            if kind == "hold":
+                d.hold(d.speed(600.0))
+                continue
             u = POSES[value] if kind == "pose" else value
             try:
                 d.move(u, d.speed(600.0), clip=clip)

@@ -96,16 +96,21 @@ def assign_ids(servo: str = typer.Argument(..., help="The servo to number (u1..u
 
 @drive_app.command("torque")
 def torque(state: str = typer.Argument(..., help="on or off"), port: Optional[str] = PortOpt,
-           baud: Optional[int] = BaudOpt,
-         timeout: Optional[float] = TimeoutOpt, params: Optional[Path] = ParamsOpt):
-    """Torque on (hold) or off (limp: the pulleys turn by hand, for tensioning) on every servo."""
+           baud: Optional[int] = BaudOpt, timeout: Optional[float] = TimeoutOpt,
+           params: Optional[Path] = ParamsOpt, zero_file: Optional[Path] = ZeroOpt):
+    """Torque off (limp: the pulleys turn by hand, for tensioning) or on (hold where they are, or at
+    the nearest end of the travel, which needs the zero file) on every servo."""
+    from ..drive.driver import MOVE_SPEED
     from ..drive.protocol import DriveError
 
     if state not in ("on", "off"):
         raise DriveError(f"torque: {state!r}: expected on or off")
-    driver, _ = _open(port, baud, params, timeout=timeout)
+    driver, _ = _open(port, baud, params, zero_file, need_zero=state == "on", timeout=timeout)
     with driver.bus:
-        driver.torque(state == "on")
+        if state == "on":
+            driver.hold(_speed(driver, None, MOVE_SPEED))
+        else:
+            driver.torque(False)
     typer.echo(f"torque {state} on every servo")
 
 

@@ -181,8 +181,14 @@ class Driver:
         return self.to_angles(self.present())
 
     def torque(self, on: bool) -> None:
+        """Torque on or off on every servo (on: each servo goes to its goal register: see :meth:`hold`)."""
         self.present()      # every servo answers before any is written
         self.bus.sync_write(self.table.torque_enable, {s.bus_id: bytes([int(on)]) for s in SERVOS})
+
+    def hold(self, speed: float) -> np.ndarray:
+        """Torque on, each servo held where it is, or brought at ``speed`` to the nearest end of its
+        travel if it is outside."""
+        return self.move(np.clip(self.positions(), self.lo, self.hi), speed)
 
     def assign_id(self, label: str, old_id: int) -> int:
         """Give the one servo on the bus at ``old_id`` the bus ID of servo ``label``."""
@@ -243,6 +249,8 @@ class Driver:
         steps = max(1, math.ceil(float(np.abs(target - start).max()) / speed * RATE))
         t0 = time.monotonic()
         try:
+            # the goal registers first: torque on sends a servo to whatever its register holds
+            self._goals(start)
             self.bus.sync_write(self.table.torque_enable, {s.bus_id: b"\x01" for s in SERVOS})
             for k in range(1, steps + 1):
                 self._goals(start + (target - start) * (k / steps))
