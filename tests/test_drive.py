@@ -7,6 +7,9 @@ sweep loads in compare and diagnose; and no command sequence puts a servo's goal
 from __future__ import annotations
 
 import math
+import os
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -242,3 +245,17 @@ def test_a_servo_without_a_bus_is_refused(tmp_path, capsys):
     code, out, err = run(["drive", "scan", "--port", "/dev/null", "--params", params], capsys)
     assert code == 2 and err.count("\n") == 1 and "[servo] is mg90s, not a bus servo" in err
     assert "mg90s" not in servos.BUS
+
+
+def test_drive_imports_no_cad_library():
+    code = ("import sys\nfrom phantom_cad import load_params\nfrom phantom_cad.cli import main\n"
+            "from phantom_cad.drive.driver import family_of\nfrom phantom_cad.drive.simbus import SimBus\n"
+            "with SimBus(family_of(load_params())[1]) as sim:\n"
+            "    try:\n"
+            "        main(['drive', 'scan', '--port', sim.port, '--max-id', '6', '--timeout', '1000'])\n"
+            "    except SystemExit as e:\n"
+            "        assert e.code == 0, e.code\n"
+            "assert not any(m.split('.')[0] in ('build123d', 'OCP', 'cadquery', 'mujoco') for m in sys.modules)\n")
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1]))
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert proc.returncode == 0, proc.stderr

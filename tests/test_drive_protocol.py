@@ -78,3 +78,37 @@ def test_word_order_is_the_familys():
     assert P.word(0x0123, True) == b"\x01\x23" and P.word(0x0123, False) == b"\x23\x01"
     assert P.unword(b"\x01\x23", True) == 0x0123 == P.unword(b"\x23\x01", False)
     assert servos.BUS_FAMILIES[servos.BUS[servos.DEFAULT]].big_endian   # the SCS0009: SCS, high byte first
+
+
+class Replay(Capture):
+    """The SDK's port, answering with ``data``."""
+
+    def __init__(self, data: bytes):
+        super().__init__()
+        self.data = data
+
+    def readPort(self, length):
+        out, self.data = self.data[:length], self.data[length:]
+        return out
+
+
+@pytest.mark.parametrize("family", sorted(servos.BUS_FAMILIES))
+def test_the_sdk_reads_our_status_packets(family):
+    # the simulated bus answers with P.packet(id, error, params): the SDK's receiver takes it, its
+    # error byte and its word in the family's order; and refuses it with a wrong checksum
+    big = servos.BUS_FAMILIES[family].big_endian
+    ph, _ = sdk(big)
+    frame = P.packet(4, 0x20, P.word(700, big))
+    value, result, error = ph.read2ByteRx(Replay(frame), 4)
+    assert (value, result, error) == (700, scs.COMM_SUCCESS, 0x20)
+    _, result, _ = ph.read2ByteRx(Replay(frame[:-1] + bytes([frame[-1] ^ 1])), 4)
+    assert result == scs.COMM_RX_CORRUPT
+
+
+def test_sync_read_matches_feetechs_sdk():
+    ph, port = sdk(False)
+    sync = scs.GroupSyncRead(port, ph, P.CONTROL_TABLES["sts"].present_position, 2)
+    for i in (1, 2, 6):
+        sync.addParam(i)
+    sync.txPacket()
+    assert port.sent == [P.sync_read(P.CONTROL_TABLES["sts"].present_position, 2, (1, 2, 6))]
