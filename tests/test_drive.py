@@ -64,6 +64,17 @@ def zeroed(bus, tmp_path, capsys):
     return bus, path
 
 
+def eventually(condition, within: float = 2.0) -> bool:
+    """Whether ``condition()`` holds within ``within`` seconds: a broadcast packet has no answer, so
+    the command returns before the simulated bus's thread has taken it."""
+    deadline = time.monotonic() + within
+    while not condition():
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.01)
+    return True
+
+
 def in_travel(sim, zero) -> bool:
     """Every goal each simulated servo was given, as an angle, inside its servo's travel."""
     for s in SERVOS:
@@ -78,7 +89,7 @@ def test_scan_finds_the_six_servos(bus, capsys):
     code, out, err = run(["drive", "scan", "--port", bus.port, "--max-id", "7", "--timeout", "200"], capsys)
     assert code == 0 and err == ""
     for s in SERVOS:
-        assert f"ID {s.bus_id:3d}  model 9  firmware 3.10  {s.label}" in out
+        assert f"ID {s.bus_id:3d}  model 9  firmware 3.10  position {FAMILY.counts // 2:4d}  {s.label}" in out
     assert "all 6 servos answer" in out
 
 
@@ -101,7 +112,8 @@ def test_zero_move_pose_sweep(zeroed, tmp_path, capsys):
     # torque off: limp, the goals as they were; on: held where they are
     for state in ("off", "on"):
         code, out, err = run(["drive", "torque", state, "--port", sim.port, "--zero", zero_file], capsys)
-        assert (code, err) == (0, "") and all(s.mem[s.table.torque_enable] == (state == "on") for s in sim.servos)
+        assert (code, err) == (0, "")
+        assert eventually(lambda: all(s.mem[s.table.torque_enable] == (state == "on") for s in sim.servos))
     held = np.array([sim.servo(s.bus_id).goals[-1] for s in SERVOS]) - zero.counts
     assert np.allclose(held * RES, np.radians(target), atol=1.5 * RES)
 
@@ -180,10 +192,7 @@ def test_each_fault_is_one_error_line_and_a_sweep_writes_nothing(zeroed, tmp_pat
         assert all(not s.goals for s in sim.servos)        # nothing was moved
     if kind == "overload":
         assert "torque off on every servo" in err
-        deadline = time.monotonic() + 2.0      # the broadcast has no answer: the simulated bus's thread takes it
-        while any(s.mem[s.table.torque_enable] for s in sim.servos) and time.monotonic() < deadline:
-            time.sleep(0.01)
-        assert all(s.mem[s.table.torque_enable] == 0 for s in sim.servos)
+        assert eventually(lambda: all(s.mem[s.table.torque_enable] == 0 for s in sim.servos))
     elif kind != "missing":
         assert "hold their last goal" in err
     assert in_travel(sim, read_zero(zero_file))

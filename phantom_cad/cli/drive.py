@@ -72,8 +72,9 @@ def scan(port: Optional[str] = PortOpt, baud: Optional[int] = BaudOpt,
     driver, _ = _open(port, baud, params, timeout=timeout)
     with driver.bus:
         found = driver.scan(max_id)
-    for i, model, fw, label in found:
-        typer.echo(f"ID {i:3d}  model {model}  firmware {fw[0]}.{fw[1]}  {label or '(not one of the hand)'}")
+    for i, model, fw, count, label in found:
+        typer.echo(f"ID {i:3d}  model {model}  firmware {fw[0]}.{fw[1]}  position {count:4d}  "
+                   f"{label or '(not one of the hand)'}")
     missing = [s for s in SERVOS if s.bus_id not in {f[0] for f in found}]
     if missing:
         raise DriveError(f"{port}: no answer from " + ", ".join(f"servo {s.label} (ID {s.bus_id})" for s in missing)

@@ -163,14 +163,15 @@ class Driver:
 
     # -- bus -------------------------------------------------------------------------
 
-    def scan(self, max_id: int) -> list[tuple[int, int, tuple[int, int], str | None]]:
-        """(ID, model number, firmware (major, minor), servo label or None) of every servo
-        answering at IDs 0..max_id."""
+    def scan(self, max_id: int) -> list[tuple[int, int, tuple[int, int], int, str | None]]:
+        """(ID, model number, firmware (major, minor), present position count, servo label or None)
+        of every servo answering at IDs 0..max_id."""
         found = []
         for i in range(max_id + 1):
             if self.bus.ping(i):
                 fw = self.bus.read(i, self.table.firmware, 2)
-                found.append((i, self.bus.read_word(i, self.table.model), (fw[0], fw[1]), self.ids.get(i)))
+                found.append((i, self.bus.read_word(i, self.table.model), (fw[0], fw[1]),
+                              self.bus.read_word(i, self.table.present_position), self.ids.get(i)))
         return found
 
     def present(self) -> np.ndarray:

@@ -18,6 +18,7 @@ import time
 import tty
 from dataclasses import dataclass, field
 
+from ..params import servos as catalogue
 from . import protocol as P
 
 FAULTS = ("missing", "timeout", "checksum", "overload")
@@ -96,11 +97,12 @@ class SimServo:
 
 
 class SimBus:
-    """Six (or ``ids``) simulated servos of a family on a pseudo-terminal: ``port`` is its name."""
+    """Six (or ``ids``) simulated servos of a catalogue bus family (``servos.BUS_FAMILIES``) on a
+    pseudo-terminal: ``port`` is its name."""
 
     def __init__(self, family, ids=range(1, 7), faults=(), speed_deg_s: float = 600.0):
         self.family = family
-        self.table = P.CONTROL_TABLES["sts" if not family.big_endian else "scs"]
+        self.table = P.CONTROL_TABLES[next(k for k, f in catalogue.BUS_FAMILIES.items() if f == family)]
         speed = speed_deg_s * family.counts / family.span_deg
         self.servos = [SimServo(i, family.counts, family.big_endian, speed, self.table) for i in ids]
         self.faults = list(faults)
