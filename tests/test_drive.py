@@ -203,6 +203,8 @@ def test_no_port_is_one_error_line(tmp_path, capsys):
     assert code == 2 and err.count("\n") == 1 and err.startswith(f"error: port {tmp_path / 'ttyNONE'}: cannot be opened")
     code, out, err = run(["drive", "scan"], capsys)
     assert code == 2 and "--port" in err
+    code, out, err = run(["drive", "scan", "--port", tmp_path, "--timeout", "0"], capsys)
+    assert code == 2 and err == "error: --timeout 0: must be a positive number of milliseconds\n"
 
 
 POSES = {n: P.pose(HAND, p).u for n, p in P.load(HAND).items() if n in ("fist", "two", "opposition_index")}
@@ -268,3 +270,11 @@ def test_drive_imports_no_cad_library():
     env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1]))
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
     assert proc.returncode == 0, proc.stderr
+
+
+def test_moving_needs_the_zero_file(bus, tmp_path, capsys):
+    missing = tmp_path / "none.zero.json"
+    code, out, err = run(["drive", "move", "--port", bus.port, "--zero", missing, "--", 0, 0, 0, 0, 0, 0], capsys)
+    assert code == 2 and err == (f"error: {missing}: no zero file: zero the servos first (phantom-cad drive zero; "
+                                 "docs/driving.md)\n")
+    assert all(not s.goals for s in bus.servos)

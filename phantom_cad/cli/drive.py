@@ -35,6 +35,8 @@ def _open(port, baud, params, zero_file=None, need_zero: bool = False, timeout=N
     zero = read_zero(zero_path(hand, zero_file)) if need_zero else None
     if port is None:
         raise DriveError("drive: give the bus adapter's serial port with --port (e.g. /dev/ttyUSB0)")
+    if timeout is not None and not 0 < timeout < float("inf"):
+        raise DriveError(f"--timeout {timeout:g}: must be a positive number of milliseconds")
     bus = Bus(port, baud or family.baud, family.big_endian, TIMEOUT if timeout is None else timeout / 1e3)
     try:
         return Driver(bus, hand, zero), hand
