@@ -24,6 +24,7 @@ from phantom_cad.calibration.data import read_measurements, write_table
 from phantom_cad.cli import main
 from phantom_cad.drive.bus import Bus
 from phantom_cad.drive.driver import Driver, family_of, read_zero
+from phantom_cad.drive import protocol as P_
 from phantom_cad.drive.protocol import DriveError
 from phantom_cad.drive.simbus import Fault, SimBus
 from phantom_cad.kinematics.topology import Q_COLUMNS, SERVOS
@@ -32,6 +33,8 @@ from phantom_cad.units import DEG
 HAND = load_hand()
 FAMILY = family_of(HAND.params)[1]
 RES = FAMILY.span_deg * DEG / FAMILY.counts     # rad per count, from the catalogue
+#: the servo the tests single out, by its label
+U3 = next(s for s in SERVOS if s.label == "u3")
 FAST = "600"                                    # deg/s: the SCS0009's rated speed, the tests' ramps
 
 
@@ -99,8 +102,9 @@ def test_zero_move_pose_sweep(zeroed, tmp_path, capsys):
     # the servos were at the middle of their counts when zeroed (the simulated servos start there)
     assert zero.counts == (FAMILY.counts // 2,) * 6 and zero.signs == (1,) * 6
     # the zero wrote each servo's travel as its angle limits
-    s3 = sim.servo(3)
-    assert s3._get(s3.table.max_angle) == FAMILY.counts // 2 + math.floor(HAND.u_max[2] / RES)
+    s3 = sim.servo(U3.bus_id)
+    limit = P_.unword(s3.mem[s3.table.max_angle:s3.table.max_angle + 2], FAMILY.big_endian)
+    assert limit == FAMILY.counts // 2 + math.floor(HAND.u_max[U3.index] / RES)
 
     target = [5.0, 10.0, 20.0, 30.0, 40.0, 50.0]
     code, out, err = run(["drive", "move", "--port", sim.port, "--zero", zero_file, "--degrees", "--speed", FAST,
@@ -138,6 +142,10 @@ def test_zero_move_pose_sweep(zeroed, tmp_path, capsys):
         assert np.abs(np.delete(m.u[rows], s.index, axis=1) - np.delete(HAND.u_min, s.index)).max() < 2 * RES
     assert in_travel(sim, zero)
 
+    # the sweep alone has no joint angle to compare with: compare says so
+    code, out, err = run(["compare", out_csv], capsys)
+    assert code == 2 and "no joint angle was measured" in err and err.count("\n") == 1
+
     # the camera's angles (here the model's) merged by time, then compare and diagnose read it as it is
     cam = tmp_path / "camera.csv"
     q = HAND.forward(m.u, compensated=True)
@@ -169,7 +177,7 @@ def test_a_command_outside_the_travel_is_refused(zeroed, capsys):
     code, out, err = run(["drive", "move", "--port", sim.port, "--zero", zero_file, "--degrees", "--clip",
                           "--speed", FAST, "--", 0, 0, 120, 0, 0, 0], capsys)
     assert code == 0
-    assert sim.servo(3).goals[-1] == FAMILY.counts // 2 + math.floor(HAND.u_max[2] / RES)
+    assert sim.servo(U3.bus_id).goals[-1] == FAMILY.counts // 2 + math.floor(HAND.u_max[U3.index] / RES)
 
 
 FAULTS = {"missing": "no answer", "timeout": "no answer", "checksum": "corrupt status packet",
