@@ -286,3 +286,41 @@ def test_moving_needs_the_zero_file(bus, tmp_path, capsys):
     assert code == 2 and err == (f"error: {missing}: no zero file: zero the servos first (phantom-cad drive zero; "
                                  "docs/driving.md)\n")
     assert all(not s.goals for s in bus.servos)
+
+
+def test_a_reversed_servo_counts_down_as_it_flexes(bus, tmp_path, capsys):
+    path = tmp_path / "zero.json"
+    code, out, err = run(["drive", "zero", "--port", bus.port, "--zero", path, "--reverse", U3.label], capsys)
+    assert (code, err) == (0, "")
+    zero = read_zero(path)
+    assert [zero.signs[s.index] for s in SERVOS] == [-1 if s is U3 else 1 for s in SERVOS]
+    code, out, err = run(["drive", "move", "--port", bus.port, "--zero", path, "--degrees", "--speed", FAST, "--",
+                          *[30.0 if s is U3 else 0.0 for s in SERVOS]], capsys)
+    assert (code, err) == (0, "")
+    assert bus.servo(U3.bus_id).goals[-1] == zero.counts[U3.index] - round(math.radians(30.0) / RES)
+    s = bus.servo(U3.bus_id)
+    low = P_.unword(s.mem[s.table.min_angle:s.table.min_angle + 2], FAMILY.big_endian)
+    assert low == zero.counts[U3.index] - math.floor(HAND.u_max[U3.index] / RES)
+    assert in_travel(bus, zero)
+
+
+def test_merge_interpolates_by_time():
+    from phantom_cad.drive.merge import merge_by_time
+
+    class Sweep:
+        t = np.array([-0.5, 0.0, 0.5, 1.5, 2.0, 3.0])
+
+        def __len__(self):
+            return len(self.t)
+
+    class Angles:
+        path = "camera.csv"
+        values = {"t": np.array([0.0, 1.0, 2.0]), "q3": np.array([0.0, 1.0, np.nan]),
+                  "q15": np.array([2.0, 4.0, 6.0])}
+
+    q, columns = merge_by_time(Sweep(), Angles())
+    assert columns == ["q3", "q15"]
+    i3, i15 = Q_COLUMNS.index("q3"), Q_COLUMNS.index("q15")
+    assert np.array_equal(q[:, i3], [np.nan, 0.0, 0.5, np.nan, np.nan, np.nan], equal_nan=True)
+    assert np.array_equal(q[:, i15], [np.nan, 2.0, 3.0, 5.0, 6.0, np.nan], equal_nan=True)
+    assert np.isnan(np.delete(q, [i3, i15], axis=1)).all()
