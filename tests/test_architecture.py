@@ -24,8 +24,8 @@ FOUNDATION = {"phantom_cad.units", "phantom_cad.canon", "phantom_cad.errors", "p
               "phantom_cad.kinematics.topology", "phantom_cad.kinematics.closed_form",
               "phantom_cad.kinematics.dimensions", "phantom_cad.kinematics.hand_params"}
 #: package -> layer; packages on one layer must not import each other
-LAYERS = {"params": 1, "kinematics": 2, "calibration": 3, "cad": 3, "sizing": 3, "postures": 3, "export": 4, "": 5,
-          "retargeting": 5, "cli": 6, "interop": 6, "__main__": 7}
+LAYERS = {"params": 1, "kinematics": 2, "calibration": 3, "cad": 3, "sizing": 3, "postures": 3, "export": 4,
+          "drive": 4, "": 5, "retargeting": 5, "cli": 6, "interop": 6, "__main__": 7}
 CAD_LIBRARIES = {"build123d", "cadquery", "OCP", "manifold3d", "trimesh"}
 #: importlib's functions that load a module by its name (the first argument)
 IMPORTLIB_LOADERS = {"import_module", "find_spec"}

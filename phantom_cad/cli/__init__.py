@@ -323,6 +323,9 @@ app.command("pose")(_pose)
 from .force import force as _force  # noqa: E402
 
 app.command("force")(_force)
+from .drive import drive_app as _drive_app  # noqa: E402
+
+app.add_typer(_drive_app, name="drive")
 
 from .retarget import retarget as _retarget  # noqa: E402
 

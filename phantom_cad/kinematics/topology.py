@@ -43,6 +43,12 @@ class Servo:
         return f"u{self.index + 1}"
 
     @property
+    def bus_id(self) -> int:
+        """The servo's ID on the serial bus (``phantom-cad drive assign-ids``): its number, 1..6,
+        as in its label."""
+        return self.index + 1
+
+    @property
     def name(self) -> str:
         return f"{self.digit}_flexion" if self.drive == "tendon" else f"{self.digit}_abduction"
 

@@ -76,6 +76,42 @@ CATALOGUE: dict[str, CatalogueServo] = {
 DEFAULT = "scs0009"
 
 
+@dataclass(frozen=True)
+class BusFamily:
+    """A serial-bus servo family as ``phantom_cad.drive`` speaks to it: the Feetech protocol's
+    packets are the same for the families; the word order and the position resolution are not."""
+
+    title: str
+    #: two-byte registers: high byte first (SCS) or low byte first (STS)
+    big_endian: bool
+    #: position counts over ``span_deg`` of output rotation, counted from 0
+    counts: int
+    span_deg: float
+    #: the factory baud rate and ID of a new servo
+    baud: int
+    factory_id: int
+    #: whether the family answers SYNC_READ (one packet for every servo's registers)
+    sync_read: bool
+    source: str
+
+
+#: by the catalogue's ``bus``: the buses ``phantom-cad drive`` speaks (a PWM or Dynamixel servo has none)
+BUS_FAMILIES: dict[str, BusFamily] = {
+    "feetech-scs": BusFamily("Feetech SCS", True, 1024, 300.0, 1_000_000, 1, False,
+                     "Feetech SCS series memory table (SCSCL): 10-bit position over 300 deg, big-endian words"),
+    "feetech-sts": BusFamily("Feetech STS/SMS", False, 4096, 360.0, 1_000_000, 1, True,
+                     "Feetech STS series memory table (SMS_STS): 12-bit position over 360 deg, little-endian words"),
+}
+
+
+
+def bus_family(name: str | None) -> str | None:
+    """The bus family (a :data:`BUS_FAMILIES` key) of catalogue servo ``name``; None when it has
+    none ``phantom-cad drive`` speaks, or for a servo of the file's own."""
+    bus = CATALOGUE[name].bus if name in CATALOGUE else None
+    return bus if bus in BUS_FAMILIES else None
+
+
 def names() -> tuple[str, ...]:
     return tuple(CATALOGUE)
 
