@@ -51,14 +51,14 @@ def part_cache(shared_root):
 
 def _export(shared_root: Path, part_cache: Path, kind: str):
     """The BuildResult of one of the hands of ``tests.support.hands``, built once per test run with
-    the run's part cache (jobs = 2): the reference hands sliced when PrusaSlicer is installed (the
-    description's masses then come from the slicer), ``"slender"`` not."""
+    the run's part cache (jobs = 2): the default hand sliced when PrusaSlicer is installed (its
+    description's masses then come from the slicer), the others not (``hands.SLICED``)."""
     from phantom_cad.export.pipeline import build_hand
 
     def make():
         path, side = hands.hand_source(kind)
         return build_hand(path, shared_root / "exports" / kind, side=side, cache_dir=part_cache, jobs=2,
-                          slice=None if kind in hands.HANDS else False)
+                          slice=None if kind in hands.SLICED else False)
     return shared.once(shared_root, f"export-{kind}", make)
 
 
