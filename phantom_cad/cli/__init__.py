@@ -323,6 +323,9 @@ app.command("pose")(_pose)
 from .force import force as _force  # noqa: E402
 
 app.command("force")(_force)
+from .grasp import grasp as _grasp  # noqa: E402
+
+app.command("grasp")(_grasp)
 
 
 def main(argv: Optional[list[str]] = None) -> None:
