@@ -64,6 +64,8 @@ DIRECTIONS = {"-z": (0, 0, -1), "+z": (0, 0, 1), "-y": (0, -1, 0), "+y": (0, 1, 
 HELD_MM = 5.0
 #: the clearance (m) between the placed object and the surface it is put against
 GAP = 0.0005
+#: the object's colour in pictures (yellow: none of the parts is)
+COLOUR = (0.95, 0.85, 0.2, 1.0)
 #: segments of the mesh profiles (the elliptic handle) and boxes of the tape roll's annulus
 PROFILE_SEGMENTS, ANNULUS_BOXES, RING_CAPSULES = 32, 16, 12
 
@@ -341,7 +343,7 @@ class Result:
     mass_g: float
     size_mm: dict                    # the object's sizes on this hand
     released_mm: float               # how far it moved when let go (gravity off)
-    contacts: tuple[str, ...]        # the hand's bodies touching it when closed
+    contacts: tuple[str, ...]        # the hand's bodies touching it once let go (gravity off)
     directions: dict                 # direction name -> Direction
     torque: np.ndarray               # the servos' torques when closed (N m, servo order)
     stall: np.ndarray                # their stall torques (N m)
@@ -363,7 +365,7 @@ class Result:
 
 def _add(mujoco, spec, body, shapes_) -> None:
     for i, sh in enumerate(shapes_):
-        kw = dict(name=f"object_{i}", pos=list(sh.pos), quat=list(sh.quat), density=sh.density)
+        kw = dict(name=f"object_{i}", pos=list(sh.pos), quat=list(sh.quat), density=sh.density, rgba=list(COLOUR))
         if sh.type == "mesh":
             mesh = spec.add_mesh(name=f"object_mesh_{i}", uservert=list(sh.vertices))
             body.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh.name, **kw)
@@ -386,9 +388,10 @@ def _build(shapes_):
     return build
 
 
-def run(scene, hand, grasp: Grasp, library: dict) -> Result:
+def run(scene, hand, grasp: Grasp, library: dict, closed=None) -> Result:
     """Simulate ``grasp`` on the hand of ``scene`` (an export's ``description/mjcf/scene.xml``;
-    ``hand`` its kinematic model)."""
+    ``hand`` its kinematic model); ``closed(trial)``, if given, is called when the hand has closed
+    on the presented object, before it is let go (bench/grasp_figures.py draws it there)."""
     pl = plan(hand, grasp, library)
     t = Trial(scene, pl.T_object, _build(pl.shapes), presented=True)
     servos = range(len(pl.u_approach))
@@ -397,9 +400,11 @@ def run(scene, hand, grasp: Grasp, library: dict) -> Result:
     t.close({k: float(pl.u_close[k]) for k in servos}, CLOSE_S)
     t.command(t.top(pl.press))
     t.run(PRESS_S)
+    if closed is not None:
+        closed(t)
     t.release()
     t.run(RELEASE_S)
-    closed, saved = t.position_mm(), t.save()
+    closed_mm, saved = t.position_mm(), t.save()
     names = {}
     for b, _ in t.touching():
         names[b] = t.mj.mj_id2name(t.m, t.mj.mjtObj.mjOBJ_BODY, b)
@@ -409,12 +414,12 @@ def run(scene, hand, grasp: Grasp, library: dict) -> Result:
     for name, v in DIRECTIONS.items():
         t.restore(saved)
         t.hold(g * np.array(v, float), HOLD_S)
-        slip = float(np.linalg.norm(t.position_mm() - closed))
+        slip = float(np.linalg.norm(t.position_mm() - closed_mm))
         n = len(t.touching())
         directions[name] = Direction(bool(n > 0 and slip <= HELD_MM), slip, n)
     s = scale(hand.params)
     return Result(grasp, float(t.m.body_mass[t.body]) * 1000.0, {k: v * s for k, v in grasp.size_mm.items()},
-                  float(np.linalg.norm(closed - start)), tuple(sorted(names.values())), directions, torque, stall,
+                  float(np.linalg.norm(closed_mm - start)), tuple(sorted(names.values())), directions, torque, stall,
                   t.warnings())
 
 
