@@ -15,8 +15,6 @@ from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
-import numpy as np  # noqa: E402
-
 from phantom_cad import load_hand, postures  # noqa: E402
 from phantom_cad.export import grasps as G  # noqa: E402
 

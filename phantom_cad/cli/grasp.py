@@ -65,6 +65,8 @@ def grasp(
         return
     typer.echo(f"{hand.params.name} ({hand.params.side}), {scene}")
     typer.echo(table([G.COLUMNS] + [G.row(r) for r in results]))
+    typer.echo("")
+    typer.echo(table([G.TORQUE_COLUMNS] + [G.torque_row(r) for r in results]))
     typer.echo(f"{sum(r.held for r in results)} of {len(results)} held in every direction "
                f"(held: touching the hand and within {G.HELD_MM:g} mm of where it was let go after "
                f"{G.HOLD_S:g} s)")

@@ -8,10 +8,10 @@ commands of a posture of the posture library (``phantom_cad.postures``, through 
 as a user hands it over) while the hand closes: the approach (the object's contacts and gravity off,
 :data:`APPROACH_S`), the closing (contacts on, the posture's commands, :data:`CLOSE_S`), the pressing
 (the grasp's pressing digits to the end of their travel, :data:`PRESS_S`), the object let go (gravity
-off, :data:`RELEASE_S`), then from there, gravity in each of the six directions of the palm frame
-for :data:`HOLD_S` each. The object is held
-in a direction when, at the end, it still touches the hand and has moved at most :data:`HELD_MM`
-from where the closing left it. MuJoCo is imported inside :func:`run`; the rest is numpy.
+off, :data:`RELEASE_S`: the closed state), then from the closed state, gravity in each of the six
+directions of the palm frame for :data:`HOLD_S` each. The object is held in a direction when, at the
+end, it still touches the hand and has moved at most :data:`HELD_MM` from the closed state. MuJoCo
+is imported by ``Trial``; the rest is numpy.
 """
 
 from __future__ import annotations
@@ -26,8 +26,9 @@ import numpy as np
 from .. import postures as posture_library
 from ..errors import UserError, one_line
 from ..kinematics import frames
+from ..kinematics.hand_params import HandParams
 from ..kinematics.link_frames import link_transforms
-from ..kinematics.topology import CMC_SERVO, DIGITS, FINGERS, THUMB_CHAIN, chain, digit_links
+from ..kinematics.topology import DIGITS, FINGERS, SERVOS, chain, digit_links
 from .hold import Trial
 
 if sys.version_info >= (3, 11):
@@ -133,6 +134,9 @@ def _grasp(path, name, e) -> Grasp:
     press = e["press"]
     if not isinstance(press, list) or any(d not in DIGITS for d in press):
         _fail(path, name, "press", press, f"must be a list of digits ({', '.join(DIGITS)})")
+    if e["place"] == "pinch" and (not press or press[0] not in FINGERS):
+        _fail(path, name, "press", press, f"a pinch is placed on its first pressing finger's pad: must start with "
+                                          f"one of {', '.join(FINGERS)}")
     obj = e["object"]
     if not isinstance(obj, dict) or obj.get("kind") not in KINDS:
         _fail(path, name, "object", obj, f"must be a table with kind one of {', '.join(KINDS)}")
@@ -173,12 +177,11 @@ class Shape:
     density: float = 0.0
 
 
-#: a quaternion turning the geom's z onto the object's x, and onto its y
+#: a quaternion turning the geom's z onto the object's x
 Z_TO_X = (math.cos(math.pi / 4), 0.0, math.sin(math.pi / 4), 0.0)
-Z_TO_Y = (math.cos(math.pi / 4), -math.sin(math.pi / 4), 0.0, 0.0)
 
 
-def scale(params) -> float:
+def scale(params: HandParams) -> float:
     """The object's scale on this hand: its length over the paper's."""
     return params.hand_length * 1000.0 / REFERENCE_LENGTH_MM
 
@@ -277,8 +280,8 @@ class Plan:
 
 def commands(hand, grasp: Grasp, library: dict) -> tuple[np.ndarray, np.ndarray]:
     """(approach, closing) servo commands: the closing posture through the control law
-    (``postures.pose``; at rest for "rest"); the approach at rest but, for a pinch, the thumb's two
-    servos already at the posture's."""
+    (``postures.pose``; at rest for "rest"); the approach at rest but, for a pinch, the first
+    pressing finger's servo already at the posture's (its pad under the object)."""
     if grasp.posture == REST:
         u = hand.u_min.copy()
     elif grasp.posture not in library:
@@ -443,9 +446,15 @@ def row(r: Result) -> tuple[str, ...]:
             + (f"{max(held):.1f}" if held else "-", f"{r.torque_ratio:.2f}"))
 
 
-def as_dict(r: Result) -> dict:
-    from ..kinematics.topology import SERVOS
+#: the servo torques in the closed state: their columns
+TORQUE_COLUMNS = ("servo torque / stall torque (N m)",) + tuple(s.label for s in SERVOS)
 
+
+def torque_row(r: Result) -> tuple[str, ...]:
+    return (r.grasp.name,) + tuple(f"{r.torque[s.index]:+.3f} / {r.stall[s.index]:.3f}" for s in SERVOS)
+
+
+def as_dict(r: Result) -> dict:
     g = r.grasp
     return {"grasp": g.name, "figure": g.figure, "category": g.category, "description": g.description,
             "source": g.source, "object": {"kind": g.kind, "size_mm": r.size_mm, "mass_g": r.mass_g},

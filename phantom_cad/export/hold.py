@@ -17,7 +17,6 @@ caller's (tests/export/test_mjcf.py).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
 

@@ -22,7 +22,9 @@ import pytest
 
 from phantom_cad import load_hand, make_hand, postures
 from phantom_cad.cli import main
+from phantom_cad.errors import UserError
 from phantom_cad.export import grasps as G
+from phantom_cad.kinematics.topology import SERVOS
 from tests.support import shared
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "grasps.md"
@@ -56,10 +58,10 @@ def test_the_objects_scale_with_the_hand_and_are_placed_from_its_frames():
     import copy
 
     from phantom_cad.kinematics.topology import FINGERS
-    from phantom_cad.params.io import load_document
+    from phantom_cad.params.io import DEFAULT_PARAMS, load_document
     from phantom_cad.params.schema import parse
 
-    doc = copy.deepcopy(load_document(Path("params/phantom.toml")))
+    doc = copy.deepcopy(load_document(DEFAULT_PARAMS))
     doc["hand"]["hand_length_mm"] = 170.0
     small = make_hand(parse(doc))
     g = G.load()["cylinder"]
@@ -86,6 +88,15 @@ def test_a_bad_grasp_file_is_one_error_line(tmp_path, capsys):
     code, out, err = run(["grasp", "mug", "--grasps", bad], capsys)
     assert code == 2 and out == "" and err.count("\n") == 1
     assert err.startswith(f"error: {bad}: grasp 'mug': object = ") and "kind one of cylinder" in err
+
+
+def test_a_pinch_needs_a_finger_to_put_its_object_on(tmp_path):
+    bad = tmp_path / "mine.toml"
+    bad.write_text('[nip]\nfigure = 30\ncategory = "precision"\ndescription = "a nip"\nplace = "pinch"\n'
+                   'posture = "opposition_index"\npress = ["thumb"]\n'
+                   'object = { kind = "wire", diameter = 2.0, length = 50.0, density_kg_m3 = 8900.0 }\n')
+    with pytest.raises(UserError, match="press = \\['thumb'\\]: a pinch is placed on its first pressing finger's pad"):
+        G.read(bad)
 
 
 def test_the_list_names_every_grasp(capsys):
@@ -152,3 +163,19 @@ def test_every_grasp_runs_and_its_result_is_the_documented_one(results):
 def test_the_main_grasps_hold_in_every_direction(results, name):
     r = results[0][name]
     assert r.held, {k: (d.held, round(d.slip_mm, 1)) for k, d in r.directions.items()}
+
+
+def test_the_command_prints_a_grasp_on_an_existing_export(results, hand_export, capsys):
+    """``phantom-cad grasp cylinder --export DIR --json``: the export's scene, the same result as the
+    library's run."""
+    import json
+
+    out_dir = hand_export("default").out_dir
+    code, out, err = run(["grasp", "cylinder", "--export", out_dir, "--json"], capsys)
+    assert code in (0, None), err
+    (doc,) = json.loads(out)
+    r = results[0]["cylinder"]
+    assert doc["held"] == r.held
+    assert {k: d["held"] for k, d in doc["directions"].items()} == {k: d.held for k, d in r.directions.items()}
+    assert doc["torque_ratio"] == pytest.approx(r.torque_ratio)
+    assert set(doc["servos"]) == {s.label for s in SERVOS}
