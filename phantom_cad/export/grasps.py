@@ -26,6 +26,7 @@ import numpy as np
 from .. import postures as posture_library
 from ..errors import UserError, one_line
 from ..kinematics import frames
+from ..kinematics.forearm_layout import palm_back
 from ..kinematics.hand_params import HandParams
 from ..kinematics.link_frames import link_transforms
 from ..kinematics.topology import DIGITS, FINGERS, SERVOS, chain, digit_links
@@ -306,8 +307,18 @@ def placement(hand, grasp: Grasp, u_approach: np.ndarray, u_close: np.ndarray, h
         bases = np.array([T[f"{f}_base"][:3, 3] for f in FINGERS])
         thick = float(np.mean([p.digit(f).thickness for f in FINGERS]))
         out[:3, :3] = [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]     # its z along the palm's x
-        out[:3, 3] = (bases[:, 0].mean(), bases[:, 1].mean() - thick / 2 - half[1] - GAP,
-                      -p.palm.thickness / 2 - half[0] - GAP)
+        z = -p.palm.thickness / 2 - half[0] - GAP
+        y = bases[:, 1].mean() - thick / 2 - half[1] - GAP
+        # clear of the palm's heel (under the palmar face, from its back face heel_length distally):
+        # against its front edge when the knuckle rule would put it into the heel; its bounding
+        # circle (the larger half extent) against the heel's front corner
+        r = max(half[0], half[1]) + GAP
+        front = palm_back(p) + p.palm.heel_length
+        bottom = -p.palm.thickness / 2 - p.palm.heel_height
+        if p.palm.heel_height > 0.0:
+            y = max(y, front + (math.sqrt(r * r - (z - bottom) ** 2) if z < bottom and r > bottom - z else
+                                r if z >= bottom else 0.0))
+        out[:3, 3] = (bases[:, 0].mean(), y, z)
         return out
     # on the pad of the first pressing finger, at the closing posture (the finger is there from the
     # approach on; the thumb then closes onto it): thin along the pad's normal (toward the thumb)

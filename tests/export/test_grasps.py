@@ -6,7 +6,7 @@ the ratio of the lengths, placed from its own frames); bad input is one ``error:
 
 Slow: every grasp simulated once per test run on the default hand's export (shared between the
 test processes), its result equal to the table of docs/grasps.md (read back from the document), and
-the power grasp of the cylinder held in every direction. The sphere, the tool handle and the
+the power grasps of the cylinder and the sphere held in every direction. The tool handle and the
 fingertip pinch drop on the twin (docs/grasps.md says why): their tests are expected to fail, and
 fail loudly the day they hold.
 """
@@ -153,8 +153,7 @@ def test_every_grasp_runs_and_its_result_is_the_documented_one(results):
 
 @pytest.mark.parametrize("name", [
     "cylinder",
-    pytest.param("sphere", marks=pytest.mark.xfail(strict=True, reason="the fist closes past a 50 mm ball: "
-                                                   "docs/grasps.md")),
+    "sphere",
     pytest.param("tool_handle", marks=pytest.mark.xfail(strict=True, reason="the handle turns out between the "
                                                         "thumb and the fingers: docs/grasps.md")),
     pytest.param("fingertip_pinch", marks=pytest.mark.xfail(strict=True, reason="the thumb meets the index on "
