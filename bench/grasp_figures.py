@@ -15,6 +15,8 @@ from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
+import numpy as np  # noqa: E402
+
 from phantom_cad import load_hand, postures  # noqa: E402
 from phantom_cad.export import grasps as G  # noqa: E402
 
@@ -64,7 +66,9 @@ def main(export: str, out_dir: str = "docs/img") -> None:
     t0 = time.process_time()
     for g in G.load().values():
         results.append(G.run(scene, hand, g, library, closed=picture(out / f"grasp_{g.name}.png", G.scale(hand.params))))
-        print(f"{g.name}: {'held' if results[-1].held else 'dropped'}", file=sys.stderr)
+        r = results[-1]
+        print(f"{g.name}: {'held' if r.held else 'dropped'}, approach (deg) {np.degrees(r.u_approach).round(1).tolist()}"
+              f"{'' if r.cleared else ', no thumb command clears the object'}", file=sys.stderr)
     print(f"{len(results)} grasps, {time.process_time() - t0:.1f} s CPU (with the pictures)", file=sys.stderr)
     print("\n".join(table(results)))
 

@@ -29,7 +29,7 @@ from ..kinematics import frames
 from ..kinematics.forearm_layout import palm_back
 from ..kinematics.hand_params import HandParams
 from ..kinematics.link_frames import link_transforms
-from ..kinematics.topology import DIGITS, FINGERS, SERVOS, chain, digit_links
+from ..kinematics.topology import CMC_SERVO, DIGITS, FINGERS, JOINTS, SERVOS, THUMB_CHAIN, chain, digit_links
 from .hold import Trial
 
 if sys.version_info >= (3, 11):
@@ -68,6 +68,9 @@ HELD_MM = 5.0
 GAP = 0.0005
 #: the object's colour in pictures (yellow: none of the parts is)
 COLOUR = (0.95, 0.85, 0.2, 1.0)
+#: the thumb's CMC and flexion commands tried (evenly over each travel) to clear the object at the
+#: approach (as cad.grasp's power grasp)
+THUMB_CMC_STEPS, THUMB_FLEX_STEPS = 21, 5
 #: segments of the mesh profiles (the elliptic handle) and boxes of the tape roll's annulus
 PROFILE_SEGMENTS, ANNULUS_BOXES, RING_CAPSULES = 32, 16, 12
 
@@ -362,6 +365,8 @@ class Result:
     torque: np.ndarray               # the servos' torques when closed (N m, servo order)
     stall: np.ndarray                # their stall torques (N m)
     warnings: dict
+    u_approach: np.ndarray           # the approach's servo commands (rad), the thumb cleared
+    cleared: bool                    # whether a thumb command pair cleared the object (else: as planned)
 
     @property
     def held(self) -> bool:
@@ -402,6 +407,33 @@ def _build(shapes_):
     return build
 
 
+def clear_thumb(t: Trial, hand, u: np.ndarray) -> np.ndarray | None:
+    """``u`` with the thumb's two servos at the first pair of a grid over their travel (the CMC's
+    outermost, as ``cad.grasp``'s power grasp turns the thumb away) at which none of the thumb's
+    parts touches the placed object: the export's collision shapes at the model's joint angles
+    (``hand.forward``), the object's contacts on. None when no pair clears it."""
+    import mujoco
+
+    m = t.m
+    d = mujoco.MjData(m)
+    mujoco.mj_copyData(d, m, t.d)
+    adr = [int(m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j.name)]) for j in JOINTS]
+    thumb = {mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, ln.name) for ln in digit_links(THUMB_CHAIN.digit)}
+    mine = set(int(g) for g in t.geoms)
+    k1, k6 = THUMB_CHAIN.servo, CMC_SERVO
+    for s6 in np.linspace(0.0, 1.0, THUMB_CMC_STEPS):
+        for s1 in np.linspace(0.0, 1.0, THUMB_FLEX_STEPS):
+            v = np.array(u, dtype=float)
+            v[k6] = hand.u_min[k6] + s6 * (hand.u_max[k6] - hand.u_min[k6])
+            v[k1] = hand.u_min[k1] + s1 * (hand.u_max[k1] - hand.u_min[k1])
+            d.qpos[adr] = hand.forward(v, compensated=True)
+            mujoco.mj_forward(m, d)
+            if not any((int(c.geom1) in mine and int(m.geom_bodyid[c.geom2]) in thumb)
+                       or (int(c.geom2) in mine and int(m.geom_bodyid[c.geom1]) in thumb) for c in d.contact[:d.ncon]):
+                return v
+    return None
+
+
 def run(scene, hand, grasp: Grasp, library: dict, closed=None) -> Result:
     """Simulate ``grasp`` on the hand of ``scene`` (an export's ``description/mjcf/scene.xml``;
     ``hand`` its kinematic model); ``closed(trial)``, if given, is called when the hand has closed
@@ -409,7 +441,12 @@ def run(scene, hand, grasp: Grasp, library: dict, closed=None) -> Result:
     pl = plan(hand, grasp, library)
     t = Trial(scene, pl.T_object, _build(pl.shapes), presented=True)
     servos = range(len(pl.u_approach))
-    t.approach({k: float(pl.u_approach[k]) for k in servos}, APPROACH_S)
+    # the thumb out of the object's way for the approach (at rest it lies under the palm, where a
+    # palm object goes); when nothing clears it, the approach as planned (the result says so)
+    approach = clear_thumb(t, hand, pl.u_approach)
+    cleared = approach is not None
+    approach = pl.u_approach if approach is None else approach
+    t.approach({k: float(approach[k]) for k in servos}, APPROACH_S)
     start = t.position_mm()
     t.close({k: float(pl.u_close[k]) for k in servos}, CLOSE_S)
     t.command(t.top(pl.press))
@@ -434,7 +471,7 @@ def run(scene, hand, grasp: Grasp, library: dict, closed=None) -> Result:
     s = scale(hand.params)
     return Result(grasp, float(t.m.body_mass[t.body]) * 1000.0, {k: v * s for k, v in grasp.size_mm.items()},
                   float(np.linalg.norm(closed_mm - start)), tuple(sorted(names.values())), directions, torque, stall,
-                  t.warnings())
+                  t.warnings(), approach, cleared)
 
 
 # -- reporting -----------------------------------------------------------------------------------
@@ -469,7 +506,8 @@ def as_dict(r: Result) -> dict:
     g = r.grasp
     return {"grasp": g.name, "figure": g.figure, "category": g.category, "description": g.description,
             "source": g.source, "object": {"kind": g.kind, "size_mm": r.size_mm, "mass_g": r.mass_g},
-            "held": r.held, "released_mm": r.released_mm, "contacts": list(r.contacts),
+            "approach_deg": {sv.label: float(np.degrees(r.u_approach[sv.index])) for sv in SERVOS},
+            "thumb_cleared": r.cleared, "held": r.held, "released_mm": r.released_mm, "contacts": list(r.contacts),
             "directions": {k: {"held": d.held, "slip_mm": d.slip_mm, "contacts": d.touching}
                            for k, d in r.directions.items()},
             "max_slip_mm": r.max_slip_mm,
