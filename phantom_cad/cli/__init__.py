@@ -330,6 +330,9 @@ app.add_typer(_drive_app, name="drive")
 from .retarget import retarget as _retarget  # noqa: E402
 
 app.command("retarget")(_retarget)
+from .grasp import grasp as _grasp  # noqa: E402
+
+app.command("grasp")(_grasp)
 
 
 def main(argv: Optional[list[str]] = None) -> None:

@@ -1,17 +1,22 @@
-"""The closed hand holding a cylinder, simulated by MuJoCo on an export's MJCF scene (docs/parts.md,
-"Power grasp").
+"""A closing hand and a free object, simulated by MuJoCo on an export's MJCF scene: the one
+procedure behind the power grasp's hold (:func:`hold_cylinder`; docs/parts.md, "Power grasp") and
+the grasp library (``export.grasps``; docs/grasps.md).
 
-The procedure, as a user would run it on the printed hand: a free solid cylinder lies where
-``cad.grasp.power_grasp`` puts it (its axis along the palm frame's x); the thumb turns to its
-commands there (the cylinder's contacts off, gravity off, 1 s); every finger servo is commanded to
-the end of its travel (2 s); then gravity comes on toward the palm's palmar side (the scene's -z:
-the palm facing down, 3 s). :func:`hold_cylinder` reports what MuJoCo did; what counts as held is
-the caller's (tests/export/test_mjcf.py). MuJoCo is imported inside.
+The procedure, as a user would run it on the printed hand (:class:`Trial`): a free object is put
+where the grasp says (a pose in the palm frame, which is the scene's world frame); the hand takes
+its approach commands with the object's contacts off and gravity off (the hand moves into place
+around it); the object's contacts come on and the hand takes its closing commands; then gravity
+comes on. MuJoCo is imported inside.
+
+:func:`hold_cylinder`: a free solid cylinder lies where ``cad.grasp.power_grasp`` puts it (its axis
+along the palm frame's x); the thumb turns to its commands there (1 s); every finger servo is
+commanded to the end of its travel (2 s); then gravity comes on toward the palm's palmar side (the
+scene's -z: the palm facing down, 3 s). It reports what MuJoCo did; what counts as held is the
+caller's (tests/export/test_mjcf.py).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -22,6 +27,132 @@ from ..kinematics.topology import CMC_SERVO, JOINTS, SERVOS, THUMB_CHAIN, chain,
 
 #: the simulated phases (s): the thumb turning, the fingers closing, the palm facing down
 THUMB_S, CLOSE_S, HOLD_S = 1.0, 2.0, 3.0
+#: the weld that holds a presented object: a time constant of four steps, critically damped (MuJoCo's
+#: default, 20 ms, lets a closing digit knock it centimetres away)
+PRESENTED_SOLREF = (0.002, 1.0)
+#: the free object's body, joint and (first) geom name in the scene
+OBJECT = "object"
+
+
+class Trial:
+    """The scene of ``scene`` (an export's ``description/mjcf/scene.xml``) with a free body at
+    ``T_object`` (4x4, metres, the world = palm frame) whose geoms ``build(mujoco, spec, body)`` adds,
+    stepped phase by phase; ``presented``: the object is held where it was put (as a user hands it
+    over) until :meth:`release`. The servos are addressed in servo (topology) order."""
+
+    def __init__(self, scene: str | Path, T_object: np.ndarray, build, presented: bool = False):
+        import mujoco
+
+        self.mj = mujoco
+        spec = mujoco.MjSpec.from_file(str(scene))
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, np.ascontiguousarray(T_object[:3, :3]).reshape(9))
+        body = spec.worldbody.add_body(name=OBJECT, pos=list(T_object[:3, 3]), quat=list(quat))
+        body.add_freejoint(name=OBJECT)
+        build(mujoco, spec, body)
+        if presented:       # held where it was put (welded to the world) until :meth:`release`
+            spec.add_equality(name=OBJECT, type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY,
+                              name1=OBJECT, data=[0.0] * 10 + [1.0, 0.0],   # anchor 0; relpose from the start
+                              solref=list(PRESENTED_SOLREF))
+        m = self.m = spec.compile()
+        self.d = mujoco.MjData(m)
+        self.body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, OBJECT)
+        self.geoms = np.flatnonzero(m.geom_bodyid == self.body)
+        self.contype = m.geom_contype[self.geoms].copy()
+        self.conaffinity = m.geom_conaffinity[self.geoms].copy()
+        self.gravity = m.opt.gravity.copy()
+        self.act = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, s.actuator) for s in SERVOS]
+        self.free = int(m.jnt_dofadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, OBJECT)])
+        mujoco.mj_resetDataKeyframe(m, self.d, 0)
+        mujoco.mj_kinematics(m, self.d)
+        self.T_start = self.pose()
+
+    def run(self, seconds: float) -> None:
+        for _ in range(int(seconds / self.m.opt.timestep)):
+            self.mj.mj_step(self.m, self.d)
+
+    def command(self, u: dict) -> None:
+        """Servo commands {servo index: rad}; the others' stay as they are."""
+        for k, v in u.items():
+            self.d.ctrl[self.act[k]] = v
+
+    def top(self, servos) -> dict:
+        """{servo: the end of its travel} for the servos given (their actuators' upper control limit)."""
+        return {k: float(self.m.actuator_ctrlrange[self.act[k], 1]) for k in servos}
+
+    def approach(self, u: dict, seconds: float) -> None:
+        """Every other servo at 0, these at their commands, the object's contacts and gravity off."""
+        self.d.ctrl[:] = 0.0
+        self.m.geom_contype[self.geoms] = 0
+        self.m.geom_conaffinity[self.geoms] = 0
+        self.m.opt.gravity[:] = 0.0
+        self.command(u)
+        self.run(seconds)
+
+    def close(self, u: dict, seconds: float) -> None:
+        """The object's contacts on, then the closing commands."""
+        self.m.geom_contype[self.geoms] = self.contype
+        self.m.geom_conaffinity[self.geoms] = self.conaffinity
+        self.command(u)
+        self.run(seconds)
+
+    def release(self) -> None:
+        """Let go of a presented object."""
+        self.d.eq_active[self.mj.mj_name2id(self.m, self.mj.mjtObj.mjOBJ_EQUALITY, OBJECT)] = 0
+
+    def hold(self, gravity, seconds: float) -> None:
+        self.m.opt.gravity[:] = gravity
+        self.run(seconds)
+
+    def save(self):
+        d = self.mj.MjData(self.m)
+        self.mj.mj_copyData(d, self.m, self.d)
+        return d
+
+    def restore(self, saved) -> None:
+        self.mj.mj_copyData(self.d, self.m, saved)
+
+    # -- what the scene is doing ---------------------------------------------------------------
+    def pose(self) -> np.ndarray:
+        """The object's pose (4x4, mm)."""
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = self.d.xmat[self.body].reshape(3, 3), units.mm(self.d.xpos[self.body])
+        return T
+
+    def position_mm(self) -> np.ndarray:
+        return units.mm(self.d.xpos[self.body].copy())
+
+    def speed_mm_s(self) -> float:
+        return units.mm(float(np.linalg.norm(self.d.qvel[self.free:self.free + 3])))
+
+    def touching(self) -> list[tuple[int, np.ndarray]]:
+        """(the hand's body, contact point in mm) of every contact of the object with the hand."""
+        m, out = self.m, []
+        mine = set(int(g) for g in self.geoms)
+        for c in self.d.contact[:self.d.ncon]:
+            g1, g2 = int(c.geom1), int(c.geom2)
+            if (g1 in mine) == (g2 in mine):
+                continue
+            other = int(m.geom_bodyid[g2 if g1 in mine else g1])
+            if other != 0:                       # the world's geoms (the floor) are not the hand
+                out.append((other, units.mm(c.pos.copy())))
+        return out
+
+    def warnings(self) -> dict:
+        return {self.mj.mjtWarning(i).name: int(self.d.warning[i].number) for i in range(len(self.d.warning))
+                if self.d.warning[i].number}
+
+    def servo_torques(self) -> np.ndarray:
+        """N m, one per servo (topology order)."""
+        return np.array([self.d.actuator_force[a] for a in self.act])
+
+    def stall_torques(self) -> np.ndarray:
+        """Each servo's stall torque (its actuator's force limit), N m."""
+        return np.array([self.m.actuator_forcerange[a, 1] for a in self.act])
+
+    def q(self) -> np.ndarray:
+        m, mj = self.m, self.mj
+        return np.array([self.d.qpos[m.jnt_qposadr[mj.mj_name2id(m, mj.mjtObj.mjOBJ_JOINT, j.name)]] for j in JOINTS])
 
 
 @dataclass(frozen=True)
@@ -55,63 +186,27 @@ class Hold:
 def hold_cylinder(scene: str | Path, grasp, mass_kg: float = 0.1) -> Hold:
     """Simulate the closed hand of ``scene`` (an export's ``description/mjcf/scene.xml``) on the
     cylinder of ``grasp`` (``cad.grasp.CylinderGrasp``), a solid of ``mass_kg``."""
-    import mujoco
-
     g = grasp
-    spec = mujoco.MjSpec.from_file(str(scene))
     r, length = units.m(g.diameter_mm / 2.0), units.m(g.x_mm[1] - g.x_mm[0])
-    body = spec.worldbody.add_body(name="cylinder", pos=[units.m((g.x_mm[0] + g.x_mm[1]) / 2.0), units.m(g.axis_y_mm),
-                                                         units.m(g.axis_z_mm)],
-                                   quat=[math.cos(math.pi / 4), 0.0, math.sin(math.pi / 4), 0.0])   # z -> x
-    body.add_freejoint(name="cylinder")
-    body.add_geom(name="cylinder", type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[r, length / 2, 0.0])
-    # a solid cylinder: I_axis = m r^2 / 2, across it m (3 r^2 + l^2) / 12
-    body.mass, body.explicitinertial = mass_kg, True
-    body.inertia = [mass_kg * (3 * r * r + length * length) / 12] * 2 + [mass_kg * r * r / 2]
-    m = spec.compile()
-    d = mujoco.MjData(m)
+    T = np.eye(4)
+    T[:3, :3] = [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [-1.0, 0.0, 0.0]]          # its axis (z) along x
+    T[:3, 3] = units.m((g.x_mm[0] + g.x_mm[1]) / 2.0), units.m(g.axis_y_mm), units.m(g.axis_z_mm)
 
-    def pose(b: int) -> np.ndarray:
-        T = np.eye(4)
-        T[:3, :3], T[:3, 3] = d.xmat[b].reshape(3, 3), units.mm(d.xpos[b])
-        return T
+    def build(mujoco, spec, body):
+        body.add_geom(name=OBJECT, type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[r, length / 2, 0.0])
+        # a solid cylinder: I_axis = m r^2 / 2, across it m (3 r^2 + l^2) / 12
+        body.mass, body.explicitinertial = mass_kg, True
+        body.inertia = [mass_kg * (3 * r * r + length * length) / 12] * 2 + [mass_kg * r * r / 2]
 
-    gid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "cylinder")
-    bid = int(m.geom_bodyid[gid])
-    contype, conaffinity = int(m.geom_contype[gid]), int(m.geom_conaffinity[gid])
-    gravity = m.opt.gravity.copy()
-    act = {s.index: mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_ACTUATOR, s.actuator) for s in SERVOS}
-    fingers = [act[chain(f).servo] for f in FINGERS]
-
-    def run(seconds: float) -> None:
-        for _ in range(int(seconds / m.opt.timestep)):
-            mujoco.mj_step(m, d)
-
-    mujoco.mj_resetDataKeyframe(m, d, 0)
-    mujoco.mj_kinematics(m, d)
-    T_start = pose(bid)
-    d.ctrl[:] = 0.0
-    m.geom_contype[gid] = m.geom_conaffinity[gid] = 0
-    m.opt.gravity[:] = 0.0
-    for k in (THUMB_CHAIN.servo, CMC_SERVO):
-        d.ctrl[act[k]] = g.u[k]
-    run(THUMB_S)
-    start = d.xpos[bid].copy()
-    m.geom_contype[gid], m.geom_conaffinity[gid] = contype, conaffinity
-    d.ctrl[fingers] = m.actuator_ctrlrange[fingers, 1]
-    run(CLOSE_S)
-    closed = d.xpos[bid].copy()
-    m.opt.gravity[:] = gravity
-    run(HOLD_S)
-    free = m.jnt_dofadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, "cylinder")]
-    palm = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "palm")
-    contacts = tuple(units.mm(float(c.pos[1])) for c in d.contact[:d.ncon]
-                     if gid in (c.geom1, c.geom2) and palm in (m.geom_bodyid[c.geom1], m.geom_bodyid[c.geom2]))
-    q = np.array([d.qpos[m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j.name)]] for j in JOINTS])
-    return Hold(diameter_mm=g.diameter_mm, mass_kg=mass_kg, start_mm=units.mm(start), closed_mm=units.mm(closed),
-                end_mm=units.mm(d.xpos[bid]), speed_mm_s=units.mm(float(np.linalg.norm(d.qvel[free:free + 3]))),
-                warnings={mujoco.mjtWarning(i).name: int(d.warning[i].number) for i in range(len(d.warning))
-                          if d.warning[i].number},
-                palm_contacts_y_mm=contacts,
-                servo_torques=np.array([d.actuator_force[act[s.index]] for s in SERVOS]),
-                q=q, T_start=T_start, T_cylinder=pose(bid), gravity=gravity)
+    t = Trial(scene, T, build)
+    t.approach({k: g.u[k] for k in (THUMB_CHAIN.servo, CMC_SERVO)}, THUMB_S)
+    start = t.position_mm()
+    t.close(t.top([chain(f).servo for f in FINGERS]), CLOSE_S)
+    closed = t.position_mm()
+    t.hold(t.gravity, HOLD_S)
+    palm = t.mj.mj_name2id(t.m, t.mj.mjtObj.mjOBJ_BODY, "palm")
+    return Hold(diameter_mm=g.diameter_mm, mass_kg=mass_kg, start_mm=start, closed_mm=closed,
+                end_mm=t.position_mm(), speed_mm_s=t.speed_mm_s(), warnings=t.warnings(),
+                palm_contacts_y_mm=tuple(float(p[1]) for b, p in t.touching() if b == palm),
+                servo_torques=t.servo_torques(), q=t.q(), T_start=t.T_start, T_cylinder=t.pose(),
+                gravity=t.gravity)
