@@ -83,23 +83,37 @@ SIZED_HAND = (160.0, 72.0, "sized_160")
 
 
 @pytest.fixture(scope="session")
-def sized_hand(shared_root, part_cache):
-    """(document, BuildResult) of :data:`SIZED_HAND`: sized as ``phantom-cad size`` does (the CMC
-    placement searched, the preflight rules checked), written to the run's folder and built with
-    the run's part cache, unsliced; made once per run."""
-    def make():
-        from phantom_cad.cad import preflight
-        from phantom_cad.export.pipeline import build_hand
-        from phantom_cad.params.io import dump_params
-        from phantom_cad.sizing import Person, size
+def sized_file(shared_root):
+    """(parameter file, the command's CompletedProcess) of :data:`SIZED_HAND`:
+    ``phantom-cad size --hand-length 160 --hand-breadth 72 --name sized_160`` (the CMC placement
+    searched, the preflight rules checked) run once per test run, its file in the run's folder."""
+    import subprocess
+    import sys
 
-        length, breadth, name = SIZED_HAND
-        got = size(Person(length, breadth, name=name), check=preflight.check)
-        path = shared_root / f"{name}.toml"
-        dump_params(got.document, path)
-        return got.document, build_hand(path, shared_root / "exports" / name, cache_dir=part_cache, jobs=2,
-                                         slice=False)
-    return shared.once(shared_root, f"export-{SIZED_HAND[2]}", make)
+    length, breadth, name = SIZED_HAND
+    path = shared_root / f"{name}.toml"
+
+    def make():
+        return subprocess.run([sys.executable, "-m", "phantom_cad", "size", "--hand-length", str(length),
+                               "--hand-breadth", str(breadth), "--name", name, "--out", str(path)],
+                              capture_output=True, text=True)
+    return path, shared.once(shared_root, f"size-{name}", make)
+
+
+@pytest.fixture(scope="session")
+def sized_hand(sized_file, shared_root, part_cache):
+    """(document, BuildResult) of :data:`SIZED_HAND`: the file ``phantom-cad size`` wrote
+    (``sized_file``), built with the run's part cache, unsliced; made once per run."""
+    import tomllib
+
+    path, proc = sized_file
+    assert proc.returncode == 0, proc.stderr
+
+    def make():
+        from phantom_cad.export.pipeline import build_hand
+
+        return build_hand(path, shared_root / "exports" / SIZED_HAND[2], cache_dir=part_cache, jobs=2, slice=False)
+    return tomllib.loads(path.read_text(encoding="utf-8")), shared.once(shared_root, f"export-{SIZED_HAND[2]}", make)
 
 
 @pytest.fixture(scope="session")

@@ -261,14 +261,20 @@ def test_the_reference_measurements_give_the_default_hand():
     ["--hand-length", 205, "--hand-breadth", 95, "--side", "left"],
     ["--hand-length", 180, "--hand-breadth", 80, "--segments", "{SEG}"],
 ], ids=["160x72", "205x95-left", "segments"])
-def test_the_command_writes_a_file_that_validates(tmp_path, argv):
-    seg = tmp_path / "person.toml"
-    seg.write_text("[index]\nproximal = 40.5\nmiddle = 23.0\ndistal = 17.5\n"
-                   "[thumb]\nmetacarpal = 45.0\nproximal = 31.0\ndistal = 25.0\n")
-    out = tmp_path / "person_hand.toml"
-    argv = [str(a).replace("{SEG}", str(seg)) for a in argv]
-    proc = subprocess.run([sys.executable, "-m", "phantom_cad", "size", *argv, "--out", str(out)],
-                          capture_output=True, text=True)
+def test_the_command_writes_a_file_that_validates(tmp_path, argv, request):
+    """(160 x 72 is the run's sized hand: the command's run of tests/conftest.py ``sized_file``.)"""
+    from tests.conftest import SIZED_HAND
+
+    if argv == ["--hand-length", SIZED_HAND[0], "--hand-breadth", SIZED_HAND[1]]:
+        out, proc = request.getfixturevalue("sized_file")
+    else:
+        seg = tmp_path / "person.toml"
+        seg.write_text("[index]\nproximal = 40.5\nmiddle = 23.0\ndistal = 17.5\n"
+                       "[thumb]\nmetacarpal = 45.0\nproximal = 31.0\ndistal = 25.0\n")
+        out = tmp_path / "person_hand.toml"
+        argv = [str(a).replace("{SEG}", str(seg)) for a in argv]
+        proc = subprocess.run([sys.executable, "-m", "phantom_cad", "size", *argv, "--out", str(out)],
+                              capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     for words in ("reach at full travel", "opposition", "power grasp", "palm:", "thinnest designed wall",
                   "fingertip force at half travel"):
