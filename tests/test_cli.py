@@ -190,18 +190,25 @@ def test_model_commands_never_import_cad(tmp_path):
     assert "HEAVY []" in proc.stdout
 
 
+@pytest.fixture(scope="module")
+def small_sweep(tmp_path_factory):
+    """A five-point simulated sweep (read, never written, by the tests that take it)."""
+    sweep = tmp_path_factory.mktemp("sweep") / "sweep.csv"
+    cli("simulate", "--points", "5", "--out", sweep)
+    return sweep
+
+
 @pytest.mark.parametrize("command", [
     ["build", "--no-slice", "--out"],
     ["compare", "{sweep}", "--report"],
     ["diagnose", "{sweep}", "--candidates", "joint_offset", "--report"],
 ])
 @pytest.mark.parametrize("victim", ["file", "folder"])
-def test_outputs_never_replace_user_data(tmp_path, command, victim):
+def test_outputs_never_replace_user_data(tmp_path, small_sweep, command, victim):
     """An output never replaces user data: `build -o params/phantom.toml` (a typo for -p) must not
     replace the parameter file with an export folder, nor `--out mydata` / `--report mydata`
     delete what the folder holds."""
-    sweep = tmp_path / "sweep.csv"
-    cli("simulate", "--points", "5", "--out", sweep)
+    sweep = small_sweep
     target = tmp_path / "mydata"
     if victim == "file":
         target.write_text("my parameters\n")
