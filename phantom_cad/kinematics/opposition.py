@@ -465,24 +465,78 @@ def margin(thumb: ThumbTips, fingers: dict[str, Tips], x: np.ndarray) -> float:
     fingers of :attr:`Reach.margin` on these grids. A finger no pair of which is in contact scores
     below every finger that has one: -(pi - PAD_CONE) less its distance to the contact band over
     the two radii (so the search moves toward contact)."""
-    return _margin(thumb, fingers, _placement(x))
+    return _margin(thumb, _opposed(fingers), _placement(x))
 
 
-def _margin(thumb: ThumbTips, fingers: dict[str, Tips], T0: np.ndarray) -> float:
-    """:func:`margin` at the placement T0."""
+#: the margin leaves a pair out only where its bound clears what matters by this much (m): far above
+#: the bounds' rounding (1e-17 m at a hand's size)
+_CLEAR = 1e-9
+
+
+@dataclass(frozen=True)
+class _Opposed:
+    """The opposed fingers' capsules for :func:`_margin`: stacked, one row per (finger, command)."""
+    fingers: dict            # finger -> Tips
+    tips: Tips               # the rows (its radius unused)
+    radius: np.ndarray       # (n,) each row's capsule radius
+    start: np.ndarray        # the row each finger's block starts at, then the end
+    centre: tuple            # the segments' bounding spheres (:func:`_sphere`)
+    half: np.ndarray
+
+
+def _sphere(t: Tips):
+    """Each capsule segment's midpoint (x, y, z) and half length: the segment lies within the half
+    length of the midpoint."""
+    return _xyz((t.a + t.b) / 2.0), np.sqrt(t.axis[2]) / 2.0
+
+
+def _opposed(fingers: dict[str, Tips]) -> _Opposed:
+    tips = [fingers[f] for f in OPPOSED]
+    stacked = Tips(*(np.concatenate([getattr(t, k) for t in tips]) for k in ("a", "b", "normal")), 0.0,
+                   np.concatenate([t.u for t in tips]))
+    return _Opposed(dict(fingers), stacked, np.concatenate([np.full(len(t.a), t.radius) for t in tips]),
+                    np.cumsum([0, *(len(t.a) for t in tips)]), *_sphere(stacked))
+
+
+def _margin(thumb: ThumbTips, opposed: _Opposed, T0: np.ndarray) -> float:
+    """:func:`margin` at the placement T0, worked out on the pairs that can matter. Two capsule
+    axes are no nearer than their midpoints' distance less the two half lengths (:func:`_sphere`)
+    and no further than the midpoints: a finger's pairs whose lower bound exceeds its least upper
+    bound (or 0) are neither in contact nor its nearest, and are left out; where the pairs kept do
+    not settle a miss, every pair is worked out. Each pair kept is worked out as :func:`contacts`
+    does, so the margin is the same number."""
     tt = thumb.placed(T0)
+    fo = opposed
+    centre, half = _sphere(tt)
+    # the fingers' rows down, the thumb's commands across: np.nonzero lists each finger's pairs in a run
+    mid = _norm(tuple(y[:, None] - x[None, :] for x, y in zip(centre, fo.centre)))
+    r = tt.radius + fo.radius
+    upper = np.minimum.reduceat(mid.min(axis=1) - r, fo.start[:-1])
+    cut = np.maximum(upper, 0.0) + 2.0 * _CLEAR                       # per finger
+    lower = mid - half[None, :]
+    lower -= (fo.half + r)[:, None]
+    j, i = np.nonzero(lower <= np.repeat(cut, np.diff(fo.start))[:, None])
+    (p1, d1, a), (p2, d2, e) = tt.axis, fo.tips.axis
+    c1, c2 = _closest(tuple(x[i] for x in p1), tuple(x[i] for x in d1), a[i],
+                      tuple(x[j] for x in p2), tuple(x[j] for x in d2), e[j])
+    v = tuple(y - x for x, y in zip(c1, c2))
+    dist = _norm(v)
+    gap = dist - tt.radius - fo.radius[j]
+    # the facing angle of the pairs in contact only
+    k = np.flatnonzero((gap <= 0.0) & (gap >= -CONTACT_BAND))
+    angle = _facing(tuple(x[k] for x in v), dist[k], _xyz(tt.normal[i[k]]), _xyz(fo.tips.normal[j[k]]))
+    run, band = np.searchsorted(j, fo.start), np.searchsorted(j[k], fo.start)
     worst = math.inf
-    for f in OPPOSED:
-        Fg = fingers[f]
-        gap, dist, v = _pairs(tt, Fg)
-        i, j = np.nonzero((gap <= 0.0) & (gap >= -CONTACT_BAND))
-        if len(i):
-            # the facing angle of the pairs in contact only
-            angle = _facing(tuple(x[i, j] for x in v), dist[i, j], _xyz(tt.normal[i]), _xyz(Fg.normal[j]))
-            m = PAD_CONE - float(angle.min())
+    for n, f in enumerate(OPPOSED):
+        if band[n + 1] > band[n]:
+            m = PAD_CONE - float(angle[band[n]:band[n + 1]].min())
         else:
-            miss = float(np.min(np.where(gap > 0.0, gap, -CONTACT_BAND - gap)))
-            m = -(math.pi - PAD_CONE) - miss / (tt.radius + Fg.radius)
+            g = gap[run[n]:run[n + 1]]
+            miss = float(np.min(np.where(g > 0.0, g, -CONTACT_BAND - g))) if len(g) else math.inf
+            if not miss <= cut[n] - _CLEAR:         # a pair left out may be nearer: every pair
+                g = _pairs(tt, fo.fingers[f])[0]
+                miss = float(np.min(np.where(g > 0.0, g, -CONTACT_BAND - g)))
+            m = -(math.pi - PAD_CONE) - miss / (tt.radius + fo.fingers[f].radius)
         worst = min(worst, m)
     return worst
 
@@ -520,7 +574,7 @@ def solve(hand, bounds: Bounds | None = None, seed: int = 0, coarse=(11, 11, 21)
     env = palm_envelope(p)
     thumb = thumb_tips(hand, coarse[0], coarse[1])
     fine_thumb = thumb_tips(hand)
-    fingers = {f: finger_tips(hand, f, coarse[2]) for f in OPPOSED}
+    fingers = _opposed({f: finger_tips(hand, f, coarse[2]) for f in OPPOSED})
     count = [0]
     clear: list = [math.inf, None]      # the best placement seen that meets both
     _violation = (lambda T0: 0.0) if constraint is None else (lambda T0: float(constraint(T0)))
