@@ -7,7 +7,7 @@ generations than `params opposition --solve`, for several seeds (the landscape h
 each row is a placement the search reaches, a lower bound of the best). Four decimals, as
 `--solve` prints: the margin can sit on an edge that rounding to 0.01 crosses (docs/opposition.md).
 
-About 100 s a seed on the project's machine.
+About 10 s a seed on the project's machine.
 Run: .venv/bin/python bench/opposition_thenar.py [PARAMS.toml] [SEEDS, e.g. 1,2,3]
 """
 

@@ -30,7 +30,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -62,6 +63,30 @@ class Tips:
     normal: np.ndarray   # (n, 3) the pad's outward normal
     radius: float
     u: np.ndarray        # (n, k) the commands (rad) of the servos that move it
+
+    @cached_property
+    def axis(self) -> tuple:
+        """The capsule's segment for :func:`_closest`: its start a and direction b - a as (x, y, z)
+        components (n,) each, and the direction's squared length (n,)."""
+        d = self.b - self.a
+        d = (d[:, 0], d[:, 1], d[:, 2])
+        return _xyz(self.a), d, _dot(d, d)
+
+
+def _xyz(p: np.ndarray) -> tuple:
+    """The (x, y, z) components of points p (..., 3)."""
+    return p[..., 0], p[..., 1], p[..., 2]
+
+
+def _dot(u, v):
+    """u . v of vectors given as (x, y, z) components, summed in the order numpy's einsum sums three
+    products, (x + z) + y: the search's numbers are einsum's bit for bit."""
+    return (u[0] * v[0] + u[2] * v[2]) + u[1] * v[1]
+
+
+def _norm(u):
+    """|u| of vectors given as (x, y, z) components, summed in np.linalg.norm's order."""
+    return np.sqrt((u[0] * u[0] + u[1] * u[1]) + u[2] * u[2])
 
 
 def _servo(digit: str) -> int:
@@ -142,17 +167,24 @@ class ThumbTips:
     u: np.ndarray        # (n1 * n6, 2): u1, u6
     body: np.ndarray     # (n1 * n6, m, 3): points along the axes of the thumb's links
     body_radius: float   # half the thumb's thickness
+    # a, b, normal and body turned by the CMC's own rotation, which no placement changes: done once,
+    # so placing is one affine map (body as x, y, z rows of every command's points)
+    _turned: tuple = field(init=False, repr=False, compare=False)
+    _body_xyz: np.ndarray = field(init=False, repr=False, compare=False)
 
-    def _rz(self, p):
-        """Rz(q15) of each command's points (the CMC's own rotation)."""
-        return _rz(self.q15, p)
+    def __post_init__(self):
+        object.__setattr__(self, "_turned", tuple(_rz(self.q15, p) for p in (self.a, self.b, self.normal)))
+        object.__setattr__(self, "_body_xyz", np.ascontiguousarray(_rz(self.q15, self.body).reshape(-1, 3).T))
 
     def placed(self, T0: np.ndarray) -> Tips:
-        return Tips(_apply(T0, self._rz(self.a)), _apply(T0, self._rz(self.b)),
-                    _apply(T0, self._rz(self.normal), 0.0), self.radius, self.u)
+        a, b, normal = self._turned
+        return Tips(_apply(T0, a), _apply(T0, b), _apply(T0, normal, 0.0), self.radius, self.u)
 
     def body_placed(self, T0: np.ndarray) -> np.ndarray:
-        return _apply(T0, self._rz(self.body))
+        """The body's points placed by T0, as x, y, z rows (3, n1 * n6 * m)."""
+        p = T0[:3, :3] @ self._body_xyz
+        p += T0[:3, 3:]
+        return p
 
 
 def thumb_tips(hand, n1: int = 21, n6: int = 21) -> ThumbTips:
@@ -193,41 +225,69 @@ def tip_gaps(hand, u) -> np.ndarray:
 
 def segment_distance(p1, q1, p2, q2):
     """Closest points of segments p1-q1 and p2-q2 (broadcast over leading axes): returns
-    (distance, point on the first, point on the second). Ericson, Real-Time Collision Detection,
-    5.1.9, with its degenerate cases."""
-    d1, d2, r = q1 - p1, q2 - p2, p1 - p2
-    a = np.einsum("...i,...i", d1, d1)
-    e = np.einsum("...i,...i", d2, d2)
-    f = np.einsum("...i,...i", d2, r)
-    c = np.einsum("...i,...i", d1, r)
-    b = np.einsum("...i,...i", d1, d2)
+    (distance, point on the first, point on the second) (:func:`_closest`)."""
+    d1, d2 = _xyz(q1 - p1), _xyz(q2 - p2)
+    c1, c2 = _closest(_xyz(p1), d1, _dot(d1, d1), _xyz(p2), d2, _dot(d2, d2))
+    return _norm(tuple(u - v for u, v in zip(c1, c2))), np.stack(c1, axis=-1), np.stack(c2, axis=-1)
+
+
+def _closest(p1, d1, a, p2, d2, e):
+    """Closest points of segments p1 + s d1 and p2 + t d2 (s, t in [0, 1]) given as (x, y, z)
+    components that broadcast, with a = d1 . d1 and e = d2 . d2: returns the points on the first and
+    on the second, as components. Ericson, Real-Time Collision Detection, 5.1.9, with its
+    degenerate cases (a segment that is a point, parallel segments)."""
+    r = tuple(u - v for u, v in zip(p1, p2))
+    f, c, b = _dot(d2, r), _dot(d1, r), _dot(d1, d2)
     eps = 1e-18
+    point1, point2 = ~(a > eps), ~(e > eps)
+    point1 = point1 if point1.any() else None       # no segment is a point: nothing to mask
+    point2 = point2 if point2.any() else None
+
+    def unless(point, v):
+        return v if point is None else np.where(point, 0.0, v)
+
     denom = a * e - b * b
+    # a quotient by a (near-)zero denominator is computed and dropped
     with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.where(denom > eps, np.clip((b * f - c * e) / np.where(denom > eps, denom, 1.0), 0.0, 1.0), 0.0)
-        s = np.where(a > eps, s, 0.0)
-        t = np.where(e > eps, (b * s + f) / np.where(e > eps, e, 1.0), 0.0)
+        s = unless(point1, np.where(denom > eps, np.clip((b * f - c * e) / denom, 0.0, 1.0), 0.0))
+        t = unless(point2, (b * s + f) / e)
         # t outside [0, 1]: clamp it and recompute s for the clamped t
-        s = np.where(t < 0.0, np.where(a > eps, np.clip(-c / np.where(a > eps, a, 1.0), 0.0, 1.0), 0.0), s)
-        s = np.where(t > 1.0, np.where(a > eps, np.clip((b - c) / np.where(a > eps, a, 1.0), 0.0, 1.0), 0.0), s)
-        t = np.clip(t, 0.0, 1.0)
-    c1 = p1 + s[..., None] * d1
-    c2 = p2 + t[..., None] * d2
-    return np.linalg.norm(c1 - c2, axis=-1), c1, c2
+        s = np.where(t < 0.0, unless(point1, np.clip(-c / a, 0.0, 1.0)), s)
+        s = np.where(t > 1.0, unless(point1, np.clip((b - c) / a, 0.0, 1.0)), s)
+    t = np.clip(t, 0.0, 1.0)
+    return tuple(p + s * d for p, d in zip(p1, d1)), tuple(p + t * d for p, d in zip(p2, d2))
+
+
+def _pairs(thumb: Tips, finger: Tips):
+    """Every (thumb command, finger command) pair of capsules, (n_thumb, n_finger) each: the gap (m;
+    < 0 overlapping), the distance of the axes and the direction (unnormalised) from the thumb's
+    closest point to the finger's, as components."""
+    (p1, d1, a), (p2, d2, e) = thumb.axis, finger.axis
+    down, across = (slice(None), None), (None, slice(None))     # the thumb's commands down, the finger's across
+    c1, c2 = _closest(tuple(x[down] for x in p1), tuple(x[down] for x in d1), a[down],
+                      tuple(x[across] for x in p2), tuple(x[across] for x in d2), e[across])
+    v = tuple(y - x for x, y in zip(c1, c2))
+    dist = _norm(v)
+    return dist - thumb.radius - finger.radius, dist, v
+
+
+def _facing(v, dist, n1, n2):
+    """The facing angle (rad) of contact directions v (components, length dist) against the pads'
+    normals n1 (the thumb's) and n2 (the finger's), as components: the larger of the two angles; pi
+    where the axes meet (dist 0)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = tuple(x / dist for x in v)
+    cos = np.minimum(_dot(v, n1), _dot(tuple(-x for x in v), n2))
+    return np.arccos(np.clip(np.nan_to_num(cos, nan=-1.0), -1.0, 1.0))
 
 
 def contacts(thumb: Tips, finger: Tips):
     """(gap, angle) over every (thumb command, finger command) pair, shape (n_thumb, n_finger):
     the capsules' gap (m; < 0 overlapping) and the *facing angle* (rad), the larger of the angles
     between the contact direction and the two pads' normals (pi where the axes meet)."""
-    T, Fg = thumb, finger
-    dist, c1, c2 = segment_distance(T.a[:, None], T.b[:, None], Fg.a[None], Fg.b[None])
-    gap = dist - T.radius - Fg.radius
-    v = c2 - c1
-    with np.errstate(divide="ignore", invalid="ignore"):
-        v = v / np.linalg.norm(v, axis=-1, keepdims=True)
-    cos = np.minimum(np.einsum("tfi,ti->tf", v, T.normal), np.einsum("tfi,fi->tf", -v, Fg.normal))
-    return gap, np.arccos(np.clip(np.nan_to_num(cos, nan=-1.0), -1.0, 1.0))
+    gap, dist, v = _pairs(thumb, finger)
+    n1, n2 = _xyz(thumb.normal[:, None]), _xyz(finger.normal[None, :])
+    return gap, _facing(v, dist, n1, n2)
 
 
 @dataclass(frozen=True)
@@ -320,17 +380,35 @@ def palm_envelope(params: HandParams) -> tuple[np.ndarray, np.ndarray]:
 
 def box_distance(p: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """Signed distance (m) of points p (..., 3) to the box [lo, hi]: negative inside."""
-    c, h = (lo + hi) / 2.0, (hi - lo) / 2.0
-    d = np.abs(p - c) - h
-    outside = np.linalg.norm(np.maximum(d, 0.0), axis=-1)
-    inside = np.minimum(d.max(axis=-1), 0.0)
-    return outside + inside
+    p = np.asarray(p, float)
+    return _box_distance(np.array(np.moveaxis(p, -1, 0), order="C"), lo, hi).reshape(p.shape[:-1])
+
+
+def _box_distance(p: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """:func:`box_distance` of points given as x, y, z rows (3, ...), worked out in p's memory (p
+    is overwritten): a search calls it on ten thousand points at a time."""
+    c, h = ((lo + hi) / 2.0)[:, None], ((hi - lo) / 2.0)[:, None]
+    p = p.reshape(3, -1)
+    p -= c
+    np.abs(p, out=p)
+    p -= h                                                  # d, per axis
+    inside = np.maximum(p[0], p[1])
+    np.maximum(inside, p[2], out=inside)
+    np.minimum(inside, 0.0, out=inside)
+    np.maximum(p, 0.0, out=p)
+    p *= p
+    out = p[0]                                              # |max(d, 0)|, in np.linalg.norm's order
+    out += p[1]
+    out += p[2]
+    np.sqrt(out, out=out)
+    out += inside
+    return out
 
 
 def palm_intrusion(thumb: ThumbTips, T0: np.ndarray, envelope) -> float:
     """How far (m) the thumb's links reach into the palm envelope over its commands (<= 0: they
     stay out, by that much)."""
-    sd = box_distance(thumb.body_placed(T0), *envelope)
+    sd = _box_distance(thumb.body_placed(T0), *envelope)
     return float(thumb.body_radius - sd.min())
 
 
@@ -387,17 +465,78 @@ def margin(thumb: ThumbTips, fingers: dict[str, Tips], x: np.ndarray) -> float:
     fingers of :attr:`Reach.margin` on these grids. A finger no pair of which is in contact scores
     below every finger that has one: -(pi - PAD_CONE) less its distance to the contact band over
     the two radii (so the search moves toward contact)."""
-    tt = thumb.placed(_placement(x))
+    return _margin(thumb, _opposed(fingers), _placement(x))
+
+
+#: the margin leaves a pair out only where its bound clears what matters by this much (m): far above
+#: the bounds' rounding (1e-17 m at a hand's size)
+_CLEAR = 1e-9
+
+
+@dataclass(frozen=True)
+class _Opposed:
+    """The opposed fingers' capsules for :func:`_margin`: stacked, one row per (finger, command)."""
+    fingers: dict            # finger -> Tips
+    tips: Tips               # the rows (its radius unused)
+    radius: np.ndarray       # (n,) each row's capsule radius
+    start: np.ndarray        # the row each finger's block starts at, then the end
+    centre: tuple            # the segments' bounding spheres (:func:`_sphere`)
+    half: np.ndarray
+
+
+def _sphere(t: Tips):
+    """Each capsule segment's midpoint (x, y, z) and half length: the segment lies within the half
+    length of the midpoint."""
+    return _xyz((t.a + t.b) / 2.0), np.sqrt(t.axis[2]) / 2.0
+
+
+def _opposed(fingers: dict[str, Tips]) -> _Opposed:
+    tips = [fingers[f] for f in OPPOSED]
+    stacked = Tips(*(np.concatenate([getattr(t, k) for t in tips]) for k in ("a", "b", "normal")), 0.0,
+                   np.concatenate([t.u for t in tips]))
+    return _Opposed(dict(fingers), stacked, np.concatenate([np.full(len(t.a), t.radius) for t in tips]),
+                    np.cumsum([0, *(len(t.a) for t in tips)]), *_sphere(stacked))
+
+
+def _margin(thumb: ThumbTips, opposed: _Opposed, T0: np.ndarray) -> float:
+    """:func:`margin` at the placement T0, worked out on the pairs that can matter. Two capsule
+    axes are no nearer than their midpoints' distance less the two half lengths (:func:`_sphere`)
+    and no further than the midpoints: a finger's pairs whose lower bound exceeds its least upper
+    bound (or 0) are neither in contact nor its nearest, and are left out; where the pairs kept do
+    not settle a miss, every pair is worked out. Each pair kept is worked out as :func:`contacts`
+    does, so the margin is the same number."""
+    tt = thumb.placed(T0)
+    fo = opposed
+    centre, half = _sphere(tt)
+    # the fingers' rows down, the thumb's commands across: np.nonzero lists each finger's pairs in a run
+    mid = _norm(tuple(y[:, None] - x[None, :] for x, y in zip(centre, fo.centre)))
+    r = tt.radius + fo.radius
+    upper = np.minimum.reduceat(mid.min(axis=1) - r, fo.start[:-1])
+    cut = np.maximum(upper, 0.0) + 2.0 * _CLEAR                       # per finger
+    lower = mid - half[None, :]
+    lower -= (fo.half + r)[:, None]
+    j, i = np.nonzero(lower <= np.repeat(cut, np.diff(fo.start))[:, None])
+    (p1, d1, a), (p2, d2, e) = tt.axis, fo.tips.axis
+    c1, c2 = _closest(tuple(x[i] for x in p1), tuple(x[i] for x in d1), a[i],
+                      tuple(x[j] for x in p2), tuple(x[j] for x in d2), e[j])
+    v = tuple(y - x for x, y in zip(c1, c2))
+    dist = _norm(v)
+    gap = dist - tt.radius - fo.radius[j]
+    # the facing angle of the pairs in contact only
+    k = np.flatnonzero((gap <= 0.0) & (gap >= -CONTACT_BAND))
+    angle = _facing(tuple(x[k] for x in v), dist[k], _xyz(tt.normal[i[k]]), _xyz(fo.tips.normal[j[k]]))
+    run, band = np.searchsorted(j, fo.start), np.searchsorted(j[k], fo.start)
     worst = math.inf
-    for f in OPPOSED:
-        Fg = fingers[f]
-        gap, angle = contacts(tt, Fg)
-        band = (gap <= 0.0) & (gap >= -CONTACT_BAND)
-        if band.any():
-            m = PAD_CONE - float(angle[band].min())
+    for n, f in enumerate(OPPOSED):
+        if band[n + 1] > band[n]:
+            m = PAD_CONE - float(angle[band[n]:band[n + 1]].min())
         else:
-            miss = float(np.min(np.where(gap > 0.0, gap, -CONTACT_BAND - gap)))
-            m = -(math.pi - PAD_CONE) - miss / (tt.radius + Fg.radius)
+            g = gap[run[n]:run[n + 1]]
+            miss = float(np.min(np.where(g > 0.0, g, -CONTACT_BAND - g))) if len(g) else math.inf
+            if not miss <= cut[n] - _CLEAR:         # a pair left out may be nearer: every pair
+                g = _pairs(tt, fo.fingers[f])[0]
+                miss = float(np.min(np.where(g > 0.0, g, -CONTACT_BAND - g)))
+            m = -(math.pi - PAD_CONE) - miss / (tt.radius + fo.fingers[f].radius)
         worst = min(worst, m)
     return worst
 
@@ -435,7 +574,7 @@ def solve(hand, bounds: Bounds | None = None, seed: int = 0, coarse=(11, 11, 21)
     env = palm_envelope(p)
     thumb = thumb_tips(hand, coarse[0], coarse[1])
     fine_thumb = thumb_tips(hand)
-    fingers = {f: finger_tips(hand, f, coarse[2]) for f in OPPOSED}
+    fingers = _opposed({f: finger_tips(hand, f, coarse[2]) for f in OPPOSED})
     count = [0]
     clear: list = [math.inf, None]      # the best placement seen that meets both
     _violation = (lambda T0: 0.0) if constraint is None else (lambda T0: float(constraint(T0)))
@@ -443,10 +582,10 @@ def solve(hand, bounds: Bounds | None = None, seed: int = 0, coarse=(11, 11, 21)
     def cost(z):
         count[0] += 1
         x = np.clip(z, lo, hi)
-        m = margin(thumb, fingers, x)
+        T0 = _placement(x)
+        m = _margin(thumb, fingers, T0)
         # the palm envelope on the fine grid: between the coarse grid's commands the thumb can
         # pass through it
-        T0 = _placement(x)
         inside = max(palm_intrusion(fine_thumb, T0, env), 0.0) + max(_violation(T0), 0.0)
         if inside <= 0.0 and -m < clear[0]:
             clear[:] = [-m, x.copy()]

@@ -4,6 +4,7 @@ placement fits them. numpy only; frames as in :mod:`.frames`."""
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -95,10 +96,20 @@ def thenar_axis_point(params: HandParams, s: float) -> np.ndarray:
     return (T_palm_thumb_cmc_base(params) @ np.array([0.0, 0.0, s, 1.0]))[:3]
 
 
+@functools.cache
+def _circle(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """cos and sin of n angles evenly round the circle (read-only: shared)."""
+    a = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
+    cos, sin = np.cos(a), np.sin(a)
+    cos.flags.writeable = sin.flags.writeable = False
+    return cos, sin
+
+
 def _ring(T0: np.ndarray, s: float, r: float, n: int = 24) -> np.ndarray:
     """Points (n, 3) of the circle of radius r about the CMC axis, s along it (palm frame)."""
-    a = np.linspace(0.0, 2.0 * math.pi, n, endpoint=False)
-    pts = np.c_[r * np.cos(a), r * np.sin(a), np.full_like(a, s), np.ones_like(a)]
+    cos, sin = _circle(n)
+    pts = np.empty((n, 4))
+    pts[:, 0], pts[:, 1], pts[:, 2], pts[:, 3] = r * cos, r * sin, s, 1.0
     return (T0 @ pts.T).T[:, :3]
 
 
