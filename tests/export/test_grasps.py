@@ -4,8 +4,8 @@ Fast: the library holds the paper's sixteen panels (Fig. 4, 14-29) in its three 
 objects' sizes and placements follow the hand (a hand of another length gets the objects scaled by
 the ratio of the lengths, placed from its own frames); bad input is one ``error:`` line, exit 2.
 
-Slow: every grasp simulated once per test run on the default hand's export (shared between the
-test processes), its result equal to the table of docs/grasps.md (read back from the document), and
+Slow: every grasp simulated once per test run on the default hand's export without the slicer
+(its masses volume x density x infill, as the table's; shared between the test processes), its result equal to the table of docs/grasps.md (read back from the document), and
 the power grasps of the cylinder and the sphere held in every direction. The tool handle and the
 fingertip pinch drop on the twin (docs/grasps.md says why): their tests are expected to fail, and
 fail loudly the day they hold.
@@ -109,9 +109,9 @@ def test_the_list_names_every_grasp(capsys):
 
 @pytest.fixture(scope="module")
 def results(hand_export, shared_root):
-    """{name: Result} of every grasp on the default hand's export, simulated once per test run; and
+    """{name: Result} of every grasp on the default hand's unsliced export, simulated once per test run; and
     the CPU seconds it took."""
-    scene = hand_export("default").out_dir / "description" / "mjcf" / "scene.xml"
+    scene = hand_export("default_unsliced").out_dir / "description" / "mjcf" / "scene.xml"
 
     def make():
         lib = postures.load(HAND)
@@ -169,7 +169,7 @@ def test_the_command_prints_a_grasp_on_an_existing_export(results, hand_export, 
     library's run."""
     import json
 
-    out_dir = hand_export("default").out_dir
+    out_dir = hand_export("default_unsliced").out_dir
     code, out, err = run(["grasp", "cylinder", "--export", out_dir, "--json"], capsys)
     assert code in (0, None), err
     (doc,) = json.loads(out)

@@ -22,13 +22,17 @@ SLENDER = ROOT / "params" / "examples" / "slender.toml"
 
 #: name -> (parameter file or None: the default file, side given on the command line or None)
 _SOURCES = {"default": (None, None), "left": (None, "left"), "hand_length_170": (SMALL, None),
-            "slender": (SLENDER, None)}
+            "slender": (SLENDER, None), "default_unsliced": (None, None)}
 #: the reference hands
 HANDS = ("default", "left", "hand_length_170")
-#: the hands exported sliced (when PrusaSlicer is installed) as a user would: the tests read the
-#: slicer's estimates of the default hand only (slicing is about 48 s of CPU per hand); the other
-#: hands' parts meet PrusaSlicer through their projects (tests/export/test_project3mf.py)
-SLICED = ("default",)
+#: the hands exported sliced (when PrusaSlicer is installed) as a user would, the description's
+#: masses then the slicer's: the default hand (the tests read its estimates) and the 170 mm hand
+#: (its cylinder hold, tests/export/test_mjcf.py, passes on the slicer's masses, not on volume x
+#: density x infill); the left hand's parts meet PrusaSlicer through their projects
+#: (tests/export/test_project3mf.py). ``"default_unsliced"`` is the default hand exported without
+#: the slicer (its parts from the run's cache): masses that do not vary from run to run, for the
+#: grasp table (tests/export/test_grasps.py)
+SLICED = ("default", "hand_length_170")
 
 
 def hand_source(kind: str) -> tuple[Path | None, str | None]:
