@@ -86,7 +86,7 @@ def couple(hand, s: np.ndarray, compliance: np.ndarray, routed=None) -> np.ndarr
     ``routed``: the routed statics a routed elasticity put in the model (Context.routed), whose
     coupling then replaces the analytic one; what the paper's form adds with ``compliance`` (friction,
     a paper compliance fitted with it) is added to it."""
-    q = hand.couple(s, hand.coupling_vectors(compliance))
+    q = hand.couple_compliant(s, compliance)
     if routed is not None:
         q += couple_routed(routed, s) - s @ hand.coupling_ideal
     return q

@@ -84,6 +84,14 @@ class Hand:
         self._alpha_column = self._alpha[:, None]
         self._cmc_gain = thumb.cmc_gain
         self._coupling_constants = [cf.coupling_constants(c.radii, c.path_lengths) for c in chains]
+        # the same per joint of the chains (each chain's joints in a row, a column each), for
+        # coupling every chain in one pass (couple_compliant)
+        self._chain_joints = np.array([i for spec in CHAINS for i in spec.q_index])
+        self._joint_servo = np.array([spec.servo for spec in CHAINS for _ in spec.q_index])
+        self._joint_chain = np.array([k for k, spec in enumerate(CHAINS) for _ in spec.q_index])
+        self._joint_constants = tuple(
+            np.concatenate([np.broadcast_to(c[i], np.shape(c[0])) for c in self._coupling_constants])[:, None]
+            for i in range(4))
         #: k_s / EA (1/m): the compliance of eq. (13)/(14) in the parameter file
         self.compliance = params.mechanics.spring_k / params.mechanics.tendon_EA
         #: the routed statics of each chain (servo order), or None with the paper's compensation
@@ -152,6 +160,18 @@ class Hand:
         q = np.empty(s.shape[:-1] + (N_JOINTS,))
         for spec, c in zip(CHAINS, vectors):
             q[..., list(spec.q_index)] = s[..., spec.servo, None] * c
+        q[..., CMC_Q] = s[..., CMC_SERVO]
+        return q
+
+    def couple_compliant(self, s: np.ndarray, compliance) -> np.ndarray:
+        """``couple(s, coupling_vectors(compliance))`` for a compliance per sample and chain
+        (..., 5), in one pass over every chain's joints: the same arithmetic on each joint, without
+        a vector per chain (a fit evaluates this thousands of times on a few thousand rows)."""
+        kappa = np.broadcast_to(np.asarray(compliance, dtype=float), s.shape[:-1] + (len(CHAINS),))
+        # coupling_vector's constants as columns: each joint's kappa meets its own chain's
+        c = cf.coupling_vector(None, None, kappa[..., self._joint_chain], self._joint_constants)[..., 0]
+        q = np.empty(s.shape[:-1] + (N_JOINTS,))
+        q[..., self._chain_joints] = s[..., self._joint_servo] * c
         q[..., CMC_Q] = s[..., CMC_SERVO]
         return q
 
