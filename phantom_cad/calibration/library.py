@@ -394,6 +394,9 @@ def routed_reference_angles(hand, statics, u_eff, radius_scale) -> np.ndarray:
     return s
 
 
+_ROUTED_S: dict = {}
+
+
 def apply_routed(ctx: Context, scale) -> None:
     """Put the routed statics with compliance scale ``scale`` (5,) in the model: the reference
     angles become the routed servo law's (the drive stretches), the coupling the routed one
@@ -403,7 +406,11 @@ def apply_routed(ctx: Context, scale) -> None:
     scale = np.asarray(scale, dtype=float)
     ctx.routed_scale = scale
     ctx.routed = routed_statics(ctx.hand, scale)
-    ctx.s = routed_reference_angles(ctx.hand, ctx.routed, ctx.u_eff, ctx.radius_scale)
+    # memoised on everything the law reads: a fit's Jacobian steps many parameters (offsets,
+    # friction) that leave it where it was; a copy, as the context's arrays are the pipeline's own
+    u, radius = ctx.u_eff, ctx.radius_scale
+    ctx.s = memoised(_ROUTED_S, (ctx.hand.params.digest, scale.tobytes(), radius.tobytes(), u.shape, u.tobytes()),
+                     lambda: routed_reference_angles(ctx.hand, ctx.routed, u, radius), cap=16).copy()
     ctx.compliance -= ctx.compliance_base
     ctx.compliance_base = 0.0
     mech = ctx.params.mechanics

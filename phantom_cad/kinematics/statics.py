@@ -26,6 +26,7 @@ polynomial fit of the solution made when the hand is built, so one or two steps 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from types import SimpleNamespace
 
 import numpy as np
@@ -72,9 +73,10 @@ class ChainStatics:
     #: the drive's stretch per unit T L / sin(alpha - s): n R_0 L_d / (EA d1 d2) (1/N)
     gamma: float
 
-    @property
+    @cached_property
     def linear(self) -> bool:
-        """One regime over s >= 0 through the origin (no preload): q = c s, T = t s."""
+        """One regime over s >= 0 through the origin (no preload): q = c s, T = t s (worked out
+        once: every solve and coupling asks)."""
         return bool(np.all(self.s_from[1:] <= 0.0) and not self.d[-1].any() and self.t0[-1] == 0.0)
 
     def regime(self, s) -> np.ndarray:
