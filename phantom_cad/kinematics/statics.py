@@ -139,16 +139,18 @@ def chain_statics(radii, strands: ChainStrands, d1: float, d2: float, spring_k: 
     t_break = preload * (1.0 + Lb / La) / share      # T at which loop k's slack strand goes slack
     order = np.argsort(t_break, kind="stable")
     kappa = spring_k / EA
+    RA = float(R @ A)
     s_from, cs, ds, ts, t0s = [-np.inf], [], [], [], []
     for m in range(n):
         broken = np.zeros(n - 1, bool)
         broken[order[:m]] = True
         lever_lengths = share * np.where(broken, La, both)
         v = cf.elastic_lever(R, lever_lengths)
+        Rv = float(R @ v)
         # the broken loops' preload offset, P L_a / EA, carried along the chain as the lever is
         pv = cf.elastic_lever(R, np.where(broken, preload * La, 0.0))
-        c = cf.coupling_vector(R, lever_lengths, kappa)
-        d = cf.coupling_vector(R, lever_lengths, kappa, constants=(pv, v, float(R @ pv), float(R @ v))) / EA
+        c = cf.coupling_vector(R, lever_lengths, kappa, constants=(A, v, RA, Rv))
+        d = cf.coupling_vector(R, lever_lengths, kappa, constants=(pv, v, float(R @ pv), Rv)) / EA
         if m > 0:
             s_from.append((t_break[order[m - 1]] - t0s[-1]) / ts[-1])
         cs.append(c)
