@@ -12,6 +12,8 @@ and the play (backlash) operator the drive's plays share (:func:`apply_play`). n
 
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 
 from ..kinematics.memo import memoised
@@ -407,10 +409,12 @@ def apply_routed(ctx: Context, scale) -> None:
     ctx.routed_scale = scale
     ctx.routed = routed_statics(ctx.hand, scale)
     # memoised on everything the law reads: a fit's Jacobian steps many parameters (offsets,
-    # friction) that leave it where it was; a copy, as the context's arrays are the pipeline's own
-    u, radius = ctx.u_eff, ctx.radius_scale
-    ctx.s = memoised(_ROUTED_S, (ctx.hand.params.digest, scale.tobytes(), radius.tobytes(), u.shape, u.tobytes()),
-                     lambda: routed_reference_angles(ctx.hand, ctx.routed, u, radius), cap=16).copy()
+    # friction) that leave it where it was. The commands by their digest (a key of a few bytes
+    # for a batch of up to a fit's chunk of rows); a copy, as the context's arrays are the pipeline's own
+    u, radius = np.ascontiguousarray(ctx.u_eff), ctx.radius_scale
+    key = (ctx.hand.params.digest, scale.tobytes(), radius.tobytes(), u.shape,
+           hashlib.blake2b(u, digest_size=16).digest())
+    ctx.s = memoised(_ROUTED_S, key, lambda: routed_reference_angles(ctx.hand, ctx.routed, u, radius), cap=8).copy()
     ctx.compliance -= ctx.compliance_base
     ctx.compliance_base = 0.0
     mech = ctx.params.mechanics
