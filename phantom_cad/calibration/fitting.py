@@ -277,8 +277,9 @@ def _forward_step(x, lo, hi) -> np.ndarray:
 
 
 def _parameter_cells(model: Model, j_idx) -> list[np.ndarray]:
-    """Per free parameter: which of the cells (of joints ``j_idx``) it moves."""
-    return [np.isin(j_idx, par.joints) for _, _, par in model.free]
+    """Per free parameter: the indices of the cells (of joints ``j_idx``) it moves (indices, not a
+    mask: each Jacobian fills its columns with them)."""
+    return [np.flatnonzero(np.isin(j_idx, par.joints)) for _, _, par in model.free]
 
 
 def _forward_difference(model: Model, groups, x, r0, evaluate, cells) -> np.ndarray:

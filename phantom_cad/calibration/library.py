@@ -12,10 +12,12 @@ and the play (backlash) operator the drive's plays share (:func:`apply_play`). n
 
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 
 from ..kinematics.memo import memoised
-from ..kinematics.statics import hand_statics, reference_angle
+from ..kinematics.statics import hand_statics, reference_angles
 from ..kinematics.topology import CHAINS, CMC_SERVO, DISTAL_JOINTS, JOINTS, N_SERVOS, SERVOS, TENDON_SERVOS, servo_joints
 from ..units import DEG
 from .framework import CHAIN_SERVOS, MEASUREMENT, Context, Effect, Param, Runs, Signature, register_effect
@@ -382,17 +384,19 @@ def routed_reference_angles(hand, statics, u_eff, radius_scale) -> np.ndarray:
     command is scaled instead); s6 = g u6."""
     s = np.empty(u_eff.shape)
     u = u_eff[:, TENDON_SERVOS] * radius_scale
-    for k, (chain, c) in enumerate(zip(hand.params.chains, statics)):
-        if c.linear:
-            # at u = 0 no tension, no stretch: s = 0 exactly. A recording sweeps one servo at a
-            # time, so most of a chain's rows are at rest and only the others are solved
-            moved = u[:, k] != 0.0
-            s[:, k] = 0.0
-            s[moved, k] = reference_angle(u[moved, k], chain, c)
-        else:
-            s[:, k] = reference_angle(u[:, k], chain, c)
+    chains = hand.params.chains
+    # at u = 0 no tension, no stretch: s = 0 exactly. A recording sweeps one servo at a time, so
+    # most of a chain's rows are at rest and only the others are solved, every chain's at once
+    moved = [np.flatnonzero(u[:, k] != 0.0) if c.linear else slice(None) for k, c in enumerate(statics)]
+    s[:, TENDON_SERVOS] = 0.0
+    solved = reference_angles([u[rows, k] for k, rows in enumerate(moved)], chains, statics)
+    for k, rows in enumerate(moved):
+        s[rows, k] = solved[k]
     s[:, CMC_SERVO] = u_eff[:, CMC_SERVO] * hand.params.thumb.cmc_gain
     return s
+
+
+_ROUTED_S: dict = {}
 
 
 def apply_routed(ctx: Context, scale) -> None:
@@ -404,7 +408,13 @@ def apply_routed(ctx: Context, scale) -> None:
     scale = np.asarray(scale, dtype=float)
     ctx.routed_scale = scale
     ctx.routed = routed_statics(ctx.hand, scale)
-    ctx.s = routed_reference_angles(ctx.hand, ctx.routed, ctx.u_eff, ctx.radius_scale)
+    # memoised on everything the law reads: a fit's Jacobian steps many parameters (offsets,
+    # friction) that leave it where it was. The commands by their digest (a key of a few bytes
+    # for a batch of up to a fit's chunk of rows); a copy, as the context's arrays are the pipeline's own
+    u, radius = np.ascontiguousarray(ctx.u_eff), ctx.radius_scale
+    key = (ctx.hand.params.digest, scale.tobytes(), radius.tobytes(), u.shape,
+           hashlib.blake2b(u, digest_size=16).digest())
+    ctx.s = memoised(_ROUTED_S, key, lambda: routed_reference_angles(ctx.hand, ctx.routed, u, radius), cap=8).copy()
     ctx.compliance -= ctx.compliance_base
     ctx.compliance_base = 0.0
     mech = ctx.params.mechanics

@@ -36,7 +36,7 @@ from ..kinematics.topology import CMC_SERVO, N_JOINTS, N_SERVOS, TENDON_SERVOS
 from ..params.errors import ParamError
 from ..params.schema import plugin_paths
 from . import library as _library  # noqa: F401  (the built-in effects are registered before any name is looked up)
-from .library import routed_reference_angles
+from .library import RoutedElasticity, RoutedElasticityPerFinger, routed_reference_angles
 from .framework import MEASUREMENT, STAGES, Context, Effect, History, get_effect, has_invert
 from .plugins import load_plugin
 
@@ -62,7 +62,11 @@ def run_pipeline(hand, items: Sequence[tuple[Effect, np.ndarray]], u, direction=
     for eff, x in items:
         if eff.stage == "reference":
             eff.apply(ctx, x)
-    ctx.s = reference_angles(hand, ctx.u_eff, ctx.radius_scale)
+    tension = [eff for eff, _ in items if eff.stage == "tension"]
+    # a routed elasticity first in the tension stage puts its own reference angles in the context
+    # without reading the cosine law's: they need not be computed
+    if not (tension and isinstance(tension[0], (RoutedElasticity, RoutedElasticityPerFinger))):
+        ctx.s = reference_angles(hand, ctx.u_eff, ctx.radius_scale)
     for eff, x in items:
         if eff.stage == "tension":
             eff.apply(ctx, x)
@@ -86,7 +90,7 @@ def couple(hand, s: np.ndarray, compliance: np.ndarray, routed=None) -> np.ndarr
     ``routed``: the routed statics a routed elasticity put in the model (Context.routed), whose
     coupling then replaces the analytic one; what the paper's form adds with ``compliance`` (friction,
     a paper compliance fitted with it) is added to it."""
-    q = hand.couple(s, hand.coupling_vectors(compliance))
+    q = hand.couple_compliant(s, compliance)
     if routed is not None:
         q += couple_routed(routed, s) - s @ hand.coupling_ideal
     return q

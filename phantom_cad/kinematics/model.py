@@ -37,6 +37,11 @@ from .topology import CHAINS, CMC_Q, CMC_SERVO, N_JOINTS, N_SERVOS, TENDON_SERVO
 _BLOCK = 8192
 #: the compensations ``Hand`` knows: the printed routing's statics, the paper's eq. (11)-(14)
 COMPENSATIONS = ("routed", "paper")
+#: every tendon chain's joints, chain after chain (each chain's in its own order), and the servo
+#: and the chain of each: the couplings of all chains in one array operation
+_CHAIN_JOINTS = np.array([i for spec in CHAINS for i in spec.q_index])
+_JOINT_SERVO = np.array([spec.servo for spec in CHAINS for _ in spec.q_index])
+_JOINT_CHAIN = np.array([k for k, spec in enumerate(CHAINS) for _ in spec.q_index])
 
 
 class Hand:
@@ -84,6 +89,10 @@ class Hand:
         self._alpha_column = self._alpha[:, None]
         self._cmc_gain = thumb.cmc_gain
         self._coupling_constants = [cf.coupling_constants(c.radii, c.path_lengths) for c in chains]
+        # the same per joint of _CHAIN_JOINTS, as columns, for coupling every chain in one pass
+        self._joint_constants = tuple(
+            np.concatenate([np.broadcast_to(c[i], np.shape(c[0])) for c in self._coupling_constants])[:, None]
+            for i in range(4))
         #: k_s / EA (1/m): the compliance of eq. (13)/(14) in the parameter file
         self.compliance = params.mechanics.spring_k / params.mechanics.tendon_EA
         #: the routed statics of each chain (servo order), or None with the paper's compensation
@@ -152,6 +161,18 @@ class Hand:
         q = np.empty(s.shape[:-1] + (N_JOINTS,))
         for spec, c in zip(CHAINS, vectors):
             q[..., list(spec.q_index)] = s[..., spec.servo, None] * c
+        q[..., CMC_Q] = s[..., CMC_SERVO]
+        return q
+
+    def couple_compliant(self, s: np.ndarray, compliance) -> np.ndarray:
+        """``couple(s, coupling_vectors(compliance))`` for a compliance per sample and chain
+        (..., 5), in one pass over every chain's joints: the same arithmetic on each joint, without
+        a vector per chain (a fit evaluates this thousands of times on a few thousand rows)."""
+        kappa = np.broadcast_to(np.asarray(compliance, dtype=float), s.shape[:-1] + (len(CHAINS),))
+        # coupling_vector's constants as columns: each joint's kappa meets its own chain's
+        c = cf.coupling_vector(None, None, kappa[..., _JOINT_CHAIN], self._joint_constants)[..., 0]
+        q = np.empty(s.shape[:-1] + (N_JOINTS,))
+        q[..., _CHAIN_JOINTS] = s[..., _JOINT_SERVO] * c
         q[..., CMC_Q] = s[..., CMC_SERVO]
         return q
 
@@ -336,8 +357,12 @@ def couple_routed(statics, s: np.ndarray) -> np.ndarray:
     """q (..., 15) of routed statics (one :class:`~.statics.ChainStatics` per tendon chain, servo
     order) at reference angles s (..., 6), each chain in its regime; the CMC's q15 = s6."""
     q = np.empty(s.shape[:-1] + (N_JOINTS,))
-    for spec, c in zip(CHAINS, statics):
-        q[..., list(spec.q_index)] = c.joints(s[..., spec.servo])
+    if all(c.linear for c in statics):
+        # one regime each, q = c s: every chain's joints in one product (ChainStatics.joints' arithmetic)
+        q[..., _CHAIN_JOINTS] = s[..., _JOINT_SERVO] * np.concatenate([c.c[-1] for c in statics])
+    else:
+        for spec, c in zip(CHAINS, statics):
+            q[..., list(spec.q_index)] = c.joints(s[..., spec.servo])
     q[..., CMC_Q] = s[..., CMC_SERVO]
     return q
 

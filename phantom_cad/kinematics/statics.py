@@ -26,6 +26,7 @@ polynomial fit of the solution made when the hand is built, so one or two steps 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 from types import SimpleNamespace
 
 import numpy as np
@@ -72,9 +73,10 @@ class ChainStatics:
     #: the drive's stretch per unit T L / sin(alpha - s): n R_0 L_d / (EA d1 d2) (1/N)
     gamma: float
 
-    @property
+    @cached_property
     def linear(self) -> bool:
-        """One regime over s >= 0 through the origin (no preload): q = c s, T = t s."""
+        """One regime over s >= 0 through the origin (no preload): q = c s, T = t s (worked out
+        once: every solve and coupling asks)."""
         return bool(np.all(self.s_from[1:] <= 0.0) and not self.d[-1].any() and self.t0[-1] == 0.0)
 
     def regime(self, s) -> np.ndarray:
@@ -137,16 +139,18 @@ def chain_statics(radii, strands: ChainStrands, d1: float, d2: float, spring_k: 
     t_break = preload * (1.0 + Lb / La) / share      # T at which loop k's slack strand goes slack
     order = np.argsort(t_break, kind="stable")
     kappa = spring_k / EA
+    RA = float(R @ A)
     s_from, cs, ds, ts, t0s = [-np.inf], [], [], [], []
     for m in range(n):
         broken = np.zeros(n - 1, bool)
         broken[order[:m]] = True
         lever_lengths = share * np.where(broken, La, both)
         v = cf.elastic_lever(R, lever_lengths)
+        Rv = float(R @ v)
         # the broken loops' preload offset, P L_a / EA, carried along the chain as the lever is
         pv = cf.elastic_lever(R, np.where(broken, preload * La, 0.0))
-        c = cf.coupling_vector(R, lever_lengths, kappa)
-        d = cf.coupling_vector(R, lever_lengths, kappa, constants=(pv, v, float(R @ pv), float(R @ v))) / EA
+        c = cf.coupling_vector(R, lever_lengths, kappa, constants=(A, v, RA, Rv))
+        d = cf.coupling_vector(R, lever_lengths, kappa, constants=(pv, v, float(R @ pv), Rv)) / EA
         if m > 0:
             s_from.append((t_break[order[m - 1]] - t0s[-1]) / ts[-1])
         cs.append(c)
@@ -200,36 +204,87 @@ def reference_angle(u, chain: ChainParams, statics: ChainStatics, rate: bool = F
     """s of servo angle u: the root of servo_angle(s) = u, by Newton steps from the cosine law
     (the uncompensated s, which the stretch only lowers) until a step is below :data:`TOLERANCE`.
     With ``rate`` also ds/du. Broadcasts over u."""
-    g = chain.guide
-    d1d2 = g.d1 * g.d2
-    sumsq, two, L0 = cf.chord_constants(g.d1, g.d2, g.alpha)
-    r = chain.servo_radius
     u = np.asarray(u, dtype=float)
-    s = cf.reference_angle(u, g.d1, g.d2, g.alpha, r)
+    s, dg = _solve([u.ravel()], [chain], [statics])
+    s, dg = s.reshape(u.shape), dg.reshape(u.shape)
+    if rate:
+        return s[()], (chain.servo_radius / dg)[()]
+    return s[()]
+
+
+def reference_angles(us, chains, statics) -> list[np.ndarray]:
+    """:func:`reference_angle` of several chains at once: ``us`` one 1-D array of servo angles per
+    chain. The same Newton steps on every element, each chain stopping on its own steps (so each
+    result is the one :func:`reference_angle` gives), run as one set of array operations: the
+    per-call cost of numpy, not the arithmetic, is what a few hundred angles per chain cost."""
+    keep = [k for k, u in enumerate(us) if len(u)]
+    out = [np.zeros(0) for _ in us]
+    if keep:
+        s, _ = _solve([np.asarray(us[k], dtype=float) for k in keep], [chains[k] for k in keep],
+                      [statics[k] for k in keep])
+        bounds = np.cumsum([0] + [len(us[k]) for k in keep])
+        for k, a, b in zip(keep, bounds[:-1], bounds[1:]):
+            out[k] = s[a:b]
+    return out
+
+
+def _solve(us, chains, statics) -> tuple[np.ndarray, np.ndarray]:
+    """(s, g') of the flat servo angles ``us`` (one 1-D array per chain) concatenated: Newton
+    steps on g(s) = (L0 - r u) - L(s) + gamma T(s) L(s) / sin(alpha - s), each chain's constants
+    spread over its elements, a chain's elements frozen once its largest step is below
+    :data:`TOLERANCE`. g' is the one of each chain's last step."""
+    sizes = [len(u) for u in us]
+    starts = np.cumsum([0] + sizes[:-1])
+    chain_of = np.repeat(np.arange(len(us)), sizes)
+    u = np.concatenate(us) if len(us) > 1 else us[0]
+
+    def spread(values):
+        return np.asarray(values, dtype=float)[chain_of]
+
+    g = [c.guide for c in chains]
+    chord = [cf.chord_constants(x.d1, x.d2, x.alpha) for x in g]
+    # each chain's constants are worked out on its scalars, as for one chain alone, then spread
+    cosine = [cf.cosine_coefficients(x.d1, x.d2, x.alpha, c.servo_radius) for x, c in zip(g, chains)]
+    alpha, d1d2 = spread([x.alpha for x in g]), spread([x.d1 * x.d2 for x in g])
+    sumsq, two, L0 = (spread([c[i] for c in chord]) for i in range(3))
+    r, gamma = spread([c.servo_radius for c in chains]), spread([c.gamma for c in statics])
+    s = cf.reference_angle(u, spread([x.d1 for x in g]), spread([x.d2 for x in g]), alpha, r,
+                           coefficients=tuple(spread([c[i] for c in cosine]) for i in range(3)))
     s = np.array(s, dtype=float, ndmin=1)
     target = L0 - r * u
-    linear = statics.linear
+    linear = [c.linear for c in statics]
+    if all(linear):
+        a, b = spread([c.t[-1] for c in statics]), 0.0
+    else:
+        a, b = np.empty(u.shape), np.empty(u.shape)
+    active = np.ones(len(us), bool)
+    moving = np.ones(u.shape, bool)
+    dg_last = np.empty(u.shape)
     for _ in range(MAX_STEPS):
-        if linear:
-            a, b = statics.t[-1], 0.0
-        else:
-            m = statics.regime(s)
-            a, b = statics.t[m], statics.t0[m]
-        phi = g.alpha - s
+        if not all(linear):
+            for k, (c, lin) in enumerate(zip(statics, linear)):
+                part = slice(starts[k], starts[k] + sizes[k])
+                if lin:
+                    a[part], b[part] = c.t[-1], 0.0
+                else:
+                    m = c.regime(s[part])
+                    a[part], b[part] = c.t[m], c.t0[m]
+        phi = alpha - s
         x, S = np.cos(phi), np.sin(phi)
         L = np.sqrt(sumsq - two * x)
         T = a * s + b
         h = T * L / S
         dL = -d1d2 * S / L
-        dg = -dL + statics.gamma * ((a * L + T * dL) / S + h * x / S)
-        step = (L - target - statics.gamma * h) / dg
-        s += step
-        if not np.abs(step).max(initial=0.0) > TOLERANCE:
+        dg = -dL + gamma * ((a * L + T * dL) / S + h * x / S)
+        step = (L - target - gamma * h) / dg
+        np.add(s, step, out=s, where=moving)
+        np.copyto(dg_last, dg, where=moving)
+        largest = np.maximum.reduceat(np.abs(step), starts) if u.size else np.zeros(len(us))
+        active &= largest > TOLERANCE
+        if not active.any():
             break
-    s = s.reshape(u.shape)
-    if rate:
-        return s[()], (r / dg).reshape(u.shape)[()]
-    return s[()]
+        moving = active[chain_of]
+    return s, dg_last
 
 
 class RoutedLaw:
