@@ -84,7 +84,7 @@ def _hand_and_scene(params, export):
     from .. import make_hand
     from ..calibration.effects import PARAMS_EFFECTS
     from ..errors import UserError, one_line
-    from ..export.pipeline import BuildError, _load, ensure_export, export_problem
+    from ..export.pipeline import BuildError, ensure_export, export_problem, load_build_params
 
     if export is not None:
         import json
@@ -95,7 +95,7 @@ def _hand_and_scene(params, export):
             raise UserError(f"--export {export}: no export there (no manifest.json)") from None
         except (OSError, ValueError, KeyError, TypeError):
             raise UserError(f"--export {export}: manifest.json is unreadable or records no hand side") from None
-        path, _, hp, _ = _load(params, side, PARAMS_EFFECTS)
+        path, _, hp, _ = load_build_params(params, side, PARAMS_EFFECTS)
         reason = export_problem(export, hp.digest, hp.side)
         if reason is not None:
             raise UserError(f"--export {export}: {reason}; give the parameter file it was built from with --params")

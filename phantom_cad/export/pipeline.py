@@ -82,7 +82,10 @@ def _is_export(folder: Path) -> bool:
         return False
 
 
-def _load(params_path, side, effects=None) -> tuple[Path, dict[str, Any], HandParams, Any]:
+def load_build_params(params_path, side, effects=None) -> tuple[Path, dict[str, Any], HandParams, Any]:
+    """(path, document, params, the file's own side) of the parameter file a build or an export's
+    reader is given (the default file for None), ``side`` overriding the file's; the pre-build
+    rules checked (``cad.preflight``)."""
     path = Path(params_path) if params_path is not None else DEFAULT_PARAMS
     document = load_document(path)
     file_side = (document.get("hand") or {}).get("side") if isinstance(document.get("hand"), dict) else None
@@ -377,7 +380,7 @@ def build_hand(params_path: str | os.PathLike | None = None, out_dir: str | os.P
 
     t_start = time.perf_counter()
     timings: dict[str, float] = {}
-    path, document, params, file_side = _load(params_path, side, effects)
+    path, document, params, file_side = load_build_params(params_path, side, effects)
     out = Path(out_dir) if out_dir is not None else _default_out(params, side, file_side)
     check_replaceable(out, _is_export, "a phantom-cad export (manifest.json)")
     jobs = max(1, int(jobs or os.cpu_count() or 1))
@@ -435,7 +438,7 @@ def ensure_export(params_path: str | os.PathLike | None = None, out_dir: str | o
     built first (:func:`build_hand`, cached) when ``out_dir`` holds none, one built from other
     parameters or one without its robot description (:func:`export_problem`). For the commands
     that read an export (check, view)."""
-    path, _document, params, file_side = _load(params_path, side, effects)
+    path, _document, params, file_side = load_build_params(params_path, side, effects)
     out = Path(out_dir) if out_dir is not None else _default_out(params, side, file_side)
     reason = export_problem(out, params.digest, params.side)
     if reason is not None:

@@ -299,11 +299,11 @@ def test_bad_side_is_a_param_error(standin, tmp_path):
 
 
 def test_default_out_dir_names():
-    from phantom_cad.export.pipeline import _default_out, _load
+    from phantom_cad.export.pipeline import _default_out, load_build_params
 
-    _, _, params, file_side = _load(None, None)
+    _, _, params, file_side = load_build_params(None, None)
     assert _default_out(params, None, file_side) == Path("exports") / "phantom"
-    _, _, left, _ = _load(None, "left")
+    _, _, left, _ = load_build_params(None, "left")
     assert left.side == "left"
     assert _default_out(left, "left", file_side) == Path("exports") / "phantom_left"
     assert _default_out(params, "right", file_side) == Path("exports") / "phantom"
