@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import postures as posture_library
+from .. import units
 from ..errors import UserError, one_line
 from ..kinematics import frames
 from ..kinematics.forearm_layout import palm_back
@@ -187,14 +188,14 @@ Z_TO_X = (math.cos(math.pi / 4), 0.0, math.sin(math.pi / 4), 0.0)
 
 def scale(params: HandParams) -> float:
     """The object's scale on this hand: its length over the paper's."""
-    return params.hand_length * 1000.0 / REFERENCE_LENGTH_MM
+    return units.mm(params.hand_length) / REFERENCE_LENGTH_MM
 
 
 def shapes(grasp: Grasp, s: float) -> tuple[list[Shape], np.ndarray]:
     """(the object's geoms, its half extents (m) along its x, y, z) at scale ``s``. Frames: a
     "palm" object's z is its axis (laid along the palm's x); a "pinch" object is thin along its z
     (the pad's normal) and long along its x."""
-    z = {k: v * s / 1000.0 for k, v in grasp.size_mm.items()}      # metres
+    z = {k: units.m(v * s) for k, v in grasp.size_mm.items()}
     rho = grasp.density
     k = grasp.kind
     if k == "cylinder":
@@ -469,7 +470,7 @@ def run(scene, hand, grasp: Grasp, library: dict, closed=None) -> Result:
         n = len(t.touching())
         directions[name] = Direction(bool(n > 0 and slip <= HELD_MM), slip, n)
     s = scale(hand.params)
-    return Result(grasp, float(t.m.body_mass[t.body]) * 1000.0, {k: v * s for k, v in grasp.size_mm.items()},
+    return Result(grasp, float(t.m.body_mass[t.body]) / units.KG_PER_G, {k: v * s for k, v in grasp.size_mm.items()},
                   float(np.linalg.norm(closed_mm - start)), tuple(sorted(names.values())), directions, torque, stall,
                   t.warnings(), approach, cleared)
 
@@ -506,7 +507,7 @@ def as_dict(r: Result) -> dict:
     g = r.grasp
     return {"grasp": g.name, "figure": g.figure, "category": g.category, "description": g.description,
             "source": g.source, "object": {"kind": g.kind, "size_mm": r.size_mm, "mass_g": r.mass_g},
-            "approach_deg": {sv.label: float(np.degrees(r.u_approach[sv.index])) for sv in SERVOS},
+            "approach_deg": {sv.label: float(units.deg(r.u_approach[sv.index])) for sv in SERVOS},
             "thumb_cleared": r.cleared, "held": r.held, "released_mm": r.released_mm, "contacts": list(r.contacts),
             "directions": {k: {"held": d.held, "slip_mm": d.slip_mm, "contacts": d.touching}
                            for k, d in r.directions.items()},
