@@ -15,7 +15,7 @@ import pytest
 from phantom_cad.kinematics import frames as F, opposition as O
 from phantom_cad.kinematics import link_frames as LF
 from phantom_cad.kinematics.model import Hand
-from phantom_cad.kinematics.topology import CMC_Q, FINGERS, N_SERVOS
+from phantom_cad.kinematics.topology import CMC_Q, FINGERS, N_SERVOS, OPPOSED_FINGERS
 from phantom_cad.params.io import load_params
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -117,6 +117,97 @@ def test_the_pad_is_the_parts_pad(hand):
         assert np.linalg.norm(T[:3, 3] - centre) == pytest.approx(r)
         assert T[:3, 2] == pytest.approx((T[:3, 3] - centre) / r)
         assert math.degrees(math.atan2(T[2, 2], T[1, 2])) == pytest.approx(-45.0)
+
+
+def _q(**deg) -> np.ndarray:
+    """Joint angles (15,) rad from degrees by joint name, the rest 0."""
+    from phantom_cad.kinematics.topology import JOINTS
+    index = {j.name: j.index for j in JOINTS}
+    q = np.zeros(len(JOINTS))
+    for name, v in deg.items():
+        q[index[name]] = math.radians(v)
+    return q
+
+
+def test_pad_facing_by_hand(hand):
+    """The CMC axis along the palm's normal (placement angles 0): the thumb's MP + IP flexed by
+    45 deg turn its pad (45 deg round the tip from the palmar face) straight palmar, -z, whatever
+    q15. A finger flexed by 135 deg in all faces its pad proximal, Rz(-phi) (0, -1, 0): 90 deg from
+    facing the thumb's; flexed by 45 deg it faces palmar too, 180 deg; at rest (0, 1, -1)/sqrt 2
+    turned about z: 135 deg."""
+    p = _with_thumb(hand.params, hand.params.palm.thumb_cmc_offset, (0.0, 0.0, 0.0))
+    for q15 in (0.0, 30.0, 80.0):
+        q = _q(thumb_mp=25, thumb_ip=20, thumb_cmc=q15, index_mcp=45, index_pip=45, index_dip=45,
+               ring_mcp=20, ring_pip=15, ring_dip=10)
+        got = {f: math.degrees(v) for f, v in O.pad_facing(p, q).items()}
+        assert got == pytest.approx({"index": 90.0, "middle": 135.0, "ring": 180.0, "pinky": 135.0}, abs=1e-9)
+
+
+def _flexed(total: float) -> np.ndarray:
+    """A pad's normal in its chain's root frame after flexion by ``total`` (rad) about -x."""
+    return np.array([0.0, math.sin(F.PAD_ANGLE - total), -math.cos(F.PAD_ANGLE - total)])
+
+
+def _rz(a: float) -> np.ndarray:
+    return F.rot_z(a)[:3, :3]
+
+
+def test_the_thumbs_pad_normal_keeps_its_angle_to_the_cmc_axis(hand):
+    """The thumb's flexion axes are perpendicular to the CMC axis and its pad normal lies in its
+    flexion plane, which contains the axis: the pad normal is pi - |45 deg - (q_MP + q_IP)| from the
+    CMC axis whatever q15 and the placement. It can face a finger's pad only where that pad's
+    normal lies |45 deg - (q_MP + q_IP)| from the CMC axis."""
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        offset, axis = rng.normal(scale=0.03, size=3), rng.uniform(-1.5, 1.5, size=3)
+        p = _with_thumb(hand.params, offset, axis)
+        mp, ip, cmc = rng.uniform(0, 70), rng.uniform(0, 55), rng.uniform(0, 90)
+        T = LF.link_transforms(p, _q(thumb_mp=mp, thumb_ip=ip, thumb_cmc=cmc))
+        n = (T["thumb_distal"] @ F.T_distal_pad(p, "thumb"))[:3, 2]
+        z = F.thumb_cmc_placement(offset, axis)[:3, 2]
+        assert math.degrees(math.acos(n @ z)) == pytest.approx(180.0 - abs(45.0 - mp - ip), abs=1e-9)
+
+
+def _facing_by_rotations(p, q, finger):
+    """The pads' facing worked out from the frames' conventions alone: the thumb's normal
+    R0 Rz(q15) n(q_MP + q_IP), the finger's Rz(-phi) n(q_MCP + q_PIP + q_DIP)."""
+    from phantom_cad.kinematics.topology import JOINTS
+    qd = {j.name: q[j.index] for j in JOINTS}
+    R0 = F.thumb_cmc_placement(p.palm.thumb_cmc_offset, p.palm.thumb_cmc_axis)[:3, :3]
+    nt = R0 @ _rz(qd["thumb_cmc"]) @ _flexed(qd["thumb_mp"] + qd["thumb_ip"])
+    phi = (FINGERS.index(finger) - 1.5) * p.palm.arc_offset
+    nf = _rz(-phi) @ _flexed(sum(qd[f"{finger}_{k}"] for k in ("mcp", "pip", "dip")))
+    return math.degrees(math.acos(-nt @ nf))
+
+
+#: the default hand's pads at the library's opposition targets (postures/library.toml): how far
+#: (deg) the normals are from facing each other, the rotations of _facing_by_rotations
+FACING_AT_TARGETS = {"index": 71.57, "middle": 45.87, "ring": 52.70}
+
+
+def test_pad_facing_at_the_opposition_targets(hand):
+    from phantom_cad import postures as P
+    lib = P.load(hand)
+    for finger, want in FACING_AT_TARGETS.items():
+        q = lib[f"opposition_{finger}"].target
+        got = math.degrees(O.pad_facing(hand.params, q)[finger])
+        assert got == pytest.approx(_facing_by_rotations(hand.params, q, finger), abs=1e-9)
+        assert got == pytest.approx(want, abs=0.01)
+
+
+#: how far (deg) from facing each other two pads may be for a pinch to hold what they press
+PAD_OPPOSE = 30.0
+
+
+@pytest.mark.xfail(strict=True, reason="the default hand's pads are 80, 53 and 62 deg from facing at "
+                   "pose's commands: the CMC axis the palm's thenar can hold keeps the thumb's pad "
+                   "turned palmar (docs/opposition.md, 'Pad to pad')")
+def test_the_pads_face_at_the_opposition_postures(hand):
+    from phantom_cad import postures as P
+    lib = P.load(hand)
+    got = {f: math.degrees(O.pad_facing(hand.params, P.pose(hand, lib[f"opposition_{f}"]).q)[f])
+           for f in OPPOSED_FINGERS}
+    assert max(got.values()) <= PAD_OPPOSE, got
 
 
 #: a placement the search found for the default hand (docs/opposition.md): there the pads meet

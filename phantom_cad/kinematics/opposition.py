@@ -38,9 +38,10 @@ import numpy as np
 from .. import units
 from . import frames as F
 from . import forearm_layout as FL
+from . import link_frames as LF
 from . import thenar as TH
 from .hand_params import HandParams
-from .topology import CMC_Q, FINGERS, N_SERVOS, OPPOSED_FINGERS, SERVOS, THUMB_CHAIN, chain
+from .topology import CMC_Q, FINGERS, N_SERVOS, OPPOSED_FINGERS, SERVOS, THUMB_CHAIN, chain, digit_links
 
 
 #: the half angle (rad) of the cone around a pad's normal in which a contact counts as pad to pad
@@ -328,6 +329,24 @@ def reach(hand, thumb: ThumbTips | None = None, T0: np.ndarray | None = None, fi
                        float(gap.min()), PAD_CONE - float(touching[k, m]),
                        (*(float(v) for v in tt.u[k]), float(ft.u[m, 0])))
     return out
+
+
+def pad_facing(params: HandParams, q, fingers=FINGERS) -> dict[str, float]:
+    """Per finger, the angle (rad) between the thumb's pad normal and the finger's pad normal reversed
+    (``frames.T_distal_pad``) at joint angles q (15,): 0 when the pads face each other squarely, pi
+    when they face the same way. Right-hand frames (a left hand is the mirror image and faces the
+    same).
+
+    Whatever the placement and q15, the thumb's pad normal lies at pi - |PAD_ANGLE - (q_MP + q_IP)|
+    from the CMC axis: its flexion axes are perpendicular to that axis and its pad normal lies in
+    its flexion plane, which contains the axis (docs/opposition.md, "Pad to pad")."""
+    T = LF.link_transforms(params, q, mirrored=False)
+
+    def normal(digit):
+        return (T[digit_links(digit)[-1].name] @ F.T_distal_pad(params, digit))[:3, 2]
+
+    n = normal(THUMB)
+    return {f: math.acos(max(-1.0, min(1.0, -float(n @ normal(f))))) for f in fingers}
 
 
 # ---------------------------------------------------------------------------
