@@ -195,10 +195,6 @@ def test_pad_facing_at_the_opposition_targets(hand):
         assert got == pytest.approx(want, abs=0.01)
 
 
-#: how far (deg) from facing each other two pads may be for a pinch to hold what they press
-PAD_OPPOSE = 30.0
-
-
 @pytest.mark.xfail(strict=True, reason="the default hand's pads are 80, 53 and 62 deg from facing at "
                    "pose's commands: the CMC axis the palm's thenar can hold keeps the thumb's pad "
                    "turned palmar (docs/opposition.md, 'Pad to pad')")
@@ -207,7 +203,27 @@ def test_the_pads_face_at_the_opposition_postures(hand):
     lib = P.load(hand)
     got = {f: math.degrees(O.pad_facing(hand.params, P.pose(hand, lib[f"opposition_{f}"]).q)[f])
            for f in OPPOSED_FINGERS}
-    assert max(got.values()) <= PAD_OPPOSE, got
+    assert max(got.values()) <= math.degrees(O.PAD_OPPOSE), got
+
+
+def test_reach_with_oppose_holds_the_pads_normals(hand):
+    """With ``oppose`` the margin is, over the command pairs in contact, the best of the smaller of
+    PAD_CONE less the contact direction's angle and PAD_OPPOSE less the pads' angle, that angle
+    worked out through the link frames (:func:`opposition.pad_facing`) at the pair's commands."""
+    thumb = O.thumb_tips(hand, 5, 5)
+    tt = thumb.placed(F.thumb_cmc_placement(hand.params.palm.thumb_cmc_offset, hand.params.palm.thumb_cmc_axis))
+    held = O.reach(hand, thumb=thumb, fingers=OPPOSED_FINGERS, n_finger=9, oppose=O.PAD_OPPOSE)
+    for f in OPPOSED_FINGERS:
+        ft = O.finger_tips(hand, f, 9)
+        gap, angle = O.contacts(tt, ft)
+        best = -math.inf
+        for i, j in zip(*np.nonzero((gap <= 0.0) & (gap >= -O.CONTACT_BAND))):
+            u = np.zeros(N_SERVOS)
+            u[0], u[5] = tt.u[i]
+            u[hand.params.digit(f).chain.spec.servo] = ft.u[j, 0]
+            normals = O.pad_facing(hand.params, hand.forward(u, compensated=True), (f,))[f]
+            best = max(best, min(O.PAD_CONE - angle[i, j], O.PAD_OPPOSE - normals))
+        assert held[f].margin == pytest.approx(best, abs=1e-9), f
 
 
 #: a placement the search found for the default hand (docs/opposition.md): there the pads meet

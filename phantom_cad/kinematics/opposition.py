@@ -24,6 +24,9 @@ carries fitted effects), over a grid of each servo's travel.
   ``palm.thumb_cmc_axis_deg``) within bounds that maximize the *opposition margin*, the smallest
   margin of index, middle and ring, with the thumb's links kept out of the palm a human-scale hand
   has (``palm_envelope``).
+* ``pad_facing(params, q)``: how far the two pads' normals are from facing each other. The cones
+  alone let them be up to 90 deg apart; ``reach`` and ``solve`` hold them within ``oppose`` (e.g.
+  ``PAD_OPPOSE``) on request.
 """
 
 from __future__ import annotations
@@ -46,6 +49,9 @@ from .topology import CMC_Q, FINGERS, N_SERVOS, OPPOSED_FINGERS, SERVOS, THUMB_C
 
 #: the half angle (rad) of the cone around a pad's normal in which a contact counts as pad to pad
 PAD_CONE = units.rad(45.0)
+#: how far (rad) from facing each other (antiparallel) two pads' normals may be for a pinch: the
+#: ``oppose`` the search and the reach take on request (docs/opposition.md, "Pad to pad")
+PAD_OPPOSE = units.rad(30.0)
 #: the fingers the thumb opposes (the paper's postures 1-3); the pinky is reported, not required
 OPPOSED = OPPOSED_FINGERS
 THUMB = THUMB_CHAIN.digit
@@ -272,23 +278,30 @@ def _pairs(thumb: Tips, finger: Tips):
     return dist - thumb.radius - finger.radius, dist, v
 
 
-def _facing(v, dist, n1, n2):
+def _facing(v, dist, n1, n2, oppose=None):
     """The facing angle (rad) of contact directions v (components, length dist) against the pads'
     normals n1 (the thumb's) and n2 (the finger's), as components: the larger of the two angles; pi
-    where the axes meet (dist 0)."""
+    where the axes meet (dist 0). With ``oppose`` (rad), also the angle between n1 and -n2 less
+    ``oppose - PAD_CONE``: the facing angle is within PAD_CONE where the contact direction lies in
+    both cones and the normals within ``oppose`` of facing each other."""
     with np.errstate(divide="ignore", invalid="ignore"):
         v = tuple(x / dist for x in v)
     cos = np.minimum(_dot(v, n1), _dot(tuple(-x for x in v), n2))
-    return np.arccos(np.clip(np.nan_to_num(cos, nan=-1.0), -1.0, 1.0))
+    angle = np.arccos(np.clip(np.nan_to_num(cos, nan=-1.0), -1.0, 1.0))
+    if oppose is None:
+        return angle
+    normals = np.arccos(np.clip(-_dot(n1, n2), -1.0, 1.0))
+    return np.maximum(angle, normals - (oppose - PAD_CONE))
 
 
-def contacts(thumb: Tips, finger: Tips):
+def contacts(thumb: Tips, finger: Tips, oppose=None):
     """(gap, angle) over every (thumb command, finger command) pair, shape (n_thumb, n_finger):
     the capsules' gap (m; < 0 overlapping) and the *facing angle* (rad), the larger of the angles
-    between the contact direction and the two pads' normals (pi where the axes meet)."""
+    between the contact direction and the two pads' normals (pi where the axes meet); with
+    ``oppose``, the pads' normals held within it of facing each other too (:func:`_facing`)."""
     gap, dist, v = _pairs(thumb, finger)
     n1, n2 = _xyz(thumb.normal[:, None]), _xyz(finger.normal[None, :])
-    return gap, _facing(v, dist, n1, n2)
+    return gap, _facing(v, dist, n1, n2, oppose)
 
 
 @dataclass(frozen=True)
@@ -309,10 +322,11 @@ class Reach:
 
 
 def reach(hand, thumb: ThumbTips | None = None, T0: np.ndarray | None = None, fingers=FINGERS,
-          n_finger: int = 41) -> dict[str, Reach]:
+          n_finger: int = 41, oppose=None) -> dict[str, Reach]:
     """Per finger, the thumb pad's closest approach to its pad and how squarely they meet (right-hand
     frames; a left hand is the mirror image and reaches the same). ``T0``: a CMC placement
-    (default: the file's)."""
+    (default: the file's). ``oppose`` (rad, e.g. :data:`PAD_OPPOSE`): a contact counts as pad to pad
+    only where the pads' normals are within it of facing each other too (:func:`contacts`)."""
     p = hand.params
     thumb = thumb_tips(hand) if thumb is None else thumb
     T0 = F.thumb_cmc_placement(p.palm.thumb_cmc_offset, p.palm.thumb_cmc_axis) if T0 is None else T0
@@ -320,7 +334,7 @@ def reach(hand, thumb: ThumbTips | None = None, T0: np.ndarray | None = None, fi
     out = {}
     for f in fingers:
         ft = finger_tips(hand, f, n_finger)
-        gap, angle = contacts(tt, ft)
+        gap, angle = contacts(tt, ft, oppose)
         masked = np.where(angle <= PAD_CONE, gap, np.inf)
         i, j = np.unravel_index(int(np.argmin(masked)), masked.shape)
         touching = np.where((gap <= 0.0) & (gap >= -CONTACT_BAND), angle, np.inf)
@@ -479,12 +493,12 @@ def _placement(x: np.ndarray) -> np.ndarray:
     return F.thumb_cmc_placement(x[:3], x[3:])
 
 
-def margin(thumb: ThumbTips, fingers: dict[str, Tips], x: np.ndarray) -> float:
+def margin(thumb: ThumbTips, fingers: dict[str, Tips], x: np.ndarray, oppose=None) -> float:
     """The search's opposition margin (rad) of placement x = (offset, axis): min over the opposed
     fingers of :attr:`Reach.margin` on these grids. A finger no pair of which is in contact scores
     below every finger that has one: -(pi - PAD_CONE) less its distance to the contact band over
     the two radii (so the search moves toward contact)."""
-    return _margin(thumb, _opposed(fingers), _placement(x))
+    return _margin(thumb, _opposed(fingers), _placement(x), oppose)
 
 
 #: the margin leaves a pair out only where its bound clears what matters by this much (m): far above
@@ -517,7 +531,7 @@ def _opposed(fingers: dict[str, Tips]) -> _Opposed:
                     np.cumsum([0, *(len(t.a) for t in tips)]), *_sphere(stacked))
 
 
-def _margin(thumb: ThumbTips, opposed: _Opposed, T0: np.ndarray) -> float:
+def _margin(thumb: ThumbTips, opposed: _Opposed, T0: np.ndarray, oppose=None) -> float:
     """:func:`margin` at the placement T0, worked out on the pairs that can matter. Two capsule
     axes are no nearer than their midpoints' distance less the two half lengths (:func:`_sphere`)
     and no further than the midpoints: a finger's pairs whose lower bound exceeds its least upper
@@ -543,7 +557,7 @@ def _margin(thumb: ThumbTips, opposed: _Opposed, T0: np.ndarray) -> float:
     gap = dist - tt.radius - fo.radius[j]
     # the facing angle of the pairs in contact only
     k = np.flatnonzero((gap <= 0.0) & (gap >= -CONTACT_BAND))
-    angle = _facing(tuple(x[k] for x in v), dist[k], _xyz(tt.normal[i[k]]), _xyz(fo.tips.normal[j[k]]))
+    angle = _facing(tuple(x[k] for x in v), dist[k], _xyz(tt.normal[i[k]]), _xyz(fo.tips.normal[j[k]]), oppose)
     run, band = np.searchsorted(j, fo.start), np.searchsorted(j[k], fo.start)
     worst = math.inf
     for n, f in enumerate(OPPOSED):
@@ -573,7 +587,7 @@ class Solution:
 
 def solve(hand, bounds: Bounds | None = None, seed: int = 0, coarse=(11, 11, 21), generations: int = 60,
           population: int = 8, iterations: int = 300,
-          constraint: Callable[[np.ndarray], float] | None = None) -> Solution:
+          constraint: Callable[[np.ndarray], float] | None = None, oppose=None) -> Solution:
     """Maximize the opposition margin over the CMC placement within ``bounds``, with the thumb's
     links kept out of the palm envelope (a penalty of ``INTRUSION_WEIGHT`` per metre inside, on the
     fine thumb grid; if the optimum still reaches inside, the best placement seen that does not).
@@ -583,7 +597,8 @@ def solve(hand, bounds: Bounds | None = None, seed: int = 0, coarse=(11, 11, 21)
     Method: differential evolution (scipy, seeded: deterministic) on a coarse command grid (``coarse``: n1,
     n6, n_finger), the file's placement in its first population, then Nelder-Mead from the best.
     The result is judged on :func:`reach`'s fine grid (21 x 21 x 41), which contains the coarse
-    one, so the fine margin is at least the searched one."""
+    one, so the fine margin is at least the searched one. ``oppose`` (rad): the pads' normals
+    held within it of facing each other too (:func:`reach`)."""
     from scipy.optimize import differential_evolution, minimize
 
     p = hand.params
@@ -602,7 +617,7 @@ def solve(hand, bounds: Bounds | None = None, seed: int = 0, coarse=(11, 11, 21)
         count[0] += 1
         x = np.clip(z, lo, hi)
         T0 = _placement(x)
-        m = _margin(thumb, fingers, T0)
+        m = _margin(thumb, fingers, T0, oppose)
         # the palm envelope on the fine grid: between the coarse grid's commands the thumb can
         # pass through it
         inside = max(palm_intrusion(fine_thumb, T0, env), 0.0) + max(_violation(T0), 0.0)
@@ -622,7 +637,7 @@ def solve(hand, bounds: Bounds | None = None, seed: int = 0, coarse=(11, 11, 21)
     if (palm_intrusion(fine_thumb, _placement(x), env) > 0.0 or _violation(_placement(x)) > 0.0) \
             and clear[1] is not None:
         x = clear[1]                    # the penalty was not enough: the best clear placement
-    fine = reach(hand, thumb=fine_thumb, T0=_placement(x))
+    fine = reach(hand, thumb=fine_thumb, T0=_placement(x), oppose=oppose)
     return Solution(tuple(float(v) for v in x[:3]), tuple(float(v) for v in x[3:]),
                     min(fine[f].margin for f in OPPOSED), fine, count[0],
                     palm_intrusion(fine_thumb, _placement(x), env),

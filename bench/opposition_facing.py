@@ -1,0 +1,73 @@
+"""Can any CMC placement make the thumb's pad face the index, middle and ring pads (docs/opposition.md,
+"Pad to pad")? The placement search (``kinematics.opposition.solve``) with ``oppose =
+PAD_OPPOSE``: a contact counts only where, besides the contact direction lying in both pads'
+45 deg cones, the pads' normals are within 30 deg of facing each other. Run under the rules the
+default file's placement was found with (the palm's thenar and a human palm, the default
+bounds), then with each rule taken away and wider bounds, to see which rule stands in the way.
+Each row is a placement the search reaches (a lower bound of the best); the margin is
+min(45 deg less the contact direction's angle, 30 deg less the normals' angle) at the squarest
+contact, the smallest of the three fingers.
+
+About 30 s a row on the project's machine.
+Run: .venv/bin/python bench/opposition_facing.py [PARAMS.toml] [SEED]
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+
+from phantom_cad import load_params, make_hand
+from phantom_cad.kinematics import frames as F
+from phantom_cad.kinematics import opposition as O
+from phantom_cad.kinematics import thenar as TH
+from phantom_cad.params.io import DEFAULT_PARAMS
+
+
+def wide_bounds(params) -> O.Bounds:
+    """The default bounds opened: the CMC centre 20 mm further radial, from the MCPs' line back to
+    110 mm behind it, 60 mm palmar to 20 mm dorsal; every axis angle free (scaled as the default's)."""
+    b = O.default_bounds(params)
+    k = params.hand_length / 0.189
+    r = math.radians
+    return O.Bounds(offset=((b.offset[0][0] - 0.020 * k, b.offset[0][1]), (-0.110 * k, 0.0), (-0.060 * k, 0.020 * k)),
+                    axis=((r(-180), r(180)), (r(-90), r(90)), (r(-180), r(180))))
+
+
+def row(label, params, T0, reach, seconds):
+    z = T0[:3, 2]
+    c = ", ".join(f"{v * 1e3:.1f}" for v in T0[:3, 3])
+    held = TH.thenar_margins(params, T0)
+    viol = O.thenar_constraint(params)(T0)
+    margin = min(reach[f].margin for f in O.OPPOSED)
+    meet = " / ".join(("yes" if reach[f].reaches else "no") for f in O.OPPOSED)
+    print(f"| {label} | {c} | {math.degrees(math.acos(z[2])):.0f} | {math.degrees(margin):+.1f} | {meet} | "
+          f"{'yes' if viol <= 0.0 else f'no ({viol * 1e3:.0f} mm)'} | {math.degrees(held['tilt']):+.0f} | {seconds:.0f} |",
+          flush=True)
+
+
+def main(argv):
+    params = load_params(argv[1] if len(argv) > 1 else DEFAULT_PARAMS)
+    seed = int(argv[2]) if len(argv) > 2 else 1
+    hand = make_hand(params)
+    print("| rules | CMC centre (mm) | CMC axis from the palm's normal (deg) | margin (deg) | pads meet "
+          "(index / middle / ring) | the thenar holds it | tilt margin (deg) | s |")
+    print("|---|---|---:|---:|---|---|---:|---:|")
+    T0 = F.thumb_cmc_placement(params.palm.thumb_cmc_offset, params.palm.thumb_cmc_axis)
+    t = time.perf_counter()
+    row("the file's placement", params, T0, O.reach(hand, oppose=O.PAD_OPPOSE, fingers=O.OPPOSED), time.perf_counter() - t)
+    cases = [("thenar and human palm, default bounds (as `--solve`)", None, O.thenar_constraint(params)),
+             ("thenar and human palm, wide bounds", wide_bounds(params), O.thenar_constraint(params)),
+             ("thenar only (no human palm), wide bounds", wide_bounds(params), O.thenar_constraint(params, human=False)),
+             ("palm envelope only, wide bounds", wide_bounds(params), None)]
+    for label, bounds, constraint in cases:
+        t = time.perf_counter()
+        s = O.solve(hand, bounds=bounds, seed=seed, population=16, generations=150, constraint=constraint,
+                    oppose=O.PAD_OPPOSE)
+        T0 = F.thumb_cmc_placement(s.offset, s.axis)
+        row(label, params, T0, s.reach, time.perf_counter() - t)
+
+
+if __name__ == "__main__":
+    main(sys.argv)
