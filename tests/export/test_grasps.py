@@ -157,7 +157,10 @@ def test_every_grasp_runs_and_its_result_is_the_documented_one(results):
     pytest.param("tool_handle", marks=pytest.mark.xfail(strict=True, reason="the curled fingers do not reach a "
                                                         "24 mm-deep handle: docs/grasps.md")),
     pytest.param("fingertip_pinch", marks=pytest.mark.xfail(strict=True, reason="the thumb meets the index on "
-                                                            "its side face, not pad to pad: docs/grasps.md")),
+                                                            "its side face, the pads 80 deg from facing: the "
+                                                            "thumb's chain keeps its pad turned palmar wherever "
+                                                            "the thenar holds it (docs/opposition.md, 'Pad to "
+                                                            "pad')")),
 ])
 def test_the_main_grasps_hold_in_every_direction(results, name):
     r = results[0][name]
