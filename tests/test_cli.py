@@ -169,6 +169,23 @@ def test_params_opposition_solves_a_placement_the_file_then_reaches(tmp_path):
     assert cli("params", "validate", "-p", f).returncode == 0
 
 
+def test_params_opposition_pads_face_holds_the_normals():
+    """--pads-face prints the reach with the pads' normals held within PAD_OPPOSE of facing: the
+    margins of ``opposition.reach(hand, oppose=PAD_OPPOSE)``, to the printed tenth of a degree."""
+    import re
+
+    from phantom_cad.kinematics import opposition
+    from phantom_cad.kinematics.model import Hand
+    from phantom_cad.params.io import load_params
+
+    out = cli("params", "opposition", "--pads-face").stdout
+    assert "the pads' normals within 30 deg of facing each other" in out
+    want = opposition.reach(Hand(load_params(None)), fingers=opposition.OPPOSED, oppose=opposition.PAD_OPPOSE)
+    for finger, r in want.items():
+        row = next(ln for ln in out.splitlines() if ln.strip().startswith(finger))
+        assert float(re.search(r"margin ([+-][0-9.]+) deg", row).group(1)) == pytest.approx(math.degrees(r.margin), abs=0.05)
+
+
 def test_model_commands_never_import_cad(tmp_path):
     inp = tmp_path / "u.csv"
     inp.write_text("u1,u2,u3,u4,u5,u6\n0,0.5,0,0,0,0\n")

@@ -118,20 +118,23 @@ def describe(hand) -> str:
     return "\n".join(out)
 
 
-def opposition_lines(hand, reach=None) -> list[str]:
+def opposition_lines(hand, reach=None, oppose=None) -> list[str]:
     """The thumb pad's closest approach to each fingertip pad over the servo travel, and how squarely
-    they meet (kinematics/opposition.py; docs/opposition.md)."""
+    they meet (kinematics/opposition.py; docs/opposition.md); with ``oppose`` (rad), the pads'
+    normals held within it of facing each other too."""
     import math
 
     from ..kinematics import opposition
     from ..kinematics.topology import CMC_SERVO, SERVOS, THUMB_CHAIN
     from ..units import deg, mm
 
-    reach = opposition.reach(hand) if reach is None else reach
+    reach = opposition.reach(hand, oppose=oppose) if reach is None else reach
     # the thumb's two servos, in the order of reach()'s u_thumb
     u1, u6 = SERVOS[THUMB_CHAIN.servo].label, SERVOS[CMC_SERVO].label
     out = ["opposition (thumb pad to fingertip pad over the travel; pads <= 0 mm: they meet; margin: how far "
-           f"inside the {deg(opposition.PAD_CONE):g} deg pad cone the contact direction stays):"]
+           f"inside the {deg(opposition.PAD_CONE):g} deg pad cone the contact direction stays"
+           + ("" if oppose is None else f", the pads' normals within {deg(oppose):g} deg of facing each other")
+           + "):"]
     for f, r in reach.items():
         pad = (f"pads {mm(r.gap):+.1f} mm at {u1} {deg(r.u_thumb[0]):.1f}, {u6} {deg(r.u_thumb[1]):.1f}, "
                f"{f} {deg(r.u_finger):.1f} deg" if math.isfinite(r.gap) else "the pads never face each other")
@@ -147,7 +150,10 @@ def opposition_lines(hand, reach=None) -> list[str]:
 def params_opposition(params: Optional[Path] = ParamsOpt,
                       solve: bool = typer.Option(False, "--solve", help="Search the thumb's CMC placement that "
                                                  "maximizes the opposition margin (seconds) and print it as "
-                                                 "parameter-file lines.")):
+                                                 "parameter-file lines."),
+                      pads_face: bool = typer.Option(False, "--pads-face", help="Count a contact only where the "
+                                                     "pads' normals are within 30 deg of facing each other "
+                                                     "too (docs/opposition.md, 'Pad to pad').")):
     """The thumb's reach to the fingertip pads; with --solve, the CMC placement that opposes index,
     middle and ring best (docs/opposition.md). Nothing is written: paste the printed lines."""
     import math
@@ -160,10 +166,11 @@ def params_opposition(params: Optional[Path] = ParamsOpt,
     p = hand.params
     typer.echo(f"{p.source}: CMC at {[round(mm(v), 2) for v in p.palm.thumb_cmc_offset]} mm, axis "
                f"{[round(deg(v), 2) for v in p.palm.thumb_cmc_axis]} deg")
-    typer.echo("\n".join(opposition_lines(hand)))
+    oppose = opposition.PAD_OPPOSE if pads_face else None
+    typer.echo("\n".join(opposition_lines(hand, oppose=oppose)))
     if not solve:
         return
-    sol = opposition.solve(hand, constraint=opposition.thenar_constraint(p))
+    sol = opposition.solve(hand, constraint=opposition.thenar_constraint(p), oppose=oppose)
     b = opposition.default_bounds(p)
     typer.echo("")
     typer.echo(f"solved ({sol.evaluations} evaluations; bounds: CMC "
@@ -171,7 +178,7 @@ def params_opposition(params: Optional[Path] = ParamsOpt,
                + ", ".join(f"{a} [{deg(lo):.0f}, {deg(hi):.0f}] deg"
                            for a, (lo, hi) in zip(("roll", "pitch", "yaw"), b.axis))
                + "):")
-    typer.echo("\n".join(opposition_lines(hand, sol.reach)))
+    typer.echo("\n".join(opposition_lines(hand, sol.reach, oppose)))
     verdict = ("the pads of index, middle and ring all meet" if math.isfinite(sol.margin) and sol.margin >= 0.0
                else "index, middle and ring are not all met pad to pad")
     palm = (f"stay {mm(-sol.intrusion):.1f} mm outside" if sol.intrusion <= 0.0
