@@ -10,14 +10,42 @@ import multiprocessing
 import os
 import sys
 import time
+from collections.abc import Sequence
 
 
-def mp_context():
-    """fork when this process has not loaded OCP yet (fast: the CLI's case); spawn once OCP
-    is loaded (its thread pools make a forked child deadlock) or where fork is missing."""
+def mp_context(preload: Sequence[str] = ()):
+    """fork when this process has not loaded OCP yet (fast: the CLI's case). Once OCP is loaded a
+    forked child can deadlock on its thread pools, so the workers then start from a fork server: a
+    process started once per process, which imports ``preload`` (module names) and runs nothing
+    else, and from which each worker forks with those modules loaded instead of importing them
+    again as a spawned one would (2-3 s for build123d). A fork server's worker is the server's
+    child (:func:`watched_parent`; ``preload`` makes the server exit with this process) and starts
+    with the environment the server started with (:func:`apply_environment`). spawn where neither
+    start method exists."""
     methods = multiprocessing.get_all_start_methods()
     ocp_loaded = any(m == "OCP" or m.startswith("OCP.") for m in sys.modules)
-    return multiprocessing.get_context("fork" if "fork" in methods and not ocp_loaded else "spawn")
+    if "fork" in methods and not ocp_loaded:
+        return multiprocessing.get_context("fork")
+    if "forkserver" in methods:
+        ctx = multiprocessing.get_context("forkserver")
+        ctx.set_forkserver_preload(list(preload))   # effective until the server starts: the first caller's
+        return ctx
+    return multiprocessing.get_context("spawn")
+
+
+def watched_parent(ctx) -> int | None:
+    """The pid a worker started by ``ctx`` watches (:func:`die_with_parent`): this process's, or
+    None (the worker's parent when it starts) for a fork server's worker, whose parent is the
+    server, gone when this process is."""
+    return None if ctx.get_start_method() == "forkserver" else os.getpid()
+
+
+def apply_environment(environ: dict[str, str]) -> None:
+    """Make this process's environment ``environ``: a fork server's worker starts with the
+    server's, taken when it started, not the environment of the process that asks for the worker
+    now (what a spawned or forked worker gets)."""
+    os.environ.clear()
+    os.environ.update(environ)
 
 
 def fork_context():
@@ -36,11 +64,15 @@ def available_cpus() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def die_with_parent(parent_pid: int, interval_s: float = 0.5) -> None:
+def die_with_parent(parent_pid: int | None, interval_s: float = 0.5) -> None:
     """Pool initializer: the worker exits as soon as the process that started it is gone (killed,
     crashed), instead of living on as an orphan holding hundreds of MB. A daemon thread polls the
-    parent's pid (a reparented worker sees another one); no signal tied to the starting thread."""
+    parent's pid (a reparented worker sees another one); no signal tied to the starting thread.
+    ``parent_pid`` None: the parent the worker has now (:func:`watched_parent`)."""
     import threading
+
+    if parent_pid is None:
+        parent_pid = os.getppid()
 
     def watch():
         while True:

@@ -153,9 +153,10 @@ class _Build:
 
     def get_pool(self) -> ProcessPoolExecutor:
         if self.pool is None:
-            self.pool = ProcessPoolExecutor(max_workers=self.jobs, mp_context=workers.mp_context(),
-                                            initializer=pool_mod.init_worker,
-                                            initargs=(os.getpid(), occt_threads(self.jobs)))
+            ctx = workers.mp_context(preload=pool_mod.PRELOAD)
+            self.pool = ProcessPoolExecutor(max_workers=self.jobs, mp_context=ctx, initializer=pool_mod.init_worker,
+                                            initargs=(workers.watched_parent(ctx), occt_threads(self.jobs),
+                                                      dict(os.environ)))
         return self.pool
 
     def close(self) -> None:

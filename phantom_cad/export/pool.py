@@ -21,7 +21,7 @@ from .. import units
 from ..atomic import write_atomic
 from ..canon import jsonable, sha256
 from ..params import parse
-from ..workers import die_with_parent, keep_freed_memory
+from ..workers import apply_environment, die_with_parent, keep_freed_memory
 from ..kinematics.hand_params import HandParams
 from . import interface, orient
 from .cache import Cache, seal
@@ -34,14 +34,22 @@ STEP_VOLUME_RTOL = 1e-3
 STL_VOLUME_RTOL = 1e-2
 
 
-def init_worker(parent_pid: int, occt_threads: int | None) -> None:
-    """Pool initializer of the build's workers: die with the parent (``workers.die_with_parent``),
+#: the module the build's fork server imports for its workers (``workers.mp_context``)
+PRELOAD = ("phantom_cad.export.pool_preload",)
+
+
+def init_worker(parent_pid: int | None, occt_threads: int | None, environ: dict[str, str] | None = None) -> None:
+    """Pool initializer of the build's workers: the environment ``environ`` of the process that
+    starts the pool where given (``workers.apply_environment``: a fork server's worker would have
+    the server's), die with the parent (``workers.die_with_parent``),
     keep the memory they free for reuse (``workers.keep_freed_memory``), load build123d now,
     without scikit-learn (``cad.kernel.import_build123d``), and when ``occt_threads`` is given
     run OpenCascade on that many threads (``cad.kernel.use_threads``: the pipeline gives each
     worker its share of the CPUs when the workers fill them)."""
     from ..cad import kernel
 
+    if environ is not None:
+        apply_environment(environ)
     die_with_parent(parent_pid)
     keep_freed_memory()
     kernel.import_build123d()

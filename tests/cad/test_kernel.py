@@ -180,7 +180,8 @@ def test_init_worker_sets_up_the_build_workers():
     from phantom_cad import workers
     from phantom_cad.export import pool
 
-    with ProcessPoolExecutor(1, mp_context=workers.mp_context(), initializer=pool.init_worker,
-                             initargs=(os.getpid(), 1)) as ex:
+    ctx = workers.mp_context(preload=pool.PRELOAD)
+    with ProcessPoolExecutor(1, mp_context=ctx, initializer=pool.init_worker,
+                             initargs=(workers.watched_parent(ctx), 1)) as ex:
         state = ex.submit(_worker_state).result(timeout=300)
     assert state == {"sklearn": False, "build123d": True, "occt": True, "threads": 1, "faults": True}

@@ -520,26 +520,32 @@ def test_concurrent_builds_share_one_cache(tmp_path):
 
 
 @pytest.mark.slow
-def test_workers_die_with_a_killed_build(tmp_path):
+@pytest.mark.parametrize("started", ["fork", "forkserver"])
+def test_workers_die_with_a_killed_build(tmp_path, started):
     """A killed build's workers exit with it (left running, each would hold ~550 MB under parent
-    PID 1). Kill the build while its workers import the CAD stack and build parts: they exit."""
+    PID 1). Kill the build while its workers import the CAD stack and build parts: they exit. A
+    build in a process that has loaded OCP starts its workers from a fork server
+    (``workers.mp_context``): the server and its workers exit too."""
     import signal
     import subprocess
     import time
 
     import psutil
 
-    code = ("from phantom_cad.export.pipeline import build_hand; "
+    prelude = "from phantom_cad.cad import kernel; kernel.import_build123d(); " if started == "forkserver" else ""
+    code = (prelude + "from phantom_cad.export.pipeline import build_hand; "
             f"build_hand(None, {str(tmp_path / 'out')!r}, cache_dir={str(tmp_path / 'cache')!r}, jobs=2)")
+    # a fork server's workers are its children: the server and two workers
+    expected = 3 if started == "forkserver" else 2
     proc = subprocess.Popen([sys.executable, "-c", code])
     try:
         parent = psutil.Process(proc.pid)
-        deadline = time.monotonic() + 60
+        deadline = time.monotonic() + 120
         workers = []
-        while time.monotonic() < deadline and len(workers) < 2:
+        while time.monotonic() < deadline and len(workers) < expected:
             workers = parent.children(recursive=True)
             time.sleep(0.1)
-        assert len(workers) >= 2, "the build started no workers"
+        assert len(workers) >= expected, f"the build started {len(workers)} processes"
         time.sleep(1.0)   # the workers are busy now (importing build123d, building parts)
         proc.send_signal(signal.SIGKILL)
         proc.wait(10)
