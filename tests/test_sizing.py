@@ -5,10 +5,12 @@ input refused with one error line, exit 2, nothing written."""
 
 from __future__ import annotations
 
+import copy
 import math
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from phantom_cad.cad import preflight
@@ -115,6 +117,69 @@ def test_palm_layout_gives_the_default_pitch_and_clears_the_bases(document):
     for (a, b), ca, cb in zip(zip(FINGERS, FINGERS[1:]), cols, cols[1:]):
         room = base_room(ca, cb, 13e-3) * 1e3
         assert room >= (w[a] + w[b]) / 2 + 0.2 - 1e-9
+
+
+def _flexed(doc, pitch=None):
+    """(least distance in mm, pair) of neighbouring fingers' boxes over their commands' grid."""
+    from phantom_cad.kinematics.finger_clearance import neighbour_clearance
+    from phantom_cad.kinematics.model import Hand
+
+    if pitch is not None:
+        doc = copy.deepcopy(doc)
+        doc["palm"]["finger_pitch_mm"] = pitch
+    p = parse(doc)
+    gap, pair = neighbour_clearance(p, Hand(p))
+    return gap * 1e3, pair
+
+
+def test_flexed_neighbours_stay_apart_on_the_sized_hand():
+    """160 x 72 mm: four 15 mm fingers, so the widest finger and 2.5 mm give a 17.5 mm pitch, at which
+    the ring's distal phalanx, fully flexed, and the pinky's, at 95 % of its travel, overlap by
+    0.26 mm as boxes (``phantom-cad check`` found the two parts overlapping on the sized hand).
+    The solver raises the pitch to 18 mm, where every neighbouring pair's boxes stay
+    FLEXED_CLEARANCE (0.1 mm) apart over every pair of commands (every 5 % of each travel)."""
+    doc = build_document(Person(160.0, 72.0))
+    assert {entry(doc, f)["width_mm"] for f in FINGERS} == {15.0}
+    assert doc["palm"]["finger_pitch_mm"] == 18.0
+    gap, _ = _flexed(doc)
+    assert gap >= S.FLEXED_CLEARANCE
+    old, pair = _flexed(doc, 17.5)
+    assert pair == ("ring", "pinky") and old == pytest.approx(-0.26, abs=0.01)
+    # the boxes' own overlap, by a corner: the ring's distal box at full travel holds a point of the
+    # pinky's at 95 % (a point-in-box test, apart from the distance's algorithm)
+    from phantom_cad.kinematics.finger_clearance import link_boxes
+    from phantom_cad.kinematics.link_frames import link_transforms
+    from phantom_cad.kinematics.model import Hand
+
+    doc["palm"]["finger_pitch_mm"] = 17.5
+    p = parse(doc)
+    h = Hand(p)
+
+    def distal(finger, f):
+        u = np.array(h.u_min, float)
+        s = FINGERS.index(finger) + 1
+        u[s] += f * (h.u_max[s] - h.u_min[s])
+        T = link_transforms(p, h.forward(u), mirrored=False)[f"{finger}_distal"]
+        c, half = link_boxes(p, finger)[f"{finger}_distal"][0]
+        return T, c, half
+
+    Tr, cr, hr = distal("ring", 1.0)
+    Tp, cp, hp = distal("pinky", 0.95)
+    # points on the pinky's box's faces (1 mm apart, in its link frame), in the ring's link frame
+    g = [np.linspace(c - h, c + h, int(2 * h / 1e-3) + 2) for c, h in zip(cp, hp)]
+    pts = np.stack(np.meshgrid(*g, indexing="ij"), -1).reshape(-1, 3)
+    pts = pts[np.any(np.isclose(np.abs(pts - cp), hp), axis=1)]
+    local = (np.linalg.inv(Tr) @ (Tp @ np.c_[pts, np.ones(len(pts))].T))[:3].T
+    assert np.any(np.all(np.abs(local - cr) < hr, axis=1))
+
+
+def test_flexed_neighbours_stay_apart_on_the_reference_hand():
+    """The reference hand's 20.5 mm pitch keeps its flexed neighbours' boxes 0.12 mm apart (the index
+    and middle); at 20 mm they would overlap as boxes."""
+    doc = template()
+    gap, pair = _flexed(doc)
+    assert pair == ("index", "middle") and S.FLEXED_CLEARANCE <= gap == pytest.approx(0.124, abs=0.001)
+    assert _flexed(doc, 20.0)[0] < 0.0
 
 
 # -- the sized files -------------------------------------------------------------
