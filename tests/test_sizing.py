@@ -266,6 +266,67 @@ def test_bad_arguments_are_one_error_line(tmp_path, capsys, argv, words):
     assert not out.exists()
 
 
+DOCUMENTED = {
+    # a hand too short for the thinnest finger its base allows (docs/sizing.md, refusals)
+    "a 100 mm hand": (
+        [], 100,
+        "error: --hand-length 100: the index distal phalanx (9.70 mm) leaves the index at most 9.30 mm thick (its "
+        "two joint bosses and clearances must fit in it), the index needs at least 10.50 mm (the tendon enters its "
+        "base below two 3 x 2 mm magnet pockets, one palm wall above the palmar face); nearest that works: "
+        "--hand-length 118"),
+    "a middle finger longer than the hand": (
+        "[middle]\nproximal = 60\nmiddle = 40\ndistal = 30\n", 170,
+        "error: the middle finger (metacarpal + proximal + middle + distal = 193.4 mm, proximal, middle, distal from "
+        "--segments) must be shorter than the hand length (170 mm, wrist crease to the middle fingertip: the carpus "
+        "lies between); nearest that works: --hand-length 194, or middle-finger segments 24.4 mm shorter in all"),
+    "an unknown key": (
+        "[index]\nproximal = 40\nnail = 3\n", 170,
+        "error: {seg}: index.nail: unknown key (allowed in [index]: proximal, middle, distal, width, lengths in mm, "
+        "joint centre to joint centre)"),
+    "a negative length": (
+        "[index]\nproximal = -40\n", 170,
+        "error: {seg}: index.proximal = -40 mm: must be > 0 mm (a length, joint centre to joint centre)"),
+    "a negative hand length": (
+        [], -170,
+        "error: --hand-length -170: must lie in [50, 400] mm, the lengths the sizing tries (docs/sizing.md); nearest "
+        "that works: --hand-length 50"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(DOCUMENTED))
+def test_the_documented_refusals(tmp_path, capsys, case):
+    """Each bad input docs/sizing.md lists: its one line, exit 2, nothing written."""
+    text, length, want = DOCUMENTED[case]
+    seg = tmp_path / "person.toml"
+    argv = ["size", "--hand-length", length, "--hand-breadth", 75, "--out", tmp_path / "hand.toml", "--no-search"]
+    if text:
+        seg.write_text(text)
+        argv += ["--segments", seg]
+    code, stdout, err = run(argv, capsys)
+    assert (code, err.splitlines(), stdout) == (2, [want.format(seg=seg)], "")
+    assert sorted(q.name for q in tmp_path.iterdir()) == (["person.toml"] if text else [])
+
+
+def test_a_segments_table_may_leave_keys_out(tmp_path, capsys):
+    """No key of a segments table is required: a table with the index's proximal phalanx alone gives
+    that phalanx the measured length and every other segment and width the reference's (the
+    reference fraction of the hand length, the reference width in proportion to the breadth)."""
+    import tomllib
+
+    seg = tmp_path / "person.toml"
+    seg.write_text("[index]\nproximal = 46.3\n")
+    out = tmp_path / "hand.toml"
+    code, _, err = run(["size", "--hand-length", 189, "--hand-breadth", 85, "--segments", seg, "--out", out,
+                        "--no-search"], capsys)
+    assert code == 0, err
+    doc, ref = tomllib.loads(out.read_text()), template()
+    got, want = doc["fingers"]["index"], ref["fingers"]["index"]
+    assert got["length_fraction"]["proximal"] * 189.0 == pytest.approx(46.3, abs=1e-4)
+    assert {k: v for k, v in got["length_fraction"].items() if k != "proximal"} == \
+        {k: v for k, v in want["length_fraction"].items() if k != "proximal"}
+    assert got["width_mm"] == want["width_mm"] and doc["fingers"]["middle"] == ref["fingers"]["middle"]
+
+
 def test_a_hand_whose_thumb_misses_a_pad_is_refused(tmp_path, capsys):
     """150 mm long and 105 mm broad, the reference placement scaled: the ring's pad never faces the
     thumb's; the line names it and the breadth of the reference's proportion, which works."""
