@@ -54,28 +54,32 @@ def link_boxes(params: HandParams, finger: str) -> dict[str, list[tuple[np.ndarr
     return out
 
 
-def posed_boxes(params: HandParams, hand, finger: str, fractions=GRID):
-    """The finger's boxes over its servo's travel: (fixed, moving), each a tuple (centres (n, 3),
-    axes (n, 3, 3), half extents (n, 3)) in the palm frame (right hand, m): ``fixed`` the finger
-    base's (n = 1), ``moving`` the phalanges' at each fraction (n = len(fractions) x boxes, the
-    fraction slowest). ``hand``: the model (``Hand``) whose ``forward`` poses the finger (ideal
-    coupling, as the collision check poses it)."""
-    servo = next(s.index for s in SERVOS if s.digit == finger)
-    boxes = link_boxes(params, finger)
-    base = next(n for n, ln in ((ln.name, ln) for ln in digit_links(finger)) if ln.parent_joint is None)
-    fixed, moving = [], []
-    for k, f in enumerate(fractions):
+def posed_boxes(params: HandParams, hand, fractions=GRID) -> dict[str, tuple]:
+    """{finger: (fixed, moving)} of every finger's boxes over its servo's travel, each a tuple
+    (centres (n, 3), axes (n, 3, 3), half extents (n, 3)) in the palm frame (right hand, m):
+    ``fixed`` the finger base's (n = 1), ``moving`` the phalanges' at each fraction (n =
+    len(fractions) x boxes, the fraction slowest). ``hand``: the model (``Hand``) whose ``forward``
+    poses the fingers (ideal coupling, as the collision check poses them); each finger hangs on its
+    own servo, so one pose per fraction holds all four."""
+    servos = [s.index for s in SERVOS if s.digit in FINGERS]
+    boxes = {f: link_boxes(params, f) for f in FINGERS}
+    out = {f: ([], []) for f in FINGERS}
+    for k, frac in enumerate(fractions):
         u = np.array(hand.u_min, float)
-        u[servo] += f * (hand.u_max[servo] - hand.u_min[servo])
+        u[servos] += frac * (hand.u_max[servos] - hand.u_min[servos])
         T = link_transforms(params, hand.forward(u), mirrored=False)
-        for name, bs in boxes.items():
-            if name == base and k:
-                continue
-            for c, h in bs:
-                R, t = T[name][:3, :3], T[name][:3, 3]
-                (fixed if name == base else moving).append((R @ c + t, R, h))
-    pack = lambda items: tuple(np.array([it[i] for it in items]) for i in range(3))  # noqa: E731
-    return pack(fixed), pack(moving)
+        for f in FINGERS:
+            fixed, moving = out[f]
+            for ln in digit_links(f):
+                if ln.parent_joint is None and k:
+                    continue
+                R, t = T[ln.name][:3, :3], T[ln.name][:3, 3]
+                for c, h in boxes[f][ln.name]:
+                    (fixed if ln.parent_joint is None else moving).append((R @ c + t, R, h))
+
+    def pack(items):
+        return tuple(np.array([it[i] for it in items]) for i in range(3))
+    return {f: (pack(fixed), pack(moving)) for f, (fixed, moving) in out.items()}
 
 
 def box_distance(a, b) -> np.ndarray:
@@ -113,21 +117,27 @@ def _take(box, which):
 def separating_gap(a, b) -> np.ndarray:
     """The largest gap between the projections of boxes a[i] and b[i] onto their separating axes
     (3 + 3 face normals, 9 edge cross products): positive where they are apart (a lower bound on
-    their distance), else minus the depth of their overlap."""
+    their distance), else minus the depth of their overlap. In a's frame (Gottschalk's form: b's
+    axes are the columns of C = Ra^T Rb)."""
     ca, Ra, ha = a
     cb, Rb, hb = b
-    axes = [Ra[:, :, i] for i in range(3)] + [Rb[:, :, i] for i in range(3)]
-    axes += [np.cross(Ra[:, :, i], Rb[:, :, j]) for i in range(3) for j in range(3)]
-    L = np.stack(axes, axis=1)                                     # (n, 15, 3)
-    norm = np.linalg.norm(L, axis=2)
-    ok = norm > 1e-9                                               # parallel edges give no axis
-    L = L / np.where(ok, norm, 1.0)[..., None]
-
-    def span(R, h):      # the box's half extent along each axis
-        return np.einsum("nki,ni->nk", np.abs(np.einsum("nkj,nji->nki", L, R)), h)
-
-    gap = np.abs(np.einsum("nkj,nj->nk", L, cb - ca)) - span(Ra, ha) - span(Rb, hb)
-    return np.where(ok, gap, -np.inf).max(axis=1)
+    t = np.einsum("nji,nj->ni", Ra, cb - ca)                       # b's centre in a's frame
+    C = np.einsum("nki,nkj->nij", Ra, Rb)
+    A = np.abs(C)
+    gaps = [np.abs(t) - ha - np.einsum("nij,nj->ni", A, hb),                        # a's faces
+            np.abs(np.einsum("ni,nij->nj", t, C)) - hb - np.einsum("nij,ni->nj", A, ha)]  # b's faces
+    for i in range(3):
+        i1, i2 = (i + 1) % 3, (i + 2) % 3
+        for j in range(3):
+            j1, j2 = (j + 1) % 3, (j + 2) % 3
+            # the axis a_i x b_j, of length sin(a_i, b_j): none where the two edges are parallel
+            length = np.sqrt(np.maximum(1.0 - C[:, i, j] ** 2, 0.0))
+            ra = ha[:, i1] * A[:, i2, j] + ha[:, i2] * A[:, i1, j]
+            rb = hb[:, j1] * A[:, i, j2] + hb[:, j2] * A[:, i, j1]
+            dist = np.abs(t[:, i2] * C[:, i1, j] - t[:, i1] * C[:, i2, j])
+            ok = length > 1e-9
+            gaps.append(np.where(ok, (dist - ra - rb) / np.where(ok, length, 1.0), -np.inf)[:, None])
+    return np.concatenate(gaps, axis=1).max(axis=1)
 
 
 def _corners(box) -> np.ndarray:
@@ -174,7 +184,7 @@ def neighbour_clearance(params: HandParams, hand, fractions=GRID) -> tuple[float
     """The least distance (m) between the boxes of two neighbouring fingers over the grid of both
     servos' commands (every pair of fractions), each finger's phalanges against the other's
     phalanges and finger base; and the pair where it is least (negative: the boxes overlap)."""
-    posed = {f: posed_boxes(params, hand, f, fractions) for f in FINGERS}
+    posed = posed_boxes(params, hand, fractions)
     best, where = np.inf, ("", "")
     for a, b in zip(FINGERS, FINGERS[1:]):
         (fa, ma), (fb, mb) = posed[a], posed[b]
