@@ -135,7 +135,7 @@ def _flexed(doc, pitch=None):
 def test_flexed_neighbours_stay_apart_on_the_sized_hand():
     """160 x 72 mm: four 15 mm fingers, so the widest finger and 2.5 mm give a 17.5 mm pitch, at which
     the ring's distal phalanx, fully flexed, and the pinky's, at 95 % of its travel, overlap by
-    0.26 mm as boxes (``phantom-cad check`` found the two parts overlapping on the sized hand).
+    0.26 mm as boxes (and ``phantom-cad check`` finds the two parts overlapping, 0.2 mm^3).
     The solver raises the pitch to 18 mm, where every neighbouring pair's boxes stay
     FLEXED_CLEARANCE (0.1 mm) apart over every pair of commands (every 5 % of each travel)."""
     doc = build_document(Person(160.0, 72.0))
