@@ -5,10 +5,12 @@ input refused with one error line, exit 2, nothing written."""
 
 from __future__ import annotations
 
+import copy
 import math
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from phantom_cad.cad import preflight
@@ -117,6 +119,69 @@ def test_palm_layout_gives_the_default_pitch_and_clears_the_bases(document):
         assert room >= (w[a] + w[b]) / 2 + 0.2 - 1e-9
 
 
+def _flexed(doc, pitch=None):
+    """(least distance in mm, pair) of neighbouring fingers' boxes over their commands' grid."""
+    from phantom_cad.kinematics.finger_clearance import neighbour_clearance
+    from phantom_cad.kinematics.model import Hand
+
+    if pitch is not None:
+        doc = copy.deepcopy(doc)
+        doc["palm"]["finger_pitch_mm"] = pitch
+    p = parse(doc)
+    gap, pair = neighbour_clearance(p, Hand(p))
+    return gap * 1e3, pair
+
+
+def test_flexed_neighbours_stay_apart_on_the_sized_hand():
+    """160 x 72 mm: four 15 mm fingers, so the widest finger and 2.5 mm give a 17.5 mm pitch, at which
+    the ring's distal phalanx, fully flexed, and the pinky's, at 95 % of its travel, overlap by
+    0.26 mm as boxes (and ``phantom-cad check`` finds the two parts overlapping, 0.2 mm^3).
+    The solver raises the pitch to 18 mm, where every neighbouring pair's boxes stay
+    FLEXED_CLEARANCE (0.1 mm) apart over every pair of commands (every 5 % of each travel)."""
+    doc = build_document(Person(160.0, 72.0))
+    assert {entry(doc, f)["width_mm"] for f in FINGERS} == {15.0}
+    assert doc["palm"]["finger_pitch_mm"] == 18.0
+    gap, _ = _flexed(doc)
+    assert gap >= S.FLEXED_CLEARANCE
+    old, pair = _flexed(doc, 17.5)
+    assert pair == ("ring", "pinky") and old == pytest.approx(-0.26, abs=0.01)
+    # the boxes' own overlap, by a corner: the ring's distal box at full travel holds a point of the
+    # pinky's at 95 % (a point-in-box test, apart from the distance's algorithm)
+    from phantom_cad.kinematics.finger_clearance import link_boxes
+    from phantom_cad.kinematics.link_frames import link_transforms
+    from phantom_cad.kinematics.model import Hand
+
+    doc["palm"]["finger_pitch_mm"] = 17.5
+    p = parse(doc)
+    h = Hand(p)
+
+    def distal(finger, f):
+        u = np.array(h.u_min, float)
+        s = FINGERS.index(finger) + 1
+        u[s] += f * (h.u_max[s] - h.u_min[s])
+        T = link_transforms(p, h.forward(u), mirrored=False)[f"{finger}_distal"]
+        c, half = link_boxes(p, finger)[f"{finger}_distal"][0]
+        return T, c, half
+
+    Tr, cr, hr = distal("ring", 1.0)
+    Tp, cp, hp = distal("pinky", 0.95)
+    # points on the pinky's box's faces (1 mm apart, in its link frame), in the ring's link frame
+    g = [np.linspace(c - h, c + h, int(2 * h / 1e-3) + 2) for c, h in zip(cp, hp)]
+    pts = np.stack(np.meshgrid(*g, indexing="ij"), -1).reshape(-1, 3)
+    pts = pts[np.any(np.isclose(np.abs(pts - cp), hp), axis=1)]
+    local = (np.linalg.inv(Tr) @ (Tp @ np.c_[pts, np.ones(len(pts))].T))[:3].T
+    assert np.any(np.all(np.abs(local - cr) < hr, axis=1))
+
+
+def test_flexed_neighbours_stay_apart_on_the_reference_hand():
+    """The reference hand's 20.5 mm pitch keeps its flexed neighbours' boxes 0.12 mm apart (the index
+    and middle); at 20 mm they would overlap as boxes."""
+    doc = template()
+    gap, pair = _flexed(doc)
+    assert pair == ("index", "middle") and S.FLEXED_CLEARANCE <= gap == pytest.approx(0.124, abs=0.001)
+    assert _flexed(doc, 20.0)[0] < 0.0
+
+
 # -- the sized files -------------------------------------------------------------
 
 def test_the_reference_measurements_give_the_default_file():
@@ -199,6 +264,67 @@ def test_bad_arguments_are_one_error_line(tmp_path, capsys, argv, words):
     assert code == 2 and len(lines) == 1 and lines[0].startswith("error: "), err
     assert words in lines[0]
     assert not out.exists()
+
+
+DOCUMENTED = {
+    # a hand too short for the thinnest finger its base allows (docs/sizing.md, refusals)
+    "a 100 mm hand": (
+        [], 100,
+        "error: --hand-length 100: the index distal phalanx (9.70 mm) leaves the index at most 9.30 mm thick (its "
+        "two joint bosses and clearances must fit in it), the index needs at least 10.50 mm (the tendon enters its "
+        "base below two 3 x 2 mm magnet pockets, one palm wall above the palmar face); nearest that works: "
+        "--hand-length 118"),
+    "a middle finger longer than the hand": (
+        "[middle]\nproximal = 60\nmiddle = 40\ndistal = 30\n", 170,
+        "error: the middle finger (metacarpal + proximal + middle + distal = 193.4 mm, proximal, middle, distal from "
+        "--segments) must be shorter than the hand length (170 mm, wrist crease to the middle fingertip: the carpus "
+        "lies between); nearest that works: --hand-length 194, or middle-finger segments 24.4 mm shorter in all"),
+    "an unknown key": (
+        "[index]\nproximal = 40\nnail = 3\n", 170,
+        "error: {seg}: index.nail: unknown key (allowed in [index]: proximal, middle, distal, width, lengths in mm, "
+        "joint centre to joint centre)"),
+    "a negative length": (
+        "[index]\nproximal = -40\n", 170,
+        "error: {seg}: index.proximal = -40 mm: must be > 0 mm (a length, joint centre to joint centre)"),
+    "a negative hand length": (
+        [], -170,
+        "error: --hand-length -170: must lie in [50, 400] mm, the lengths the sizing tries (docs/sizing.md); nearest "
+        "that works: --hand-length 50"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(DOCUMENTED))
+def test_the_documented_refusals(tmp_path, capsys, case):
+    """Each bad input docs/sizing.md lists: its one line, exit 2, nothing written."""
+    text, length, want = DOCUMENTED[case]
+    seg = tmp_path / "person.toml"
+    argv = ["size", "--hand-length", length, "--hand-breadth", 75, "--out", tmp_path / "hand.toml", "--no-search"]
+    if text:
+        seg.write_text(text)
+        argv += ["--segments", seg]
+    code, stdout, err = run(argv, capsys)
+    assert (code, err.splitlines(), stdout) == (2, [want.format(seg=seg)], "")
+    assert sorted(q.name for q in tmp_path.iterdir()) == (["person.toml"] if text else [])
+
+
+def test_a_segments_table_may_leave_keys_out(tmp_path, capsys):
+    """No key of a segments table is required: a table with the index's proximal phalanx alone gives
+    that phalanx the measured length and every other segment and width the reference's (the
+    reference fraction of the hand length, the reference width in proportion to the breadth)."""
+    import tomllib
+
+    seg = tmp_path / "person.toml"
+    seg.write_text("[index]\nproximal = 46.3\n")
+    out = tmp_path / "hand.toml"
+    code, _, err = run(["size", "--hand-length", 189, "--hand-breadth", 85, "--segments", seg, "--out", out,
+                        "--no-search"], capsys)
+    assert code == 0, err
+    doc, ref = tomllib.loads(out.read_text()), template()
+    got, want = doc["fingers"]["index"], ref["fingers"]["index"]
+    assert got["length_fraction"]["proximal"] * 189.0 == pytest.approx(46.3, abs=1e-4)
+    assert {k: v for k, v in got["length_fraction"].items() if k != "proximal"} == \
+        {k: v for k, v in want["length_fraction"].items() if k != "proximal"}
+    assert got["width_mm"] == want["width_mm"] and doc["fingers"]["middle"] == ref["fingers"]["middle"]
 
 
 def test_a_hand_whose_thumb_misses_a_pad_is_refused(tmp_path, capsys):

@@ -205,8 +205,38 @@ def build_document(person: Person) -> dict:
     palm["heel_height_mm"] = S.scaled(ref["palm"]["heel_height_mm"], hl)
     palm["heel_length_mm"] = S.scaled(ref["palm"]["heel_length_mm"], hl)
     palm["thumb_cmc_offset_mm"] = [round(v * hl / S.REFERENCE_LENGTH, 4) for v in ref["palm"]["thumb_cmc_offset_mm"]]
+    flexed_spacing(doc)
     palm["thickness_mm"] = palm_thickness(doc)
     return doc
+
+
+def flexed_spacing(doc: dict) -> None:
+    """Raise the document's finger pitch on the half-millimetre grid until neighbouring fingers,
+    flexed over every pair of their commands, stay :data:`solvers.FLEXED_CLEARANCE` apart
+    (``kinematics.finger_clearance.neighbour_clearance``: the phalanges' boxes and the finger bases');
+    at the palm layout's largest pitch, narrow the wider of the pair that comes closest instead
+    (Infeasible when it is then narrower than its rules allow)."""
+    from ..kinematics.finger_clearance import neighbour_clearance
+    from ..kinematics.model import Hand
+
+    palm = doc["palm"]
+    top = units.mm(S.MAX_FINGER_PITCH)
+    while True:
+        p = parse(doc)
+        gap, (a, b) = neighbour_clearance(p, Hand(p, compensation="paper"))    # the ideal coupling
+        if units.mm(gap) >= S.FLEXED_CLEARANCE - 1e-9:
+            return
+        if palm["finger_pitch_mm"] + S.STEP <= top + 1e-9:
+            palm["finger_pitch_mm"] += S.STEP
+            continue
+        wa, wb = digit_entry(doc, a)["width_mm"], digit_entry(doc, b)["width_mm"]
+        wider = a if wa >= wb else b
+        digit_entry(doc, wider)["width_mm"] -= S.STEP
+        try:
+            parse(doc)
+        except ParamError as exc:
+            raise Infeasible(f"the {a} and {b} fingers, flexed, come {units.mm(gap):.2f} mm apart at the largest "
+                             f"finger pitch ({top:g} mm); the {wider} cannot be narrower ({exc})") from None
 
 
 def palm_thickness(doc: dict) -> float:

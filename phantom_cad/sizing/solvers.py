@@ -24,6 +24,10 @@ STEP = 0.5
 #: the clearance (mm) between adjacent fingers at the default's pitch (20.5 mm for 18 mm fingers; at
 #: 1 mm flexed fingers overlap, docs/parts.md)
 PITCH_CLEARANCE = 2.5
+#: the least distance (mm) between the boxes of neighbouring fingers flexed over every pair of their
+#: commands (``kinematics.finger_clearance``); the boxes hold the parts' rounded ends by their
+#: corners, so the parts stand further apart (the reference hand: 0.12 mm at its 20.5 mm pitch)
+FLEXED_CLEARANCE = 0.1
 
 #: what the sizing picks hardware from, largest first: disc magnets (diameter, thickness), and
 #: bearings (bore, outer, width: 683ZZ, MR63ZZ, 682ZZ); the first that fits every digit is chosen

@@ -74,9 +74,6 @@ def test_the_default_hand_is_all_green(export):
         assert what in checks
 
 
-@pytest.mark.xfail(strict=True, reason="the sized 160 x 72 mm hand's ring and pinky distal phalanges overlap "
-                   "(0.2 mm^3) on the command grid: the sizing's pitch keeps the finger bases apart, not the flexed "
-                   "phalanges (docs/sizing.md, limitations)")
 def test_a_sized_hand_is_all_green(sized_hand):
     """The hand ``phantom-cad size`` makes for 160 x 72 mm (tests/conftest.py)."""
     from phantom_cad.export.check import check_export
