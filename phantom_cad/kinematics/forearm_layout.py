@@ -321,6 +321,37 @@ def heel_gap(params: HandParams) -> float:
     return float(np.maximum(lo - P, P - hi).max(axis=1).min())
 
 
+#: the breadth (m) of a human forearm near the wrist (55-65 mm) with room for a shell, which the
+#: forearm module should stay within at the reference hand (:data:`REFERENCE_HAND_LENGTH`), scaled
+#: with the hand length (docs/sizing.md)
+FOREARM_BREADTH = 0.080
+#: the hand length (m) :data:`FOREARM_BREADTH` is given at: the default hand's (the paper's)
+REFERENCE_HAND_LENGTH = 0.189
+
+
+def forearm_points(params: HandParams) -> np.ndarray:
+    """Every servo's envelope (:func:`servo_envelope`) placed in the forearm module (m, palm frame,
+    right hand), stacked (n, 3): the module's block is one palm wall around them."""
+    pts = []
+    for k, T in forearm_servos(params).items():
+        env = servo_envelope(params, k)
+        pts.append((T[:3, :3] @ env.T).T + T[:3, 3])
+    return np.vstack(pts)
+
+
+def forearm_width(params: HandParams) -> float:
+    """The forearm module's width (m, across the forearm, palm x): its servos' envelopes
+    (:func:`forearm_points`) across and a palm wall each side (``cad.parts.wrist.forearm_block``)."""
+    x = forearm_points(params)[:, 0]
+    return float(x.max() - x.min()) + 2.0 * params.palm.wall
+
+
+def forearm_width_limit(params: HandParams) -> float:
+    """The widest (m) a forearm module within a human forearm may be for this hand:
+    :data:`FOREARM_BREADTH` scaled with the hand length."""
+    return FOREARM_BREADTH * params.hand_length / REFERENCE_HAND_LENGTH
+
+
 def forearm_top(params: HandParams) -> float:
     """z (m, palm frame) of the forearm module's top: a palm wall above the palm's dorsal face
     (flush with the tab that screws it onto the palm)."""
