@@ -201,6 +201,72 @@ def _forearm_servos(params: HandParams) -> dict[int, np.ndarray]:
     return out
 
 
+def drive_runs(params: HandParams) -> list[tuple[int, float, np.ndarray, np.ndarray]]:
+    """Every drive's straight run through the forearm module: (servo, side, start, end), the start
+    where it leaves its pulley (servo frame (side r, 0, 0): a tendon servo's drive at -x, the CMC
+    loop's strands at -x and +x), the end where it crosses the module's front face
+    (:func:`forearm_front`) along the servo's y (m, palm frame, right hand)."""
+    out = []
+    y1 = forearm_front(params)
+    for k, T in sorted(forearm_servos(params).items()):
+        for side in ((-1.0, 1.0) if SERVOS[k].drive == "loop" else (-1.0,)):
+            p = T[:3, 3] + side * servo_radius(params, k) * T[:3, 0]
+            u = T[:3, 1]
+            out.append((k, side, p, p + u * (y1 - p[1]) / u[1]))
+    return out
+
+
+def _convex_min(f, lo: float = 0.0, hi: float = 1.0, iterations: int = 80) -> float:
+    """The least value of a convex function of one variable on [lo, hi] (golden section)."""
+    g = (math.sqrt(5.0) - 1.0) / 2.0
+    a, b = lo, hi
+    c, d = b - g * (b - a), a + g * (b - a)
+    fc, fd = f(c), f(d)
+    for _ in range(iterations):
+        if fc <= fd:
+            b, d, fd = d, c, fc
+            c = b - g * (b - a)
+            fc = f(c)
+        else:
+            a, c, fc = c, d, fd
+            d = a + g * (b - a)
+            fd = f(d)
+    return min(fc, fd, f(lo), f(hi))
+
+
+def drive_clearances(params: HandParams) -> dict[tuple[int, float, int], float]:
+    """The least distance (m) from each drive's run through the module (:func:`drive_runs`) to
+    every other servo's envelope: its body and its ears grown by a hole clearance
+    (:func:`servo_boxes`) and its pulley's cavity (a cylinder of the pulley's radius and the
+    cavity margin, a pulley width and two hole clearances tall), keyed (servo, side, other servo).
+    A point's distance to each of the three is convex along the run: each one's least value by
+    golden section, the least of the three."""
+    c = params.print.hole_clearance
+    h = params.cad.servo_pulley_width / 2.0 + c
+    boxes = [(lo - c, hi + c) for lo, hi in servo_boxes(params).values()]
+    servos = forearm_servos(params)
+    out = {}
+    for k, side, p0, p1 in drive_runs(params):
+        for j, T in sorted(servos.items()):
+            if j == k:
+                continue
+            R = T[:3, :3].T
+            a, b = R @ (p0 - T[:3, 3]), R @ (p1 - T[:3, 3])
+            rc = servo_radius(params, j) + pulley_cavity_margin(params)
+
+            def to_box(t: float, lo: np.ndarray, hi: np.ndarray) -> float:
+                q = a + (b - a) * t
+                return float(np.linalg.norm(np.maximum(np.maximum(lo - q, q - hi), 0.0)))
+
+            def to_cavity(t: float) -> float:
+                q = a + (b - a) * t
+                return math.hypot(max(math.hypot(q[0], q[1]) - rc, 0.0), max(abs(q[2]) - h, 0.0))
+
+            out[(k, side, j)] = min([_convex_min(to_cavity)] +
+                                    [_convex_min(lambda t, lo=lo, hi=hi: to_box(t, lo, hi)) for lo, hi in boxes])
+    return out
+
+
 def _outlines(params: HandParams, T: np.ndarray, servo: int) -> list[np.ndarray]:
     """The xy outlines (palm frame, counter-clockwise) of servo ``servo``'s body, ears and pulley
     cavity, grown by a clearance, placed by T, with the pockets the module cuts for them: open along

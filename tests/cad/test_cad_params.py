@@ -155,6 +155,69 @@ def test_a_wide_servo_widens_the_forearm_row(document):
             assert d >= doc["palm"]["wall_mm"] - 1e-6, (width, d)
 
 
+def _sampled_clearance(a, b, T, r, document, n=4001):
+    """By hand, in mm: the least distance from n points along the segment ab (palm frame) to a
+    servo at T's body and ears (boxes grown by the hole clearance, from the servo's dimensions as
+    the file gives them) and its pulley cavity (radius r + 3 tendon diameters + a hole clearance,
+    half a pulley width and a hole clearance each side of the mid-plane); at most the true least
+    distance plus half the spacing of the points."""
+    sv, cad, c = document["servo"], document["cad"], document["print"]["hole_clearance_mm"]
+    L, W, H = sv["body_mm"]
+    top = -(cad["servo_pulley_width_mm"] / 2 + c)
+    ears = (top - cad["servo_ear_offset_mm"] - cad["servo_ear_thickness_mm"], top - cad["servo_ear_offset_mm"])
+    y0 = -cad["servo_shaft_offset_mm"]
+    boxes = [((-W / 2, y0 - L / 2, top - H), (W / 2, y0 + L / 2, top)),
+             ((-W / 2, y0 - sv["flange_span_mm"] / 2, ears[0]), (W / 2, y0 + sv["flange_span_mm"] / 2, ears[1]))]
+    t = np.linspace(0.0, 1.0, n)[:, None]
+    q = (a + (b - a) * t - T[:3, 3]) @ T[:3, :3]            # in the servo frame
+    d = [np.linalg.norm(np.maximum(np.maximum(np.array(lo) - c - q, q - np.array(hi) - c), 0.0), axis=1)
+         for lo, hi in boxes]
+    rc = r + 3 * document["hardware"]["tendon_diameter_mm"] + c
+    h = cad["servo_pulley_width_mm"] / 2 + c
+    d.append(np.hypot(np.maximum(np.hypot(q[:, 0], q[:, 1]) - rc, 0.0), np.maximum(np.abs(q[:, 2]) - h, 0.0)))
+    return float(np.min(d)), float(np.linalg.norm(b - a)) / (n - 1) / 2
+
+
+@pytest.mark.parametrize("example", [None, "small", "slender"])
+def test_every_drive_clears_every_other_servo(document, example):
+    """Every drive runs from its pulley to the module's front face (``forearm_layout.drive_runs``)
+    at least a tendon hole's radius and the thinnest printable wall (0.5 + 0.8 mm by default) from
+    every other servo's body, ears and pulley cavity: its channel keeps a wall to their pockets (the
+    least is the CMC loop's ulnar strand beside the thumb's servo: 3.57 mm on the default hand, 2.36
+    mm on the small one). ``forearm_layout.drive_clearances`` (golden section on each shape) against
+    the distance sampled along the run, from the servo's dimensions in the file."""
+    from phantom_cad.kinematics import forearm_layout as FL
+    from phantom_cad.kinematics.topology import SERVOS
+    from phantom_cad.params import load_document
+    from phantom_cad.params.rules import MIN_WALL
+    from phantom_cad.units import MM
+
+    doc = document if example is None else load_document(f"params/examples/{example}.toml")
+    p = parse(doc)
+    servos = FL.forearm_servos(p)
+    got = FL.drive_clearances(p)
+    runs = FL.drive_runs(p)
+    assert len(runs) == 7 and len(got) == 7 * 5          # the loop's two strands, five drives
+    hole = doc["hardware"]["tendon_diameter_mm"] + 2 * doc["print"]["hole_clearance_mm"]
+    for k, side, a, b in runs:
+        for j, T in servos.items():
+            if j == k:
+                continue
+            r = (doc["thumb"]["cmc_pulley_radius_mm"] if SERVOS[j].drive == "loop" else
+                 (doc["thumb"] if SERVOS[j].digit == "thumb" else doc["fingers"][SERVOS[j].digit])
+                 ["servo_pulley_radius_mm"])
+            sampled, slack = _sampled_clearance(a * 1e3, b * 1e3, F_mm(T), r, doc)
+            assert got[(k, side, j)] * 1e3 == pytest.approx(sampled, abs=slack + 1e-6), (k, side, j)
+            assert got[(k, side, j)] * 1e3 >= hole / 2 + MIN_WALL / MM - 1e-9, (k, side, j)
+
+
+def F_mm(T):
+    """A transform (m) in mm."""
+    out = np.array(T, float)
+    out[:3, 3] *= 1e3
+    return out
+
+
 def test_convex_hull_2d_is_qhulls():
     """``forearm_layout.convex_hull_2d`` (the servo row's outlines) against scipy's Qhull: the same vertices in
     the same counter-clockwise cycle, on random clouds, the servo pulley's 24-gon with its swept copy,
