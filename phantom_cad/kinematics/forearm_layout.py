@@ -1,6 +1,8 @@
 """The forearm module's servo row: where each of the six servos sits (the iterative row solver),
-their bodies, envelopes and the gaps between them, and the palm's back and ulnar faces the row
-sets. numpy only; frames as in :mod:`.frames`."""
+their bodies, envelopes and the gaps between them, the drives' clearances to the other servos,
+the module's width and the limit a human forearm sets, and the palm's back and ulnar faces the row
+sets; the two staggered rows that fit within that limit (:func:`staggered_servos`, which the
+module is not built from). numpy only; frames as in :mod:`.frames`."""
 
 from __future__ import annotations
 
