@@ -16,9 +16,6 @@ GRASP_DIAMETER = 35.0
 #: the 95th-percentile adult palm at the reference hand (mm): breadth, and thickness with the heel
 #: (tests/cad/test_human_scale.py), scaled with the hand length
 PALM_ENVELOPE = (95.0, 35.0)
-#: the breadth (mm) a forearm module within a human forearm may take at the reference hand, scaled with
-#: the hand length (a design target, docs/sizing.md)
-FOREARM_BREADTH = 80.0
 
 
 def size(
@@ -69,8 +66,6 @@ def report(p, searched: bool) -> list[str]:
     """What a designer acts on: each digit's section, travel and reach against Table I; the
     opposition; the power grasp's cylinder; the palm against its envelope; the forearm module's
     breadth; the thinnest designed wall."""
-    import numpy as np
-
     from ..kinematics import forearm_layout as FL
     from ..kinematics import frames as F
     from ..kinematics import thenar as TH
@@ -106,15 +101,10 @@ def report(p, searched: bool) -> list[str]:
     out.append(f"palm: {breadth:.1f} mm broad (metacarpal block and thenar), {thick:.1f} mm thick with the heel; "
                f"the 95th-percentile envelope at this hand length: {env_b:.1f} x {env_t:.1f} mm"
                f"{'' if breadth <= env_b + 1e-9 and thick <= env_t + 1e-9 else ' (outside it)'}")
-    xs = []
-    for s, T in FL.forearm_servos(p).items():
-        e = FL.servo_envelope(p, s)
-        xs.append((T[:3, :3] @ e.T)[0] + T[0, 3])
-    xs = mm(np.concatenate(xs))
-    fa = float(xs.max() - xs.min())
-    wide = " (wider: docs/sizing.md, limitations)" if fa > FOREARM_BREADTH * k else ""
-    out.append(f"forearm module: the servos span {fa:.0f} mm across; the target within a human forearm is "
-               f"{FOREARM_BREADTH * k:.0f} mm at this hand length{wide}")
+    fa, limit = mm(FL.forearm_width(p)), mm(FL.forearm_width_limit(p))
+    wide = " (wider: docs/sizing.md, limitations)" if fa > limit + 1e-9 else ""
+    out.append(f"forearm module: {fa:.1f} mm wide; the target within a human forearm is "
+               f"{limit:.1f} mm at this hand length (80 mm at 189 mm){wide}")
     walls = {"palm.wall_mm": p.palm.wall, "cad.cheek_mm": p.cad.cheek}
     thinnest = min(walls, key=walls.get)
     out.append(f"thinnest designed wall: {thinnest} = {mm(walls[thinnest]):g} mm (the rules' minimum "

@@ -1,6 +1,8 @@
 """The forearm module's servo row: where each of the six servos sits (the iterative row solver),
-their bodies, envelopes and the gaps between them, and the palm's back and ulnar faces the row
-sets. numpy only; frames as in :mod:`.frames`."""
+their bodies, envelopes and the gaps between them, the drives' clearances to the other servos,
+the module's width and the limit a human forearm sets, and the palm's back and ulnar faces the row
+sets; the two staggered rows that fit within that limit (:func:`staggered_servos`, which the
+module is not built from). numpy only; frames as in :mod:`.frames`."""
 
 from __future__ import annotations
 
@@ -70,9 +72,16 @@ def box_corners(lo, hi) -> np.ndarray:
     return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])], float)
 
 
+_ENVELOPE: dict = {}
+
+
 def servo_envelope(params: HandParams, servo: int) -> np.ndarray:
     """Points (m, servo frame) whose hull holds a servo with its clearance: the corners of its body
-    and ears and the rim of its pulley's cavity, grown by a hole clearance."""
+    and ears and the rim of its pulley's cavity, grown by a hole clearance. Memoised (read-only)."""
+    return memoised(_ENVELOPE, (params.digest, servo), lambda: _servo_envelope(params, servo), cap=96)
+
+
+def _servo_envelope(params: HandParams, servo: int) -> np.ndarray:
     c = params.print.hole_clearance
     pts = [box_corners(lo - c, hi + c) for lo, hi in servo_boxes(params).values()]
     rc = servo_radius(params, servo) + pulley_cavity_margin(params)
@@ -201,6 +210,254 @@ def _forearm_servos(params: HandParams) -> dict[int, np.ndarray]:
     return out
 
 
+def drive_runs(params: HandParams) -> list[tuple[int, float, np.ndarray, np.ndarray]]:
+    """Every drive's straight run through the forearm module: (servo, side, start, end), the start
+    where it leaves its pulley (servo frame (side r, 0, 0): a tendon servo's drive at -x, the CMC
+    loop's strands at -x and +x), the end where it crosses the module's front face
+    (:func:`forearm_front`) along the servo's y (m, palm frame, right hand)."""
+    return _drive_runs(params, forearm_servos(params))
+
+
+def _drive_runs(params: HandParams, servos: dict[int, np.ndarray]) -> list[tuple[int, float, np.ndarray, np.ndarray]]:
+    out = []
+    y1 = forearm_front(params)
+    for k, T in sorted(servos.items()):
+        for side in ((-1.0, 1.0) if SERVOS[k].drive == "loop" else (-1.0,)):
+            p = T[:3, 3] + side * servo_radius(params, k) * T[:3, 0]
+            u = T[:3, 1]
+            out.append((k, side, p, p + u * (y1 - p[1]) / u[1]))
+    return out
+
+
+def _convex_min(f, rounds: int = 5, n: int = 33) -> float:
+    """The least value on [0, 1] of a convex function of one variable, evaluated on arrays: n
+    samples, then n again between the least one's neighbours (the least lies between them), ``rounds``
+    times (the bracket shrinks to 2 / (n - 1) of itself each time: a millionth of the run)."""
+    lo, hi = 0.0, 1.0
+    best = math.inf
+    for _ in range(rounds):
+        t = np.linspace(lo, hi, n)
+        v = f(t)
+        i = int(np.argmin(v))
+        best = min(best, float(v[i]))
+        lo, hi = float(t[max(i - 1, 0)]), float(t[min(i + 1, n - 1)])
+    return best
+
+
+def drive_clearances(params: HandParams) -> dict[tuple[int, float, int], float]:
+    """The least distance (m) from each drive's run through the module (:func:`drive_runs`) to
+    every other servo's envelope: its body and its ears grown by a hole clearance
+    (:func:`servo_boxes`) and its pulley's cavity (a cylinder of the pulley's radius and the
+    cavity margin, a pulley width and two hole clearances tall), keyed (servo, side, other servo).
+    A point's distance to each of the three is convex along the run: each one's least value by
+    shrinking brackets (:func:`_convex_min`), the least of the three."""
+    return _drive_clearances(params, forearm_servos(params))
+
+
+def _drive_clearances(params: HandParams, servos: dict[int, np.ndarray],
+                      only: int | None = None) -> dict[tuple[int, float, int], float]:
+    c = params.print.hole_clearance
+    h = params.cad.servo_pulley_width / 2.0 + c
+    boxes = [(lo - c, hi + c) for lo, hi in servo_boxes(params).values()]
+    out = {}
+    for k, side, p0, p1 in _drive_runs(params, servos):
+        if only is not None and k != only:
+            continue
+        for j, T in sorted(servos.items()):
+            if j == k:
+                continue
+            R = T[:3, :3].T
+            a, b = R @ (p0 - T[:3, 3]), R @ (p1 - T[:3, 3])
+            rc = servo_radius(params, j) + pulley_cavity_margin(params)
+
+            def to_box(t: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+                q = a + (b - a) * t[:, None]
+                return np.linalg.norm(np.maximum(np.maximum(lo - q, q - hi), 0.0), axis=1)
+
+            def to_cavity(t: np.ndarray) -> np.ndarray:
+                q = a + (b - a) * t[:, None]
+                return np.hypot(np.maximum(np.hypot(q[:, 0], q[:, 1]) - rc, 0.0), np.maximum(np.abs(q[:, 2]) - h, 0.0))
+
+            out[(k, side, j)] = min([_convex_min(to_cavity)] +
+                                    [_convex_min(lambda t, lo=lo, hi=hi: to_box(t, lo, hi)) for lo, hi in boxes])
+    return out
+
+
+def raised_servo(C: np.ndarray, E: np.ndarray, r: float) -> np.ndarray:
+    """Servo frame at pulley centre C turned about its shaft as :func:`aimed_servo` turns it in
+    plan, then tilted about its x (kept level) so that the drive, leaving the pulley at (-r, 0, 0)
+    along +y, runs straight through E where C and E stand at different heights (the pulley's plane
+    holds the drive)."""
+    T = aimed_servo(np.array([C[0], C[1], E[2]]), E, r)
+    x, h = T[:3, 0], T[:3, 1]
+    d = E - (C - r * x)
+    a = math.atan2(float(d[2]), float(d[:2] @ h[:2]))
+    y = math.cos(a) * h + math.sin(a) * np.array([0.0, 0.0, 1.0])
+    T[:3, 1], T[:3, 2], T[:3, 3] = y, np.cross(x, y), C
+    return T
+
+
+def staggered_rows(params: HandParams) -> tuple[tuple[int, ...], tuple[int, ...]]:
+    """(front, rear): the servos of :func:`staggered_servos`' two rows, each radial to ulnar. In the
+    order of their targets (servo 6, thumb, index, middle, ring, pinky) the front row takes the
+    first, fourth and sixth (servo 6's loop runs at its own height, in the CMC pulley's plane), the
+    raised rear row the others: every rear drive passes over the front row between the front
+    drives either side of it, so no two drives cross."""
+    targets = {s.index: servo_target(params, s.index) for s in SERVOS}
+    order = sorted(targets, key=lambda k: (targets[k][0] + (0.0 if SERVOS[k].drive == "loop" else
+                                                              servo_radius(params, k)), k))
+    return (order[0], order[3], order[5]), (order[1], order[2], order[4])
+
+
+def _plan_gap(params: HandParams, Ta: np.ndarray, a: int, Tb: np.ndarray, b: int) -> float:
+    """The distance (m) between two placed servos' envelopes seen from the dorsal side (their
+    convex hulls in plan; each pocket is that hull swept straight up: the servo, with its pulley
+    on, drops in along z); negative where they overlap (less their overlap along the axis that
+    separates them best). For convex sets it is the largest over directions n of
+    min(B . n) - max(A . n): the best of 256 directions, then 33 between its neighbours, five times
+    (the function has one maximum there)."""
+    P, Q = [((T[:3, :3] @ servo_envelope(params, k).T)[:2] + T[:2, 3:4]) for T, k in ((Ta, a), (Tb, b))]
+
+    def gap(t: np.ndarray) -> np.ndarray:
+        n = np.vstack([np.cos(t), np.sin(t)])
+        return (n.T @ Q).min(axis=1) - (n.T @ P).max(axis=1)
+
+    step = 2.0 * math.pi / 256
+    t = np.arange(256) * step
+    best = -math.inf
+    for _ in range(6):
+        v = gap(t)
+        i = int(np.argmax(v))
+        best = max(best, float(v[i]))
+        t = t[i] + np.linspace(-step, step, 33)
+        step = 2.0 * step / 32
+    return best
+
+
+def _envelope_x(params: HandParams, T: np.ndarray, k: int) -> tuple[float, float]:
+    x = (T[:3, :3] @ servo_envelope(params, k).T)[0] + T[0, 3]
+    return float(x.min()), float(x.max())
+
+
+def _packed(place, left: float, lo: float, hi: float) -> float:
+    """The least x in [lo, hi] at which ``place(x)``'s gap to its left neighbour is ``left`` or
+    more (bisection: the gap grows with x)."""
+    if place(lo) >= left:
+        return lo
+    for _ in range(26):
+        mid = (lo + hi) / 2.0
+        lo, hi = (lo, mid) if place(mid) >= left else (mid, hi)
+    return hi
+
+
+def staggered_servos(params: HandParams) -> dict[int, np.ndarray]:
+    """T_palm_servo (m, right hand) of the six servos in two staggered rows (:func:`staggered_rows`)
+    within a forearm's breadth (76.9 mm wide on the default hand, :func:`forearm_width_limit` 80 mm).
+    The front row as far forward as the servos' envelopes allow (:func:`forearm_front`, as the one
+    row stands): servo 6 behind the CMC pulley (at its x), its shaft parallel to the CMC axis and its
+    pulley in the CMC pulley's plane (:func:`coplanar_servo`), then the middle and the pinky servos,
+    each a palm wall ulnar of the one before in plan (:func:`_plan_gap`), at their targets' height
+    and aimed at them (:func:`aimed_servo`). The rear row a palm wall behind the front row's
+    envelopes: the thumb's servo flush with servo 6's radial side, or as little ulnar of it as lets
+    its drive clear servo 6's tilted pulley, then the index and the ring servos a wall apart; each
+    raised (:func:`raised_servo`: its drive slopes to its target) to the lowest height, its pulley
+    inside the module, at which its drive clears every other servo's envelope by half a tendon hole
+    and a palm wall (:func:`drive_clearances`), so that it passes over the front row. The gaps in
+    plan take each pocket as its servo's envelope swept straight up: servo 6, tilted, drops in
+    along z with its pulley on."""
+    front_ids, rear_ids = staggered_rows(params)
+    targets = {s.index: servo_target(params, s.index) for s in SERVOS}
+    radius = {k: servo_radius(params, k) for k in targets}
+    envelope = {k: servo_envelope(params, k) for k in targets}
+    axis = T_palm_thumb_cmc_base(params)[:3, 2]
+    w = params.palm.wall
+    span = 4.0 * params.servo.body[0]           # room enough for any packing search
+
+    def frame(k: int, x: float, y: float, z: float | None = None) -> np.ndarray:
+        if SERVOS[k].drive == "loop":
+            return coplanar_servo(x, y, targets[k], axis)
+        C = np.array([x, y, targets[k][2] if z is None else z])
+        return raised_servo(C, targets[k], radius[k])
+
+    def reach(T: np.ndarray, k: int, sign: float) -> float:
+        return float((T[:3, :3] @ envelope[k].T)[1].max() if sign > 0 else (T[:3, :3] @ envelope[k].T)[1].min())
+
+    out: dict[int, np.ndarray] = {}
+    # the front row: as far forward as its envelopes allow (a servo's turn depends weakly on y)
+    y = forearm_front(params) - w
+    x0 = float(targets[front_ids[0]][0])
+    for _ in range(6):
+        row = {front_ids[0]: frame(front_ids[0], x0, y)}
+        prev = front_ids[0]
+        for k in front_ids[1:]:
+            x = _packed(lambda x: _plan_gap(params, row[prev], prev, frame(k, x, y), k), w,
+                        row[prev][0, 3], row[prev][0, 3] + span)
+            row[k], prev = frame(k, x, y), k
+        y_new = forearm_front(params) - w - max(reach(T, k, 1.0) for k, T in row.items())
+        if abs(y_new - y) < 1e-9:
+            break
+        y = y_new
+    out.update(row)
+    left = min(_envelope_x(params, T, k)[0] for k, T in row.items())
+    back = min(reach(T, k, -1.0) + T[1, 3] for k, T in row.items()) - w
+    # the rear row: its radial servo flush with the front row's radial side, or as little ulnar
+    # of it as lets its drive clear the front row from the highest its pulley may stand (inside the
+    # module); the others packed a wall apart; each raised as little as lets its drive clear every
+    # other servo; packed again at those heights (a raised servo's tilt turns its outline a little)
+    z_top = forearm_top(params) - params.cad.servo_pulley_width / 2.0 - params.print.hole_clearance
+    need = tendon_relief(params) / 2.0 + w
+    first = rear_ids[0]
+    z = {k: float(targets[k][2]) for k in rear_ids}
+
+    def clears(k: int, T: np.ndarray, others: dict[int, np.ndarray]) -> float:
+        return min(_drive_clearances(params, {**others, k: T}, only=k).values())
+
+    def pack(yr: float, x_first: float | None) -> dict[int, np.ndarray]:
+        rear: dict[int, np.ndarray] = {}
+        if x_first is None:
+            x_first = _packed(lambda x: _envelope_x(params, frame(first, x, yr, z[first]), first)[0] - left, 0.0,
+                              left - span, left + span)
+        if clears(first, frame(first, x_first, yr, z_top), out) < need:
+            x_first = _packed(lambda x: clears(first, frame(first, x, yr, z_top), out), need,
+                              x_first, x_first + span)
+        rear[first] = frame(first, x_first, yr, z[first])
+        prev = first
+        for k in rear_ids[1:]:
+            x = _packed(lambda x: _plan_gap(params, rear[prev], prev, frame(k, x, yr, z[k]), k), w,
+                        rear[prev][0, 3], rear[prev][0, 3] + span)
+            rear[k], prev = frame(k, x, yr, z[k]), k
+        return rear
+
+    yr, x_first = back, None
+    for _ in range(2):
+        for _ in range(6):
+            rear = pack(yr, x_first)
+            y_new = back - max(reach(T, k, 1.0) for k, T in rear.items())
+            if abs(y_new - yr) < 1e-9:
+                break
+            yr = y_new
+        x_first = float(rear[first][0, 3])
+        for k in rear_ids:
+            x = float(rear[k][0, 3])
+            lo, hi = float(targets[k][2]), max(z_top, float(targets[k][2]))
+            if clears(k, frame(k, x, yr, lo), {**out, **rear}) < need:
+                for _ in range(22):
+                    mid = (lo + hi) / 2.0
+                    lo, hi = (lo, mid) if clears(k, frame(k, x, yr, mid), {**out, **rear}) >= need else (mid, hi)
+                lo = hi
+            z[k] = lo
+            rear[k] = frame(k, x, yr, lo)
+    # the raised servos' tilts move their fronts a little: the row back to a wall behind the front
+    for _ in range(6):
+        y_new = back - max(reach(T, k, 1.0) for k, T in rear.items())
+        if abs(y_new - yr) < 1e-12:
+            break
+        yr = y_new
+        rear = {k: frame(k, float(T[0, 3]), yr, z[k]) for k, T in rear.items()}
+    out.update(rear)
+    return out
+
+
 def _outlines(params: HandParams, T: np.ndarray, servo: int) -> list[np.ndarray]:
     """The xy outlines (palm frame, counter-clockwise) of servo ``servo``'s body, ears and pulley
     cavity, grown by a clearance, placed by T, with the pockets the module cuts for them: open along
@@ -319,6 +576,37 @@ def heel_gap(params: HandParams) -> float:
     P = local @ T0[:3, :3].T + T0[:3, 3]
     lo, hi = box
     return float(np.maximum(lo - P, P - hi).max(axis=1).min())
+
+
+#: the breadth (m) of a human forearm near the wrist (55-65 mm) with room for a shell, which the
+#: forearm module should stay within at the reference hand (:data:`REFERENCE_HAND_LENGTH`), scaled
+#: with the hand length (docs/sizing.md)
+FOREARM_BREADTH = 0.080
+#: the hand length (m) :data:`FOREARM_BREADTH` is given at: the default hand's (the paper's)
+REFERENCE_HAND_LENGTH = 0.189
+
+
+def forearm_points(params: HandParams) -> np.ndarray:
+    """Every servo's envelope (:func:`servo_envelope`) placed in the forearm module (m, palm frame,
+    right hand), stacked (n, 3): the module's block is one palm wall around them."""
+    pts = []
+    for k, T in forearm_servos(params).items():
+        env = servo_envelope(params, k)
+        pts.append((T[:3, :3] @ env.T).T + T[:3, 3])
+    return np.vstack(pts)
+
+
+def forearm_width(params: HandParams) -> float:
+    """The forearm module's width (m, across the forearm, palm x): its servos' envelopes
+    (:func:`forearm_points`) across and a palm wall each side (``cad.parts.wrist.forearm_block``)."""
+    x = forearm_points(params)[:, 0]
+    return float(x.max() - x.min()) + 2.0 * params.palm.wall
+
+
+def forearm_width_limit(params: HandParams) -> float:
+    """The widest (m) a forearm module within a human forearm may be for this hand:
+    :data:`FOREARM_BREADTH` scaled with the hand length."""
+    return FOREARM_BREADTH * params.hand_length / REFERENCE_HAND_LENGTH
 
 
 def forearm_top(params: HandParams) -> float:

@@ -5,6 +5,7 @@ default file (params/phantom.toml)."""
 from __future__ import annotations
 
 import copy
+import itertools
 import math
 
 import numpy as np
@@ -153,6 +154,175 @@ def test_a_wide_servo_widens_the_forearm_row(document):
             B = np.vstack([outline(Tb, lo, hi) for lo, hi in boxes])
             d = np.sqrt(((A[:, None, :] - B[None, :, :]) ** 2).sum(-1)).min()
             assert d >= doc["palm"]["wall_mm"] - 1e-6, (width, d)
+
+
+def _sampled_clearance(a, b, T, r, document, n=4001):
+    """By hand, in mm: the least distance from n points along the segment ab (palm frame) to a
+    servo at T's body and ears (boxes grown by the hole clearance, from the servo's dimensions as
+    the file gives them) and its pulley cavity (radius r + 3 tendon diameters + a hole clearance,
+    half a pulley width and a hole clearance each side of the mid-plane); at most the true least
+    distance plus half the spacing of the points."""
+    sv, cad, c = document["servo"], document["cad"], document["print"]["hole_clearance_mm"]
+    L, W, H = sv["body_mm"]
+    top = -(cad["servo_pulley_width_mm"] / 2 + c)
+    ears = (top - cad["servo_ear_offset_mm"] - cad["servo_ear_thickness_mm"], top - cad["servo_ear_offset_mm"])
+    y0 = -cad["servo_shaft_offset_mm"]
+    boxes = [((-W / 2, y0 - L / 2, top - H), (W / 2, y0 + L / 2, top)),
+             ((-W / 2, y0 - sv["flange_span_mm"] / 2, ears[0]), (W / 2, y0 + sv["flange_span_mm"] / 2, ears[1]))]
+    t = np.linspace(0.0, 1.0, n)[:, None]
+    q = (a + (b - a) * t - T[:3, 3]) @ T[:3, :3]            # in the servo frame
+    d = [np.linalg.norm(np.maximum(np.maximum(np.array(lo) - c - q, q - np.array(hi) - c), 0.0), axis=1)
+         for lo, hi in boxes]
+    rc = r + 3 * document["hardware"]["tendon_diameter_mm"] + c
+    h = cad["servo_pulley_width_mm"] / 2 + c
+    d.append(np.hypot(np.maximum(np.hypot(q[:, 0], q[:, 1]) - rc, 0.0), np.maximum(np.abs(q[:, 2]) - h, 0.0)))
+    return float(np.min(d)), float(np.linalg.norm(b - a)) / (n - 1) / 2
+
+
+@pytest.mark.parametrize("example", [None, "small", "slender"])
+def test_every_drive_clears_every_other_servo(document, example):
+    """Every drive runs from its pulley to the module's front face (``forearm_layout.drive_runs``)
+    at least a tendon hole's radius and the thinnest printable wall (0.5 + 0.8 mm by default) from
+    every other servo's body, ears and pulley cavity: its channel keeps a wall to their pockets (the
+    least is the CMC loop's ulnar strand beside the thumb's servo: 3.57 mm on the default hand, 2.36
+    mm on the small one). ``forearm_layout.drive_clearances`` (shrinking brackets on each shape) against
+    the distance sampled along the run, from the servo's dimensions in the file."""
+    from phantom_cad.kinematics import forearm_layout as FL
+    from phantom_cad.kinematics.topology import SERVOS
+    from phantom_cad.params import load_document
+    from phantom_cad.params.rules import MIN_WALL
+    from phantom_cad.units import MM
+
+    doc = document if example is None else load_document(f"params/examples/{example}.toml")
+    p = parse(doc)
+    servos = FL.forearm_servos(p)
+    got = FL.drive_clearances(p)
+    runs = FL.drive_runs(p)
+    assert len(runs) == 7 and len(got) == 7 * 5          # the loop's two strands, five drives
+    hole = doc["hardware"]["tendon_diameter_mm"] + 2 * doc["print"]["hole_clearance_mm"]
+    for k, side, a, b in runs:
+        for j, T in servos.items():
+            if j == k:
+                continue
+            r = (doc["thumb"]["cmc_pulley_radius_mm"] if SERVOS[j].drive == "loop" else
+                 (doc["thumb"] if SERVOS[j].digit == "thumb" else doc["fingers"][SERVOS[j].digit])
+                 ["servo_pulley_radius_mm"])
+            sampled, slack = _sampled_clearance(a * 1e3, b * 1e3, F_mm(T), r, doc)
+            assert got[(k, side, j)] * 1e3 == pytest.approx(sampled, abs=slack + 1e-6), (k, side, j)
+            assert got[(k, side, j)] * 1e3 >= hole / 2 + MIN_WALL / MM - 1e-9, (k, side, j)
+
+
+def _envelope_by_hand(document, r, n=720):
+    """In mm, servo frame: a servo's body and ears (boxes grown by the hole clearance) and its pulley
+    cavity's rims (radius r + 3 tendon diameters + a hole clearance, half a pulley width and a hole
+    clearance either side of the mid-plane), from the file's numbers."""
+    sv, cad, c = document["servo"], document["cad"], document["print"]["hole_clearance_mm"]
+    L, W, H = sv["body_mm"]
+    top = -(cad["servo_pulley_width_mm"] / 2 + c)
+    e1 = top - cad["servo_ear_offset_mm"]
+    y0 = -cad["servo_shaft_offset_mm"]
+    s = sv["flange_span_mm"]
+    pts = [(x, y, z) for x in (-W / 2 - c, W / 2 + c) for y in (y0 - L / 2 - c, y0 + L / 2 + c)
+           for z in (top - H - c, top + c)]
+    pts += [(x, y, z) for x in (-W / 2 - c, W / 2 + c) for y in (y0 - s / 2 - c, y0 + s / 2 + c)
+            for z in (e1 - cad["servo_ear_thickness_mm"] - c, e1 + c)]
+    rc = r + 3 * document["hardware"]["tendon_diameter_mm"] + c
+    a = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
+    h = cad["servo_pulley_width_mm"] / 2 + c
+    rims = [np.c_[rc * np.cos(a), rc * np.sin(a), np.full_like(a, z)] for z in (-h, h)]
+    return np.vstack([np.array(pts)] + rims)
+
+
+def _servo_radius(document, k):
+    from phantom_cad.kinematics.topology import SERVOS
+
+    if SERVOS[k].drive == "loop":
+        return document["thumb"]["cmc_pulley_radius_mm"]
+    digit = SERVOS[k].digit
+    return (document["thumb"] if digit == "thumb" else document["fingers"][digit])["servo_pulley_radius_mm"]
+
+
+def test_the_staggered_rows_fit_a_human_forearm(document):
+    """``forearm_layout.staggered_servos``: two rows of three within a forearm's breadth at the
+    reference hand (at most 80 mm with a palm wall each side, measured on the envelopes built here
+    from the file's servo: 76.9 mm); servo 6, the middle and the pinky servos in front, the thumb,
+    index and ring servos behind, a palm wall behind them; each drive straight through its target
+    (servo 6's strands tangent to the CMC pulley: its radius from its centre); servo 6 in the CMC
+    pulley's plane with its shaft along the CMC axis; the servos of each row a palm wall apart in
+    plan (their envelopes sampled densely); the front row a palm wall behind the module's front."""
+    from phantom_cad.kinematics import forearm_layout as FL, frames as F, thenar
+    from phantom_cad.kinematics.topology import CHAINS, SERVOS
+
+    p = parse(document)
+    S = {k: F_mm(T) for k, T in FL.staggered_servos(p).items()}
+    servo = {c.digit: c.servo for c in CHAINS}
+    front, rear = FL.staggered_rows(p)
+    assert set(front) == {5, servo["middle"], servo["pinky"]}
+    assert set(rear) == {servo["thumb"], servo["index"], servo["ring"]}
+    env = {k: _envelope_by_hand(document, _servo_radius(document, k)) @ T[:3, :3].T + T[:3, 3] for k, T in S.items()}
+    xs = np.concatenate([e[:, 0] for e in env.values()])
+    wall = document["palm"]["wall_mm"]
+    width = xs.max() - xs.min() + 2 * wall
+    assert width <= 80.0 * document["hand"]["hand_length_mm"] / 189.0
+    assert width == pytest.approx(76.9, abs=0.05)
+    assert FL.forearm_width_limit(p) * 1e3 == pytest.approx(80.0)
+    front_face = FL.forearm_front(p) * 1e3
+    assert max(env[k][:, 1].max() for k in front) <= front_face - wall + 1e-6
+    assert max(env[k][:, 1].max() for k in rear) <= min(env[k][:, 1].min() for k in front) - wall + 1e-6
+    for row in (front, rear):
+        for a, b in zip(row, row[1:]):
+            d = np.sqrt(((env[a][:, None, :2] - env[b][None, :, :2]) ** 2).sum(-1)).min()
+            assert d >= wall - 0.02, (a, b, d)          # sampled rims: within 0.02 mm of the circle
+    for k, T in S.items():
+        r = _servo_radius(document, k)
+        E = FL.servo_target(p, k) * 1e3
+        for side in ((-1.0, 1.0) if SERVOS[k].drive == "loop" else (-1.0,)):
+            t0 = T[:3, 3] + side * r * T[:3, 0]
+            off = np.linalg.norm(np.cross(E - t0, T[:3, 1]))
+            assert off == pytest.approx(r if SERVOS[k].drive == "loop" else 0.0, abs=1e-6), (k, side)
+    Tc = F.T_palm_thumb_cmc_base(p) @ thenar.T_cmc_base_pulley(p)
+    assert S[5][:3, 2] == pytest.approx(Tc[:3, 2], abs=1e-12)
+    assert (S[5][:3, 3] / 1e3 - Tc[:3, 3]) @ Tc[:3, 2] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_the_staggered_rows_drives_clear_every_servo_and_each_other(document):
+    """In ``forearm_layout.staggered_servos`` every drive, from its pulley to its target, runs at
+    least half a tendon hole and a palm wall (0.5 + 2.4 mm) from every other servo's body, ears and
+    pulley cavity within the module (the rear row stands raised so that its drives pass over the
+    front row), and at least a tendon hole and a palm wall from every other drive (no two cross),
+    sampled along the runs."""
+    from phantom_cad.kinematics import forearm_layout as FL
+    from phantom_cad.kinematics.topology import SERVOS
+
+    p = parse(document)
+    S = FL.staggered_servos(p)
+    hole = document["hardware"]["tendon_diameter_mm"] + 2 * document["print"]["hole_clearance_mm"]
+    wall = document["palm"]["wall_mm"]
+    runs = FL._drive_runs(p, S)
+    for k, side, a, b in runs:
+        for j, T in S.items():
+            if j != k:
+                d, slack = _sampled_clearance(a * 1e3, b * 1e3, F_mm(T), _servo_radius(document, j), document)
+                assert d >= hole / 2 + wall - slack - 1e-6, (k, side, j, d)
+    full = []
+    for k, side, a, _ in runs:
+        u = S[k][:3, 1]
+        E = FL.servo_target(p, k)
+        full.append((k, a * 1e3, (a + u * ((E - a) @ u)) * 1e3))
+    t = np.linspace(0.0, 1.0, 800)[:, None]
+    for (k, a, b), (j, c, d) in itertools.combinations(full, 2):
+        if k != j:
+            A, B = a + (b - a) * t, c + (d - c) * t
+            gap = np.sqrt(((A[:, None] - B[None]) ** 2).sum(-1)).min()
+            assert gap >= hole + wall, (k, j, gap)
+    assert all(SERVOS[k].drive == "loop" or S[k][2, 3] * 1e3 >= -4.6 - 1e-9 for k in S)
+
+
+def F_mm(T):
+    """A transform (m) in mm."""
+    out = np.array(T, float)
+    out[:3, 3] *= 1e3
+    return out
 
 
 def test_convex_hull_2d_is_qhulls():

@@ -204,6 +204,17 @@ def test_forearm_front_wall_holes_only_where_a_drive_runs(built, params, documen
             assert inside == (not carries), (k, side, p)
 
 
+def test_forearm_width_is_the_built_blocks_breadth(built, params, document):
+    """``forearm_layout.forearm_width`` is the built module's breadth (its bounding box across the
+    forearm, read from the solid), and its limit is 80 mm at the paper's 189 mm hand length."""
+    from phantom_cad.kinematics import forearm_layout
+
+    box = built["forearm"].shape.bounding_box()
+    assert box.max.X - box.min.X == pytest.approx(forearm_layout.forearm_width(params) * 1e3, abs=1e-6)
+    assert forearm_layout.forearm_width_limit(params) * 1e3 == pytest.approx(
+        80.0 * document["hand"]["hand_length_mm"] / 189.0, abs=1e-9)
+
+
 # ---------------------------------------------------------------------------
 # pulley grooves at their radii
 # ---------------------------------------------------------------------------

@@ -37,11 +37,7 @@ def forearm_block(params: HandParams) -> tuple[float, float, float, float, float
     every one of its servos' envelopes (``forearm_layout.servo_envelope``), its front face
     ``forearm_layout.forearm_front``, its top a wall above the palm's dorsal face (flush with the tab)."""
     w = mm(params.palm.wall)
-    pts = []
-    for k, T in FL.forearm_servos(params).items():
-        env = FL.servo_envelope(params, k)
-        pts.append(np.array([mm(v) for v in ((T[:3, :3] @ env.T).T + T[:3, 3]).ravel()]).reshape(-1, 3))
-    pts = np.vstack(pts)
+    pts = units.mm(FL.forearm_points(params))
     return (pts[:, 0].min() - w, pts[:, 0].max() + w, pts[:, 1].min() - w, mm(FL.forearm_front(params)),
             pts[:, 2].min() - w, mm(params.palm.thickness) / 2.0 + w)
 
