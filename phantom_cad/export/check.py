@@ -17,8 +17,15 @@ Every row compares what one source says with what another measures, at random se
   estimate when the export was sliced, else volume x density x infill);
 - each visual mesh against its solid (volume, centre, bounding box);
 - every mesh reference resolves, ``check_urdf`` accepts the URDF, MuJoCo's model test;
-- reported, never failing: each fingertip's distance to the palm with every tendon servo at the
-  end of its travel (:func:`fist_rows`).
+- no two parts collide over a grid of servo commands (:func:`collision_rows`); reported, never
+  failing: the thumb-finger pinch contacts there and where they begin, and each fingertip's
+  distance to the palm with every tendon servo at the end of its travel (:func:`fist_rows`).
+
+Then what the hand must do (``functional``), each computed by the package function the tests call:
+the thumb's pad reaching the index, middle and ring pads on the solids (:func:`opposition_rows`);
+a cylinder scaled with the hand enclosed on the solids and held palm down in MuJoCo
+(:func:`power_grasp_rows`); every wall two perimeters thick (:func:`wall_rows`); every tendon path
+outside material (:func:`tendon_rows`).
 
 A row names the worst item (link, joint, file); ``ok`` None = not run (a tool missing).
 Needs the ``cad`` extra (build123d, trimesh, mujoco, yourdfpy); imports them inside the checks.
