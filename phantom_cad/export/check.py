@@ -565,7 +565,7 @@ def power_grasp_rows(export: Export, params: HandParams, solids: dict, log=lambd
     thumb clear), then held palm down in MuJoCo (``export.hold.hold_cylinder``). The commands follow
     the paper's compensation, as the MuJoCo hold was tuned on it."""
     from ..cad import grasp
-    from .hold import HOLD_KG, hold_cylinder
+    from .hold import HOLD_KG, MOVED_MM, SQUEEZED_MM, hold_cylinder
 
     diameter = grasp.power_grasp_diameter_mm(params)
     g, tried = grasp.power_grasp(Hand(params, None, "paper"), solids, diameter)
@@ -590,7 +590,7 @@ def power_grasp_rows(export: Export, params: HandParams, solids: dict, log=lambd
     why = h.problems()
     rows.append(Row(f"{name} held palm down, {HOLD_KG * 1e3:g} g (MuJoCo, export.hold)", export.scene.name, "held",
                     "; ".join(why) if why else f"squeezed {h.squeezed_mm:.1f} mm, moved {h.moved_mm:.1f} mm",
-                    "squeezed, moved < 5 mm", not why))
+                    f"squeezed < {SQUEEZED_MM:g}, moved < {MOVED_MM:g} mm, at rest", not why))
     return rows
 
 
@@ -648,7 +648,7 @@ def check_export(export_dir: Path, params: HandParams, samples: int = 8, settle:
     rows += inertial_rows(export, robot, params, props, mj_inertials)
     rows += mesh_rows(export, props)
     rows += fist_rows(hand, solids)
-    meshes = visual_meshes(export)
+    meshes = visual_meshes(export) if sweep or functional else {}
     if sweep:
         log("check: collisions over the command grid (manifold3d)")
         rows += collision_rows(export, params, hand, log, meshes)
