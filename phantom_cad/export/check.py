@@ -33,6 +33,7 @@ Needs the ``cad`` extra (build123d, trimesh, mujoco, yourdfpy); imports them ins
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 import shutil
@@ -579,9 +580,7 @@ def power_grasp_rows(export: Export, params: HandParams, solids: dict, log=lambd
     rows = [Row(f"{name} enclosed (cad.grasp.power_grasp)", " / ".join(g.fingers) + f" (axis y {g.axis_y_mm:.1f} mm)",
                 "every finger past its equator", "wrap " + " / ".join(f"{w:.0f}" for w in wraps) + " deg",
                 "> 90 deg", True)]
-    try:
-        import mujoco  # noqa: F401
-    except ImportError:
+    if importlib.util.find_spec("mujoco") is None:
         rows.append(Row(f"{name} held palm down (MuJoCo)", export.scene.name, "held", "not run (mujoco missing)", "-",
                         None))
         return rows
