@@ -54,6 +54,9 @@ STEPS = 40
 PALM_GAP_MM = 0.5
 #: ``resting_axis_z`` stops rising when its clearance is within this of the gap (mm)
 ADVANCE_TOL_MM = 1e-9
+#: the power grasp's cylinder: the paper's 35 mm on its 189 mm hand, scaled with the hand's length
+#: (``power_grasp_diameter_mm``)
+POWER_GRASP_MM, POWER_GRASP_HAND_MM = 35.0, 189.0
 #: the thumb's CMC and IP/MP commands tried (evenly over each travel) to turn it out of the way of the
 #: power grasp's cylinder and the closed fingers
 THUMB_CMC_STEPS, THUMB_FLEX_STEPS = 21, 5
@@ -373,6 +376,12 @@ def cylinder_grasp(hand, solids: dict, diameter_mm: float, axis_y_mm: float,
                 break
     return CylinderGrasp(float(diameter_mm), float(axis_y_mm), float(z), (float(x[0]), float(x[1])), u.copy(),
                          float(palm.distance_to(cyl)), fingers, thumb_mm)
+
+
+def power_grasp_diameter_mm(params: HandParams) -> float:
+    """The diameter (mm) of the power grasp's cylinder for a hand: :data:`POWER_GRASP_MM` times its
+    length over :data:`POWER_GRASP_HAND_MM`."""
+    return POWER_GRASP_MM * units.mm(params.hand_length) / POWER_GRASP_HAND_MM
 
 
 def power_grasp(hand, solids: dict, diameter_mm: float, step_mm: float = 5.0,

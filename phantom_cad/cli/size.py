@@ -11,8 +11,6 @@ import typer
 
 #: the first line of every file ``size`` writes: it replaces only files that start with it
 MARKER = "# phantom-cad size:"
-#: the power grasp's cylinder at the reference hand (mm; tests/cad, cad.grasp), scaled with the hand length
-GRASP_DIAMETER = 35.0
 #: the 95th-percentile adult palm at the reference hand (mm): breadth, and thickness with the heel
 #: (tests/cad/test_human_scale.py), scaled with the hand length
 PALM_ENVELOPE = (95.0, 35.0)
@@ -67,6 +65,7 @@ def report(p, searched: bool) -> list[str]:
     opposition; the power grasp's cylinder; the palm against its envelope; the forearm module's
     breadth; the thinnest designed wall."""
     from ..kinematics import forearm_layout as FL
+    from ..cad.grasp import power_grasp_diameter_mm
     from ..kinematics import frames as F
     from ..kinematics import thenar as TH
     from ..kinematics.model import Hand
@@ -88,8 +87,8 @@ def report(p, searched: bool) -> list[str]:
     out.append(f"  (CMC placement: {'searched' if searched else 'the reference hand scaled'}; "
                f"offset {[round(mm(v), 2) for v in p.palm.thumb_cmc_offset]} mm)")
     out.append("")
-    out.append(f"power grasp: a cylinder of {GRASP_DIAMETER * k:.1f} mm (35 mm at hand length 189 mm), across the "
-               "palm (built and closed on by tests/cad)")
+    out.append(f"power grasp: a cylinder of {power_grasp_diameter_mm(p):.1f} mm (35 mm at hand length 189 mm), across "
+               "the palm (closed on and held by phantom-cad check)")
     x0, x1 = (mm(v) for v in FL.metacarpal_x(p))
     pts = TH.thenar_points(p, F.T_palm_thumb_cmc_base(p))
     # only the journal and the turn set how far radial the thenar block reaches (the pulley's cavity

@@ -17,8 +17,15 @@ Every row compares what one source says with what another measures, at random se
   estimate when the export was sliced, else volume x density x infill);
 - each visual mesh against its solid (volume, centre, bounding box);
 - every mesh reference resolves, ``check_urdf`` accepts the URDF, MuJoCo's model test;
-- reported, never failing: each fingertip's distance to the palm with every tendon servo at the
-  end of its travel (:func:`fist_rows`).
+- no two parts collide over a grid of servo commands (:func:`collision_rows`); reported, never
+  failing: the thumb-finger pinch contacts there and where they begin, and each fingertip's
+  distance to the palm with every tendon servo at the end of its travel (:func:`fist_rows`).
+
+Then what the hand must do (``functional``), each computed by the package function the tests call:
+the thumb's pad reaching the index, middle and ring pads on the solids (:func:`opposition_rows`);
+a cylinder scaled with the hand enclosed on the solids and held palm down in MuJoCo
+(:func:`power_grasp_rows`); every wall two perimeters thick (:func:`wall_rows`); every tendon path
+outside material (:func:`tendon_rows`).
 
 A row names the worst item (link, joint, file); ``ok`` None = not run (a tool missing).
 Needs the ``cad`` extra (build123d, trimesh, mujoco, yourdfpy); imports them inside the checks.
@@ -26,6 +33,7 @@ Needs the ``cad`` extra (build123d, trimesh, mujoco, yourdfpy); imports them ins
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import math
 import shutil
@@ -469,16 +477,10 @@ def fist_rows(hand: Hand, solids: dict) -> list[Row]:
                 " / ".join(far), "-", " / ".join(f"{d:.1f}" for d in far.values()) + " mm", "-", True)]
 
 
-def collision_rows(export: Export, params: HandParams, hand: Hand, log=lambda msg: None) -> list[Row]:
-    """No two parts interpenetrate over the grid of servo commands of
-    ``interference.command_sweep`` (the description's visual meshes, posed by the assembly
-    interface): a joint's parent and child and the designed contacts may touch; the pinch
-    contacts (a thumb part with a finger part) are logged with the commands where they begin."""
-    from . import interface
-    from .interference import SWEEP_FRACTIONS, SWEEP_TOL_MM3, command_sweep, may_touch
+def visual_meshes(export: Export) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """{link: (vertices mm, faces)} of the description's visual meshes (link frames), each read once."""
     from .step_stl import read_stl
 
-    asm = interface.assembly()
     pkg = export.urdf.parent.parent
     meshes = {}
     for name in LINK_NAMES:
@@ -486,6 +488,21 @@ def collision_rows(export: Export, params: HandParams, hand: Hand, log=lambda ms
         if path.is_file():
             v, f = read_stl(path.read_bytes())
             meshes[name] = (v / units.MM, f)
+    return meshes
+
+
+def collision_rows(export: Export, params: HandParams, hand: Hand, log=lambda msg: None,
+                   meshes: dict | None = None) -> list[Row]:
+    """No two parts interpenetrate over the grid of servo commands of
+    ``interference.command_sweep`` (the description's visual meshes, posed by the assembly
+    interface): a joint's parent and child and the designed contacts may touch; the pinch
+    contacts (a thumb part with a finger part) are listed in a row that never fails, each with the
+    thumb flexion where it begins."""
+    from . import interface
+    from .interference import SWEEP_FRACTIONS, SWEEP_TOL_MM3, command_sweep, may_touch
+
+    asm = interface.assembly()
+    meshes = visual_meshes(export) if meshes is None else meshes
     r = command_sweep(meshes, hand, lambda q: asm.pose_transforms(params, q),
                       may_touch(asm.designed_contacts(params)))
     grid = ", ".join(f"{f:.0%}" for f in SWEEP_FRACTIONS)
@@ -494,12 +511,121 @@ def collision_rows(export: Export, params: HandParams, hand: Hand, log=lambda ms
         log(f"check: pinch contact {e['parts'][0]} x {e['parts'][1]}: from thumb flexion "
             f"{e['from_thumb_flexion']:.0%}, largest {e['volume_mm3']:.2f} mm^3 at {at}")
     errors = {" x ".join(e["parts"]): e["volume_mm3"] for e in r["collisions"]} or {"-": 0.0}
+    by_finger: dict[str, list[float]] = {}
+    for e in r["pinch"]:
+        finger = next(n for n in e["parts"] if not n.startswith("thumb")).split("_")[0]
+        by_finger.setdefault(finger, []).append(e["from_thumb_flexion"])
+    begin = " / ".join(f"{f} {len(v)} from {min(v):.0%}" for f, v in sorted(by_finger.items())) or "none"
     return [_row(f"parts apart over the command grid ({grid} of each travel; {r['poses']} poses, manifold3d)",
-                 errors, SWEEP_TOL_MM3, "mm^3")]
+                 errors, SWEEP_TOL_MM3, "mm^3"),
+            Row("thumb-finger pinch contacts on the command grid: part pairs, the thumb flexion where they begin "
+                "(reported)", f"{len(r['pinch'])} pairs (each on stderr)", "-", begin, "-", True)]
+
+
+def opposition_rows(params: HandParams, solids: dict, meshes: dict) -> list[Row]:
+    """The thumb's pad reaches the index, middle and ring pads on the solids
+    (``cad.grasp.solid_contact``: of the kinematic model's contacts, ``kinematics.opposition``, the
+    first where the finger flexing onto the still thumb comes within (0, REACH_MM] of it pad to pad),
+    and there the two tips share no volume (OpenCascade's boolean) and no two parts interpenetrate
+    (manifold3d on the visual meshes; a joint's parent and child and the designed contacts may
+    touch)."""
+    from ..cad import assembly, grasp, measure
+    from ..kinematics.opposition import OPPOSED, THUMB
+    from ..kinematics.topology import digit_links
+    from .interference import SWEEP_TOL_MM3, interference, may_touch
+
+    hand = Hand(params)
+    allowed = may_touch(assembly.designed_contacts(params))
+    thumb = digit_links(THUMB)[-1].name
+    measured, problems = {}, {}
+    for finger in OPPOSED:
+        c = grasp.solid_contact(hand, solids, finger)
+        if c is None:
+            measured[finger], problems[finger] = "-", "no pad-to-pad contact"
+            continue
+        T = assembly.pose_transforms(params, hand.forward(c.u, compensated=True))
+        tip = digit_links(finger)[-1].name
+        a, b = measure.placed(solids[thumb], T[thumb]), measure.placed(solids[tip], T[tip])
+        overlap = measure.intersection_volume(a, b)
+        collisions = interference(meshes, T, allowed, tol_mm3=SWEEP_TOL_MM3)["collisions"]
+        measured[finger] = f"{c.distance_mm:.3f}"
+        if overlap > 0.0:
+            problems[finger] = f"tips overlap {overlap:.3g} mm^3"
+        elif collisions:
+            problems[finger] = "overlap " + ", ".join(" x ".join(e["parts"]) for e in collisions)
+    ok = not problems
+    return [Row(f"thumb pad to the {', '.join(OPPOSED)} pads on the solids (cad.grasp.solid_contact), no "
+                "interpenetration", "; ".join(f"{f}: {why}" for f, why in problems.items()) or " / ".join(OPPOSED),
+                f"(0, {grasp.REACH_MM:g}] mm", " / ".join(measured.values()) + " mm", f"<= {grasp.REACH_MM:g} mm",
+                ok)]
+
+
+def power_grasp_rows(export: Export, params: HandParams, solids: dict, log=lambda msg: None) -> list[Row]:
+    """The power grasp of a cylinder scaled with the hand (``cad.grasp.power_grasp_diameter_mm``):
+    enclosed on the solids (``cad.grasp.power_grasp``: every finger touches it past its equator, the
+    thumb clear), then held palm down in MuJoCo (``export.hold.hold_cylinder``). The commands follow
+    the paper's compensation, as the MuJoCo hold was tuned on it."""
+    from ..cad import grasp
+    from .hold import HOLD_KG, MOVED_MM, SQUEEZED_MM, hold_cylinder
+
+    diameter = grasp.power_grasp_diameter_mm(params)
+    g, tried = grasp.power_grasp(Hand(params, None, "paper"), solids, diameter)
+    name = f"power grasp: a {diameter:.1f} mm cylinder across the palm"
+    if g is None:
+        last = tried[-1] if tried else None
+        wraps = " / ".join("-" if c is None else f"{c.wrap_deg:.0f}" for c in (last.fingers.values() if last else ()))
+        return [Row(f"{name} enclosed (cad.grasp.power_grasp)", "no position across the palm",
+                    "every finger past its equator", f"wrap {wraps} deg (last tried)", "> 90 deg", False)]
+    wraps = [c.wrap_deg for c in g.fingers.values()]
+    rows = [Row(f"{name} enclosed (cad.grasp.power_grasp)", " / ".join(g.fingers) + f" (axis y {g.axis_y_mm:.1f} mm)",
+                "every finger past its equator", "wrap " + " / ".join(f"{w:.0f}" for w in wraps) + " deg",
+                "> 90 deg", True)]
+    if importlib.util.find_spec("mujoco") is None:
+        rows.append(Row(f"{name} held palm down (MuJoCo)", export.scene.name, "held", "not run (mujoco missing)", "-",
+                        None))
+        return rows
+    log("check: the power grasp's hold (MuJoCo)")
+    h = hold_cylinder(export.scene, g)
+    why = h.problems()
+    rows.append(Row(f"{name} held palm down, {HOLD_KG * 1e3:g} g (MuJoCo, export.hold)", export.scene.name, "held",
+                    "; ".join(why) if why else f"squeezed {h.squeezed_mm:.1f} mm, moved {h.moved_mm:.1f} mm",
+                    f"squeezed < {SQUEEZED_MM:g}, moved < {MOVED_MM:g} mm, at rest", not why))
+    return rows
+
+
+def wall_rows(params: HandParams, meshes: dict) -> list[Row]:
+    """Every wall of every part at least two perimeters (``export.walls.part_walls`` on the visual
+    meshes: ray casting; the bar allows for the mesh's tolerance)."""
+    from .walls import part_walls, wall_bar_mm
+
+    bar = wall_bar_mm(params)
+    walls = part_walls(meshes, params)
+    thin = {n: r["wall_thinnest"] for n, r in walls.items()}
+    item = min(thin, key=lambda n: thin[n])
+    return [Row(f"walls >= two perimeters on every part ({len(walls)} parts; export.walls, trimesh rays)", item,
+                f">= {bar:.2f} mm", f"{thin[item]:.3f} mm", f">= {bar:.2f} mm", bool(thin[item] >= bar))]
+
+
+def tendon_rows(params: HandParams, solids: dict) -> list[Row]:
+    """No tendon passes through material: ``cad.clearance.tendon_hits`` over the routing model's strands
+    at 0-100 % of every travel, on the solids (a left hand's mirrored back into the right-handed
+    frames its parts are built in)."""
+    from ..cad.clearance import FRACTIONS, STEP_MM, tendon_hits
+
+    shapes = solids
+    if params.side == "left":
+        import build123d as bd
+
+        shapes = {n: s.mirror(bd.Plane.YZ) for n, s in solids.items()}
+    hits = tendon_hits(params, shapes)
+    first = (f"{hits[0].strand} in {hits[0].part} at {hits[0].fraction:.0%}" if hits else
+             f"every strand, {len(FRACTIONS)} poses")
+    return [Row(f"tendon paths outside material (cad.clearance, a point every {STEP_MM:g} mm, OpenCascade)", first,
+                "0 points", f"{sum(h.n_points for h in hits)} points", "0", not hits)]
 
 
 def check_export(export_dir: Path, params: HandParams, samples: int = 8, settle: int = 3, seed: int = 0,
-                 log=lambda msg: None, sweep: bool = True) -> list[Row]:
+                 log=lambda msg: None, sweep: bool = True, functional: bool = True) -> list[Row]:
     """Every row of the check of the export in ``export_dir`` built from ``params``."""
     export = Export.open(Path(export_dir))
     problem = export_problem(export.folder, params.digest, params.side)
@@ -521,9 +647,19 @@ def check_export(export_dir: Path, params: HandParams, samples: int = 8, settle:
     rows += inertial_rows(export, robot, params, props, mj_inertials)
     rows += mesh_rows(export, props)
     rows += fist_rows(hand, solids)
+    meshes = visual_meshes(export) if sweep or functional else {}
     if sweep:
         log("check: collisions over the command grid (manifold3d)")
-        rows += collision_rows(export, params, hand, log)
+        rows += collision_rows(export, params, hand, log, meshes)
+    if functional:
+        log("check: opposition on the solids")
+        rows += opposition_rows(params, solids, meshes)
+        log("check: the power grasp on the solids")
+        rows += power_grasp_rows(export, params, solids, log)
+        log("check: walls (ray casting)")
+        rows += wall_rows(params, meshes)
+        log("check: tendon paths (OpenCascade)")
+        rows += tendon_rows(params, solids)
     return rows
 
 

@@ -32,6 +32,11 @@ THUMB_S, CLOSE_S, HOLD_S = 1.0, 2.0, 3.0
 PRESENTED_SOLREF = (0.002, 1.0)
 #: the free object's body, joint and (first) geom name in the scene
 OBJECT = "object"
+#: the cylinder the closed hand holds palm down (kg), and what counts as held: the closing fingers
+#: squeeze it less than SQUEEZED_MM (the palm's heel holds it on its wrist side), palm down it moves
+#: less than MOVED_MM and ends slower than RESTING_MM_S, no warning, the palm touching it
+HOLD_KG = 0.1
+SQUEEZED_MM, MOVED_MM, RESTING_MM_S = 5.0, 5.0, 10.0
 
 
 class Trial:
@@ -182,8 +187,21 @@ class Hold:
         """How far it moved with the palm facing down."""
         return float(np.linalg.norm(self.end_mm - self.closed_mm))
 
+    def problems(self) -> list[str]:
+        """Why the cylinder does not count as held (empty: held; the limits above)."""
+        out = [f"{k} x{n}" for k, n in self.warnings.items()]
+        if self.squeezed_mm >= SQUEEZED_MM:
+            out.append(f"squeezed {self.squeezed_mm:.1f} mm >= {SQUEEZED_MM:g}")
+        if self.moved_mm >= MOVED_MM:
+            out.append(f"moved {self.moved_mm:.1f} mm >= {MOVED_MM:g} palm down")
+        if self.speed_mm_s >= RESTING_MM_S:
+            out.append(f"still moving at {self.speed_mm_s:.1f} mm/s")
+        if not self.palm_contacts_y_mm:
+            out.append("the palm does not touch it")
+        return out
 
-def hold_cylinder(scene: str | Path, grasp, mass_kg: float = 0.1) -> Hold:
+
+def hold_cylinder(scene: str | Path, grasp, mass_kg: float = HOLD_KG) -> Hold:
     """Simulate the closed hand of ``scene`` (an export's ``description/mjcf/scene.xml``) on the
     cylinder of ``grasp`` (``cad.grasp.CylinderGrasp``), a solid of ``mass_kg``."""
     g = grasp

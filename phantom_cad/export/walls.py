@@ -25,7 +25,9 @@ from __future__ import annotations
 import numpy as np
 
 from .. import units
+from ..kinematics.hand_params import HandParams
 from ..kinematics.vectors import clipped_acos
+from ..params.rules import MIN_WALL
 
 #: half-angle of the cone of rays around the inward normal (degrees)
 CONE_DEG = 15.0
@@ -133,3 +135,17 @@ def thin_walls(vertices: np.ndarray, faces: np.ndarray, minimum: float, samples:
         out["wall_thinnest"] = float(walls[j])
         out["wall_at"] = [round(float(v), 3) for v in points[j]]
     return out
+
+
+def wall_bar_mm(params: HandParams) -> float:
+    """The thinnest wall (mm) a part's exported mesh may read: two perimeters of the nozzle
+    (``params.rules.MIN_WALL``) less twice the STL tolerance, as a mesh lies within that tolerance of
+    each face (a wall of exactly two perimeters can read that much thinner)."""
+    return units.mm(MIN_WALL) - 2.0 * units.mm(params.print.stl_tolerance)
+
+
+def part_walls(meshes: dict[str, tuple[np.ndarray, np.ndarray]], params: HandParams,
+               samples: int = SAMPLES) -> dict[str, dict]:
+    """{part: :func:`thin_walls` of its mesh (vertices, faces; mm) against :func:`wall_bar_mm`}."""
+    bar = wall_bar_mm(params)
+    return {n: thin_walls(v, f, bar, samples) for n, (v, f) in sorted(meshes.items())}

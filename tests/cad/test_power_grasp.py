@@ -19,6 +19,7 @@ contacts may touch).
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -62,6 +63,17 @@ def _cylinder(p, shapes, y: float):
     boxes = [measure.placed(shapes[f"{f}_base"], T0[f"{f}_base"]).bounding_box() for f in FINGERS]
     x0, x1 = min(b.min.X for b in boxes), max(b.max.X for b in boxes)
     return Pos((x0 + x1) / 2, y, z) * Rot(0, 90, 0) * Cylinder(DIAMETER_MM / 2, x1 - x0), z, (x0, x1)
+
+
+def test_the_cylinder_scales_with_the_hand():
+    """The cylinder ``phantom-cad check`` closes the hand on: the paper's 35 mm on its 189 mm hand
+    (params/phantom.toml), in proportion on the 170 mm hand: 35 x 170 / 189 = 31.48 mm."""
+    from phantom_cad import load_params
+
+    root = Path(__file__).resolve().parents[2]
+    assert grasp.power_grasp_diameter_mm(load_params(root / "params" / "phantom.toml")) == pytest.approx(35.0)
+    assert grasp.power_grasp_diameter_mm(load_params(root / "params" / "examples" / "small.toml")) == pytest.approx(
+        31.48, abs=0.005)
 
 
 def test_the_cylinder_is_found(hand):

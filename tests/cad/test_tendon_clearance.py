@@ -59,6 +59,11 @@ def test_a_part_without_its_channels_is_caught(params, monkeypatch):
     hits = clearance.tendon_hits(params, {"index_proximal": shape}, fractions=(0.0,))
     assert {h.strand for h in hits} >= {"index_mcp_pip_a", "index_mcp_pip_b", "index_return"}
     assert all(h.part == "index_proximal" for h in hits)
+    # phantom-cad check's row fails on it, naming the part
+    from phantom_cad.export.check import tendon_rows
+
+    (row,) = tendon_rows(params, {"index_proximal": shape})
+    assert row.ok is False and row.item.endswith(" in index_proximal at 0%"), row
 
 
 def _classify(shape, points_mm):

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from phantom_cad.export.walls import thin_walls, wall_samples, wall_thickness
+from phantom_cad.export.walls import part_walls, thin_walls, wall_bar_mm, wall_samples, wall_thickness
 
 MIN_WALL = 0.8
 
@@ -100,7 +100,8 @@ def walls(hand_meshes, params):
     grooves, dimensions.FLANK) can read down to 0.8 - 2 x tolerance: that is the bar a wall must
     clear."""
     tol = params.print.stl_tolerance * 1e3
-    return {n: thin_walls(v, f, MIN_WALL - 2.0 * tol) for n, (v, f) in hand_meshes("default").items()}
+    assert wall_bar_mm(params) == pytest.approx(MIN_WALL - 2.0 * tol)
+    return part_walls(hand_meshes("default"), params)
 
 
 def test_the_servo_pulleys_print(walls):
@@ -139,12 +140,10 @@ def test_every_wall_of_a_170_mm_hand_is_two_perimeters(hand_parts, hand_meshes):
     assert p.hand_length == pytest.approx(0.170)
     tol = p.print.stl_tolerance * 1e3
     bar = MIN_WALL - 2.0 * tol
+    assert wall_bar_mm(p) == pytest.approx(bar)
     meshes = hand_meshes("hand_length_170")
-    thin = {}
-    for n, (v, f) in meshes.items():
-        r = thin_walls(v, f, bar)
-        if r["wall_thinnest"] < bar:
-            thin[n] = round(r["wall_thinnest"], 3)
+    walls = part_walls(meshes, p)
+    thin = {n: round(r["wall_thinnest"], 3) for n, r in walls.items() if r["wall_thinnest"] < bar}
     assert len(meshes) == 28 and thin == {}
 
 
