@@ -22,14 +22,14 @@ from __future__ import annotations
 import math
 import sys
 import time
-from dataclasses import replace
 
 
 from phantom_cad import load_params, make_hand
 from phantom_cad.kinematics import frames as F
 from phantom_cad.kinematics import opposition as O
 from phantom_cad.kinematics import thenar as TH
-from phantom_cad.params.io import DEFAULT_PARAMS
+from phantom_cad.params import parse
+from phantom_cad.params.io import DEFAULT_PARAMS, load_document
 
 
 def wide_bounds(params) -> O.Bounds:
@@ -54,10 +54,12 @@ def row(label, params, T0, reach, seconds):
           flush=True)
 
 
-def twisted(params, psi: float):
-    """The file with its thumb twisted by psi (rad): ``thumb.twist``, the MP turned about the
-    metacarpal's length."""
-    return replace(params, thumb=replace(params.thumb, twist=psi))
+def twisted(path, psi: float):
+    """The file with its thumb twisted by psi (deg): ``thumb.twist_deg``, the MP turned about the
+    metacarpal's length (through the document, so that the memoised routes are keyed on it)."""
+    doc = load_document(path)
+    doc["thumb"]["twist_deg"] = psi
+    return parse(doc, str(path))
 
 
 def main(argv):
@@ -66,11 +68,12 @@ def main(argv):
         k = argv.index("--twist")
         twist = [float(v) for v in argv[k + 1].split(",")]
         argv = argv[:k] + argv[k + 2:]
-    params = load_params(argv[1] if len(argv) > 1 else DEFAULT_PARAMS)
+    path = argv[1] if len(argv) > 1 else DEFAULT_PARAMS
+    params = load_params(path)
     seed = int(argv[2]) if len(argv) > 2 else 1
     hand = make_hand(params)
     if twist is not None:
-        return main_twist(params, seed, twist)
+        return main_twist(params, path, seed, twist)
     print("| rules | CMC centre (mm) | CMC axis from the palm's normal (deg) | margin (deg) | pads meet "
           "(index / middle / ring) | the thenar holds it | tilt margin (deg) | s |")
     print("|---|---|---:|---:|---|---|---:|---:|")
@@ -89,12 +92,12 @@ def main(argv):
         row(label, params, T0, s.reach, time.perf_counter() - t)
 
 
-def main_twist(params, seed, twist):
+def main_twist(params, path, seed, twist):
     print("| twist (deg) | CMC centre (mm) | axis (deg) | margin (deg) | pads meet (index / middle / ring) | "
           "margin without oppose (index / middle / ring, deg) | s |")
     print("|---:|---|---|---:|---|---|---:|")
     for psi in twist:
-        hand = make_hand(twisted(params, math.radians(psi)))
+        hand = make_hand(twisted(path, psi))
         t = time.perf_counter()
         s = O.solve(hand, seed=seed, population=16, generations=150, constraint=O.thenar_constraint(params),
                     oppose=O.PAD_OPPOSE)

@@ -14,12 +14,17 @@ import pytest
 from phantom_cad.kinematics import frames as F, link_frames as LF, opposition as O
 from phantom_cad.kinematics.topology import JOINTS, LINK_NAMES
 from phantom_cad.params import ParamError, parse
-from phantom_cad.params.io import load_params
+from phantom_cad.params.io import DEFAULT_PARAMS, load_document, load_params
 
 
 def _twisted(params, deg: float, side: str | None = None):
-    p = replace(params, thumb=replace(params.thumb, twist=math.radians(deg)))
-    return p if side is None else replace(p, side=side)
+    """The default file with ``thumb.twist_deg = deg`` (and ``hand.side``), parsed: its digest,
+    which the memoised routes and models are keyed on, is the file's."""
+    doc = load_document(DEFAULT_PARAMS)
+    doc["thumb"]["twist_deg"] = deg
+    if side is not None:
+        doc["hand"]["side"] = side
+    return parse(doc, str(DEFAULT_PARAMS))
 
 
 @pytest.fixture(scope="module")
@@ -172,3 +177,34 @@ def test_the_mjcf_of_a_twisted_thumb_poses_its_bodies_where_link_frames_does(par
         b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, link)
         assert np.allclose(R0.T @ d.xmat[b].reshape(3, 3), want[link][:3, :3], atol=1e-9), link
         assert np.allclose(R0.T @ (d.xpos[b] - p0), want[link][:3, 3], atol=1e-9), link
+
+
+@pytest.mark.parametrize("side", ["right", "left"])
+def test_the_twisted_thumbs_tendons_are_the_mechanism(params, side):
+    """The routing model of a twisted thumb (its guide G1, MP-IP loop hub and return channel on the
+    metacarpal turned with the MP) keeps the mechanism's lengths, worked from the file's numbers:
+    the loop's strands +-(R_MP q_MP - R_IP q_IP) (eq. 2), the drive chord(q_MP) - chord(0) + r u1
+    (eq. 4-5), whatever q15 (the drive enters down the CMC axis), the return R_MP q_MP + R_IP q_IP
+    (eq. 11)."""
+    from phantom_cad.kinematics import routing_paths
+    from phantom_cad.kinematics.topology import SERVOS
+
+    p = _twisted(params, 80.0, side)
+    t = p.thumb
+    R_mp, R_ip = t.chain.radii
+    g = t.chain.guide
+    chord = lambda x: math.sqrt(g.d1 ** 2 + g.d2 ** 2 - 2.0 * g.d1 * g.d2 * math.cos(g.alpha - x))  # noqa: E731
+    rest = routing_paths.lengths(p)
+    rng = np.random.default_rng(13)
+    for _ in range(6):
+        mp, ip, cmc = rng.uniform(0.0, 1.2), rng.uniform(0.0, 0.95), rng.uniform(0.0, 1.5)
+        u = np.zeros(len(SERVOS))
+        u[0], u[5] = rng.uniform(0.0, 1.4), cmc
+        got = routing_paths.lengths(p, _q(thumb_mp=math.degrees(mp), thumb_ip=math.degrees(ip),
+                                          thumb_cmc=math.degrees(cmc)), u)
+        want = R_mp * mp - R_ip * ip
+        assert got["thumb_mp_ip_a"] - rest["thumb_mp_ip_a"] == pytest.approx(want, abs=1e-9)
+        assert got["thumb_mp_ip_b"] - rest["thumb_mp_ip_b"] == pytest.approx(-want, abs=1e-9)
+        r = t.chain.servo_radius
+        assert got["thumb_drive"] - rest["thumb_drive"] == pytest.approx(chord(mp) - chord(0.0) + r * u[0], abs=1e-9)
+        assert got["thumb_return"] - rest["thumb_return"] == pytest.approx(R_mp * mp + R_ip * ip, abs=1e-9)

@@ -295,6 +295,28 @@ def _cmc_loop(params: HandParams) -> tuple[Strand, Strand]:
     return tuple(out)
 
 
+def _turned_with_mp(params: HandParams, strands: tuple[Strand, ...]) -> tuple[Strand, ...]:
+    """The thumb's strands with what they fix to the metacarpal on its MP's side (the drive's guide
+    G1, the MP-IP loop's hub and clamp, the return's knot and channel) turned with the MP by the
+    thumb's twist about the metacarpal's length (``link_frames.joint_origin``: the part is built
+    so). The drive's entry from the column stays on the CMC axis, where q15 leaves its length alone."""
+    mp = joint(LF.THUMB_MP)
+    T = LF.joint_origin(params, link(mp.child))
+    if T is None or np.array_equal(T[:3, :3], np.eye(3)):
+        return strands
+    R, o = T[:3, :3], T[:3, 3]
+    turn = lambda v: tuple(float(t) for t in o + R @ (np.asarray(v, float) - o))  # noqa: E731
+
+    def element(e):
+        if e.link != mp.parent or (isinstance(e, Point) and e.role == "interface"):
+            return e
+        if isinstance(e, Point):
+            return Point(e.kind, e.link, turn(e.pos), e.role)
+        return Pulley(e.link, turn(e.centre), tuple(float(t) for t in R @ np.asarray(e.axis, float)), e.radius,
+                      e.width, e.role, e.joint)
+    return tuple(Strand(st.name, tuple(element(e) for e in st.elements)) for st in strands)
+
+
 def _mirror_element(e):
     S = F.MIRROR[:3, :3]
     mirror = lambda v: tuple(float(t) for t in S @ np.asarray(v, float))  # noqa: E731
@@ -332,6 +354,8 @@ def _routes(params: HandParams, mirror: bool) -> tuple[Route, ...]:
             strands, d, k = _cmc_loop(params), params.hardware.tendon_diameter, "EA"
         else:
             strands, d, k = (_return(params, t.digit, lay, rest),), params.cad.spring_diameter, "k_s"
+        if t.digit == JOINTS[CMC_Q].digit:
+            strands = _turned_with_mp(params, strands)
         if mirror:
             strands = tuple(Strand(s.name, tuple(_mirror_element(e) for e in s.elements)) for s in strands)
         out.append(Route(t, strands, d, k))
