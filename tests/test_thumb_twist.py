@@ -208,3 +208,15 @@ def test_the_twisted_thumbs_tendons_are_the_mechanism(params, side):
         r = t.chain.servo_radius
         assert got["thumb_drive"] - rest["thumb_drive"] == pytest.approx(chord(mp) - chord(0.0) + r * u[0], abs=1e-9)
         assert got["thumb_return"] - rest["thumb_return"] == pytest.approx(R_mp * mp + R_ip * ip, abs=1e-9)
+
+
+def test_a_twisted_file_is_not_built_yet(params):
+    """The metacarpal part does not turn its MP side with the twist: the pre-build rules refuse a
+    twisted file in one line, naming the field; the untwisted default passes."""
+    from phantom_cad.cad import preflight
+
+    preflight.check(params)
+    with pytest.raises(ParamError) as info:
+        preflight.check(_twisted(params, 80.0))
+    assert "\n" not in str(info.value)
+    assert str(info.value).startswith(f"{DEFAULT_PARAMS}: thumb.twist_deg = 80.0: is not built")
