@@ -220,3 +220,48 @@ def test_a_twisted_file_is_not_built_yet(params):
         preflight.check(_twisted(params, 80.0))
     assert "\n" not in str(info.value)
     assert str(info.value).startswith(f"{DEFAULT_PARAMS}: thumb.twist_deg = 80.0: is not built")
+
+
+def test_the_twins_thumb_tendons_are_the_mechanism_when_twisted(params):
+    """MuJoCo's own wrapping of a twisted thumb's routed tendons (the MJCF's sites and pulley
+    cylinders, written from the routing model), at random joint and servo angles, against the
+    mechanism from the file's numbers: the MP-IP loop's strands +-(R_MP q_MP - R_IP q_IP), the
+    drive chord(q_MP) - chord(0) + r u1, the return R_MP q_MP + R_IP q_IP."""
+    mujoco = pytest.importorskip("mujoco")
+    from phantom_cad.export.mjcf import mjcf_spec
+    from phantom_cad.export.robot import Inertial, RobotLink, transmissions
+
+    p = _twisted(params, 80.0)
+    drives, strands = transmissions(p)
+    mass = Inertial(0.01, (0.0, 0.0, 0.0), (1e-6, 0.0, 0.0, 1e-6, 0.0, 1e-6), "test")
+    model = _kinematic_model(p)
+    model = replace(model, links=tuple(RobotLink(ln.name, mass if ln.name in LINK_NAMES else None, None)
+                                       for ln in model.links), drives=drives, strands=strands)
+    m = mjcf_spec(model).compile()
+    d = mujoco.MjData(m)
+
+    def lengths(q, u1):
+        d.qpos[:] = 0.0
+        for j in JOINTS:
+            d.qpos[m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, j.name)]] = q[j.index]
+        d.qpos[m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, "thumb_flexion")]] = u1
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
+        mujoco.mj_tendon(m, d)
+        return {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_TENDON, t): d.ten_length[t] for t in range(m.ntendon)}
+
+    t = p.thumb
+    R_mp, R_ip = t.chain.radii
+    g = t.chain.guide
+    chord = lambda x: math.sqrt(g.d1 ** 2 + g.d2 ** 2 - 2.0 * g.d1 * g.d2 * math.cos(g.alpha - x))  # noqa: E731
+    rest = lengths(np.zeros(len(JOINTS)), 0.0)
+    rng = np.random.default_rng(17)
+    for _ in range(5):
+        mp, ip, cmc, u1 = rng.uniform(0.0, 1.2), rng.uniform(0.0, 0.95), rng.uniform(0.0, 1.5), rng.uniform(0.0, 1.4)
+        got = lengths(_q(thumb_mp=math.degrees(mp), thumb_ip=math.degrees(ip), thumb_cmc=math.degrees(cmc)), u1)
+        want = R_mp * mp - R_ip * ip
+        assert got["thumb_mp_ip_a"] - rest["thumb_mp_ip_a"] == pytest.approx(want, abs=2e-5)
+        assert got["thumb_mp_ip_b"] - rest["thumb_mp_ip_b"] == pytest.approx(-want, abs=2e-5)
+        assert got["thumb_drive"] - rest["thumb_drive"] == pytest.approx(
+            chord(mp) - chord(0.0) + t.chain.servo_radius * u1, abs=2e-5)
+        assert got["thumb_return"] - rest["thumb_return"] == pytest.approx(R_mp * mp + R_ip * ip, abs=2e-5)
