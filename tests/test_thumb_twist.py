@@ -210,18 +210,6 @@ def test_the_twisted_thumbs_tendons_are_the_mechanism(params, side):
         assert got["thumb_return"] - rest["thumb_return"] == pytest.approx(R_mp * mp + R_ip * ip, abs=1e-9)
 
 
-def test_a_twisted_file_is_not_built_yet(params):
-    """The metacarpal part does not turn its MP side with the twist: the pre-build rules refuse a
-    twisted file in one line, naming the field; the untwisted default passes."""
-    from phantom_cad.cad import preflight
-
-    preflight.check(params)
-    with pytest.raises(ParamError) as info:
-        preflight.check(_twisted(params, 80.0))
-    assert "\n" not in str(info.value)
-    assert str(info.value).startswith(f"{DEFAULT_PARAMS}: thumb.twist_deg = 80.0: is not built")
-
-
 def test_the_twins_thumb_tendons_are_the_mechanism_when_twisted(params):
     """MuJoCo's own wrapping of a twisted thumb's routed tendons (the MJCF's sites and pulley
     cylinders, written from the routing model), at random joint and servo angles, against the
@@ -265,3 +253,38 @@ def test_the_twins_thumb_tendons_are_the_mechanism_when_twisted(params):
         assert got["thumb_drive"] - rest["thumb_drive"] == pytest.approx(
             chord(mp) - chord(0.0) + t.chain.servo_radius * u1, abs=2e-5)
         assert got["thumb_return"] - rest["thumb_return"] == pytest.approx(R_mp * mp + R_ip * ip, abs=2e-5)
+
+
+def test_the_twisted_metacarpal_part_carries_the_models_guide_and_hub(params):
+    """The metacarpal part of a file twisted by 80 deg, measured on the solid in its own (the CMC
+    base's) frame: its guide eyelet's hole is centred on the routing model's G1 and its MP-IP hub's
+    groove lies about the model's hub axis (the MP axis turned by Ry(80 deg): x -> (cos 80, 0,
+    -sin 80)), its floor half a cord inside the hub's radius; the MP's axle bore lies on the turned
+    axis through the metacarpal's end. Hub and column stay about the CMC axis: the solid's lowest
+    point is the part's printing floor."""
+    pytest.importorskip("build123d")
+    from phantom_cad import units
+    from phantom_cad.cad import measure
+    from phantom_cad.cad.registry import part as make_part
+    from phantom_cad.kinematics import routing
+
+    p = _twisted(params, 80.0)
+    part = make_part(p, "thumb_cmc_base")
+    shape = part.build()
+    assert shape.is_valid and len(shape.solids()) == 1
+    faces = measure.cylinders(shape)
+    t = part.sec.tol
+    axis = np.array([math.cos(math.radians(80.0)), 0.0, -math.sin(math.radians(80.0))])
+    drive = next(s for r in routing.routes(p) for s in r.strands if s.name == "thumb_drive")
+    g1 = units.mm(np.asarray(next(e.pos for e in drive.elements if getattr(e, "role", "") == "guide G1")))
+    eyes = measure.eyelet_centres(shape, t.tendon_hole / 2.0, t.eyelet_length, faces=faces)
+    assert len(eyes) == 1 and np.allclose(eyes[0]["centre"], g1, atol=1e-3)
+    loop = next(s for r in routing.routes(p) for s in r.strands if s.name == "thumb_mp_ip_a")
+    hub = next(e for e in loop.elements if getattr(e, "role", "") == "hub")
+    assert np.allclose(hub.axis, -axis, atol=1e-12)
+    floor = measure.measure_groove_radius(shape, units.mm(np.asarray(hub.centre)), axis, units.mm(hub.width),
+                                          faces=faces)
+    assert floor == pytest.approx(units.mm(hub.radius - p.hardware.tendon_diameter / 2.0), abs=1e-3)
+    mp = np.array([0.0, units.mm(p.thumb.metacarpal), 0.0])
+    assert any(measure.coaxial(c, mp, axis, 1e-6) for c in faces)
+    assert shape.bounding_box().min.Z == pytest.approx(part.palmar_floor, abs=1e-3)

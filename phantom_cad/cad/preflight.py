@@ -32,8 +32,7 @@ def check(params: HandParams) -> None:
     reaches past the metacarpal block's front; and if the thenar's cuts (journal, cavity, turn) come
     within two perimeters of a finger socket's magnet pockets (``thenar.socket_pocket_gap``), or a
     servo's flange screw pilot opens above the forearm module's top (``forearm_layout.pilot_headroom``),
-    or the CMC base comes within a clearance of the palm's heel (``forearm_layout.heel_gap``); and
-    a thumb twisted (``thumb.twist_deg`` not 0), which the metacarpal part is not built for."""
+    or the CMC base comes within a clearance of the palm's heel (``forearm_layout.heel_gap``)."""
     from ..kinematics import couplers
     from ..kinematics import forearm_layout as FL
     from ..kinematics import frames as F
@@ -41,14 +40,6 @@ def check(params: HandParams) -> None:
     from ..kinematics import thenar as TH
 
     src = params.source
-    if params.thumb.twist != 0.0:
-        # the frames, the descriptions and the routing model turn the thumb's MP; the metacarpal
-        # part (cad/parts/thumb.py) is still built with its MP clevis, guide and hub across the
-        # CMC axis: a build would print a thumb its descriptions do not describe
-        raise ParamError("thumb.twist_deg", round(units.deg(params.thumb.twist), 6),
-                         "is not built: the thumb's metacarpal part does not turn its MP clevis, guide and "
-                         "pulleys with the twist yet (docs/parameters.md); the kinematics, the descriptions' "
-                         "frames and the opposition search read it", src)
     T0 = F.T_palm_thumb_cmc_base(params)
     fit = TH.thenar_margins(params, T0)
     if fit["tilt"] < 0.0:

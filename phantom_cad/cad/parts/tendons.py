@@ -93,6 +93,15 @@ class LinkTendons:
     def __init__(self, params: HandParams, link_name: str):
         self.params, self.link = params, link_name
         cl = units.mm(params.print.hole_clearance)
+        # a twisted thumb's metacarpal: its features are read in its MP's frame before the twist
+        # (the part cuts them there and turns them with the MP), where they lie in planes x = const
+        turned = routing.mp_turn(params)
+        if turned is not None and turned[0] == link_name:
+            _, turn_R, turn_o = turned
+            flat = lambda v: turn_o + turn_R.T @ (np.asarray(v, float) - turn_o)  # noqa: E731
+        else:
+            flat = lambda v: np.asarray(v, float)  # noqa: E731
+        _mm = lambda v: np.asarray(units.mm(flat(v)), float)  # noqa: E731
         self.grooves: list[Groove] = []
         self.anchors: list[Anchor] = []
         seen = set()
