@@ -288,3 +288,15 @@ def test_the_twisted_metacarpal_part_carries_the_models_guide_and_hub(params):
     mp = np.array([0.0, units.mm(p.thumb.metacarpal), 0.0])
     assert any(measure.coaxial(c, mp, axis, 1e-6) for c in faces)
     assert shape.bounding_box().min.Z == pytest.approx(part.palmar_floor, abs=1e-3)
+
+
+def test_the_twisted_metacarpal_verifies_on_both_sides(params):
+    """The part's own measurements (its grooves, its guide at d1 from the MP axis, its lowest point)
+    pass on the right hand's solid and on the left hand's, which is its mirror image."""
+    pytest.importorskip("build123d")
+    from phantom_cad.cad import assembly
+
+    for side in ("right", "left"):
+        p = _twisted(params, 80.0, side)
+        built = assembly.build_part(p, "thumb_cmc_base")
+        assert assembly.verify_part(p, "thumb_cmc_base", built.shape) == [], side

@@ -105,6 +105,11 @@ class LinkTendons:
         self.grooves: list[Groove] = []
         self.anchors: list[Anchor] = []
         seen = set()
+        # the arcs are measured over the hand's travel poses (a left hand's mirrored), which the
+        # right-handed strands fit while every pulley turns about x (the mirror flips x only); a
+        # twisted thumb's do not, so they are measured on the hand's own strands
+        sided = ({st.name: st for r in routing.routes(params) for st in r.strands} if turned is not None
+                 else {st.name: st for r in routing.routes(params, right_handed=True) for st in r.strands})
         for r in routing.routes(params, right_handed=True):
             if _KIND[r.name] not in KINDS:
                 continue
@@ -121,7 +126,7 @@ class LinkTendons:
                         if e.role == "return":
                             # the arc it touches, and behind it the parent's run, which turns into
                             # this link's frame as the joint flexes (up to a quarter turn beyond)
-                            a0, a1 = routing_paths.arc_range(params, st, i)
+                            a0, a1 = routing_paths.arc_range(params, sided[st.name], i)
                             sector = (a0 - SECTOR_MARGIN, a1 + math.pi / 2.0)
                         if key in seen:
                             continue

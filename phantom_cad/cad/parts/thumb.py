@@ -120,8 +120,9 @@ class ThumbCMCBase(RoutedPart, Part):
         bb = shape.bounding_box(optimal=True)
         self.expect(out, "lowest z", bb.min.Z, self.palmar_floor, 0.02)
         tol = self.sec.tol
-        if self.twisted:   # the MP side measured where it was cut
-            shape = transform(shape, np.linalg.inv(self.turn))
+        if self.twisted:   # the MP side measured where it was cut (a left hand's part is mirrored)
+            turn = F.mirror(self.turn) if self.params.side == "left" else self.turn
+            shape = transform(shape, np.linalg.inv(turn))
         faces = self.verify_routing(shape, out)     # the grooves; the faces, for the eyelet and the pockets
         eyes = eyelet_centres(shape, tol.tendon_hole / 2.0, tol.eyelet_length, faces=faces)
         d = (point_line_distance(eyes[0]["centre"], (0, self.length, 0), (1, 0, 0)) if len(eyes) == 1
