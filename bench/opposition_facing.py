@@ -9,10 +9,9 @@ min(45 deg less the contact direction's angle, 30 deg less the normals' angle) a
 contact, the smallest of the three fingers.
 
 With ``--twist DEGREES,...``: the same search under the file's rules (thenar, human palm, default
-bounds) for a thumb that is not built: the MP and IP axes turned by each angle about the thumb
-metacarpal's length (a pronation of the thumb, fixed in its metacarpal), which turns its pad's
-cone about the CMC axis open (docs/opposition.md, "Pad to pad"). Only the capsules are turned
-(``opposition.ThumbTips``); nothing of the parameters, frames or parts knows of it.
+bounds) with the file's ``thumb.twist`` set to each angle: the MP and IP axes turned about the
+thumb metacarpal's length (a pronation of the thumb, fixed in its metacarpal), which turns its
+pad's cone about the CMC axis open (docs/opposition.md, "Pad to pad").
 
 About 30 s a row on the project's machine.
 Run: .venv/bin/python bench/opposition_facing.py [PARAMS.toml] [SEED] [--twist 45,70,90]
@@ -24,13 +23,13 @@ import math
 import sys
 import time
 
-import numpy as np
 
 from phantom_cad import load_params, make_hand
 from phantom_cad.kinematics import frames as F
 from phantom_cad.kinematics import opposition as O
 from phantom_cad.kinematics import thenar as TH
-from phantom_cad.params.io import DEFAULT_PARAMS
+from phantom_cad.params import parse
+from phantom_cad.params.io import DEFAULT_PARAMS, load_document
 
 
 def wide_bounds(params) -> O.Bounds:
@@ -55,17 +54,12 @@ def row(label, params, T0, reach, seconds):
           flush=True)
 
 
-def twisted(psi: float):
-    """``opposition.thumb_tips`` for a thumb whose MP and IP axes are turned by psi (rad) about its
-    metacarpal's length (the CMC base's y, through its origin: the metacarpal's own points stay)."""
-    c, s = math.cos(psi), math.sin(psi)
-    R = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-    plain = O.thumb_tips
-
-    def thumb_tips(hand, n1=21, n6=21):
-        t = plain(hand, n1, n6)
-        return O.ThumbTips(t.a @ R.T, t.b @ R.T, t.normal @ R.T, t.q15, t.radius, t.u, t.body @ R.T, t.body_radius)
-    return thumb_tips
+def twisted(path, psi: float):
+    """The file with its thumb twisted by psi (deg): ``thumb.twist_deg``, the MP turned about the
+    metacarpal's length (through the document, so that the memoised routes are keyed on it)."""
+    doc = load_document(path)
+    doc["thumb"]["twist_deg"] = psi
+    return parse(doc, str(path))
 
 
 def main(argv):
@@ -74,11 +68,12 @@ def main(argv):
         k = argv.index("--twist")
         twist = [float(v) for v in argv[k + 1].split(",")]
         argv = argv[:k] + argv[k + 2:]
-    params = load_params(argv[1] if len(argv) > 1 else DEFAULT_PARAMS)
+    path = argv[1] if len(argv) > 1 else DEFAULT_PARAMS
+    params = load_params(path)
     seed = int(argv[2]) if len(argv) > 2 else 1
     hand = make_hand(params)
     if twist is not None:
-        return main_twist(params, hand, seed, twist)
+        return main_twist(params, path, seed, twist)
     print("| rules | CMC centre (mm) | CMC axis from the palm's normal (deg) | margin (deg) | pads meet "
           "(index / middle / ring) | the thenar holds it | tilt margin (deg) | s |")
     print("|---|---|---:|---:|---|---|---:|---:|")
@@ -97,21 +92,17 @@ def main(argv):
         row(label, params, T0, s.reach, time.perf_counter() - t)
 
 
-def main_twist(params, hand, seed, twist):
+def main_twist(params, path, seed, twist):
     print("| twist (deg) | CMC centre (mm) | axis (deg) | margin (deg) | pads meet (index / middle / ring) | "
           "margin without oppose (index / middle / ring, deg) | s |")
     print("|---:|---|---|---:|---|---|---:|")
-    plain = O.thumb_tips
     for psi in twist:
-        O.thumb_tips = twisted(math.radians(psi))
-        try:
-            t = time.perf_counter()
-            s = O.solve(hand, seed=seed, population=16, generations=150, constraint=O.thenar_constraint(params),
-                        oppose=O.PAD_OPPOSE)
-            T0 = F.thumb_cmc_placement(s.offset, s.axis)
-            loose = O.reach(hand, thumb=O.thumb_tips(hand), T0=T0, fingers=O.OPPOSED)
-        finally:
-            O.thumb_tips = plain
+        hand = make_hand(twisted(path, psi))
+        t = time.perf_counter()
+        s = O.solve(hand, seed=seed, population=16, generations=150, constraint=O.thenar_constraint(params),
+                    oppose=O.PAD_OPPOSE)
+        T0 = F.thumb_cmc_placement(s.offset, s.axis)
+        loose = O.reach(hand, T0=T0, fingers=O.OPPOSED)
         c = ", ".join(f"{v * 1e3:.1f}" for v in s.offset)
         a = ", ".join(f"{math.degrees(v):.1f}" for v in s.axis)
         meet = " / ".join(("yes" if s.reach[f].reaches else "no") for f in O.OPPOSED)

@@ -100,9 +100,12 @@ def test_the_batched_tips_are_the_per_pose_chain(hand):
             assert np.allclose(placed.a[k], a, atol=1e-12) and np.allclose(placed.normal[k], nrm, atol=1e-12)
 
 
-def _with_thumb(params, offset, axis):
+def _with_thumb(params, offset, axis, untwisted: bool = False):
+    """The file with its CMC placed at ``offset``, ``axis``; ``untwisted``: its thumb's flexion axes
+    across the CMC axis whatever the file's twist (tests/test_thumb_twist.py turns them)."""
     from dataclasses import replace
-    return replace(params, palm=replace(params.palm, thumb_cmc_offset=tuple(offset), thumb_cmc_axis=tuple(axis)))
+    p = replace(params, palm=replace(params.palm, thumb_cmc_offset=tuple(offset), thumb_cmc_axis=tuple(axis)))
+    return replace(p, thumb=replace(p.thumb, twist=0.0)) if untwisted else p
 
 
 def test_the_pad_is_the_parts_pad(hand):
@@ -135,7 +138,7 @@ def test_pad_facing_by_hand(hand):
     q15. A finger flexed by 135 deg in all faces its pad proximal, Rz(-phi) (0, -1, 0): 90 deg from
     facing the thumb's; flexed by 45 deg it faces palmar too, 180 deg; at rest (0, 1, -1)/sqrt 2
     turned about z: 135 deg."""
-    p = _with_thumb(hand.params, hand.params.palm.thumb_cmc_offset, (0.0, 0.0, 0.0))
+    p = _with_thumb(hand.params, hand.params.palm.thumb_cmc_offset, (0.0, 0.0, 0.0), untwisted=True)
     for q15 in (0.0, 30.0, 80.0):
         q = _q(thumb_mp=25, thumb_ip=20, thumb_cmc=q15, index_mcp=45, index_pip=45, index_dip=45,
                ring_mcp=20, ring_pip=15, ring_dip=10)
@@ -160,7 +163,7 @@ def test_the_thumbs_pad_normal_keeps_its_angle_to_the_cmc_axis(hand):
     rng = np.random.default_rng(5)
     for _ in range(20):
         offset, axis = rng.normal(scale=0.03, size=3), rng.uniform(-1.5, 1.5, size=3)
-        p = _with_thumb(hand.params, offset, axis)
+        p = _with_thumb(hand.params, offset, axis, untwisted=True)
         mp, ip, cmc = rng.uniform(0, 70), rng.uniform(0, 55), rng.uniform(0, 90)
         T = LF.link_transforms(p, _q(thumb_mp=mp, thumb_ip=ip, thumb_cmc=cmc))
         n = (T["thumb_distal"] @ F.T_distal_pad(p, "thumb"))[:3, 2]
@@ -170,11 +173,11 @@ def test_the_thumbs_pad_normal_keeps_its_angle_to_the_cmc_axis(hand):
 
 def _facing_by_rotations(p, q, finger):
     """The pads' facing worked out from the frames' conventions alone: the thumb's normal
-    R0 Rz(q15) n(q_MP + q_IP), the finger's Rz(-phi) n(q_MCP + q_PIP + q_DIP)."""
+    R0 Rz(q15) Ry(twist) n(q_MP + q_IP), the finger's Rz(-phi) n(q_MCP + q_PIP + q_DIP)."""
     from phantom_cad.kinematics.topology import JOINTS
     qd = {j.name: q[j.index] for j in JOINTS}
     R0 = F.thumb_cmc_placement(p.palm.thumb_cmc_offset, p.palm.thumb_cmc_axis)[:3, :3]
-    nt = R0 @ _rz(qd["thumb_cmc"]) @ _flexed(qd["thumb_mp"] + qd["thumb_ip"])
+    nt = R0 @ _rz(qd["thumb_cmc"]) @ F.rot_y(p.thumb.twist)[:3, :3] @ _flexed(qd["thumb_mp"] + qd["thumb_ip"])
     phi = (FINGERS.index(finger) - 1.5) * p.palm.arc_offset
     nf = _rz(-phi) @ _flexed(sum(qd[f"{finger}_{k}"] for k in ("mcp", "pip", "dip")))
     return math.degrees(math.acos(-nt @ nf))

@@ -98,6 +98,9 @@ class Thumb:
     cmc_limits: tuple[float, float]
     cmc_travel: tuple[float, float]
     cmc_pulley_radius: float     # r6: servo 6's pulley and the CMC pulley (a 1:1 cable loop)
+    # the MP joint's fixed turn (rad) about the metacarpal's length (its y), a pronation: the MP and
+    # IP axes and the pad turn with it; 0 lays the thumb's flexion axes across the CMC axis
+    twist: float = 0.0
 
 
 @dataclass(frozen=True)

@@ -8,10 +8,13 @@ from __future__ import annotations
 import numpy as np
 
 from .forearm_layout import T_palm_forearm, T_palm_servo
-from .frames import T_palm_finger_base, T_palm_thumb_cmc_base, flex, mirror, segment_length, trans
+from .frames import T_palm_finger_base, T_palm_thumb_cmc_base, flex, mirror, rot_y, segment_length, trans
 from .hand_params import HandParams
 from .thenar import T_cmc_base_pulley
-from .topology import CMC_Q, JOINTS, LINKS, N_JOINTS, joint, link
+from .topology import CMC_Q, JOINTS, LINKS, N_JOINTS, THUMB_CHAIN, joint, link
+
+#: the joint the thumb's twist turns: its chain's reference joint, the MP
+THUMB_MP = THUMB_CHAIN.joint_names[0]
 
 
 def rest_transforms(params: HandParams) -> dict[str, np.ndarray]:
@@ -37,8 +40,22 @@ def _joint_transform(params: HandParams, ln, q) -> np.ndarray:
     j = joint(ln.parent_joint)
     if j.index == CMC_Q:
         return T_palm_thumb_cmc_base(params, float(q[j.index]))
+    T = joint_origin(params, ln)
+    return flex(float(q[j.index])) if T is None else T @ flex(float(q[j.index]))
+
+
+def joint_origin(params: HandParams, ln) -> np.ndarray | None:
+    """Where the flexion joint of link ``ln`` sits in its parent's frame before it turns (right
+    hand, metres): at the end of the parent's segment, on the parent's y; the thumb's MP turned
+    there by ``thumb.twist`` about that y (the metacarpal's length). None where the joint sits at
+    the parent's origin untwisted (the fingers' MCPs on their bases)."""
     L = segment_length(params, link(ln.parent))
-    return flex(float(q[j.index])) if L == 0.0 else trans(0, L, 0) @ flex(float(q[j.index]))
+    j = joint(ln.parent_joint)
+    psi = params.thumb.twist if j.name == THUMB_MP else 0.0
+    if L == 0.0 and psi == 0.0:
+        return None
+    T = trans(0, L, 0)
+    return T if psi == 0.0 else T @ rot_y(psi)
 
 
 def joint_transforms(params: HandParams, q) -> dict[str, np.ndarray]:

@@ -44,7 +44,7 @@ from . import forearm_layout as FL
 from . import link_frames as LF
 from . import thenar as TH
 from .hand_params import HandParams
-from .topology import CMC_Q, FINGERS, N_SERVOS, OPPOSED_FINGERS, SERVOS, THUMB_CHAIN, chain, digit_links
+from .topology import CMC_Q, FINGERS, N_SERVOS, OPPOSED_FINGERS, SERVOS, THUMB_CHAIN, chain, digit_links, joint, link
 
 
 #: the half angle (rad) of the cone around a pad's normal in which a contact counts as pad to pad
@@ -100,18 +100,22 @@ def _servo(digit: str) -> int:
     return chain(digit).servo
 
 
-def _chain(params: HandParams, digit: str, q: np.ndarray, origin_y: float):
+def _chain(params: HandParams, digit: str, q: np.ndarray):
     """The distal link of ``digit`` in its chain's root frame (the finger base; the thumb's CMC
-    base), for joint angles q (n, 15): flexion turns about -x, so every link of the chain stays in
-    the root's y-z plane. Returns the tip segment's ends (n, 3) x2, the pad normal (n, 3), the tip
-    radius, and the joint centres (n, 3) in chain order (the reference joint first), then the
-    tip's centre."""
+    base), for joint angles q (n, 15): flexion turns about -x, so every link after the reference
+    joint stays in that joint's y-z plane, which ``link_frames.joint_origin`` places in the root
+    (the thumb's MP turned by its twist about the root's y). Returns the tip segment's ends (n, 3)
+    x2, the pad normal (n, 3), the tip radius, and the joint centres (n, 3) in chain order (the
+    reference joint first), then the tip's centre."""
     ch = chain(digit)
     d = params.digit(digit)
     lengths = [getattr(d, seg) for seg in ch.segments[1:]]     # the links after each joint
+    origin = LF.joint_origin(params, link(joint(ch.joint_names[0]).child))
     theta = np.zeros(len(q))
     yz = np.zeros((len(q), 2))
-    yz[:, 0] = origin_y
+    # the origin lies on the root's y, the axis its turn is about: the chain is laid out in the
+    # plane from the origin's y and the plane turned about the root's y as a whole
+    yz[:, 0] = 0.0 if origin is None else origin[1, 3]
     centres = []
     for k, qi in enumerate(ch.q_index):
         centres.append(yz.copy())
@@ -128,7 +132,11 @@ def _chain(params: HandParams, digit: str, q: np.ndarray, origin_y: float):
     a = np.hstack([zeros - half, c])
     b = np.hstack([zeros + half, c])
     centres = [np.hstack([zeros, v]) for v in (*centres, c)]
-    return a, b, np.hstack([zeros, n]), r, centres
+    n = np.hstack([zeros, n])
+    if origin is not None and not np.array_equal(origin[:3, :3], np.eye(3)):
+        R = origin[:3, :3].T
+        a, b, n, centres = a @ R, b @ R, n @ R, [v @ R for v in centres]
+    return a, b, n, r, centres
 
 
 def _rz(q15: np.ndarray, p: np.ndarray) -> np.ndarray:
@@ -157,7 +165,7 @@ def finger_tips(hand, finger: str, n: int = 41) -> Tips:
     u = np.zeros((n, N_SERVOS))
     u[:, s] = _travel(hand, s, n)
     q = hand.forward(u, compensated=True)
-    a, b, nrm, r, _ = _chain(hand.params, finger, q, 0.0)
+    a, b, nrm, r, _ = _chain(hand.params, finger, q)
     T = F.T_palm_finger_base(hand.params, finger)
     return Tips(_apply(T, a), _apply(T, b), _apply(T, nrm, 0.0), r, u[:, [s]])
 
@@ -201,7 +209,7 @@ def thumb_tips(hand, n1: int = 21, n6: int = 21) -> ThumbTips:
     u[:, s1], u[:, s6] = g1.ravel(), g6.ravel()
     q = hand.forward(u, compensated=True)
     p = hand.params
-    a, b, nrm, r, centres = _chain(p, THUMB, q, p.thumb.metacarpal)
+    a, b, nrm, r, centres = _chain(p, THUMB, q)
     # the links' axes: the metacarpal from its hub's rim (the hub sits on the palm) to the MP, the
     # proximal phalanx to the IP, the distal phalanx to its tip's centre, 8 points each
     hub = np.zeros_like(centres[0])
@@ -220,11 +228,11 @@ def tip_gaps(hand, u) -> np.ndarray:
     q = hand.forward(u, compensated=True)
     p = hand.params
     T0 = F.thumb_cmc_placement(p.palm.thumb_cmc_offset, p.palm.thumb_cmc_axis)
-    a, b, _, r, _ = _chain(p, THUMB, q, p.thumb.metacarpal)
+    a, b, _, r, _ = _chain(p, THUMB, q)
     a, b = _apply(T0, _rz(q[:, CMC_Q], a)), _apply(T0, _rz(q[:, CMC_Q], b))
     out = np.empty((len(u), len(FINGERS)))
     for k, f in enumerate(FINGERS):
-        fa, fb, _, fr, _ = _chain(p, f, q, 0.0)
+        fa, fb, _, fr, _ = _chain(p, f, q)
         T = F.T_palm_finger_base(p, f)
         out[:, k] = segment_distance(a, b, _apply(T, fa), _apply(T, fb))[0] - r - fr
     return out
@@ -351,9 +359,11 @@ def pad_facing(params: HandParams, q, fingers=FINGERS) -> dict[str, float]:
     when they face the same way. Right-hand frames (a left hand is the mirror image and faces the
     same).
 
-    Whatever the placement and q15, the thumb's pad normal lies at pi - |PAD_ANGLE - (q_MP + q_IP)|
-    from the CMC axis: its flexion axes are perpendicular to that axis and its pad normal lies in
-    its flexion plane, which contains the axis (docs/opposition.md, "Pad to pad")."""
+    Whatever the placement and q15, the thumb's pad normal lies at
+    arccos(-cos(twist) cos(PAD_ANGLE - (q_MP + q_IP))) from the CMC axis: untwisted its flexion
+    axes are perpendicular to that axis and its pad normal lies in its flexion plane, which
+    contains the axis; the twist turns that plane about the metacarpal (docs/opposition.md, "Pad
+    to pad")."""
     T = LF.link_transforms(params, q, mirrored=False)
 
     def normal(digit):

@@ -295,6 +295,44 @@ def _cmc_loop(params: HandParams) -> tuple[Strand, Strand]:
     return tuple(out)
 
 
+def mp_turn(params: HandParams) -> tuple[str, np.ndarray, np.ndarray] | None:
+    """(the thumb metacarpal's link, R, o) of the thumb's twist: what is fixed to the metacarpal on
+    its MP's side turns by R about the line through o (m, the MP's centre) along the metacarpal's
+    length (``link_frames.joint_origin``); None for an untwisted thumb."""
+    mp = joint(LF.THUMB_MP)
+    T = LF.joint_origin(params, link(mp.child))
+    if T is None or np.array_equal(T[:3, :3], np.eye(3)):
+        return None
+    return mp.parent, T[:3, :3].copy(), T[:3, 3].copy()
+
+
+def _turned_with_mp(params: HandParams, strands: tuple[Strand, ...]) -> tuple[Strand, ...]:
+    """The thumb's strands with what they fix to the metacarpal on its MP's side (the drive's guide
+    G1, the MP-IP loop's hub and clamp, the return's knot and channel) turned with the MP by the
+    thumb's twist about the metacarpal's length (:func:`mp_turn`: the part is built so). The drive
+    enters from the column on the CMC axis, where q15 leaves its length alone, and runs to the
+    entry's turned image (where the turned arm's channel starts) before G1."""
+    turned = mp_turn(params)
+    if turned is None:
+        return strands
+    base, R, o = turned
+    turn = lambda v: tuple(float(t) for t in o + R @ (np.asarray(v, float) - o))  # noqa: E731
+
+    def elements(els):
+        for e in els:
+            if e.link != base:
+                yield e
+            elif isinstance(e, Point) and e.role == "interface":
+                yield e
+                yield Point("via", e.link, turn(e.pos), "channel")
+            elif isinstance(e, Point):
+                yield Point(e.kind, e.link, turn(e.pos), e.role)
+            else:
+                yield Pulley(e.link, turn(e.centre), tuple(float(t) for t in R @ np.asarray(e.axis, float)), e.radius,
+                             e.width, e.role, e.joint)
+    return tuple(Strand(st.name, tuple(elements(st.elements))) for st in strands)
+
+
 def _mirror_element(e):
     S = F.MIRROR[:3, :3]
     mirror = lambda v: tuple(float(t) for t in S @ np.asarray(v, float))  # noqa: E731
@@ -332,6 +370,8 @@ def _routes(params: HandParams, mirror: bool) -> tuple[Route, ...]:
             strands, d, k = _cmc_loop(params), params.hardware.tendon_diameter, "EA"
         else:
             strands, d, k = (_return(params, t.digit, lay, rest),), params.cad.spring_diameter, "k_s"
+        if t.digit == JOINTS[CMC_Q].digit:
+            strands = _turned_with_mp(params, strands)
         if mirror:
             strands = tuple(Strand(s.name, tuple(_mirror_element(e) for e in s.elements)) for s in strands)
         out.append(Route(t, strands, d, k))

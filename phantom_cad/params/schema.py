@@ -222,6 +222,7 @@ def _thumb(t: TomlTable, hand_length: float) -> Thumb:
                       "(it turns it through a cable loop from the forearm module): name the loop's pulley "
                       "radius cmc_pulley_radius_mm instead (docs/parameters.md)")
     horn = t.number("cmc_pulley_radius_mm", gt=0) * MM
+    twist = t.number("twist_deg", ge=-90, le=90, default=0.0) * DEG
     lo, hi = limits[cmc]
     q15, u6 = topology.JOINTS[topology.CMC_Q].label, topology.SERVOS[topology.CMC_SERVO].label
     for u in cmc_travel:
@@ -231,7 +232,7 @@ def _thumb(t: TomlTable, hand_length: float) -> Thumb:
                           f"the CMC limits [{lo:g}, {hi:g}]: the servo travel must map inside the workspace")
     t.done()
     return Thumb(seg["metacarpal"], seg["proximal"], seg["distal"], width, thickness, chain,
-                 gain, limits[cmc], cmc_travel, horn)
+                 gain, limits[cmc], cmc_travel, horn, twist)
 
 
 def _cad(c: TomlTable, hand_length: float, fingers: Mapping[str, Finger], thumb: Thumb, palm: Palm,

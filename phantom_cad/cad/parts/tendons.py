@@ -93,9 +93,23 @@ class LinkTendons:
     def __init__(self, params: HandParams, link_name: str):
         self.params, self.link = params, link_name
         cl = units.mm(params.print.hole_clearance)
+        # a twisted thumb's metacarpal: its features are read in its MP's frame before the twist
+        # (the part cuts them there and turns them with the MP), where they lie in planes x = const
+        turned = routing.mp_turn(params)
+        if turned is not None and turned[0] == link_name:
+            _, turn_R, turn_o = turned
+            flat = lambda v: turn_o + turn_R.T @ (np.asarray(v, float) - turn_o)  # noqa: E731
+        else:
+            flat = lambda v: np.asarray(v, float)  # noqa: E731
+        _mm = lambda v: np.asarray(units.mm(flat(v)), float)  # noqa: E731
         self.grooves: list[Groove] = []
         self.anchors: list[Anchor] = []
         seen = set()
+        # the arcs are measured over the hand's travel poses (a left hand's mirrored), which the
+        # right-handed strands fit while every pulley turns about x (the mirror flips x only); a
+        # twisted thumb's do not, so they are measured on the hand's own strands
+        sided = ({st.name: st for r in routing.routes(params) for st in r.strands} if turned is not None
+                 else {st.name: st for r in routing.routes(params, right_handed=True) for st in r.strands})
         for r in routing.routes(params, right_handed=True):
             if _KIND[r.name] not in KINDS:
                 continue
@@ -112,7 +126,7 @@ class LinkTendons:
                         if e.role == "return":
                             # the arc it touches, and behind it the parent's run, which turns into
                             # this link's frame as the joint flexes (up to a quarter turn beyond)
-                            a0, a1 = routing_paths.arc_range(params, st, i)
+                            a0, a1 = routing_paths.arc_range(params, sided[st.name], i)
                             sector = (a0 - SECTOR_MARGIN, a1 + math.pi / 2.0)
                         if key in seen:
                             continue

@@ -15,11 +15,14 @@ phalanx.Phalanx("thumb", ...).
 
 from __future__ import annotations
 
+from dataclasses import replace
 
 import numpy as np
 
 from ... import canon
+from ... import units
 from ...kinematics import frames as F
+from ...kinematics import routing
 from ...kinematics import thenar as TH
 from ...kinematics.dimensions import digit_entry
 from ...kinematics.hand_params import HandParams
@@ -52,6 +55,15 @@ class ThumbCMCBase(RoutedPart, Part):
         self.thenar = {k: mm(v) for k, v in TH.thenar(params).items()}
         #: the joint at its distal end (the thumb MP): its clevis
         self.joint = child_joint(self.link).key
+        #: the MP side's turn (mm): a twisted thumb's arm, MP clevis, guide and their channels are
+        #: cut in the MP's frame before the twist (``tendons.link_tendons`` reads them there) and
+        #: turned with it about the metacarpal's length; the hub and the column stay
+        self.turn = np.eye(4)
+        turned = routing.mp_turn(params)
+        if turned is not None:
+            _, R, o = turned
+            o = np.asarray(units.mm(o), float)
+            self.turn[:3, :3], self.turn[:3, 3] = R, o - R @ o
         if self.length <= self.hub_radius + self.sec.slot_back:
             raise ValueError(f"thumb metacarpal {self.length:.2f} mm leaves no arm between the CMC hub "
                              f"(radius {self.hub_radius:g} mm) and the {self.joint.upper()} clevis")
@@ -73,14 +85,33 @@ class ThumbCMCBase(RoutedPart, Part):
         return G1, link_tendons(self.params, self.link.name).eyelet_toward(G1)
 
     @property
-    def palmar_floor(self) -> float:
-        """z (mm) of the face the part prints on: the palmar face (-thickness / 2), or lower, as
-        low as the MP guide's boss reaches below it (the MP guide sits inside the palmar face, its
-        boss does not); the pad fills the hub and the arm down to it as far as the MP clevis
-        slot's back."""
+    def flat_floor(self) -> float:
+        """z (mm) of the MP side's palmar face in the MP's frame before any twist: the palmar face
+        (-thickness / 2), or lower, as low as the MP guide's boss reaches below it (the MP guide
+        sits inside the palmar face, its boss does not); the pad fills the arm down to it as far as
+        the MP clevis slot's back."""
         G1, toward = self.guide_boss()
         return min(-self.sec.thickness / 2.0,
                    cylinder_floor(*eyelet_boss_axis(self.sec, G1, toward), self.sec.eyelet_boss_radius))
+
+    @property
+    def palmar_floor(self) -> float:
+        """z (mm) of the face the part prints on: the MP side's palmar face (``flat_floor``), or,
+        twisted, the turned arm's and pad's lowest edge (x = +-W / 2 at the pad's face or the
+        dorsal face) where that lies lower; the hub and the keel under the turned arm reach down
+        to it."""
+        flat = self.flat_floor
+        if not self.twisted:
+            return flat
+        return min(flat, *(float(self.turn[2, 0] * x + self.turn[2, 2] * z) for x in self._half_widths()
+                           for z in (flat, self.sec.thickness / 2.0)))
+
+    def _half_widths(self) -> tuple[float, float]:
+        return (-self.sec.width / 2.0, self.sec.width / 2.0)
+
+    @property
+    def twisted(self) -> bool:
+        return not np.array_equal(self.turn, np.eye(4))
 
     def verify(self, shape) -> list[str]:
         """The metacarpal-side guide eyelet at d1 from the MP axis (at y = metacarpal); the solid's
@@ -89,6 +120,9 @@ class ThumbCMCBase(RoutedPart, Part):
         bb = shape.bounding_box(optimal=True)
         self.expect(out, "lowest z", bb.min.Z, self.palmar_floor, 0.02)
         tol = self.sec.tol
+        if self.twisted:   # the MP side measured where it was cut (a left hand's part is mirrored)
+            turn = F.mirror(self.turn) if self.params.side == "left" else self.turn
+            shape = transform(shape, np.linalg.inv(turn))
         faces = self.verify_routing(shape, out)     # the grooves; the faces, for the eyelet and the pockets
         eyes = eyelet_centres(shape, tol.tendon_hole / 2.0, tol.eyelet_length, faces=faces)
         d = (point_line_distance(eyes[0]["centre"], (0, self.length, 0), (1, 0, 0)) if len(eyes) == 1
@@ -123,23 +157,33 @@ class ThumbCMCBase(RoutedPart, Part):
         return transform(box(-r - 1.0, r + 1.0, r - KEY_DEPTH, r + 1.0, -h - c, t["top"] - t["pulley"] + 1.0),
                          self.T_pulley())
 
+    def support_blockers(self) -> list:
+        """The tendon features' blockers (``RoutedPart``), turned with the MP side they are cut in."""
+        out = super().support_blockers()
+        if not self.twisted:
+            return out
+        R, t = self.turn[:3, :3], self.turn[:3, 3]
+        return [replace(b, vertices=b.vertices @ R.T + t,
+                        **({} if getattr(b, "flat", None) is None else {"flat": tuple(R @ np.asarray(b.flat, float))}))
+                for b in out]
+
     def build(self):
         sec, t = self.sec, self.sec.tol
         W, T, L = sec.width, sec.thickness, self.length
         zp = self.palmar_floor
-        body = [cylinder((0, 0, zp), (0, 0, T / 2.0), self.hub_radius),
-                box(-W / 2.0, W / 2.0, 0.0, L, -T / 2.0, T / 2.0),
-                cylinder((0, 0, 0.0), (0, 0, self.thenar["top"]), self.thenar["column_r"])]
-        if zp < -T / 2.0:     # the pad, from the hub to the clevis slot's back
-            body.append(box(-W / 2.0, W / 2.0, 0.0, L - sec.slot_back, zp, -T / 2.0 + 0.01))
+        zf = self.flat_floor
+        R = self.turn[:3, :3]
+        # the MP side, cut in the MP's frame before the twist
+        arm = [box(-W / 2.0, W / 2.0, 0.0, L, -T / 2.0, T / 2.0)]
+        if zf < -T / 2.0:     # the pad, from the hub to the clevis slot's back
+            arm.append(box(-W / 2.0, W / 2.0, 0.0, L - sec.slot_back, zf, -T / 2.0 + 0.01))
         lt = link_tendons(self.params, self.link.name)
         b, tools = clevis(sec, self.joint, L, lt.hubs().get(child_joint(self.link).name))
-        body += b
         tools += hub_grooves(sec, lt)
         G1, toward = self.guide_boss()
         b3, guide, u, (s_near, s_far) = eyelet(sec, G1, toward)
         G = np.array([0.0, *G1])
-        body += b3
+        side_body = b + b3
         guide += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - G)))
         # the near relief leaves through the clevis slot's back along the chord at rest, as on the
         # finger bases
@@ -163,7 +207,21 @@ class ThumbCMCBase(RoutedPart, Part):
         # and the turn opens through the palmar pad below it, as it opened through the palmar face
         # (a skin of 0.73 mm stayed under its sphere); the cord bears on the bend's inner side
         guide.append(cylinder(turn, (0.0, 0.0, floor), r_turn))
-        # the column's keyed end, and the drive's bore down its axis to the turn
-        tools.append(self.key_tool())
-        tools.append(cylinder(turn, (0.0, 0.0, self.thenar["top"] + 1.0), t.tendon_hole / 2.0))
-        return build(body, tools, guide, channel_tools(lt, up=self.print_up) + anchor_tools(lt, sec, self.print_up))
+        up = R.T @ self.print_up if self.twisted else self.print_up     # the printer's +z where they are cut
+        later = channel_tools(lt, up=up) + anchor_tools(lt, sec, up)
+        hub = cylinder((0, 0, zp), (0, 0, T / 2.0), self.hub_radius)
+        column = cylinder((0, 0, 0.0), (0, 0, self.thenar["top"]), self.thenar["column_r"])
+        axis_tools = [self.key_tool(), cylinder(turn, (0.0, 0.0, self.thenar["top"] + 1.0), t.tendon_hole / 2.0)]
+        if not self.twisted:
+            return build([hub, arm[0], column, *arm[1:], *side_body], tools + axis_tools, guide, later)
+        moved = lambda shapes: [transform(x, self.turn) for x in shapes]  # noqa: E731
+        # under the turned arm a keel down to the floor the part prints on, from the hub to the
+        # clevis slot's back; the drive's turn on the CMC axis joins the turned arm's channel by a
+        # bore across the hub, about the metacarpal's length like the twist
+        corners = [self.turn[:3, :3] @ np.array([x, 0.0, z]) for x in self._half_widths() for z in (zf, T / 2.0)]
+        xs = [c[0] for c in corners]
+        keel = box(min(xs), max(xs), 0.0, L - sec.slot_back, zp, 0.0)
+        turned_turn = (self.turn @ np.array([*turn, 1.0]))[:3]
+        joint_tools = [sphere(turn, r_turn), cylinder(turn, turned_turn, t.tendon_hole / 2.0)]
+        return build([hub, *moved(arm), column, keel, *moved(side_body)], moved(tools) + axis_tools,
+                     moved(guide) + joint_tools, moved(later))
