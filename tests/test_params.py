@@ -357,6 +357,8 @@ def _field(document, path, value):
     ("mechanics.tendon_EA_N", 1e-300, "mechanics.tendon_EA_N", "a coupled joint must flex"),
     # a groove of radius 8.5 mm does not fit in a 16 mm boss; 1.5 mm cuts into the 3.4 mm axle bore
     ("fingers.index.pulley_radius_mm.dip", 8.5, "fingers.index.pulley_radius_mm.dip", "joint boss's surface"),
+    # the return cord's 1.9 mm channel at R = 6.5 mm leaves 8 - 6.5 - 0.95 = 0.55 mm under the dorsal face
+    ("fingers.index.pulley_radius_mm.dip", 6.5, "fingers.index.pulley_radius_mm.dip", "must be <= 6.250 mm"),
     # found by the property test (seed 4): these validated and did not build
     ("fingers.pinky.limits_rad.dip", [0.0, 2.728821], "fingers.pinky.limits_rad.dip", "flexion up to 120 deg"),
     ("palm.finger_pitch_mm", 22.0, "palm.finger_pitch_mm", "must be <= 21 mm"),

@@ -426,11 +426,14 @@ def test_a_sized_hand_builds(sized_hand):
 
 
 def test_pulley_radii_keep_the_ratio_inside_the_boss():
-    assert S.pulley_radii((5.0, 4.0, 5.0), 16.0, 1.8, 1.5) == (5.0, 4.0, 5.0)
-    r = S.pulley_radii((5.0, 4.0, 5.0), 9.0, 1.8, 1.5)
-    assert max(r) == pytest.approx(9.0 / 2 - 0.75, abs=1e-3) and r[0] / r[1] == pytest.approx(5 / 4, abs=1e-3)
+    assert S.pulley_radii((5.0, 4.0, 5.0), 16.0, 1.8, 1.5, 1.9) == (5.0, 4.0, 5.0)
+    # 11 mm thick: the return cord's 1.9 mm channel at the largest radius keeps 0.8 mm under the
+    # dorsal face: R = 5.5 - 0.95 - 0.8 = 3.75 mm, the 5:4 ratio kept
+    assert S.pulley_radii((5.0, 4.0, 5.0), 11.0, 1.8, 1.5, 1.9) == (3.75, 3.0, 3.75)
+    # the sized 160 x 72 mm hand's ring, pinky and thumb, 12.5 mm thick: 6.25 - 0.95 - 0.8 = 4.5 mm
+    assert S.pulley_radii((5.0, 4.0, 5.0), 12.5, 1.8, 1.5, 1.9) == (4.5, 3.6, 4.5)
     # the smallest would no longer clear the axle bore and half a cord
-    assert all(math.isnan(v) for v in S.pulley_radii((5.0, 4.0, 5.0), 6.0, 1.8, 1.5))
+    assert all(math.isnan(v) for v in S.pulley_radii((5.0, 4.0, 5.0), 9.0, 1.8, 1.5, 1.9))
 
 
 def test_section_moves_the_target_inside_the_bounds():

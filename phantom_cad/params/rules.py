@@ -71,6 +71,15 @@ def _joints(c, fingers, thumb, hardware, printing, cad) -> None:
                                  f"with hole_compensation) and the joint boss's surface ({name}.thickness_mm / 2 = "
                                  f"{thick / 2.0 / MM:g} mm): their floors lie half a cord ({cord / 2.0 / MM:g} mm, "
                                  f"the return cord's) inside the radius", c.source)
+            # the return cord runs along each link at its joints' groove radius, in a channel
+            # (kinematics.routing): two perimeters must stay between it and the dorsal face
+            top = R + ret / 2.0 + MIN_WALL
+            if top > thick / 2.0 + 1e-9:
+                raise ParamError(f"{name}.pulley_radius_mm.{key}", round(R / MM, 6),
+                                 f"must be <= {(thick / 2.0 - ret / 2.0 - MIN_WALL) / MM:.3f} mm: the return "
+                                 f"cord's channel ({ret / MM:g} mm with clearance) runs at this radius and "
+                                 f"must keep a {MIN_WALL / MM:g} mm wall under the dorsal face "
+                                 f"({name}.thickness_mm / 2 = {thick / 2.0 / MM:g} mm)", c.source)
     if cad.spring_diameter + 2.0 * printing.hole_clearance >= cad.cheek - 1e-12:
         raise c.error("spring_diameter_mm", cad.spring_diameter / MM,
                       f"its channel ({(cad.spring_diameter + 2.0 * printing.hole_clearance) / MM:g} mm with "

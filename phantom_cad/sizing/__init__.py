@@ -125,6 +125,7 @@ def build_document(person: Person) -> dict:
     hw["axle_diameter_mm"] = bearing[0]
     axle_bore = printed_hole(bearing[0] + 2.0 * cl, comp) / 2.0
     cord = max(hw["tendon_diameter_mm"], cad["spring_diameter_mm"])
+    channel = cad["spring_diameter_mm"] + 2.0 * cl        # the return cord's channel
     widths = {}
     for d in DIGITS:
         t, r = digit_entry(doc, d), digit_entry(ref, d)
@@ -139,7 +140,8 @@ def build_document(person: Person) -> dict:
         if d == "thumb":
             # the smallest pulley outside the axle bore, the largest (in ratio) inside the joint boss
             ratio = max(r["pulley_radius_mm"].values()) / min(r["pulley_radius_mm"].values())
-            t_floor = max(bearing[1], 2.0 * (ratio * (axle_bore + cord / 2.0) + cord / 2.0))
+            t_floor = max(bearing[1], 2.0 * (ratio * (axle_bore + cord / 2.0)
+                                             + max(cord / 2.0, S.return_room(channel))))
             w_floor = S.digit_width_floor(cl, cad["cheek_mm"], hw["tendon_diameter_mm"], cad["spring_diameter_mm"],
                                           units.mm(FLANK))
             why = f"the joint bearing ({bearing[1]:g} mm) and pulleys outside the axle bore"
@@ -168,7 +170,8 @@ def build_document(person: Person) -> dict:
             raise Infeasible(f"the {d} must be at least {w_floor:.2f} mm wide (its clevis and magnet pockets) and "
                              f"at most {w_ceiling:.2f} mm ({why})")
         widths[d] = width
-        radii = S.pulley_radii(tuple(r["pulley_radius_mm"][k] for k in spec.keys), thick, axle_bore, cord)
+        radii = S.pulley_radii(tuple(r["pulley_radius_mm"][k] for k in spec.keys), thick, axle_bore, cord,
+                                channel)
         if math.isnan(radii[0]):
             raise Infeasible(f"the {d} ({thick:g} mm thick) holds no pulleys between the axle bore "
                              f"({axle_bore:.2f} mm) and its joint bosses")

@@ -104,13 +104,23 @@ def section(target: float, floor: float, ceiling: float) -> float:
     return min(max(near(target), lo), hi)
 
 
-def pulley_radii(reference: tuple[float, ...], thickness: float, axle_bore: float, cord: float) -> tuple[float, ...]:
+def return_room(channel: float) -> float:
+    """How far (mm) inside the joint boss's surface (radius thickness / 2) the largest pulley radius
+    must lie for the return cord's channel (diameter ``channel``, clearances included): the cord
+    runs along each link at the radius of its joints' grooves (kinematics.routing), and its channel
+    keeps a two-perimeter wall under the dorsal face (params.rules._joints)."""
+    return channel / 2.0 + units.mm(MIN_WALL)
+
+
+def pulley_radii(reference: tuple[float, ...], thickness: float, axle_bore: float, cord: float,
+                 channel: float) -> tuple[float, ...]:
     """The joint pulley radii (mm) in the reference's ratio (5:4:5, the thumb's 5:4): the
     reference's when they fit, else scaled down until the largest lies a half cord inside the joint
-    boss (radius thickness / 2); NaN when the smallest would then not clear the axle bore
-    (params.rules._joints)."""
-    s = min(1.0, (thickness / 2.0 - cord / 2.0) / max(reference))
-    radii = tuple(round(r * s, 3) for r in reference)
+    boss (radius thickness / 2) and the return cord's channel over it (:func:`return_room`) keeps
+    its wall under the dorsal face, each rounded down to the micrometre; NaN when the smallest would
+    then not clear the axle bore (params.rules._joints)."""
+    s = min(1.0, (thickness / 2.0 - max(cord / 2.0, return_room(channel))) / max(reference))
+    radii = reference if s >= 1.0 else tuple(math.floor(r * s * 1000.0) / 1000.0 for r in reference)
     if min(radii) - cord / 2.0 <= axle_bore:
         return tuple(math.nan for _ in reference)
     return radii

@@ -478,12 +478,13 @@ def test_a_thin_palm_under_a_tilted_cmc_is_refused(variant):
 
 
 def test_a_loop_without_a_clamp_position_is_a_param_error(tmp_path, document):
-    """The index pulleys 1.5 times larger (MCP 7.5, PIP 6, DIP 7.5 mm) and the DIP flexing to
+    """The index pulleys 1.25 times larger (MCP 6.25, PIP 5, DIP 6.25 mm: the largest whose return
+    cord's channel keeps its wall under the 16 mm finger's dorsal face) and the DIP flexing to
     2.09 rad: the PIP-DIP loop's strands leave the middle phalanx's groove at
     gamma = acos((R_PIP + R_DIP) / L_middle) from its axis, and a clamp on the DIP groove keeps both
     wraps inside (8, 172 deg) only while the DIP travel (limit + 3 deg) stays under 2 gamma - 16 deg.
-    By hand: L_middle = 0.143 x 189 = 27.027 mm, gamma = acos(13.5 / 27.027) = 60.03 deg, so
-    104.07 deg < 119.75 + 3 deg. Validation refuses the file rather than the build stopping on a
+    By hand: L_middle = 0.143 x 189 = 27.027 mm, gamma = acos(11.25 / 27.027) = 65.40 deg, so
+    114.80 deg < 119.75 + 3 deg. Validation refuses the file rather than the build stopping on a
     ValueError."""
     import subprocess
     import sys
@@ -492,7 +493,7 @@ def test_a_loop_without_a_clamp_position_is_a_param_error(tmp_path, document):
 
     doc = copy.deepcopy(document)
     f = doc["fingers"]["index"]
-    f["pulley_radius_mm"] = {k: 1.5 * v for k, v in f["pulley_radius_mm"].items()}
+    f["pulley_radius_mm"] = {k: 1.25 * v for k, v in f["pulley_radius_mm"].items()}
     f["limits_rad"]["dip"] = [0.0, 2.09]
     L = f["length_fraction"]["middle"] * doc["hand"]["hand_length_mm"]
     gamma = math.degrees(math.acos((f["pulley_radius_mm"]["pip"] + f["pulley_radius_mm"]["dip"]) / L))

@@ -77,6 +77,34 @@ def _wedge(apex_deg):
     return trimesh.convex.convex_hull(np.array(pts))
 
 
+def test_a_sized_pinky_bases_return_channel_keeps_two_perimeters(sized_file):
+    """The 160 x 72 mm hand's pinky base (12.5 mm thick) carries the return cord's channel (1.5 mm
+    cord, 0.2 mm clearance each side: 1.9 mm) along y at its MCP groove radius. By hand, the roof
+    over it is thickness / 2 - R - 0.95 mm: 0.30 mm at the reference's R = 5 mm; the sizing's
+    4.5 mm leaves 0.80 mm, two perimeters. Measured on the built part's mesh by a ray straight down
+    through the dorsal face over the channel (trimesh), not by ``export.walls``."""
+    from phantom_cad.cad.parts.finger_base import FingerBase
+    from phantom_cad.cad.parts.tendons import link_tendons
+    from phantom_cad.export.step_stl import tessellate
+    from phantom_cad.params.io import load_params
+
+    params = load_params(sized_file[0])
+    part = FingerBase(params, "pinky")
+    (p0, p1, d), *_ = link_tendons(params, part.link.name).channels
+    top = part.sec.thickness / 2.0
+    v, f = tessellate(part.build(), 0.02)[:2]
+    mesh = trimesh.Trimesh(v, f, process=False)
+    # roofed between the knot well's teardrop (to y = -7.94) and the clevis slot's back wall
+    # (y = -6.45): the ray at y = -7
+    origin = np.array([[p0[0], -7.0, top + 1.0]])
+    hits, _, _ = mesh.ray.intersects_location(origin, np.array([[0.0, 0.0, -1.0]]), multiple_hits=True)
+    z = np.sort(hits[:, 2])[::-1]
+    assert z[0] == pytest.approx(top, abs=1e-6)
+    assert z[0] - z[1] == pytest.approx(top - p0[2] - d / 2.0, abs=0.02)     # the tessellation's tolerance
+    assert z[0] - z[1] == pytest.approx(0.80, abs=0.02)
+    assert (top, p0[2], d) == pytest.approx((6.25, 4.5, 1.9))
+
+
 def test_a_wedge_is_an_edge_not_a_wall():
     """A 40 deg wedge: thin near its apex (2 x tan 20 deg x the distance from it), but its faces
     are 40 deg off parallel, more than WALL_DEG: an edge, no wall under 0.8 mm."""
