@@ -477,3 +477,17 @@ def test_a_left_hand_is_the_right_one_mirrored():
     left = build_document(Person(205.0, 95.0, side="left"))
     assert left["hand"]["side"] == "left" and dict(left, hand=right["hand"]) == right
     preflight.check(parse(left))
+
+
+def test_the_print_aids_refuse_before_a_file_is_written(tmp_path, capsys, monkeypatch):
+    """A file the angle gauge cannot be made for would validate and then fail its build: the
+    preflight rules construct the print aids. With the marks' least pitch at the full 3 mm, the
+    156.3 mm hand's 22.2 mm faces (7 marks need 22.5) are refused before anything is written."""
+    from phantom_cad.cad import gauge
+
+    monkeypatch.setattr(gauge, "MARK_MIN_PITCH", gauge.MARK_PITCH)
+    out = tmp_path / "small.toml"
+    code, _, err = run(["size", "--hand-length", 156.3, "--hand-breadth", 68.4, "--out", out, "--no-search"], capsys)
+    assert code == 2 and err.startswith("error: ") and len(err.splitlines()) == 1
+    assert "the angle gauge's faces (22.2 mm" in err and "need (22.5 mm)" in err
+    assert not out.exists()

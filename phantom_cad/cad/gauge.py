@@ -14,7 +14,8 @@ beside the fit-test coupon (``gauge/``). The plate's outline, seen from above:
   corners next to them stay 82.5 degrees wide, so the marks keep clear of them.
 
 Each reference face but the datum carries its angle as marks engraved in the top face: one
-dimple per step (15 degrees: one, 90 degrees: six), in a row along the face's middle.
+dimple per step (15 degrees: one, 90 degrees: six), in a row along the face's middle, 3 mm apart
+or closer on a small hand's shorter faces (``mark_pitch``).
 
 Frame: mm, z up (the print orientation: the plate flat on the bed at z = 0). Dimensions are
 plain properties (numpy only); :meth:`AngleGauge.build` imports build123d.
@@ -43,6 +44,8 @@ MARK_DIAMETER = 1.5
 MARK_DEPTH = 0.6
 MARK_PITCH = 3.0
 MARK_INSET = 4.0
+#: the least pitch of the marks, on a small hand's gauge: a dimple and half a millimetre of wall
+MARK_MIN_PITCH = MARK_DIAMETER + 0.5
 #: display colour
 COLOR = (0.45, 0.65, 0.85)
 
@@ -66,9 +69,9 @@ class AngleGauge(PrintAid):
             raise ParamError("fingers.*.limits_rad", round(math.radians(self.largest_limit_deg), 6),
                              f"the angle gauge covers joint ranges up to {180.0 - 2 * STEP_DEG:g} degrees "
                              "(its faces turn by 15 degrees and must close a convex outline)", params.source)
-        # the most marks in a row, and a dimple's width of face beyond each end
-        need = (len(self.angles_deg) - 2) * MARK_PITCH + 3.0 * MARK_DIAMETER
-        if self.face_length < need:
+        # the most marks in a row at the least pitch, and a dimple's width of face beyond each end
+        need = (len(self.angles_deg) - 2) * MARK_MIN_PITCH + 3.0 * MARK_DIAMETER
+        if self.face_length < need - 1e-9:
             raise ParamError("fingers.*.length_fraction", round(self.radius, 3),
                              f"the angle gauge's faces ({self.face_length:.1f} mm, from the longest finger) are "
                              f"shorter than their marks need ({need:.1f} mm)", params.source)
@@ -105,6 +108,14 @@ class AngleGauge(PrintAid):
         return 2.0 * self.radius * math.sin(math.radians(STEP_DEG) / 2.0)
 
     @property
+    def mark_pitch(self) -> float:
+        """The marks' pitch along a face: MARK_PITCH, or less where the faces are too short for it
+        (a small hand's gauge), so that the row of the most marks and a dimple's width beyond each
+        end fill the face; never under MARK_MIN_PITCH (the constructor refuses that)."""
+        rows = len(self.angles_deg) - 2
+        return min(MARK_PITCH, (self.face_length - 3.0 * MARK_DIAMETER) / rows)
+
+    @property
     def thickness(self) -> float:
         """The plate: two palm walls (stiff and flat in print; the marks leave a floor under them)."""
         return 2.0 * mm(self.params.palm.wall)
@@ -138,7 +149,7 @@ class AngleGauge(PrintAid):
             along = np.array([math.cos(t), math.sin(t)])
             mid = (self.corners[k] + self.corners[k + 1]) / 2.0 - MARK_INSET * self.normal(a)
             for i in range(k):
-                out.append(tuple(mid + (i - (k - 1) / 2.0) * MARK_PITCH * along))
+                out.append(tuple(mid + (i - (k - 1) / 2.0) * self.mark_pitch * along))
         return out
 
     def mark_clearance(self) -> float:

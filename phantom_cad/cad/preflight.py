@@ -32,7 +32,9 @@ def check(params: HandParams) -> None:
     reaches past the metacarpal block's front; and if the thenar's cuts (journal, cavity, turn) come
     within two perimeters of a finger socket's magnet pockets (``thenar.socket_pocket_gap``), or a
     servo's flange screw pilot opens above the forearm module's top (``forearm_layout.pilot_headroom``),
-    or the CMC base comes within a clearance of the palm's heel (``forearm_layout.heel_gap``)."""
+    or the CMC base comes within a clearance of the palm's heel (``forearm_layout.heel_gap``); or if
+    a print aid the build makes beside the parts refuses the file (``print_aids.AIDS``: the angle
+    gauge's faces too short for its marks)."""
     from ..kinematics import couplers
     from ..kinematics import forearm_layout as FL
     from ..kinematics import frames as F
@@ -95,3 +97,9 @@ def check(params: HandParams) -> None:
     routing.routes(params)
     couplers.couplers(params)
     statics.hand_statics(params)
+    # the print aids refuse in their constructors what they cannot make (the angle gauge: faces too
+    # short for their marks), which every build makes beside the parts
+    from .print_aids import AIDS
+
+    for aid in AIDS:
+        aid(params)

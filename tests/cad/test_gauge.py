@@ -130,8 +130,29 @@ def test_gauge_refuses_what_it_cannot_cover():
     assert AngleGauge(_fake(math.radians(150.0), 140.0)).angles_deg[-1] == 150.0
     with pytest.raises(ParamError, match="the angle gauge covers joint ranges up to 150 degrees"):
         AngleGauge(_fake(math.radians(151.0), 140.0))
-    # 7 faces beyond the datum at 3 mm pitch need 22.5 mm of face: a finger of 80 mm gives 20.9
-    with pytest.raises(ParamError, match=r"the angle gauge's faces \(20.9 mm, from the longest finger\) are "
-                                         r"shorter than their marks need \(22.5 mm\)"):
-        AngleGauge(_fake(1.61, 80.0))
+    # 7 faces beyond the datum: a row of 7 marks at the least pitch (2 mm) and a dimple's width beyond
+    # each end need 6 x 2 + 3 x 1.5 = 16.5 mm of face; a finger of 60 mm gives 2 x 60 sin 7.5 = 15.7
+    with pytest.raises(ParamError, match=r"the angle gauge's faces \(15.7 mm, from the longest finger\) are "
+                                         r"shorter than their marks need \(16.5 mm\)"):
+        AngleGauge(_fake(1.61, 60.0))
     assert np.isfinite(AngleGauge(_fake(1.61, 90.0)).volume())
+
+
+def test_a_small_hands_gauge_closes_up_its_marks():
+    """Faces too short for the 3 mm pitch (a 150 mm hand's: a finger of 80 mm gives 20.9 mm, where
+    7 marks at 3 mm need 22.5): the row of the most marks fills the face less a dimple's width at
+    each end, pitch (2 x 80 sin 7.5 - 4.5) / 6; the dimples stay apart and inside, the solid verifies."""
+    from phantom_cad.cad.gauge import AngleGauge
+
+    g = AngleGauge(_fake(1.61, 80.0))
+    face = 2 * 80.0 * math.sin(math.radians(7.5))
+    assert g.face_length == pytest.approx(face, rel=1e-12)
+    assert g.mark_pitch == pytest.approx((face - 4.5) / 6.0, rel=1e-12) and 2.0 < g.mark_pitch < 3.0
+    assert AngleGauge(_fake(1.61, 100.0)).mark_pitch == 3.0
+    marks = np.array(g.marks())
+    gaps = np.linalg.norm(marks[:, None] - marks[None, :], axis=-1) + np.eye(len(marks)) * 1e9
+    assert gaps.min() == pytest.approx(g.mark_pitch, rel=1e-9) and gaps.min() - 1.5 > 0.5
+    assert g.mark_clearance() > 0.75
+    shape = g.build()
+    assert measure.solid_report(shape)["valid"] and g.verify(shape) == []
+    assert shape.volume == pytest.approx(g.volume(), rel=1e-9)
