@@ -350,6 +350,9 @@ def _packed(place, left: float, lo: float, hi: float) -> float:
     return hi
 
 
+_STAGGERED: dict = {}
+
+
 def staggered_servos(params: HandParams) -> dict[int, np.ndarray]:
     """T_palm_servo (m, right hand) of the six servos in two staggered rows (:func:`staggered_rows`)
     within a forearm's breadth (76.9 mm wide on the default hand, :func:`forearm_width_limit` 80 mm).
@@ -364,7 +367,11 @@ def staggered_servos(params: HandParams) -> dict[int, np.ndarray]:
     inside the module, at which its drive clears every other servo's envelope by half a tendon hole
     and a palm wall (:func:`drive_clearances`), so that it passes over the front row. The gaps in
     plan take each pocket as its servo's envelope swept straight up: servo 6, tilted, drops in
-    along z with its pulley on."""
+    along z with its pulley on. Memoised (read-only): the search takes about a second."""
+    return memoised(_STAGGERED, params.digest, lambda: _staggered_servos(params), cap=16)
+
+
+def _staggered_servos(params: HandParams) -> dict[int, np.ndarray]:
     front_ids, rear_ids = staggered_rows(params)
     targets = {s.index: servo_target(params, s.index) for s in SERVOS}
     radius = {k: servo_radius(params, k) for k in targets}
