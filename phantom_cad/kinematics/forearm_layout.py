@@ -165,7 +165,13 @@ _FOREARM: dict = {}
 
 
 def forearm_servos(params: HandParams) -> dict[int, np.ndarray]:
-    """T_palm_servo (m, right hand) of every servo in the forearm module: one row across the
+    """T_palm_servo (m, right hand) of every servo in the forearm module: the one row
+    (:func:`row_servos`). Read-only."""
+    return row_servos(params)
+
+
+def row_servos(params: HandParams) -> dict[int, np.ndarray]:
+    """T_palm_servo (m, right hand) of the six servos in one row across the
     forearm in the order of their targets (radial to ulnar, so no two cables cross), each as near
     (least squares, :func:`spaced`) to where its cable leaves straight ahead as at least
     forearm_pitch apart allows, widened until the turned servos stand a palm wall apart
@@ -176,10 +182,17 @@ def forearm_servos(params: HandParams) -> dict[int, np.ndarray]:
     plane (:func:`coplanar_servo`: the loop's strands run straight and in both pulleys' planes);
     the row as far forward as the servos' envelopes (:func:`servo_envelope`) allow, one palm wall
     behind the module's front face (:func:`forearm_front`). Memoised (read-only)."""
-    return memoised(_FOREARM, params.digest, lambda: _forearm_servos(params), cap=16)
+    return memoised(_FOREARM, params.digest, lambda: _row_servos(params), cap=16)
 
 
-def _forearm_servos(params: HandParams) -> dict[int, np.ndarray]:
+def two_rows(params: HandParams) -> bool:
+    """Whether two staggered rows (:func:`staggered_servos`) fit within a human forearm: their
+    width, measured as :func:`forearm_width` measures the module's, at most
+    :func:`forearm_width_limit` (from about 182 mm of hand length: the servo does not scale)."""
+    return _width(params, staggered_servos(params)) <= forearm_width_limit(params)
+
+
+def _row_servos(params: HandParams) -> dict[int, np.ndarray]:
     targets = {s.index: servo_target(params, s.index) for s in SERVOS}
     # each pulley as near as the pitch allows to where its drive leaves straight ahead toward its
     # target (its centre r ulnar of the target's x; a loop's centre on it): least squares with
@@ -596,8 +609,12 @@ REFERENCE_HAND_LENGTH = 0.189
 def forearm_points(params: HandParams) -> np.ndarray:
     """Every servo's envelope (:func:`servo_envelope`) placed in the forearm module (m, palm frame,
     right hand), stacked (n, 3): the module's block is one palm wall around them."""
+    return _points(params, forearm_servos(params))
+
+
+def _points(params: HandParams, servos: dict[int, np.ndarray]) -> np.ndarray:
     pts = []
-    for k, T in forearm_servos(params).items():
+    for k, T in servos.items():
         env = servo_envelope(params, k)
         pts.append((T[:3, :3] @ env.T).T + T[:3, 3])
     return np.vstack(pts)
@@ -606,7 +623,11 @@ def forearm_points(params: HandParams) -> np.ndarray:
 def forearm_width(params: HandParams) -> float:
     """The forearm module's width (m, across the forearm, palm x): its servos' envelopes
     (:func:`forearm_points`) across and a palm wall each side (``cad.parts.wrist.forearm_block``)."""
-    x = forearm_points(params)[:, 0]
+    return _width(params, forearm_servos(params))
+
+
+def _width(params: HandParams, servos: dict[int, np.ndarray]) -> float:
+    x = _points(params, servos)[:, 0]
     return float(x.max() - x.min()) + 2.0 * params.palm.wall
 
 
