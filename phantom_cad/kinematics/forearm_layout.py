@@ -165,9 +165,23 @@ _FOREARM: dict = {}
 
 
 def forearm_servos(params: HandParams) -> dict[int, np.ndarray]:
-    """T_palm_servo (m, right hand) of every servo in the forearm module: the one row
-    (:func:`row_servos`). Read-only."""
-    return row_servos(params)
+    """T_palm_servo (m, right hand) of every servo in the forearm module: two staggered rows
+    (:func:`staggered_servos`) where :func:`forearm_rows` is 2, one row (:func:`row_servos`)
+    otherwise. Read-only."""
+    return staggered_servos(params) if forearm_rows(params) == 2 else row_servos(params)
+
+
+def forearm_rows(params: HandParams) -> int:
+    """How many rows the forearm module holds its servos in: one on every hand (:func:`two_rows`
+    says where two would fit a human forearm; the module is not built from them, docs/sizing.md)."""
+    return 1
+
+
+def drops_straight(params: HandParams, servo: int) -> bool:
+    """Whether a servo's pocket and pulley cavity open straight up the module's z rather than along
+    its shaft: servo 6 in the two rows (tilted with the CMC axis: along its shaft its pocket would
+    cut into the middle servo's beside it; tilted across its ears, its flange pilots stay whole)."""
+    return SERVOS[servo].drive == "loop" and forearm_rows(params) == 2
 
 
 def row_servos(params: HandParams) -> dict[int, np.ndarray]:
