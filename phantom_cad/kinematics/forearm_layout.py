@@ -336,14 +336,25 @@ def staggered_rows(params: HandParams) -> tuple[tuple[int, ...], tuple[int, ...]
     return (order[0], order[3], order[5]), (order[1], order[2], order[4])
 
 
+def _pocket_points(params: HandParams, T: np.ndarray, k: int) -> np.ndarray:
+    """Points (3, n; m, palm frame) whose hull in plan holds servo ``k``'s pocket placed at T: its
+    envelope (:func:`servo_envelope`) swept straight up (servo 6), or along its shaft up to the
+    module's top (:func:`forearm_top`; a raised servo tilts with its drive and drops in along its
+    shaft, which keeps the material under its flange pilots)."""
+    P = T[:3, :3] @ servo_envelope(params, k).T + T[:3, 3:4]
+    if SERVOS[k].drive == "loop" or T[2, 2] >= 1.0 - 1e-12:
+        return P
+    a = T[:3, 2:3]
+    return np.hstack([P, P + a * ((forearm_top(params) - P[2]) / a[2, 0])])
+
+
 def _plan_gap(params: HandParams, Ta: np.ndarray, a: int, Tb: np.ndarray, b: int) -> float:
-    """The distance (m) between two placed servos' envelopes seen from the dorsal side (their
-    convex hulls in plan; each pocket is that hull swept straight up: the servo, with its pulley
-    on, drops in along z); negative where they overlap (less their overlap along the axis that
+    """The distance (m) between two placed servos' pockets seen from the dorsal side (the convex
+    hulls in plan of :func:`_pocket_points`); negative where they overlap (less their overlap along the axis that
     separates them best). For convex sets it is the largest over directions n of
     min(B . n) - max(A . n): the best of 256 directions, then 33 between its neighbours, five times
     (the function has one maximum there)."""
-    P, Q = [((T[:3, :3] @ servo_envelope(params, k).T)[:2] + T[:2, 3:4]) for T, k in ((Ta, a), (Tb, b))]
+    P, Q = [_pocket_points(params, T, k)[:2] for T, k in ((Ta, a), (Tb, b))]
 
     def gap(t: np.ndarray) -> np.ndarray:
         n = np.vstack([np.cos(t), np.sin(t)])
@@ -362,7 +373,7 @@ def _plan_gap(params: HandParams, Ta: np.ndarray, a: int, Tb: np.ndarray, b: int
 
 
 def _envelope_x(params: HandParams, T: np.ndarray, k: int) -> tuple[float, float]:
-    x = (T[:3, :3] @ servo_envelope(params, k).T)[0] + T[0, 3]
+    x = _pocket_points(params, T, k)[0]
     return float(x.min()), float(x.max())
 
 
@@ -387,14 +398,15 @@ def staggered_servos(params: HandParams) -> dict[int, np.ndarray]:
     row stands): servo 6 behind the CMC pulley (at its x), its shaft parallel to the CMC axis and its
     pulley in the CMC pulley's plane (:func:`coplanar_servo`), then the middle and the pinky servos,
     each a palm wall ulnar of the one before in plan (:func:`_plan_gap`), at their targets' height
-    and aimed at them (:func:`aimed_servo`). The rear row a palm wall behind the front row's
-    envelopes: the thumb's servo flush with servo 6's radial side, or as little ulnar of it as lets
+    and aimed at them (:func:`aimed_servo`). The rear row's pockets a palm wall behind the front
+    row's: the thumb's servo flush with servo 6's radial side, or as little ulnar of it as lets
     its drive clear servo 6's tilted pulley, then the index and the ring servos a wall apart; each
     raised (:func:`raised_servo`: its drive slopes to its target) to the lowest height, its pulley
     inside the module, at which its drive clears every other servo's envelope by half a tendon hole
     and a palm wall (:func:`drive_clearances`), so that it passes over the front row. The gaps in
-    plan take each pocket as its servo's envelope swept straight up: servo 6, tilted, drops in
-    along z with its pulley on. Memoised (read-only): the search takes about a second."""
+    plan and between the rows are the pockets' (:func:`_pocket_points`): servo 6, tilted, drops in
+    straight along z with its pulley on, a raised servo along its shaft. Memoised (read-only): the
+    search takes about a second."""
     return memoised(_STAGGERED, params.digest, lambda: _staggered_servos(params), cap=16)
 
 
@@ -402,7 +414,6 @@ def _staggered_servos(params: HandParams) -> dict[int, np.ndarray]:
     front_ids, rear_ids = staggered_rows(params)
     targets = {s.index: servo_target(params, s.index) for s in SERVOS}
     radius = {k: servo_radius(params, k) for k in targets}
-    envelope = {k: servo_envelope(params, k) for k in targets}
     axis = T_palm_thumb_cmc_base(params)[:3, 2]
     w = params.palm.wall
     span = 4.0 * params.servo.body[0]           # room enough for any packing search
@@ -414,7 +425,8 @@ def _staggered_servos(params: HandParams) -> dict[int, np.ndarray]:
         return raised_servo(C, targets[k], radius[k])
 
     def reach(T: np.ndarray, k: int, sign: float) -> float:
-        return float((T[:3, :3] @ envelope[k].T)[1].max() if sign > 0 else (T[:3, :3] @ envelope[k].T)[1].min())
+        y = _pocket_points(params, T, k)[1] - T[1, 3]
+        return float(y.max() if sign > 0 else y.min())
 
     out: dict[int, np.ndarray] = {}
     # the front row: as far forward as its envelopes allow (a servo's turn depends weakly on y)
