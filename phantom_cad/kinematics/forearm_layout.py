@@ -165,7 +165,27 @@ _FOREARM: dict = {}
 
 
 def forearm_servos(params: HandParams) -> dict[int, np.ndarray]:
-    """T_palm_servo (m, right hand) of every servo in the forearm module: one row across the
+    """T_palm_servo (m, right hand) of every servo in the forearm module: two staggered rows
+    (:func:`staggered_servos`) where :func:`forearm_rows` is 2, one row (:func:`row_servos`)
+    otherwise. Read-only."""
+    return staggered_servos(params) if forearm_rows(params) == 2 else row_servos(params)
+
+
+def forearm_rows(params: HandParams) -> int:
+    """How many rows the forearm module holds its servos in: one on every hand (:func:`two_rows`
+    says where two would fit a human forearm; the module is not built from them, docs/sizing.md)."""
+    return 1
+
+
+def drops_straight(params: HandParams, servo: int) -> bool:
+    """Whether a servo's pocket and pulley cavity open straight up the module's z rather than along
+    its shaft: servo 6 in the two rows (tilted with the CMC axis: along its shaft its pocket would
+    cut into the middle servo's beside it; tilted across its ears, its flange pilots stay whole)."""
+    return SERVOS[servo].drive == "loop" and forearm_rows(params) == 2
+
+
+def row_servos(params: HandParams) -> dict[int, np.ndarray]:
+    """T_palm_servo (m, right hand) of the six servos in one row across the
     forearm in the order of their targets (radial to ulnar, so no two cables cross), each as near
     (least squares, :func:`spaced`) to where its cable leaves straight ahead as at least
     forearm_pitch apart allows, widened until the turned servos stand a palm wall apart
@@ -176,10 +196,17 @@ def forearm_servos(params: HandParams) -> dict[int, np.ndarray]:
     plane (:func:`coplanar_servo`: the loop's strands run straight and in both pulleys' planes);
     the row as far forward as the servos' envelopes (:func:`servo_envelope`) allow, one palm wall
     behind the module's front face (:func:`forearm_front`). Memoised (read-only)."""
-    return memoised(_FOREARM, params.digest, lambda: _forearm_servos(params), cap=16)
+    return memoised(_FOREARM, params.digest, lambda: _row_servos(params), cap=16)
 
 
-def _forearm_servos(params: HandParams) -> dict[int, np.ndarray]:
+def two_rows(params: HandParams) -> bool:
+    """Whether two staggered rows (:func:`staggered_servos`) fit within a human forearm: their
+    width, measured as :func:`forearm_width` measures the module's, at most
+    :func:`forearm_width_limit` (from about 182 mm of hand length: the servo does not scale)."""
+    return _width(params, staggered_servos(params)) <= forearm_width_limit(params)
+
+
+def _row_servos(params: HandParams) -> dict[int, np.ndarray]:
     targets = {s.index: servo_target(params, s.index) for s in SERVOS}
     # each pulley as near as the pitch allows to where its drive leaves straight ahead toward its
     # target (its centre r ulnar of the target's x; a loop's centre on it): least squares with
@@ -309,14 +336,25 @@ def staggered_rows(params: HandParams) -> tuple[tuple[int, ...], tuple[int, ...]
     return (order[0], order[3], order[5]), (order[1], order[2], order[4])
 
 
+def _pocket_points(params: HandParams, T: np.ndarray, k: int) -> np.ndarray:
+    """Points (3, n; m, palm frame) whose hull in plan holds servo ``k``'s pocket placed at T: its
+    envelope (:func:`servo_envelope`) swept straight up (servo 6), or along its shaft up to the
+    module's top (:func:`forearm_top`; a raised servo tilts with its drive and drops in along its
+    shaft, which keeps the material under its flange pilots)."""
+    P = T[:3, :3] @ servo_envelope(params, k).T + T[:3, 3:4]
+    if SERVOS[k].drive == "loop" or T[2, 2] >= 1.0 - 1e-12:
+        return P
+    a = T[:3, 2:3]
+    return np.hstack([P, P + a * ((forearm_top(params) - P[2]) / a[2, 0])])
+
+
 def _plan_gap(params: HandParams, Ta: np.ndarray, a: int, Tb: np.ndarray, b: int) -> float:
-    """The distance (m) between two placed servos' envelopes seen from the dorsal side (their
-    convex hulls in plan; each pocket is that hull swept straight up: the servo, with its pulley
-    on, drops in along z); negative where they overlap (less their overlap along the axis that
+    """The distance (m) between two placed servos' pockets seen from the dorsal side (the convex
+    hulls in plan of :func:`_pocket_points`); negative where they overlap (less their overlap along the axis that
     separates them best). For convex sets it is the largest over directions n of
     min(B . n) - max(A . n): the best of 256 directions, then 33 between its neighbours, five times
     (the function has one maximum there)."""
-    P, Q = [((T[:3, :3] @ servo_envelope(params, k).T)[:2] + T[:2, 3:4]) for T, k in ((Ta, a), (Tb, b))]
+    P, Q = [_pocket_points(params, T, k)[:2] for T, k in ((Ta, a), (Tb, b))]
 
     def gap(t: np.ndarray) -> np.ndarray:
         n = np.vstack([np.cos(t), np.sin(t)])
@@ -335,7 +373,7 @@ def _plan_gap(params: HandParams, Ta: np.ndarray, a: int, Tb: np.ndarray, b: int
 
 
 def _envelope_x(params: HandParams, T: np.ndarray, k: int) -> tuple[float, float]:
-    x = (T[:3, :3] @ servo_envelope(params, k).T)[0] + T[0, 3]
+    x = _pocket_points(params, T, k)[0]
     return float(x.min()), float(x.max())
 
 
@@ -350,6 +388,9 @@ def _packed(place, left: float, lo: float, hi: float) -> float:
     return hi
 
 
+_STAGGERED: dict = {}
+
+
 def staggered_servos(params: HandParams) -> dict[int, np.ndarray]:
     """T_palm_servo (m, right hand) of the six servos in two staggered rows (:func:`staggered_rows`)
     within a forearm's breadth (76.9 mm wide on the default hand, :func:`forearm_width_limit` 80 mm).
@@ -357,18 +398,22 @@ def staggered_servos(params: HandParams) -> dict[int, np.ndarray]:
     row stands): servo 6 behind the CMC pulley (at its x), its shaft parallel to the CMC axis and its
     pulley in the CMC pulley's plane (:func:`coplanar_servo`), then the middle and the pinky servos,
     each a palm wall ulnar of the one before in plan (:func:`_plan_gap`), at their targets' height
-    and aimed at them (:func:`aimed_servo`). The rear row a palm wall behind the front row's
-    envelopes: the thumb's servo flush with servo 6's radial side, or as little ulnar of it as lets
+    and aimed at them (:func:`aimed_servo`). The rear row's pockets a palm wall behind the front
+    row's: the thumb's servo flush with servo 6's radial side, or as little ulnar of it as lets
     its drive clear servo 6's tilted pulley, then the index and the ring servos a wall apart; each
     raised (:func:`raised_servo`: its drive slopes to its target) to the lowest height, its pulley
     inside the module, at which its drive clears every other servo's envelope by half a tendon hole
     and a palm wall (:func:`drive_clearances`), so that it passes over the front row. The gaps in
-    plan take each pocket as its servo's envelope swept straight up: servo 6, tilted, drops in
-    along z with its pulley on."""
+    plan and between the rows are the pockets' (:func:`_pocket_points`): servo 6, tilted, drops in
+    straight along z with its pulley on, a raised servo along its shaft. Memoised (read-only): the
+    search takes about a second."""
+    return memoised(_STAGGERED, params.digest, lambda: _staggered_servos(params), cap=16)
+
+
+def _staggered_servos(params: HandParams) -> dict[int, np.ndarray]:
     front_ids, rear_ids = staggered_rows(params)
     targets = {s.index: servo_target(params, s.index) for s in SERVOS}
     radius = {k: servo_radius(params, k) for k in targets}
-    envelope = {k: servo_envelope(params, k) for k in targets}
     axis = T_palm_thumb_cmc_base(params)[:3, 2]
     w = params.palm.wall
     span = 4.0 * params.servo.body[0]           # room enough for any packing search
@@ -380,7 +425,8 @@ def staggered_servos(params: HandParams) -> dict[int, np.ndarray]:
         return raised_servo(C, targets[k], radius[k])
 
     def reach(T: np.ndarray, k: int, sign: float) -> float:
-        return float((T[:3, :3] @ envelope[k].T)[1].max() if sign > 0 else (T[:3, :3] @ envelope[k].T)[1].min())
+        y = _pocket_points(params, T, k)[1] - T[1, 3]
+        return float(y.max() if sign > 0 else y.min())
 
     out: dict[int, np.ndarray] = {}
     # the front row: as far forward as its envelopes allow (a servo's turn depends weakly on y)
@@ -589,8 +635,12 @@ REFERENCE_HAND_LENGTH = 0.189
 def forearm_points(params: HandParams) -> np.ndarray:
     """Every servo's envelope (:func:`servo_envelope`) placed in the forearm module (m, palm frame,
     right hand), stacked (n, 3): the module's block is one palm wall around them."""
+    return _points(params, forearm_servos(params))
+
+
+def _points(params: HandParams, servos: dict[int, np.ndarray]) -> np.ndarray:
     pts = []
-    for k, T in forearm_servos(params).items():
+    for k, T in servos.items():
         env = servo_envelope(params, k)
         pts.append((T[:3, :3] @ env.T).T + T[:3, 3])
     return np.vstack(pts)
@@ -599,7 +649,11 @@ def forearm_points(params: HandParams) -> np.ndarray:
 def forearm_width(params: HandParams) -> float:
     """The forearm module's width (m, across the forearm, palm x): its servos' envelopes
     (:func:`forearm_points`) across and a palm wall each side (``cad.parts.wrist.forearm_block``)."""
-    x = forearm_points(params)[:, 0]
+    return _width(params, forearm_servos(params))
+
+
+def _width(params: HandParams, servos: dict[int, np.ndarray]) -> float:
+    x = _points(params, servos)[:, 0]
     return float(x.max() - x.min()) + 2.0 * params.palm.wall
 
 

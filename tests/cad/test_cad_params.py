@@ -110,7 +110,7 @@ def test_spring_channel_wider_than_the_cheek(document):
 
 
 def test_a_wide_servo_widens_the_forearm_row(document):
-    """No tendon passes under a neighbouring servo (they sit in one row in the forearm module): a
+    """No tendon passes under a neighbouring servo in the one row (``forearm_layout.row_servos``): a
     14 mm wide body validates, though 14/2 + 2 x 0.2 + 0.3 > 7 mm. Two
     neighbours' least pitch is the wider of their two pulley cavities (radius r + 2 x 0.6 + 0.6 +
     0.2: 9.0 mm for a finger's 7 mm pulley, 10.0 mm for the CMC loop's 8 mm) and the body with its
@@ -138,8 +138,8 @@ def test_a_wide_servo_widens_the_forearm_row(document):
         doc["servo"]["body_mm"] = [23.2, width, 25.3]
         p = parse(doc)
         preflight.check(p)
-        ks = sorted(FL.forearm_servos(p), key=lambda k: FL.forearm_servos(p)[k][0, 3])
-        row = [FL.forearm_servos(p)[k] for k in ks]
+        ks = sorted(FL.row_servos(p), key=lambda k: FL.row_servos(p)[k][0, 3])
+        row = [FL.row_servos(p)[k] for k in ks]
         for (ka, Ta), (kb, Tb) in zip(zip(ks, row), zip(ks[1:], row[1:])):
             loop = {SERVOS[ka].drive == "loop", SERVOS[kb].drive == "loop"}
             pitch = max(cavity[True in loop] + cavity[False], width + 0.4) + 2.4
@@ -285,6 +285,20 @@ def test_the_staggered_rows_fit_a_human_forearm(document):
     assert (S[5][:3, 3] / 1e3 - Tc[:3, 3]) @ Tc[:3, 2] == pytest.approx(0.0, abs=1e-12)
 
 
+def test_two_rows_where_they_fit_a_human_forearm(document):
+    """``forearm_layout.two_rows``: the two staggered rows where their width (76.9 mm, the servo
+    does not scale) is within 80 mm x hand length / 189 mm: at 182 mm (limit 77.04 mm), not at
+    181 mm (76.61 mm)."""
+    from phantom_cad.kinematics import forearm_layout as FL
+
+    for length, fits in ((182.0, True), (181.0, False)):
+        doc = copy.deepcopy(document)
+        doc["hand"]["hand_length_mm"] = length
+        p = parse(doc)
+        assert FL.forearm_width_limit(p) * 1e3 == pytest.approx(80.0 * length / 189.0)
+        assert FL.two_rows(p) is fits, length
+
+
 def test_the_staggered_rows_drives_clear_every_servo_and_each_other(document):
     """In ``forearm_layout.staggered_servos`` every drive, from its pulley to its target, runs at
     least half a tendon hole and a palm wall (0.5 + 2.4 mm) from every other servo's body, ears and
@@ -398,8 +412,8 @@ def test_long_flange_ears_move_the_forearm_row_back(document):
     p0 = parse(doc)
     doc["servo"]["flange_span_mm"] = document["servo"]["flange_span_mm"] + 4.0
     p1 = parse(doc)
-    y0 = {k: T[1, 3] * 1e3 for k, T in FL.forearm_servos(p0).items()}
-    y1 = {k: T[1, 3] * 1e3 for k, T in FL.forearm_servos(p1).items()}
+    y0 = {k: T[1, 3] * 1e3 for k, T in FL.row_servos(p0).items()}
+    y1 = {k: T[1, 3] * 1e3 for k, T in FL.row_servos(p1).items()}
     ahead = document["servo"]["flange_span_mm"] / 2 - document["cad"]["servo_shaft_offset_mm"]
     cavity = 8.0 + 2 * 0.6 + 0.6 + 0.2                # the largest pulley (the CMC loop's): r + lip + cord + clearance
     assert ahead > cavity                              # the ears set the row's front today

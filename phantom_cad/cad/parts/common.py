@@ -369,6 +369,34 @@ def teardrop(p0, p1, r: float, up=None, roof: float = units.rad(45.0)):
     return b.Solid.extrude(b.Face(wire), b.Vector(*(p1 - p0)))
 
 
+def polygon_cylinder(p0, p1, r: float, n: int = 32):
+    """A prism of ``n`` sides about the axis p0 -> p1 whose flats stand ``r`` from the axis (it
+    holds the cylinder of radius r): a convex solid of plane faces (:func:`swept_up`)."""
+    b = bd()
+    p0, p1 = np.asarray(p0, float), np.asarray(p1, float)
+    axis = (p1 - p0) / np.linalg.norm(p1 - p0)
+    ref = np.array([1.0, 0.0, 0.0]) if abs(axis[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    e1 = np.cross(axis, ref)
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(axis, e1)
+    R = r / math.cos(math.pi / n)
+    a = 2.0 * math.pi * np.arange(n) / n
+    pts = [b.Vector(*(p0 + R * (math.cos(t) * e1 + math.sin(t) * e2))) for t in a]
+    return b.Solid.extrude(b.Face(b.Wire.make_polygon(pts, close=True)), b.Vector(*(p1 - p0)))
+
+
+def swept_up(solid, height: float) -> list:
+    """A convex solid of plane faces swept ``height`` straight up +z, as tools: the solid and the
+    prism each upward-facing face sweeps (a point above the solid, within ``height``, lies above
+    one of those faces: the union is the sweep)."""
+    b = bd()
+    out = [solid]
+    for f in solid.faces():
+        if f.normal_at().Z > 1e-9:
+            out.append(b.Solid.extrude(f, b.Vector(0.0, 0.0, height)))
+    return out
+
+
 def cyl_x(r: float, x0: float, x1: float, y: float, z: float):
     return cylinder((x0, y, z), (x1, y, z), r)
 

@@ -9,7 +9,8 @@ back into its own. Why the servos are here and not in the palm: docs/parts.md.
   so that its drive leaves the pulley straight toward its finger's socket (the thumb's toward its
   turn onto the CMC axis); servo 6's shaft parallel to the CMC axis, its pulley in the CMC
   pulley's plane (``forearm_layout.coplanar_servo``); pockets and ear slots open along the shafts (the
-  servos drop in, then their pulleys go on), pulley cavities, M2 pilot holes under the flange ears;
+  servos drop in, then their pulleys go on; in two rows servo 6's pocket and cavity open straight up,
+  ``forearm_layout.drops_straight``), pulley cavities, M2 pilot holes under the flange ears;
 * each drive's channel (the loop's two) from its pulley through the front wall, on to the palm,
   joined by a slot to its servo's drop-in pocket where it runs beside it closer than a flank
   (``ServoMount.drive_slot``);
@@ -29,7 +30,7 @@ from ...kinematics.hand_params import HandParams
 from ...kinematics.topology import FOREARM, SERVO_MOUNT, SERVOS, link
 from ..measure import circular_pockets
 from .base import Part
-from .common import Tolerances, box, build, cylinder, mm, transform
+from .common import Tolerances, box, build, cylinder, mm, polygon_cylinder, swept_up, transform
 from . import wrist
 from .servos import ServoMount
 
@@ -112,13 +113,22 @@ class Forearm(ServoMount, Part):
         reach = y1 - y0 + 2.0 * wrist.TAB_LENGTH
         for k in FOREARM_SERVOS:
             Ts = self.T_servo(k)
-            # open along the shaft out of the block's top (a tilted shaft: its corners too)
-            top = (z1 - Ts[2, 3]) / Ts[2, 2] + 1.0 + (x1 - x0) * math.sqrt(max(1.0 - Ts[2, 2] ** 2, 0.0)) / Ts[2, 2]
-            for blo, bhi in self.open_pockets(k, top):
-                tools.append(transform(box(blo[0], bhi[0], blo[1], bhi[1], blo[2], bhi[2]), Ts))
             rc = self.cavity_radius(k)
-            zc0, _ = self.cavity_span(k)
-            tools.append(transform(cylinder((0, 0, zc0), (0, 0, top), rc), Ts))
+            zc0, zc1 = self.cavity_span(k)
+            if FL.drops_straight(self.params, k):
+                # the pocket and the cavity swept straight up out of the block's top: the servo,
+                # its pulley on, drops in along z (along its tilted shaft it would cut into its
+                # neighbour's pocket)
+                up = z1 + 1.0 - (Ts[2, 3] - (x1 - x0) - (y1 - y0))
+                for blo, bhi in self.open_pockets(k, zc1):
+                    tools += swept_up(transform(box(blo[0], bhi[0], blo[1], bhi[1], blo[2], bhi[2]), Ts), up)
+                tools += swept_up(transform(polygon_cylinder((0, 0, zc0), (0, 0, zc1), rc), Ts), up)
+            else:
+                # open along the shaft out of the block's top (a tilted shaft: its corners too)
+                top = (z1 - Ts[2, 3]) / Ts[2, 2] + 1.0 + (x1 - x0) * math.sqrt(max(1.0 - Ts[2, 2] ** 2, 0.0)) / Ts[2, 2]
+                for blo, bhi in self.open_pockets(k, top):
+                    tools.append(transform(box(blo[0], bhi[0], blo[1], bhi[1], blo[2], bhi[2]), Ts))
+                tools.append(transform(cylinder((0, 0, zc0), (0, 0, top), rc), Ts))
             tools += [transform(p, Ts) for p in self.pilot_tools(k)]
             # every drive runs straight on toward its target (servo 6's loop: both strands)
             for side in self.strand_sides(k):
