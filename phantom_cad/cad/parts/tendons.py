@@ -33,6 +33,7 @@ from ...kinematics import routing
 from ...kinematics import routing_paths
 from ...kinematics.dimensions import FLANK
 from ...kinematics.hand_params import HandParams
+from ...kinematics.link_frames import THUMB_MP
 from ...kinematics.memo import memoised
 from ...kinematics.topology import TENDONS, joint
 from ...kinematics.vectors import clipped_acos, perpendicular_frame
@@ -94,9 +95,10 @@ class LinkTendons:
         self.params, self.link = params, link_name
         cl = units.mm(params.print.hole_clearance)
         # a twisted thumb's metacarpal: its features are read in its MP's frame before the twist
-        # (the part cuts them there and turns them with the MP), where they lie in planes x = const
-        turned = routing.mp_turn(params)
-        if turned is not None and turned[0] == link_name:
+        # (the part cuts them there and turns them with the MP), where they lie in planes x = const;
+        # the twist is asked for on that link only: no other part reads it
+        turned = routing.mp_turn(params) if link_name == joint(THUMB_MP).parent else None
+        if turned is not None:
             _, turn_R, turn_o = turned
             flat = lambda v: turn_o + turn_R.T @ (np.asarray(v, float) - turn_o)  # noqa: E731
         else:
