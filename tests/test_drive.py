@@ -96,6 +96,7 @@ def test_scan_finds_the_six_servos(bus, capsys):
     assert "all 6 servos answer" in out
 
 
+@pytest.mark.slow
 def test_zero_move_pose_sweep(zeroed, tmp_path, capsys):
     sim, zero_file = zeroed
     zero = read_zero(zero_file)
@@ -222,6 +223,7 @@ command = st.one_of(st.tuples(st.just("move"), st.lists(angle, min_size=6, max_s
                     st.tuples(st.just("hold"), st.none(), st.just(False)))
 
 
+@pytest.mark.slow
 @settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(st.lists(command, min_size=1, max_size=4))
 def test_no_command_sequence_drives_a_servo_outside_its_travel(zeroed, commands):

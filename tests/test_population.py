@@ -94,6 +94,7 @@ def _check_refused(records, tmp_path):
 TINY = pop.Person("tiny", 100.0, 75.0)
 
 
+@pytest.mark.slow
 def test_a_refused_person_on_the_local_pool(tmp_path):
     records = pop.run_study([TINY], tmp_path, workers=1, search=False)
     _check_refused(records, tmp_path)
@@ -104,6 +105,7 @@ def test_a_refused_person_on_the_local_pool(tmp_path):
     assert "| tiny | 100 x 75 | refused | the index distal phalanx" in (tmp_path / "population.md").read_text()
 
 
+@pytest.mark.slow
 def test_a_refused_person_on_a_dask_cluster(tmp_path):
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as c:

@@ -104,6 +104,7 @@ def _frames(labels, name):
     return [i for i, n in enumerate(labels) if n == name]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("side", ["right", "left"])
 def test_vector_retargeting_follows_the_gestures(hands, side):
     from phantom_cad import retargeting as R

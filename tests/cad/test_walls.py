@@ -77,6 +77,7 @@ def _wedge(apex_deg):
     return trimesh.convex.convex_hull(np.array(pts))
 
 
+@pytest.mark.slow
 def test_a_sized_pinky_bases_return_channel_keeps_two_perimeters(sized_file):
     """The 160 x 72 mm hand's pinky base (12.5 mm thick) carries the return cord's channel (1.5 mm
     cord, 0.2 mm clearance each side: 1.9 mm) along y at its MCP groove radius. By hand, the roof
