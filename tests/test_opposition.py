@@ -17,6 +17,7 @@ from phantom_cad.kinematics import link_frames as LF
 from phantom_cad.kinematics.model import Hand
 from phantom_cad.kinematics.topology import CMC_Q, FINGERS, N_SERVOS, OPPOSED_FINGERS
 from phantom_cad.params.io import load_params
+from tests.support.joint_angles import q_deg
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -122,16 +123,6 @@ def test_the_pad_is_the_parts_pad(hand):
         assert math.degrees(math.atan2(T[2, 2], T[1, 2])) == pytest.approx(-45.0)
 
 
-def _q(**deg) -> np.ndarray:
-    """Joint angles (15,) rad from degrees by joint name, the rest 0."""
-    from phantom_cad.kinematics.topology import JOINTS
-    index = {j.name: j.index for j in JOINTS}
-    q = np.zeros(len(JOINTS))
-    for name, v in deg.items():
-        q[index[name]] = math.radians(v)
-    return q
-
-
 def test_pad_facing_by_hand(hand):
     """The CMC axis along the palm's normal (placement angles 0): the thumb's MP + IP flexed by
     45 deg turn its pad (45 deg round the tip from the palmar face) straight palmar, -z, whatever
@@ -140,7 +131,7 @@ def test_pad_facing_by_hand(hand):
     turned about z: 135 deg."""
     p = _with_thumb(hand.params, hand.params.palm.thumb_cmc_offset, (0.0, 0.0, 0.0), untwisted=True)
     for q15 in (0.0, 30.0, 80.0):
-        q = _q(thumb_mp=25, thumb_ip=20, thumb_cmc=q15, index_mcp=45, index_pip=45, index_dip=45,
+        q = q_deg(thumb_mp=25, thumb_ip=20, thumb_cmc=q15, index_mcp=45, index_pip=45, index_dip=45,
                ring_mcp=20, ring_pip=15, ring_dip=10)
         got = {f: math.degrees(v) for f, v in O.pad_facing(p, q).items()}
         assert got == pytest.approx({"index": 90.0, "middle": 135.0, "ring": 180.0, "pinky": 135.0}, abs=1e-9)
@@ -165,7 +156,7 @@ def test_the_thumbs_pad_normal_keeps_its_angle_to_the_cmc_axis(hand):
         offset, axis = rng.normal(scale=0.03, size=3), rng.uniform(-1.5, 1.5, size=3)
         p = _with_thumb(hand.params, offset, axis, untwisted=True)
         mp, ip, cmc = rng.uniform(0, 70), rng.uniform(0, 55), rng.uniform(0, 90)
-        T = LF.link_transforms(p, _q(thumb_mp=mp, thumb_ip=ip, thumb_cmc=cmc))
+        T = LF.link_transforms(p, q_deg(thumb_mp=mp, thumb_ip=ip, thumb_cmc=cmc))
         n = (T["thumb_distal"] @ F.T_distal_pad(p, "thumb"))[:3, 2]
         z = F.thumb_cmc_placement(offset, axis)[:3, 2]
         assert math.degrees(math.acos(n @ z)) == pytest.approx(180.0 - abs(45.0 - mp - ip), abs=1e-9)

@@ -15,6 +15,7 @@ from phantom_cad.kinematics import frames as F, link_frames as LF, opposition as
 from phantom_cad.kinematics.topology import JOINTS, LINK_NAMES
 from phantom_cad.params import ParamError, parse
 from phantom_cad.params.io import DEFAULT_PARAMS, load_document, load_params
+from tests.support.joint_angles import q_deg
 
 
 def _twisted(params, deg: float, side: str | None = None):
@@ -30,14 +31,6 @@ def _twisted(params, deg: float, side: str | None = None):
 @pytest.fixture(scope="module")
 def params():
     return load_params(None)
-
-
-def _q(**deg) -> np.ndarray:
-    index = {j.name: j.index for j in JOINTS}
-    q = np.zeros(len(JOINTS))
-    for name, v in deg.items():
-        q[index[name]] = math.radians(v)
-    return q
 
 
 def test_twist_deg_is_read_in_degrees_and_defaults_to_0(document):
@@ -79,7 +72,7 @@ def test_the_pad_normal_from_the_cmc_axis_is_the_closed_form(params):
             p = _twisted(params, psi)
             p = replace(p, palm=replace(p.palm, thumb_cmc_offset=tuple(offset), thumb_cmc_axis=tuple(axis)))
             mp, ip, cmc = rng.uniform(0, 70), rng.uniform(0, 55), rng.uniform(0, 90)
-            T = LF.link_transforms(p, _q(thumb_mp=mp, thumb_ip=ip, thumb_cmc=cmc))
+            T = LF.link_transforms(p, q_deg(thumb_mp=mp, thumb_ip=ip, thumb_cmc=cmc))
             n = (T["thumb_distal"] @ F.T_distal_pad(p, "thumb"))[:3, 2]
             z = F.thumb_cmc_placement(offset, axis)[:3, 2]
             want = math.acos(-math.cos(math.radians(psi)) * math.cos(math.radians(45.0 - mp - ip)))
@@ -136,12 +129,12 @@ def test_the_urdf_of_a_twisted_thumb_poses_its_links_where_link_frames_does(para
         # the mimic joints follow their reference in the URDF: read back what it posed
         q = np.array([robot.cfg[robot.actuated_joint_names.index(j.name)] if j.name in robot.actuated_joint_names
                       else q[j.index] for j in JOINTS])
-        want = LF.link_transforms(p, _pose_q(robot, q))
+        want = LF.link_transforms(p, _poseq_deg(robot, q))
         for link in LINK_NAMES:
             assert np.allclose(robot.get_transform(link, "palm"), want[link], atol=1e-12), link
 
 
-def _pose_q(robot, q):
+def _poseq_deg(robot, q):
     """The joint angles the URDF posed: mimic joints from their reference joints' multipliers."""
     out = q.copy()
     for j in JOINTS:
@@ -200,7 +193,7 @@ def test_the_twisted_thumbs_tendons_are_the_mechanism(params, side):
         mp, ip, cmc = rng.uniform(0.0, 1.2), rng.uniform(0.0, 0.95), rng.uniform(0.0, 1.5)
         u = np.zeros(len(SERVOS))
         u[0], u[5] = rng.uniform(0.0, 1.4), cmc
-        got = routing_paths.lengths(p, _q(thumb_mp=math.degrees(mp), thumb_ip=math.degrees(ip),
+        got = routing_paths.lengths(p, q_deg(thumb_mp=math.degrees(mp), thumb_ip=math.degrees(ip),
                                           thumb_cmc=math.degrees(cmc)), u)
         want = R_mp * mp - R_ip * ip
         assert got["thumb_mp_ip_a"] - rest["thumb_mp_ip_a"] == pytest.approx(want, abs=1e-9)
@@ -246,7 +239,7 @@ def test_the_twins_thumb_tendons_are_the_mechanism_when_twisted(params):
     rng = np.random.default_rng(17)
     for _ in range(5):
         mp, ip, cmc, u1 = rng.uniform(0.0, 1.2), rng.uniform(0.0, 0.95), rng.uniform(0.0, 1.5), rng.uniform(0.0, 1.4)
-        got = lengths(_q(thumb_mp=math.degrees(mp), thumb_ip=math.degrees(ip), thumb_cmc=math.degrees(cmc)), u1)
+        got = lengths(q_deg(thumb_mp=math.degrees(mp), thumb_ip=math.degrees(ip), thumb_cmc=math.degrees(cmc)), u1)
         want = R_mp * mp - R_ip * ip
         assert got["thumb_mp_ip_a"] - rest["thumb_mp_ip_a"] == pytest.approx(want, abs=2e-5)
         assert got["thumb_mp_ip_b"] - rest["thumb_mp_ip_b"] == pytest.approx(-want, abs=2e-5)
