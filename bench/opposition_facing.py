@@ -1,5 +1,5 @@
 """Can any CMC placement make the thumb's pad face the index, middle and ring pads (docs/opposition.md,
-"Pad to pad")? The placement search (``kinematics.opposition.solve``) with ``oppose =
+"Pad to pad")? The placement search (``kinematics.thumb_placement.solve``) with ``oppose =
 PAD_OPPOSE``: a contact counts only where, besides the contact direction lying in both pads'
 45 deg cones, the pads' normals are within 30 deg of facing each other. Run under the rules the
 default file's placement was found with (the palm's thenar and a human palm, the default
@@ -27,18 +27,19 @@ import time
 from phantom_cad import load_params, make_hand
 from phantom_cad.kinematics import frames as F
 from phantom_cad.kinematics import opposition as O
+from phantom_cad.kinematics import thumb_placement as TP
 from phantom_cad.kinematics import thenar as TH
 from phantom_cad.params import parse
 from phantom_cad.params.io import DEFAULT_PARAMS, load_document
 
 
-def wide_bounds(params) -> O.Bounds:
+def wide_bounds(params) -> TP.Bounds:
     """The default bounds opened: the CMC centre 20 mm further radial, from the MCPs' line back to
     110 mm behind it, 60 mm palmar to 20 mm dorsal; every axis angle free (scaled as the default's)."""
-    b = O.default_bounds(params)
+    b = TP.default_bounds(params)
     k = params.hand_length / 0.189
     r = math.radians
-    return O.Bounds(offset=((b.offset[0][0] - 0.020 * k, b.offset[0][1]), (-0.110 * k, 0.0), (-0.060 * k, 0.020 * k)),
+    return TP.Bounds(offset=((b.offset[0][0] - 0.020 * k, b.offset[0][1]), (-0.110 * k, 0.0), (-0.060 * k, 0.020 * k)),
                     axis=((r(-180), r(180)), (r(-90), r(90)), (r(-180), r(180))))
 
 
@@ -46,7 +47,7 @@ def row(label, params, T0, reach, seconds):
     z = T0[:3, 2]
     c = ", ".join(f"{v * 1e3:.1f}" for v in T0[:3, 3])
     held = TH.thenar_margins(params, T0)
-    viol = O.thenar_constraint(params)(T0)
+    viol = TP.thenar_constraint(params)(T0)
     margin = min(reach[f].margin for f in O.OPPOSED)
     meet = " / ".join(("yes" if reach[f].reaches else "no") for f in O.OPPOSED)
     print(f"| {label} | {c} | {math.degrees(math.acos(z[2])):.0f} | {math.degrees(margin):+.1f} | {meet} | "
@@ -80,14 +81,14 @@ def main(argv):
     T0 = F.thumb_cmc_placement(params.palm.thumb_cmc_offset, params.palm.thumb_cmc_axis)
     t = time.perf_counter()
     row("the file's placement", params, T0, O.reach(hand, oppose=O.PAD_OPPOSE, fingers=O.OPPOSED), time.perf_counter() - t)
-    cases = [("thenar and human palm, default bounds (as `--solve`)", None, O.thenar_constraint(params)),
-             ("thenar and human palm, wide bounds", wide_bounds(params), O.thenar_constraint(params)),
-             ("thenar only (no human palm), wide bounds", wide_bounds(params), O.thenar_constraint(params, human=False)),
+    cases = [("thenar and human palm, default bounds (as `--solve`)", None, TP.thenar_constraint(params)),
+             ("thenar and human palm, wide bounds", wide_bounds(params), TP.thenar_constraint(params)),
+             ("thenar only (no human palm), wide bounds", wide_bounds(params), TP.thenar_constraint(params, human=False)),
              ("palm envelope only, wide bounds", wide_bounds(params), None)]
     for label, bounds, constraint in cases:
         t = time.perf_counter()
-        s = O.solve(hand, bounds=bounds, seed=seed, population=16, generations=150, constraint=constraint,
-                    oppose=O.PAD_OPPOSE)
+        s = TP.solve(hand, bounds=bounds, seed=seed, population=16, generations=150, constraint=constraint,
+                     oppose=O.PAD_OPPOSE)
         T0 = F.thumb_cmc_placement(s.offset, s.axis)
         row(label, params, T0, s.reach, time.perf_counter() - t)
 
@@ -99,8 +100,8 @@ def main_twist(params, path, seed, twist):
     for psi in twist:
         hand = make_hand(twisted(path, psi))
         t = time.perf_counter()
-        s = O.solve(hand, seed=seed, population=16, generations=150, constraint=O.thenar_constraint(params),
-                    oppose=O.PAD_OPPOSE)
+        s = TP.solve(hand, seed=seed, population=16, generations=150, constraint=TP.thenar_constraint(params),
+                     oppose=O.PAD_OPPOSE)
         T0 = F.thumb_cmc_placement(s.offset, s.axis)
         loose = O.reach(hand, T0=T0, fingers=O.OPPOSED)
         c = ", ".join(f"{v * 1e3:.1f}" for v in s.offset)

@@ -18,7 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from phantom_cad.kinematics import frames as F, opposition as O  # noqa: E402
+from phantom_cad.kinematics import frames as F, opposition as O, thumb_placement as TP  # noqa: E402
 from phantom_cad.kinematics import link_frames as LF
 from phantom_cad.kinematics.model import Hand  # noqa: E402
 from phantom_cad.kinematics.topology import CHAINS, FINGERS, N_SERVOS, chain, digit_links  # noqa: E402
@@ -32,7 +32,7 @@ def _with_thumb(p, offset, axis):
 def draw(ax, hand, p, u, title, highlight, view):
     q = hand.forward(u, compensated=True)
     Ts = LF.link_transforms(p, q)
-    lo, hi = O.palm_envelope(p)
+    lo, hi = TP.palm_envelope(p)
     # the palm envelope's edges
     c = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]) * 1e3
     for i in range(8):

@@ -1,6 +1,6 @@
 """The CMC placement the default hand's file carries (docs/opposition.md, "Within the palm's
-thenar"): the placement search (``kinematics.opposition.solve``) with the palm's thenar as its
-constraint (``opposition.thenar_constraint``: the CMC axis within 60 deg of the palm's normal, the
+thenar"): the placement search (``kinematics.thumb_placement.solve``) with the palm's thenar as its
+constraint (``thumb_placement.thenar_constraint``: the CMC axis within 60 deg of the palm's normal, the
 CMC base below the palm, the thumb drive's turn above the CMC pulley under the dorsal face, the
 journal's and the turn's walls within a palm of human breadth), a larger population and more
 generations than `params opposition --solve`, for several seeds (the landscape has several optima:
@@ -18,7 +18,7 @@ import sys
 import time
 
 from phantom_cad import load_params, make_hand
-from phantom_cad.kinematics import opposition as O
+from phantom_cad.kinematics import opposition as O, thumb_placement as TP
 from phantom_cad.params.io import DEFAULT_PARAMS
 
 
@@ -31,7 +31,7 @@ def main(argv):
     print("|---:|---|---|---:|---|---:|---:|")
     for seed in seeds:
         t = time.perf_counter()
-        s = O.solve(hand, seed=seed, population=16, generations=150, constraint=O.thenar_constraint(params))
+        s = TP.solve(hand, seed=seed, population=16, generations=150, constraint=TP.thenar_constraint(params))
         c = ", ".join(f"{v * 1e3:.4f}" for v in s.offset)
         a = ", ".join(f"{math.degrees(v):.4f}" for v in s.axis)
         meet = " / ".join(("yes" if s.reach[f].reaches else "no") for f in O.OPPOSED)

@@ -1,7 +1,8 @@
-"""Thumb opposition (kinematics/opposition.py), against answers computed another way: the
-closest points of segments by dense sampling, the fingertips by the per-pose transforms of
-``link_frames.link_transforms`` (the chain the descriptions are written from), distances to a box by
-enumeration, and the reach by brute force over sampled capsule axes."""
+"""Thumb opposition (kinematics/opposition.py) and the placement search (kinematics/thumb_placement.py),
+against answers computed another way: the closest points of segments by dense sampling, the
+fingertips by the per-pose transforms of ``link_frames.link_transforms`` (the chain the descriptions
+are written from), distances to a box by enumeration, and the reach by brute force over sampled
+capsule axes."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from phantom_cad.kinematics import frames as F, opposition as O
+from phantom_cad.kinematics import frames as F, opposition as O, thumb_placement as TP
 from phantom_cad.kinematics import link_frames as LF
 from phantom_cad.kinematics.model import Hand
 from phantom_cad.kinematics.topology import CMC_Q, FINGERS, N_SERVOS, OPPOSED_FINGERS
@@ -59,7 +60,7 @@ def test_box_distance_by_hand():
     lo, hi = np.zeros(3), np.array([2.0, 4.0, 6.0])
     pts = np.array([[1, 2, 3], [3, 2, 3], [3, 5, 3], [1, 2, 0.5], [-1, -1, -1]], float)
     want = [-1.0, 1.0, math.sqrt(2.0), -0.5, math.sqrt(3.0)]
-    assert O.box_distance(pts, lo, hi) == pytest.approx(want)
+    assert TP.box_distance(pts, lo, hi) == pytest.approx(want)
 
 
 def _per_pose_tip(params, digit, q):
@@ -302,7 +303,7 @@ def _rpy(R):
 
 def test_the_palm_envelope_by_hand(hand):
     p = hand.params
-    lo, hi = O.palm_envelope(p)
+    lo, hi = TP.palm_envelope(p)
     doc = tomllib.loads((ROOT / "params" / "phantom.toml").read_text())
     wall = doc["palm"]["wall_mm"]
     # the MCPs lie on an arc, pitch apart along chords at the mean of adjacent finger directions
@@ -330,16 +331,16 @@ def test_solve_improves_on_the_file(hand):
     the search's grid) is no worse than the file's placement, which is in its first population,
     and whose thumb stays out of the palm envelope; the fine grid's margin is at least the
     coarse one's (the grids are nested)."""
-    sol = O.solve(hand, generations=4, population=3, iterations=40)
-    b = O.default_bounds(hand.params).array()
+    sol = TP.solve(hand, generations=4, population=3, iterations=40)
+    b = TP.default_bounds(hand.params).array()
     x = np.array([*sol.offset, *sol.axis])
     assert np.all(x >= b[:, 0] - 1e-12) and np.all(x <= b[:, 1] + 1e-12)
     thumb = O.thumb_tips(hand, 11, 11)
     fingers = {f: O.finger_tips(hand, f, 21) for f in O.OPPOSED}
     p = hand.params
     start = np.clip(np.array([*p.palm.thumb_cmc_offset, *p.palm.thumb_cmc_axis]), b[:, 0], b[:, 1])
-    coarse = O.margin(thumb, fingers, x)
-    assert coarse >= O.margin(thumb, fingers, start)
+    coarse = TP.margin(thumb, fingers, x)
+    assert coarse >= TP.margin(thumb, fingers, start)
     assert sol.margin >= coarse - 1e-12 or coarse < -O.PAD_CONE
     assert sol.intrusion <= 0.0
 
@@ -357,7 +358,7 @@ def test_solve_meets_a_callers_constraint(hand):
         return max(x0 - T0[0, 3], y0 - T0[1, 3])
 
     assert need(F.T_palm_thumb_cmc_base(p)) > 0.0
-    sol = O.solve(hand, generations=4, population=3, iterations=40, constraint=need)
+    sol = TP.solve(hand, generations=4, population=3, iterations=40, constraint=need)
     assert sol.offset[0] >= x0 - 1e-12 and sol.offset[1] >= y0 - 1e-12
     assert sol.violation == pytest.approx(max(x0 - sol.offset[0], y0 - sol.offset[1]), abs=1e-15)
     assert sol.violation <= 0.0 and sol.intrusion <= 0.0

@@ -1,8 +1,9 @@
-"""The placement search's arithmetic (kinematics/opposition.py, kinematics/thenar.py) against
-straightforward versions written here: the closest points of segments with einsum over (..., 3)
-arrays, the thumb turned by its CMC angle and then placed, the box distance with np.linalg.norm, the
-facing angle of every pair. The search keeps its answers only if every number is the same, so each
-comparison is bit for bit (np.array_equal, ==), on random inputs and on the default hand's grids."""
+"""The placement search's arithmetic (kinematics/opposition.py, kinematics/thumb_placement.py,
+kinematics/thenar.py) against straightforward versions written here: the closest points of segments
+with einsum over (..., 3) arrays, the thumb turned by its CMC angle and then placed, the box distance
+with np.linalg.norm, the facing angle of every pair. The search keeps its answers only if every
+number is the same, so each comparison is bit for bit (np.array_equal, ==), on random inputs and on
+the default hand's grids."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from phantom_cad.kinematics import opposition as O
+from phantom_cad.kinematics import opposition as O, thumb_placement as TP
 from phantom_cad.kinematics import thenar as TH
 from phantom_cad.kinematics.model import Hand
 from phantom_cad.params.io import load_params
@@ -72,7 +73,7 @@ def ref_turn_and_place(thumb, T0, p, w=1.0):
 
 
 def ref_margin(thumb, fingers, x):
-    T0 = O._placement(x)
+    T0 = TP._placement(x)
     tt = O.Tips(ref_turn_and_place(thumb, T0, thumb.a), ref_turn_and_place(thumb, T0, thumb.b),
                 ref_turn_and_place(thumb, T0, thumb.normal, 0.0), thumb.radius, thumb.u)
     worst = math.inf
@@ -139,7 +140,7 @@ def test_box_distance_is_the_norm_version_bit_for_bit():
     lo, hi = np.array([-0.02, -0.07, -0.01]), np.array([0.06, 0.01, 0.012])
     for shape in [(500,), (40, 24), ()]:
         p = rng.normal(scale=0.05, size=(*shape, 3))
-        got = O.box_distance(p, lo, hi)
+        got = TP.box_distance(p, lo, hi)
         assert got.shape == shape and np.array_equal(got, ref_box_distance(p, lo, hi))
 
 
@@ -150,7 +151,7 @@ def grids(hand):
 
 
 def _placements(hand, n, seed):
-    b = O.default_bounds(hand.params).array()
+    b = TP.default_bounds(hand.params).array()
     rng = np.random.default_rng(seed)
     return b[:, 0] + (b[:, 1] - b[:, 0]) * rng.random((n, 6))
 
@@ -158,7 +159,7 @@ def _placements(hand, n, seed):
 def test_the_placed_thumb_is_turned_then_placed_bit_for_bit(hand, grids):
     thumb, small, _ = grids
     for x in _placements(hand, 20, 14):
-        T0 = O._placement(x)
+        T0 = TP._placement(x)
         for th in (thumb, small):
             tt = th.placed(T0)
             assert np.array_equal(tt.a, ref_turn_and_place(th, T0, th.a))
@@ -166,8 +167,8 @@ def test_the_placed_thumb_is_turned_then_placed_bit_for_bit(hand, grids):
             assert np.array_equal(tt.normal, ref_turn_and_place(th, T0, th.normal, 0.0))
             body = ref_turn_and_place(th, T0, th.body)
             assert np.array_equal(th.body_placed(T0), body.reshape(-1, 3).T)
-            env = O.palm_envelope(hand.params)
-            assert O.palm_intrusion(th, T0, env) == float(th.body_radius - ref_box_distance(body, *env).min())
+            env = TP.palm_envelope(hand.params)
+            assert TP.palm_intrusion(th, T0, env) == float(th.body_radius - ref_box_distance(body, *env).min())
 
 
 def test_the_search_margin_is_the_reference_bit_for_bit(hand, grids, monkeypatch):
@@ -179,20 +180,20 @@ def test_the_search_margin_is_the_reference_bit_for_bit(hand, grids, monkeypatch
     file = np.array([*p.palm.thumb_cmc_offset, *p.palm.thumb_cmc_axis])
     rng = np.random.default_rng(15)
     near = file + rng.normal(scale=[2e-3] * 3 + [0.05] * 3, size=(20, 6))
-    every, pairs = [0], O._pairs
+    every, pairs = [0], TP._pairs         # the name the margin calls
 
     def counted(*args):
         every[0] += 1
         return pairs(*args)
 
-    monkeypatch.setattr(O, "_pairs", counted)
+    monkeypatch.setattr(TP, "_pairs", counted)
     contact = 0
     for x in [*_placements(hand, 40, 2), *near]:
-        m = O.margin(thumb, fingers, x)
+        m = TP.margin(thumb, fingers, x)
         assert m == ref_margin(thumb, fingers, x)
         contact += m > -O.PAD_CONE
     assert contact >= 10 and every[0] >= 1          # both ways of settling a finger were compared
-    tt = thumb.placed(O._placement(file))
+    tt = thumb.placed(TP._placement(file))
     for f, Fg in fingers.items():
         assert all(np.array_equal(g, w) for g, w in zip(O.contacts(tt, Fg), ref_contacts(tt, Fg)))
 
@@ -205,7 +206,7 @@ def test_the_thenar_rings_are_the_reference_bit_for_bit(hand):
 
     rng = np.random.default_rng(17)
     for x in _placements(hand, 20, 18):
-        T0 = O._placement(x)
+        T0 = TP._placement(x)
         s, r = rng.normal(scale=0.02), rng.uniform(0.0, 0.01)
         for n in (24, 7):
             assert np.array_equal(TH._ring(T0, s, r, n), ref_ring(T0, s, r, n))

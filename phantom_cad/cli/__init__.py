@@ -159,7 +159,7 @@ def params_opposition(params: Optional[Path] = ParamsOpt,
     import math
 
     from .. import load_hand
-    from ..kinematics import opposition
+    from ..kinematics import opposition, thumb_placement
     from ..units import deg, mm
 
     hand = load_hand(params)
@@ -170,8 +170,8 @@ def params_opposition(params: Optional[Path] = ParamsOpt,
     typer.echo("\n".join(opposition_lines(hand, oppose=oppose)))
     if not solve:
         return
-    sol = opposition.solve(hand, constraint=opposition.thenar_constraint(p), oppose=oppose)
-    b = opposition.default_bounds(p)
+    sol = thumb_placement.solve(hand, constraint=thumb_placement.thenar_constraint(p), oppose=oppose)
+    b = thumb_placement.default_bounds(p)
     typer.echo("")
     typer.echo(f"solved ({sol.evaluations} evaluations; bounds: CMC "
                + ", ".join(f"{a} [{mm(lo):.1f}, {mm(hi):.1f}] mm" for a, (lo, hi) in zip("xyz", b.offset)) + "; "

@@ -1,7 +1,7 @@
 """A parameter file for a person (``phantom-cad size``): the default hand's file
 (params/phantom.toml) as the template, every size-dependent choice re-solved for the person's hand
 length, breadth and measured segments (:mod:`.solvers`), the thumb's CMC placement searched for
-opposition as ``params opposition --solve`` does (``kinematics.opposition``), and the result
+opposition as ``params opposition --solve`` does (``kinematics.thumb_placement``), and the result
 validated. Imports params and kinematics, never CAD: the caller hands in the CAD layer's
 pre-build check (``cad.preflight.check``). docs/sizing.md."""
 
@@ -344,14 +344,14 @@ def size(person: Person, check: Callable[[HandParams], None] | None = None, sear
 
     consider(doc, False)
     if search:
-        from ..kinematics import opposition
+        from ..kinematics import thumb_placement
         from ..kinematics.model import Hand
 
         for k, (population, generations) in enumerate(SEARCHES[:searches]):
             if k and best is not None and best.margin >= 0.0:
                 break
-            sol = opposition.solve(Hand(start), seed=seed + k, population=population, generations=generations,
-                                   constraint=opposition.thenar_constraint(start))
+            sol = thumb_placement.solve(Hand(start), seed=seed + k, population=population,
+                                        generations=generations, constraint=thumb_placement.thenar_constraint(start))
             solved = copy.deepcopy(doc)
             solved["palm"]["thumb_cmc_offset_mm"] = [round(float(units.mm(v)), 4) for v in sol.offset]
             solved["palm"]["thumb_cmc_axis_deg"] = [round(float(units.deg(v)), 4) for v in sol.axis]
