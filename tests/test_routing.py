@@ -233,7 +233,7 @@ def test_a_coupler_without_room_is_refused(monkeypatch):
 def test_servo_boxes_and_wrist_by_hand():
     """The servo's body and flange-ear boxes (the one description the palm's pockets and the coming
     forearm layout use) and the wrist crease, from the file's numbers."""
-    from phantom_cad.kinematics import forearm_layout as FL
+    from phantom_cad.kinematics import servo_geometry as SG
     from phantom_cad.kinematics import frames as F
 
     path = ROOT / "params" / "phantom.toml"
@@ -243,7 +243,7 @@ def test_servo_boxes_and_wrist_by_hand():
     cad, c = doc["cad"], doc["print"]["hole_clearance_mm"]
     top = -(cad["servo_pulley_width_mm"] / 2 + c)                  # the output face under the pulley
     off = cad["servo_shaft_offset_mm"]
-    boxes = {k: (np.array(lo) * 1e3, np.array(hi) * 1e3) for k, (lo, hi) in FL.servo_boxes(p).items()}
+    boxes = {k: (np.array(lo) * 1e3, np.array(hi) * 1e3) for k, (lo, hi) in SG.servo_boxes(p).items()}
     np.testing.assert_allclose(boxes["body"][0], [-W / 2, -off - L / 2, top - H], atol=1e-9)
     np.testing.assert_allclose(boxes["body"][1], [W / 2, -off + L / 2, top], atol=1e-9)
     ear_top = top - cad["servo_ear_offset_mm"]

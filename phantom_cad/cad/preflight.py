@@ -39,6 +39,7 @@ def check(params: HandParams) -> None:
     from ..kinematics import forearm_layout as FL
     from ..kinematics import frames as F
     from ..kinematics import routing, statics
+    from ..kinematics import servo_geometry as SG
     from ..kinematics import thenar as TH
 
     src = params.source
@@ -83,7 +84,7 @@ def check(params: HandParams) -> None:
         raise ParamError("servo.body_mm", [round(mm(v), 6) for v in params.servo.body],
                          f"places servo {SERVOS[k].label}'s flange screw pilot {mm(-head):.3f} mm above the forearm "
                          f"module's top (palm.thickness_mm / 2 + palm.wall_mm = "
-                         f"{mm(FL.forearm_top(params)):g} mm): the pilot must open at or below it, so that the "
+                         f"{mm(SG.forearm_top(params)):g} mm): the pilot must open at or below it, so that the "
                          "screw's thread gets its full depth in the module", src)
     if params.palm.heel_height > 0.0:
         from .parts.palm import Palm

@@ -64,9 +64,10 @@ def report(p, searched: bool) -> list[str]:
     """What a designer acts on: each digit's section, travel and reach against Table I; the
     opposition; the power grasp's cylinder; the palm against its envelope; the forearm module's
     breadth; the thinnest designed wall."""
-    from ..kinematics import forearm_layout as FL
     from ..cad.grasp import power_grasp_diameter_mm
+    from ..kinematics import forearm_layout as FL
     from ..kinematics import frames as F
+    from ..kinematics import servo_geometry as SG
     from ..kinematics import thenar as TH
     from ..kinematics.model import Hand
     from ..params.rules import MIN_WALL
@@ -100,7 +101,7 @@ def report(p, searched: bool) -> list[str]:
     out.append(f"palm: {breadth:.1f} mm broad (metacarpal block and thenar), {thick:.1f} mm thick with the heel; "
                f"the 95th-percentile envelope at this hand length: {env_b:.1f} x {env_t:.1f} mm"
                f"{'' if breadth <= env_b + 1e-9 and thick <= env_t + 1e-9 else ' (outside it)'}")
-    fa, limit = mm(FL.forearm_width(p)), mm(FL.forearm_width_limit(p))
+    fa, limit = mm(FL.forearm_width(p)), mm(SG.forearm_width_limit(p))
     wide = " (wider: docs/sizing.md, limitations)" if fa > limit + 1e-9 else ""
     out.append(f"forearm module: {fa:.1f} mm wide; the target within a human forearm is "
                f"{limit:.1f} mm at this hand length (80 mm at 189 mm){wide}")

@@ -27,9 +27,9 @@ from .. import postures as posture_library
 from .. import units
 from ..errors import UserError, one_line
 from ..kinematics import frames
-from ..kinematics.forearm_layout import palm_back
 from ..kinematics.hand_params import HandParams
 from ..kinematics.link_frames import link_transforms
+from ..kinematics.servo_geometry import palm_back
 from ..kinematics.topology import CMC_SERVO, DIGITS, FINGERS, JOINTS, SERVOS, THUMB_CHAIN, chain, digit_links
 from .hold import Trial
 

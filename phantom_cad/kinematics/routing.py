@@ -50,6 +50,7 @@ import numpy as np
 from . import forearm_layout as FL
 from . import frames as F
 from . import link_frames as LF
+from . import servo_geometry as SG
 from . import thenar as TH
 from .dimensions import FLANK, slot_back
 from .hand_params import HandParams
@@ -265,7 +266,7 @@ def _cmc_loop(params: HandParams) -> tuple[Strand, Strand]:
     a's path by + r6 u6 and b's by - r6 u6, turning the CMC by q15 by - r6 q15 / cmc_gain and + r6
     q15 / cmc_gain: both paths keep their lengths exactly when q15 = cmc_gain u6. A via point where each strand crosses the gap
     between the palm and the forearm module holds it between the two wraps (servo 6's pulley lies in
-    the CMC pulley's plane, ``forearm_layout.coplanar_servo``: the strands are straight and in both planes)."""
+    the CMC pulley's plane, ``servo_geometry.coplanar_servo``: the strands are straight and in both planes)."""
     s = SERVOS[CMC_SERVO]
     r, rq = F.servo_radius(params, s.index), F.cmc_pulley_radius(params)
     w = params.cad.servo_pulley_width
@@ -276,7 +277,7 @@ def _cmc_loop(params: HandParams) -> tuple[Strand, Strand]:
     Tq = F.T_palm_thumb_cmc_base(params) @ TH.T_cmc_base_pulley(params) @ F.rot_z(turn)
     (sa, sb), (qa, qb) = cmc_loop_clamps(params)
     clamps = {"a": (sa, qa + turn), "b": (sb, qb + turn)}
-    y_gap = FL.forearm_front(params) + params.print.hole_clearance / 2.0
+    y_gap = SG.forearm_front(params) + params.print.hole_clearance / 2.0
     out = []
     for name, side, axis in (("a", -1.0, -1.0), ("b", 1.0, 1.0)):
         cs, cq = clamps[name]

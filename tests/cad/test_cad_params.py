@@ -121,7 +121,7 @@ def test_a_wide_servo_widens_the_forearm_row(document):
     of neighbours' body and ear rectangles (grown by the clearance, at the servo's mid-plane) at
     least a wall apart, sampled densely on their outlines."""
     from phantom_cad.cad import preflight
-    from phantom_cad.kinematics import forearm_layout as FL, frames as F
+    from phantom_cad.kinematics import forearm_layout as FL, frames as F, servo_geometry as SG
     from phantom_cad.kinematics.topology import SERVOS
     from phantom_cad.params import parse
 
@@ -144,7 +144,7 @@ def test_a_wide_servo_widens_the_forearm_row(document):
             loop = {SERVOS[ka].drive == "loop", SERVOS[kb].drive == "loop"}
             pitch = max(cavity[True in loop] + cavity[False], width + 0.4) + 2.4
             assert (Tb[0, 3] - Ta[0, 3]) * 1e3 >= pitch - 1e-9, (width, ka, kb)
-        assert FL.forearm_pitch(p) * 1e3 == pytest.approx(max(cavity[True] + cavity[False], width + 0.4) + 2.4)
+        assert SG.forearm_pitch(p) * 1e3 == pytest.approx(max(cavity[True] + cavity[False], width + 0.4) + 2.4)
         c, L, span, off = 0.2, 23.2, doc["servo"]["flange_span_mm"], doc["cad"]["servo_shaft_offset_mm"]
         boxes = [((-width / 2 - c, -off - L / 2 - c), (width / 2 + c, -off + L / 2 + c)),
                  ((-width / 2 - c, -off - span / 2 - c), (width / 2 + c, -off + span / 2 + c))]
@@ -243,20 +243,20 @@ def _servo_radius(document, k):
 
 
 def test_the_staggered_rows_fit_a_human_forearm(document):
-    """``forearm_layout.staggered_servos``: two rows of three within a forearm's breadth at the
+    """``forearm_stagger.staggered_servos``: two rows of three within a forearm's breadth at the
     reference hand (at most 80 mm with a palm wall each side, measured on the envelopes built here
     from the file's servo: 76.9 mm); servo 6, the middle and the pinky servos in front, the thumb,
     index and ring servos behind, a palm wall behind them; each drive straight through its target
     (servo 6's strands tangent to the CMC pulley: its radius from its centre); servo 6 in the CMC
     pulley's plane with its shaft along the CMC axis; the servos of each row a palm wall apart in
     plan (their envelopes sampled densely); the front row a palm wall behind the module's front."""
-    from phantom_cad.kinematics import forearm_layout as FL, frames as F, thenar
+    from phantom_cad.kinematics import forearm_stagger as FS, frames as F, servo_geometry as SG, thenar
     from phantom_cad.kinematics.topology import CHAINS, SERVOS
 
     p = parse(document)
-    S = {k: F_mm(T) for k, T in FL.staggered_servos(p).items()}
+    S = {k: F_mm(T) for k, T in FS.staggered_servos(p).items()}
     servo = {c.digit: c.servo for c in CHAINS}
-    front, rear = FL.staggered_rows(p)
+    front, rear = FS.staggered_rows(p)
     assert set(front) == {5, servo["middle"], servo["pinky"]}
     assert set(rear) == {servo["thumb"], servo["index"], servo["ring"]}
     env = {k: _envelope_by_hand(document, _servo_radius(document, k)) @ T[:3, :3].T + T[:3, 3] for k, T in S.items()}
@@ -265,8 +265,8 @@ def test_the_staggered_rows_fit_a_human_forearm(document):
     width = xs.max() - xs.min() + 2 * wall
     assert width <= 80.0 * document["hand"]["hand_length_mm"] / 189.0
     assert width == pytest.approx(76.9, abs=0.05)
-    assert FL.forearm_width_limit(p) * 1e3 == pytest.approx(80.0)
-    front_face = FL.forearm_front(p) * 1e3
+    assert SG.forearm_width_limit(p) * 1e3 == pytest.approx(80.0)
+    front_face = SG.forearm_front(p) * 1e3
     assert max(env[k][:, 1].max() for k in front) <= front_face - wall + 1e-6
     assert max(env[k][:, 1].max() for k in rear) <= min(env[k][:, 1].min() for k in front) - wall + 1e-6
     for row in (front, rear):
@@ -275,7 +275,7 @@ def test_the_staggered_rows_fit_a_human_forearm(document):
             assert d >= wall - 0.02, (a, b, d)          # sampled rims: within 0.02 mm of the circle
     for k, T in S.items():
         r = _servo_radius(document, k)
-        E = FL.servo_target(p, k) * 1e3
+        E = SG.servo_target(p, k) * 1e3
         for side in ((-1.0, 1.0) if SERVOS[k].drive == "loop" else (-1.0,)):
             t0 = T[:3, 3] + side * r * T[:3, 0]
             off = np.linalg.norm(np.cross(E - t0, T[:3, 1]))
@@ -286,33 +286,33 @@ def test_the_staggered_rows_fit_a_human_forearm(document):
 
 
 def test_two_rows_where_they_fit_a_human_forearm(document):
-    """``forearm_layout.two_rows``: the two staggered rows where their width (76.9 mm, the servo
+    """``forearm_stagger.two_rows``: the two staggered rows where their width (76.9 mm, the servo
     does not scale) is within 80 mm x hand length / 189 mm: at 182 mm (limit 77.04 mm), not at
     181 mm (76.61 mm)."""
-    from phantom_cad.kinematics import forearm_layout as FL
+    from phantom_cad.kinematics import forearm_stagger as FS, servo_geometry as SG
 
     for length, fits in ((182.0, True), (181.0, False)):
         doc = copy.deepcopy(document)
         doc["hand"]["hand_length_mm"] = length
         p = parse(doc)
-        assert FL.forearm_width_limit(p) * 1e3 == pytest.approx(80.0 * length / 189.0)
-        assert FL.two_rows(p) is fits, length
+        assert SG.forearm_width_limit(p) * 1e3 == pytest.approx(80.0 * length / 189.0)
+        assert FS.two_rows(p) is fits, length
 
 
 def test_the_staggered_rows_drives_clear_every_servo_and_each_other(document):
-    """In ``forearm_layout.staggered_servos`` every drive, from its pulley to its target, runs at
+    """In ``forearm_stagger.staggered_servos`` every drive, from its pulley to its target, runs at
     least half a tendon hole and a palm wall (0.5 + 2.4 mm) from every other servo's body, ears and
     pulley cavity within the module (the rear row stands raised so that its drives pass over the
     front row), and at least a tendon hole and a palm wall from every other drive (no two cross),
     sampled along the runs."""
-    from phantom_cad.kinematics import forearm_layout as FL
+    from phantom_cad.kinematics import forearm_stagger as FS, servo_geometry as SG
     from phantom_cad.kinematics.topology import SERVOS
 
     p = parse(document)
-    S = FL.staggered_servos(p)
+    S = FS.staggered_servos(p)
     hole = document["hardware"]["tendon_diameter_mm"] + 2 * document["print"]["hole_clearance_mm"]
     wall = document["palm"]["wall_mm"]
-    runs = FL._drive_runs(p, S)
+    runs = SG._drive_runs(p, S)
     for k, side, a, b in runs:
         for j, T in S.items():
             if j != k:
@@ -321,7 +321,7 @@ def test_the_staggered_rows_drives_clear_every_servo_and_each_other(document):
     full = []
     for k, side, a, _ in runs:
         u = S[k][:3, 1]
-        E = FL.servo_target(p, k)
+        E = SG.servo_target(p, k)
         full.append((k, a * 1e3, (a + u * ((E - a) @ u)) * 1e3))
     t = np.linspace(0.0, 1.0, 800)[:, None]
     for (k, a, b), (j, c, d) in itertools.combinations(full, 2):
@@ -340,12 +340,12 @@ def F_mm(T):
 
 
 def test_convex_hull_2d_is_qhulls():
-    """``forearm_layout.convex_hull_2d`` (the servo row's outlines) against scipy's Qhull: the same vertices in
+    """``servo_geometry.convex_hull_2d`` (the servo row's outlines) against scipy's Qhull: the same vertices in
     the same counter-clockwise cycle, on random clouds, the servo pulley's 24-gon with its swept copy,
     a square with points on its edges and corners repeated; no area is an error."""
     from scipy.spatial import ConvexHull
 
-    from phantom_cad.kinematics import forearm_layout as FL
+    from phantom_cad.kinematics import servo_geometry as SG
 
     def cycle(P, idx):                # the hull's points as a cycle from its lowest (x, y): a point
         pts = [tuple(P[int(i)]) for i in idx]       # repeated may be either index
@@ -360,9 +360,9 @@ def test_convex_hull_2d_is_qhulls():
     clouds = [rng.normal(size=(n, 2)) * rng.uniform(1e-3, 10.0) for n in (3, 4, 10, 50, 400)]
     clouds += [np.vstack([gon, gon + [3.0, -1.5]]), square]
     for P in clouds:
-        assert cycle(P, FL.convex_hull_2d(P)) == cycle(P, ConvexHull(P).vertices), P[:4]
+        assert cycle(P, SG.convex_hull_2d(P)) == cycle(P, ConvexHull(P).vertices), P[:4]
     with pytest.raises(ValueError, match="no area"):
-        FL.convex_hull_2d(np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]))
+        SG.convex_hull_2d(np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]))
 
 
 def test_shaft_offset_beyond_the_body(document):
@@ -405,7 +405,7 @@ def test_long_flange_ears_move_the_forearm_row_back(document):
     front is where the servos' envelopes (ears grown by a clearance, ahead of the shaft by
     flange_span / 2 - shaft_offset) end, one palm wall behind the module's front face: by hand,
     4 mm more span moves the row 2 mm further back from that face."""
-    from phantom_cad.kinematics import forearm_layout as FL
+    from phantom_cad.kinematics import forearm_layout as FL, servo_geometry as SG
     from phantom_cad.params import parse
 
     doc = copy.deepcopy(document)
@@ -420,7 +420,7 @@ def test_long_flange_ears_move_the_forearm_row_back(document):
     # the module's front face stands behind the palm (no servo at the CMC any more): it stays; the
     # row moves back by what the ears grew ahead along the servo that reaches furthest forward: at
     # most 2 mm (less along a turned or tilted servo's y), the same for every servo
-    assert FL.forearm_front(p1) == FL.forearm_front(p0)
+    assert SG.forearm_front(p1) == SG.forearm_front(p0)
     dy = [y1[k] - y0[k] for k in y0]
     assert -2.0 - 1e-9 <= dy[0] < -1.0 and all(v == pytest.approx(dy[0], abs=1e-9) for v in dy)
 

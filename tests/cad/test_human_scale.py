@@ -15,7 +15,7 @@ import pytest
 from phantom_cad.cad import assembly
 from phantom_cad.cad import measure
 from phantom_cad.canon import plain
-from phantom_cad.kinematics import forearm_layout
+from phantom_cad.kinematics import forearm_layout, servo_geometry
 from phantom_cad.kinematics import frames
 from phantom_cad.kinematics import link_frames
 from phantom_cad.kinematics import thenar
@@ -125,7 +125,7 @@ def test_the_servos_sit_behind_the_palm(hand):
     ahead = _section(fa, back + 1.0)
     assert ahead is not None
     assert ahead[0][2] == pytest.approx(doc["palm"]["thickness_mm"] / 2, abs=1e-6)     # on the dorsal face
-    behind = _section(fa, forearm_layout.forearm_front(p) * 1e3 - 2.0)
+    behind = _section(fa, servo_geometry.forearm_front(p) * 1e3 - 2.0)
     assert behind[0][2] < -doc["palm"]["thickness_mm"] / 2                               # the module's body
 
 

@@ -112,7 +112,7 @@ def _is_inside(shape, p) -> bool:
 
 @pytest.mark.parametrize("k", [1, 2, 3, 4, 5, 6])
 def test_forearm_servo_cavity_and_its_front_wall(built, params, document, k):
-    from phantom_cad.kinematics import forearm_layout
+    from phantom_cad.kinematics import forearm_layout, forearm_stagger
     from phantom_cad.kinematics import frames, routing
     from phantom_cad.kinematics import thenar
 
@@ -133,7 +133,7 @@ def test_forearm_servo_cavity_and_its_front_wall(built, params, document, k):
     else:
         measured = [c["radius"] for c in measure.cylinders(shape) if measure.coaxial(c, shaft, axis)]
         assert measured and max(measured) == pytest.approx(cavity, abs=1e-6)
-    level = forearm_layout.forearm_rows(params) == 1 or k - 1 in forearm_layout.staggered_rows(params)[0]
+    level = forearm_layout.forearm_rows(params) == 1 or k - 1 in forearm_stagger.staggered_rows(params)[0]
     if k == 6:
         # servo 6's shaft is parallel to the CMC axis and its pulley lies in the CMC pulley's plane
         Tc = frames.T_palm_thumb_cmc_base(params) @ thenar.T_cmc_base_pulley(params)
@@ -203,12 +203,12 @@ def test_forearm_front_wall_holes_only_where_a_drive_runs(built, params, documen
     sides); on a tendon servo's +x, where no cable leaves, the wall is solid where the module is
     (no hole that carries no tendon; in two rows the ulnar servo's +x runs past the module's side)."""
     from phantom_cad.cad.parts import wrist
-    from phantom_cad.kinematics import forearm_layout
+    from phantom_cad.kinematics import forearm_layout, servo_geometry
     from phantom_cad.kinematics import frames
     from phantom_cad.kinematics.topology import SERVO_MOUNT, SERVOS
 
     T_fp = np.linalg.inv(forearm_layout.T_palm_forearm(params))
-    mid_wall = forearm_layout.forearm_front(params) * 1e3 - document["palm"]["wall_mm"] / 2     # palm y (mm)
+    mid_wall = servo_geometry.forearm_front(params) * 1e3 - document["palm"]["wall_mm"] / 2     # palm y (mm)
     shape = built["forearm"].shape
     held = [s.index for s in SERVOS if SERVO_MOUNT[s.drive] == "forearm"]
     assert len(held) == 6
@@ -228,11 +228,11 @@ def test_forearm_front_wall_holes_only_where_a_drive_runs(built, params, documen
 def test_forearm_width_is_the_built_blocks_breadth(built, params, document):
     """``forearm_layout.forearm_width`` is the built module's breadth (its bounding box across the
     forearm, read from the solid), and its limit is 80 mm at the paper's 189 mm hand length."""
-    from phantom_cad.kinematics import forearm_layout
+    from phantom_cad.kinematics import forearm_layout, servo_geometry
 
     box = built["forearm"].shape.bounding_box()
     assert box.max.X - box.min.X == pytest.approx(forearm_layout.forearm_width(params) * 1e3, abs=1e-6)
-    assert forearm_layout.forearm_width_limit(params) * 1e3 == pytest.approx(
+    assert servo_geometry.forearm_width_limit(params) * 1e3 == pytest.approx(
         80.0 * document["hand"]["hand_length_mm"] / 189.0, abs=1e-9)
 
 

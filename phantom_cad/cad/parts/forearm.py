@@ -8,7 +8,7 @@ back into its own. Why the servos are here and not in the palm: docs/parts.md.
   thumb flexion, the pinky ulnar): the tendon servos' shafts dorsal, each turned about its shaft
   so that its drive leaves the pulley straight toward its finger's socket (the thumb's toward its
   turn onto the CMC axis); servo 6's shaft parallel to the CMC axis, its pulley in the CMC
-  pulley's plane (``forearm_layout.coplanar_servo``); pockets and ear slots open along the shafts (the
+  pulley's plane (``servo_geometry.coplanar_servo``); pockets and ear slots open along the shafts (the
   servos drop in, then their pulleys go on; in two rows servo 6's pocket and cavity open straight up,
   ``forearm_layout.drops_straight``), pulley cavities, M2 pilot holes under the flange ears;
 * each drive's channel (the loop's two) from its pulley through the front wall, on to the palm,

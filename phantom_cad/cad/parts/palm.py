@@ -8,7 +8,7 @@ y distal, z dorsal. Built from:
   the finger column's y), each with two magnet pockets facing the finger base's pockets
   and the tendon exit at the palm's tendon height;
 * the metacarpal block: from its back face (the wrist crease, or the thenar's back,
-  ``forearm_layout.palm_back``) to the sockets, across the four fingers (the servos sit in the forearm
+  ``servo_geometry.palm_back``) to the sockets, across the four fingers (the servos sit in the forearm
   module behind it, ``forearm.py``);
 * the thenar block, radial of the metacarpal block: the journal that holds the CMC base's column
   (from the palmar face up along the CMC axis), the cavity of the CMC pulley on that column with
@@ -37,6 +37,7 @@ from ... import units
 from ...kinematics import couplers
 from ...kinematics import forearm_layout as FL
 from ...kinematics import frames as F
+from ...kinematics import servo_geometry as SG
 from ...kinematics import thenar as TH
 from ...kinematics.hand_params import HandParams
 from ...kinematics.topology import FINGERS, LINKS, chain
@@ -121,7 +122,7 @@ class Palm(ServoMount, Part):
         the finger drives' channels (``forearm_layout.metacarpal_x``), from the palm's back face to behind
         the socket faces."""
         x0, x1 = (mm(v) for v in FL.metacarpal_x(self.params))
-        return x0, x1, mm(FL.palm_back(self.params)), self.slab_front()
+        return x0, x1, mm(SG.palm_back(self.params)), self.slab_front()
 
     def heel(self) -> tuple[np.ndarray, np.ndarray] | None:
         """(lo, hi) palm frame (mm) of the heel, under the metacarpal block from its back face, or None
@@ -133,7 +134,7 @@ class Palm(ServoMount, Part):
                 np.array([x1, y0 + self.heel_length, -self.thickness / 2.0]))
 
     def _placed_box(self, T, lo, hi) -> np.ndarray:
-        return FL.box_corners(lo, hi) @ T[:3, :3].T + T[:3, 3]
+        return SG.box_corners(lo, hi) @ T[:3, :3].T + T[:3, 3]
 
     def thenar_block(self) -> tuple[np.ndarray, np.ndarray]:
         """(lo, hi) palm frame (mm) of the thenar block: the bounding box of the journal's and the
@@ -192,13 +193,13 @@ class Palm(ServoMount, Part):
         # it) out of the palm
         phi = FL.cmc_loop_direction(self.params) + math.pi
         tools = [journal, cavity, swept(np.array([math.cos(phi), math.sin(phi), 0.0]), 4.0 * R + 60.0)]
-        # the back: the cavity reaches the palm's back face (forearm_layout.palm_back is its back), so it
+        # the back: the cavity reaches the palm's back face (servo_geometry.palm_back is its back), so it
         # is swept on out through that face, in the pulley's plane (a cylinder tangent to the face,
         # or one sampled a hair inside it, left a skin of 0 to 0.55 mm)
         back = self.back_sweep()
         if back is not None:
             v, n = back
-            depth = ((T0 @ np.array([0.0, 0.0, q, 1.0]))[1] - mm(FL.palm_back(self.params)) + 2.0 * (R + h)) / n
+            depth = ((T0 @ np.array([0.0, 0.0, q, 1.0]))[1] - mm(SG.palm_back(self.params)) + 2.0 * (R + h)) / n
             tools.append(swept(v, depth))
         return tools
 
@@ -233,7 +234,7 @@ class Palm(ServoMount, Part):
         r = self.tol.tendon_hole / 2.0
         p0, p1 = path[:2]
         Ti = np.linalg.inv(T0)
-        y_back = mm(FL.palm_back(self.params))
+        y_back = mm(SG.palm_back(self.params))
         ss = np.linspace(0.0, 1.0, 401)
         thin = []
         for s in ss:

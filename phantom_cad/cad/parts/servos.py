@@ -12,6 +12,7 @@ import numpy as np
 
 from ...kinematics import forearm_layout as FL
 from ...kinematics import frames as F
+from ...kinematics import servo_geometry as SG
 from ...kinematics.dimensions import FLANK, servo_screw_offset
 from ...kinematics.topology import SERVOS
 from .common import mm
@@ -43,7 +44,7 @@ class ServoMount:
         return self.pulley_radius(servo) + mm(F.pulley_cavity_margin(self.params))
 
     def _box(self, what: str, grow: float):
-        lo, hi = FL.servo_boxes(self.params)[what]
+        lo, hi = SG.servo_boxes(self.params)[what]
         return np.array([mm(v) for v in lo]) - grow, np.array([mm(v) for v in hi]) + grow
 
     def body_box(self, servo: int, grow: float = 0.0):

@@ -1,8 +1,8 @@
 """The wrist joint between the palm and the forearm module (numpy only, palm frame, mm).
 
 The palm ends at its back face (the wrist crease, or the back of the thenar where the CMC's
-column sits further back, ``forearm_layout.palm_back``); the forearm module's front face stands a
-clearance behind it (``forearm_layout.forearm_front``). A tab of the module lies on the palm's dorsal face
+column sits further back, ``servo_geometry.palm_back``); the forearm module's front face stands a
+clearance behind it (``servo_geometry.forearm_front``). A tab of the module lies on the palm's dorsal face
 there and two M2 screws hold it: the palm drills their pilots, the module their clearance holes.
 Both parts read this one description.
 """
@@ -17,6 +17,7 @@ from ...kinematics import forearm_layout as FL
 from ...kinematics import frames as F
 from ...kinematics import routing
 from ...kinematics import routing_paths
+from ...kinematics import servo_geometry as SG
 from ...kinematics.hand_params import HandParams
 from ...kinematics.topology import THUMB_CHAIN
 from .common import mm
@@ -34,11 +35,11 @@ def socket_x(params: HandParams) -> tuple[float, float]:
 
 def forearm_block(params: HandParams) -> tuple[float, float, float, float, float, float]:
     """x0, x1, y0, y1, z0, z1 (palm frame, mm) of the forearm module's block: one palm wall around
-    every one of its servos' envelopes (``forearm_layout.servo_envelope``), its front face
-    ``forearm_layout.forearm_front``, its top a wall above the palm's dorsal face (flush with the tab)."""
+    every one of its servos' envelopes (``servo_geometry.servo_envelope``), its front face
+    ``servo_geometry.forearm_front``, its top a wall above the palm's dorsal face (flush with the tab)."""
     w = mm(params.palm.wall)
     pts = units.mm(FL.forearm_points(params))
-    return (pts[:, 0].min() - w, pts[:, 0].max() + w, pts[:, 1].min() - w, mm(FL.forearm_front(params)),
+    return (pts[:, 0].min() - w, pts[:, 0].max() + w, pts[:, 1].min() - w, mm(SG.forearm_front(params)),
             pts[:, 2].min() - w, mm(params.palm.thickness) / 2.0 + w)
 
 
@@ -49,15 +50,15 @@ def tab(params: HandParams) -> tuple[np.ndarray, np.ndarray]:
     forearm_x = forearm_block(params)[:2]
     px0, px1 = socket_x(params)
     top = mm(params.palm.thickness) / 2.0
-    return (np.array([max(forearm_x[0], px0), mm(FL.forearm_front(params)), top]),
-            np.array([min(forearm_x[1], px1), mm(FL.palm_back(params)) + TAB_LENGTH, top + mm(params.palm.wall)]))
+    return (np.array([max(forearm_x[0], px0), mm(SG.forearm_front(params)), top]),
+            np.array([min(forearm_x[1], px1), mm(SG.palm_back(params)) + TAB_LENGTH, top + mm(params.palm.wall)]))
 
 
 def tab_screws(params: HandParams) -> list[np.ndarray]:
     """Centres of the tab's two screws on the palm's dorsal face, half a tab length in from its
     ends, halfway along its length over the palm."""
     lo, hi = tab(params)
-    y = (mm(FL.palm_back(params)) + hi[1]) / 2.0
+    y = (mm(SG.palm_back(params)) + hi[1]) / 2.0
     inset = TAB_LENGTH / 2.0
     return [np.array([lo[0] + inset, y, lo[2]]), np.array([hi[0] - inset, y, lo[2]])]
 
