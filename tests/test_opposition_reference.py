@@ -180,13 +180,13 @@ def test_the_search_margin_is_the_reference_bit_for_bit(hand, grids, monkeypatch
     file = np.array([*p.palm.thumb_cmc_offset, *p.palm.thumb_cmc_axis])
     rng = np.random.default_rng(15)
     near = file + rng.normal(scale=[2e-3] * 3 + [0.05] * 3, size=(20, 6))
-    every, pairs = [0], TP._pairs         # the name the margin calls
+    every, pairs = [0], TP.pad_pairs         # the name the margin calls
 
     def counted(*args):
         every[0] += 1
         return pairs(*args)
 
-    monkeypatch.setattr(TP, "_pairs", counted)
+    monkeypatch.setattr(TP, "pad_pairs", counted)
     contact = 0
     for x in [*_placements(hand, 40, 2), *near]:
         m = TP.margin(thumb, fingers, x)

@@ -17,7 +17,7 @@ from .frames import (T_palm_socket, T_palm_thumb_cmc_base, servo_radius, socket_
                      wrist_y)
 from .hand_params import HandParams
 from .memo import memoised
-from .servo_geometry import (_drive_clearances, _drive_runs, _points, _width, aimed_servo, coplanar_servo,
+from .servo_geometry import (drive_clearances_of, drive_runs_of, envelope_points, envelope_width, aimed_servo, coplanar_servo,
                              forearm_front, forearm_pitch, forearm_top, palm_back, servo_boxes, servo_envelope,
                              servo_gaps, servo_target, spaced)
 from .thenar import T_cmc_base_pulley, thenar
@@ -132,7 +132,7 @@ def drive_runs(params: HandParams) -> list[tuple[int, float, np.ndarray, np.ndar
     where it leaves its pulley (servo frame (side r, 0, 0): a tendon servo's drive at -x, the CMC
     loop's strands at -x and +x), the end where it crosses the module's front face
     (:func:`forearm_front`) along the servo's y (m, palm frame, right hand)."""
-    return _drive_runs(params, forearm_servos(params))
+    return drive_runs_of(params, forearm_servos(params))
 
 
 def drive_clearances(params: HandParams) -> dict[tuple[int, float, int], float]:
@@ -142,7 +142,7 @@ def drive_clearances(params: HandParams) -> dict[tuple[int, float, int], float]:
     cavity margin, a pulley width and two hole clearances tall), keyed (servo, side, other servo).
     A point's distance to each of the three is convex along the run: each one's least value by
     shrinking brackets (:func:`.servo_geometry._convex_min`), the least of the three."""
-    return _drive_clearances(params, forearm_servos(params))
+    return drive_clearances_of(params, forearm_servos(params))
 
 
 def heel_box(params: HandParams) -> tuple[np.ndarray, np.ndarray] | None:
@@ -188,13 +188,13 @@ def heel_gap(params: HandParams) -> float:
 def forearm_points(params: HandParams) -> np.ndarray:
     """Every servo's envelope (:func:`servo_envelope`) placed in the forearm module (m, palm frame,
     right hand), stacked (n, 3): the module's block is one palm wall around them."""
-    return _points(params, forearm_servos(params))
+    return envelope_points(params, forearm_servos(params))
 
 
 def forearm_width(params: HandParams) -> float:
     """The forearm module's width (m, across the forearm, palm x): its servos' envelopes
     (:func:`forearm_points`) across and a palm wall each side (``cad.parts.wrist.forearm_block``)."""
-    return _width(params, forearm_servos(params))
+    return envelope_width(params, forearm_servos(params))
 
 
 def pilot_headroom(params: HandParams) -> tuple[float, int]:

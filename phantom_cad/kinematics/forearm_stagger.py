@@ -12,7 +12,7 @@ import numpy as np
 from .frames import T_palm_thumb_cmc_base, servo_radius, tendon_relief
 from .hand_params import HandParams
 from .memo import memoised
-from .servo_geometry import (_drive_clearances, _width, aimed_servo, coplanar_servo, forearm_front, forearm_top,
+from .servo_geometry import (drive_clearances_of, envelope_width, aimed_servo, coplanar_servo, forearm_front, forearm_top,
                              forearm_width_limit, servo_envelope, servo_target)
 from .topology import SERVOS
 
@@ -163,7 +163,7 @@ def _staggered_servos(params: HandParams) -> dict[int, np.ndarray]:
     z = {k: float(targets[k][2]) for k in rear_ids}
 
     def clears(k: int, T: np.ndarray, others: dict[int, np.ndarray]) -> float:
-        return min(_drive_clearances(params, {**others, k: T}, only=k).values())
+        return min(drive_clearances_of(params, {**others, k: T}, only=k).values())
 
     def pack(yr: float, x_first: float | None) -> dict[int, np.ndarray]:
         rear: dict[int, np.ndarray] = {}
@@ -215,4 +215,4 @@ def two_rows(params: HandParams) -> bool:
     """Whether two staggered rows (:func:`staggered_servos`) fit within a human forearm: their
     width, measured as :func:`.forearm_layout.forearm_width` measures the module's, at most
     :func:`forearm_width_limit` (from about 182 mm of hand length: the servo does not scale)."""
-    return _width(params, staggered_servos(params)) <= forearm_width_limit(params)
+    return envelope_width(params, staggered_servos(params)) <= forearm_width_limit(params)

@@ -64,14 +64,14 @@ class Tips:
 
     @cached_property
     def axis(self) -> tuple:
-        """The capsule's segment for :func:`_closest`: its start a and direction b - a as (x, y, z)
+        """The capsule's segment for :func:`segment_closest`: its start a and direction b - a as (x, y, z)
         components (n,) each, and the direction's squared length (n,)."""
         d = self.b - self.a
         d = (d[:, 0], d[:, 1], d[:, 2])
-        return _xyz(self.a), d, _dot(d, d)
+        return xyz(self.a), d, _dot(d, d)
 
 
-def _xyz(p: np.ndarray) -> tuple:
+def xyz(p: np.ndarray) -> tuple:
     """The (x, y, z) components of points p (..., 3)."""
     return p[..., 0], p[..., 1], p[..., 2]
 
@@ -82,7 +82,7 @@ def _dot(u, v):
     return (u[0] * v[0] + u[2] * v[2]) + u[1] * v[1]
 
 
-def _norm(u):
+def norm3(u):
     """|u| of vectors given as (x, y, z) components, summed in np.linalg.norm's order."""
     return np.sqrt((u[0] * u[0] + u[1] * u[1]) + u[2] * u[2])
 
@@ -231,13 +231,13 @@ def tip_gaps(hand, u) -> np.ndarray:
 
 def segment_distance(p1, q1, p2, q2):
     """Closest points of segments p1-q1 and p2-q2 (broadcast over leading axes): returns
-    (distance, point on the first, point on the second) (:func:`_closest`)."""
-    d1, d2 = _xyz(q1 - p1), _xyz(q2 - p2)
-    c1, c2 = _closest(_xyz(p1), d1, _dot(d1, d1), _xyz(p2), d2, _dot(d2, d2))
-    return _norm(tuple(u - v for u, v in zip(c1, c2))), np.stack(c1, axis=-1), np.stack(c2, axis=-1)
+    (distance, point on the first, point on the second) (:func:`segment_closest`)."""
+    d1, d2 = xyz(q1 - p1), xyz(q2 - p2)
+    c1, c2 = segment_closest(xyz(p1), d1, _dot(d1, d1), xyz(p2), d2, _dot(d2, d2))
+    return norm3(tuple(u - v for u, v in zip(c1, c2))), np.stack(c1, axis=-1), np.stack(c2, axis=-1)
 
 
-def _closest(p1, d1, a, p2, d2, e):
+def segment_closest(p1, d1, a, p2, d2, e):
     """Closest points of segments p1 + s d1 and p2 + t d2 (s, t in [0, 1]) given as (x, y, z)
     components that broadcast, with a = d1 . d1 and e = d2 . d2: returns the points on the first and
     on the second, as components. Ericson, Real-Time Collision Detection, 5.1.9, with its
@@ -264,20 +264,20 @@ def _closest(p1, d1, a, p2, d2, e):
     return tuple(p + s * d for p, d in zip(p1, d1)), tuple(p + t * d for p, d in zip(p2, d2))
 
 
-def _pairs(thumb: Tips, finger: Tips):
+def pad_pairs(thumb: Tips, finger: Tips):
     """Every (thumb command, finger command) pair of capsules, (n_thumb, n_finger) each: the gap (m;
     < 0 overlapping), the distance of the axes and the direction (unnormalised) from the thumb's
     closest point to the finger's, as components."""
     (p1, d1, a), (p2, d2, e) = thumb.axis, finger.axis
     down, across = (slice(None), None), (None, slice(None))     # the thumb's commands down, the finger's across
-    c1, c2 = _closest(tuple(x[down] for x in p1), tuple(x[down] for x in d1), a[down],
+    c1, c2 = segment_closest(tuple(x[down] for x in p1), tuple(x[down] for x in d1), a[down],
                       tuple(x[across] for x in p2), tuple(x[across] for x in d2), e[across])
     v = tuple(y - x for x, y in zip(c1, c2))
-    dist = _norm(v)
+    dist = norm3(v)
     return dist - thumb.radius - finger.radius, dist, v
 
 
-def _facing(v, dist, n1, n2, oppose=None):
+def facing_angle(v, dist, n1, n2, oppose=None):
     """The facing angle (rad) of contact directions v (components, length dist) against the pads'
     normals n1 (the thumb's) and n2 (the finger's), as components: the larger of the two angles; pi
     where the axes meet (dist 0). With ``oppose`` (rad), also the angle between n1 and -n2 less
@@ -297,10 +297,10 @@ def contacts(thumb: Tips, finger: Tips, oppose=None):
     """(gap, angle) over every (thumb command, finger command) pair, shape (n_thumb, n_finger):
     the capsules' gap (m; < 0 overlapping) and the *facing angle* (rad), the larger of the angles
     between the contact direction and the two pads' normals (pi where the axes meet); with
-    ``oppose``, the pads' normals held within it of facing each other too (:func:`_facing`)."""
-    gap, dist, v = _pairs(thumb, finger)
-    n1, n2 = _xyz(thumb.normal[:, None]), _xyz(finger.normal[None, :])
-    return gap, _facing(v, dist, n1, n2, oppose)
+    ``oppose``, the pads' normals held within it of facing each other too (:func:`facing_angle`)."""
+    gap, dist, v = pad_pairs(thumb, finger)
+    n1, n2 = xyz(thumb.normal[:, None]), xyz(finger.normal[None, :])
+    return gap, facing_angle(v, dist, n1, n2, oppose)
 
 
 @dataclass(frozen=True)

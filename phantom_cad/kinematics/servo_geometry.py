@@ -126,7 +126,7 @@ def spaced(want, pitch) -> list[float]:
     return [zk + float(c[k]) for k, zk in enumerate(z)]
 
 
-def _drive_runs(params: HandParams, servos: dict[int, np.ndarray]) -> list[tuple[int, float, np.ndarray, np.ndarray]]:
+def drive_runs_of(params: HandParams, servos: dict[int, np.ndarray]) -> list[tuple[int, float, np.ndarray, np.ndarray]]:
     out = []
     y1 = forearm_front(params)
     for k, T in sorted(servos.items()):
@@ -152,13 +152,13 @@ def _convex_min(f, rounds: int = 5, n: int = 33) -> float:
     return best
 
 
-def _drive_clearances(params: HandParams, servos: dict[int, np.ndarray],
+def drive_clearances_of(params: HandParams, servos: dict[int, np.ndarray],
                       only: int | None = None) -> dict[tuple[int, float, int], float]:
     c = params.print.hole_clearance
     h = params.cad.servo_pulley_width / 2.0 + c
     boxes = [(lo - c, hi + c) for lo, hi in servo_boxes(params).values()]
     out = {}
-    for k, side, p0, p1 in _drive_runs(params, servos):
+    for k, side, p0, p1 in drive_runs_of(params, servos):
         if only is not None and k != only:
             continue
         for j, T in sorted(servos.items()):
@@ -271,7 +271,7 @@ FOREARM_BREADTH = 0.080
 REFERENCE_HAND_LENGTH = 0.189
 
 
-def _points(params: HandParams, servos: dict[int, np.ndarray]) -> np.ndarray:
+def envelope_points(params: HandParams, servos: dict[int, np.ndarray]) -> np.ndarray:
     pts = []
     for k, T in servos.items():
         env = servo_envelope(params, k)
@@ -279,8 +279,8 @@ def _points(params: HandParams, servos: dict[int, np.ndarray]) -> np.ndarray:
     return np.vstack(pts)
 
 
-def _width(params: HandParams, servos: dict[int, np.ndarray]) -> float:
-    x = _points(params, servos)[:, 0]
+def envelope_width(params: HandParams, servos: dict[int, np.ndarray]) -> float:
+    x = envelope_points(params, servos)[:, 0]
     return float(x.max() - x.min()) + 2.0 * params.palm.wall
 
 

@@ -26,7 +26,7 @@ from . import forearm_layout as FL
 from . import frames as F
 from . import thenar as TH
 from .hand_params import HandParams
-from .opposition import (CONTACT_BAND, OPPOSED, PAD_CONE, ThumbTips, Tips, _closest, _facing, _norm, _pairs, _xyz,
+from .opposition import (CONTACT_BAND, OPPOSED, PAD_CONE, ThumbTips, Tips, segment_closest, facing_angle, norm3, pad_pairs, xyz,
                          finger_tips, reach, thumb_tips)
 from .topology import FINGERS
 
@@ -188,7 +188,7 @@ class _Opposed:
 def _sphere(t: Tips):
     """Each capsule segment's midpoint (x, y, z) and half length: the segment lies within the half
     length of the midpoint."""
-    return _xyz((t.a + t.b) / 2.0), np.sqrt(t.axis[2]) / 2.0
+    return xyz((t.a + t.b) / 2.0), np.sqrt(t.axis[2]) / 2.0
 
 
 def _opposed(fingers: dict[str, Tips]) -> _Opposed:
@@ -210,7 +210,7 @@ def _margin(thumb: ThumbTips, opposed: _Opposed, T0: np.ndarray, oppose=None) ->
     fo = opposed
     centre, half = _sphere(tt)
     # the fingers' rows down, the thumb's commands across: np.nonzero lists each finger's pairs in a run
-    mid = _norm(tuple(y[:, None] - x[None, :] for x, y in zip(centre, fo.centre)))
+    mid = norm3(tuple(y[:, None] - x[None, :] for x, y in zip(centre, fo.centre)))
     r = tt.radius + fo.radius
     upper = np.minimum.reduceat(mid.min(axis=1) - r, fo.start[:-1])
     cut = np.maximum(upper, 0.0) + 2.0 * _CLEAR                       # per finger
@@ -218,14 +218,14 @@ def _margin(thumb: ThumbTips, opposed: _Opposed, T0: np.ndarray, oppose=None) ->
     lower -= (fo.half + r)[:, None]
     j, i = np.nonzero(lower <= np.repeat(cut, np.diff(fo.start))[:, None])
     (p1, d1, a), (p2, d2, e) = tt.axis, fo.tips.axis
-    c1, c2 = _closest(tuple(x[i] for x in p1), tuple(x[i] for x in d1), a[i],
+    c1, c2 = segment_closest(tuple(x[i] for x in p1), tuple(x[i] for x in d1), a[i],
                       tuple(x[j] for x in p2), tuple(x[j] for x in d2), e[j])
     v = tuple(y - x for x, y in zip(c1, c2))
-    dist = _norm(v)
+    dist = norm3(v)
     gap = dist - tt.radius - fo.radius[j]
     # the facing angle of the pairs in contact only
     k = np.flatnonzero((gap <= 0.0) & (gap >= -CONTACT_BAND))
-    angle = _facing(tuple(x[k] for x in v), dist[k], _xyz(tt.normal[i[k]]), _xyz(fo.tips.normal[j[k]]), oppose)
+    angle = facing_angle(tuple(x[k] for x in v), dist[k], xyz(tt.normal[i[k]]), xyz(fo.tips.normal[j[k]]), oppose)
     run, band = np.searchsorted(j, fo.start), np.searchsorted(j[k], fo.start)
     worst = math.inf
     for n, f in enumerate(OPPOSED):
@@ -235,7 +235,7 @@ def _margin(thumb: ThumbTips, opposed: _Opposed, T0: np.ndarray, oppose=None) ->
             g = gap[run[n]:run[n + 1]]
             miss = float(np.min(np.where(g > 0.0, g, -CONTACT_BAND - g))) if len(g) else math.inf
             if not miss <= cut[n] - _CLEAR:         # a pair left out may be nearer: every pair
-                g = _pairs(tt, fo.fingers[f])[0]
+                g = pad_pairs(tt, fo.fingers[f])[0]
                 miss = float(np.min(np.where(g > 0.0, g, -CONTACT_BAND - g)))
             m = -(math.pi - PAD_CONE) - miss / (tt.radius + fo.fingers[f].radius)
         worst = min(worst, m)

@@ -312,7 +312,7 @@ def test_the_staggered_rows_drives_clear_every_servo_and_each_other(document):
     S = FS.staggered_servos(p)
     hole = document["hardware"]["tendon_diameter_mm"] + 2 * document["print"]["hole_clearance_mm"]
     wall = document["palm"]["wall_mm"]
-    runs = SG._drive_runs(p, S)
+    runs = SG.drive_runs_of(p, S)
     for k, side, a, b in runs:
         for j, T in S.items():
             if j != k:
