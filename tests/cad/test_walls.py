@@ -106,6 +106,35 @@ def test_a_sized_pinky_bases_return_channel_keeps_two_perimeters(sized_file):
     assert (top, p0[2], d) == pytest.approx((6.25, 4.5, 1.9))
 
 
+@pytest.mark.slow
+def test_a_sized_pinky_bases_flexion_stop_leaves_no_fin(sized_file):
+    """The 160 x 72 mm hand's pinky base: the MCP guide eyelet's near relief (1 mm radius) grazes
+    the palmar face (y = -T / 2 = -6.25 mm) under the MCP flexion stop's wedge, its roof 0.1 mm above
+    the face at the clevis slot's back wall (y = -6.45) and lower on as it runs distally. Rays
+    straight up the middle (x = 0, every 0.02 mm from the back wall on) first meet that roof, never
+    the palmar face, until past the wedge's edge only the empty slot is left: no fin stands between
+    the relief's end and the wedge's slope. ``export.walls`` (trimesh rays) finds no wall under
+    two perimeters on the part."""
+    from phantom_cad.cad.parts.finger_base import FingerBase
+    from phantom_cad.export.step_stl import tessellate
+    from phantom_cad.params.io import load_params
+
+    params = load_params(sized_file[0])
+    part = FingerBase(params, "pinky")
+    face = -part.sec.thickness / 2.0
+    v, f = tessellate(part.build(), 0.02)[:2]
+    mesh = trimesh.Trimesh(v, f, process=False)
+    ys = np.arange(-6.40, -3.99, 0.02)
+    origins = np.column_stack([np.zeros_like(ys), ys, np.full_like(ys, face - 1.0)])
+    hits, ray, _ = mesh.ray.intersects_location(origins, np.tile([0.0, 0.0, 1.0], (len(ys), 1)), multiple_hits=True)
+    first = np.array([hits[ray == i, 2].min() - face if np.any(ray == i) else np.nan for i in range(len(ys))])
+    under = ~np.isnan(first)
+    assert under[0] and not under[-1] and np.all(np.diff(under.astype(int)) <= 0)   # the wedge, then the slot
+    assert first[0] == pytest.approx(0.10, abs=0.01)
+    assert np.all(first[under] > 0.02)
+    assert part_walls({"pinky": (v, f)}, params)["pinky"]["wall_thinnest"] >= wall_bar_mm(params)
+
+
 def test_a_wedge_is_an_edge_not_a_wall():
     """A 40 deg wedge: thin near its apex (2 x tan 20 deg x the distance from it), but its faces
     are 40 deg off parallel, more than WALL_DEG: an edge, no wall under 0.8 mm."""

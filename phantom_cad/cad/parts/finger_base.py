@@ -21,7 +21,7 @@ from ...kinematics.topology import FINGERS, digit_links
 from ..measure import circular_pockets, eyelet_centres, point_line_distance
 from .base import MAGNET_DOWN, Part, child_joint
 from .common import DigitSection, box, build, cylinder, mm
-from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, hub_grooves
+from .phalanx import clevis, eyelet, hub_grooves, near_relief, stop_wedge
 from .drive_fans import clear_of_fans, drive_fan_tools, guide_entry
 from .tendons import RoutedPart, link_tendons, anchor_tools, channel_tools
 
@@ -98,8 +98,9 @@ class FingerBase(RoutedPart, Part):
         start = float(np.linalg.norm(s_near - np.array([0.0, *G1])))
         # the MCP stop's wedge, left standing in the clevis slot, ends in an edge on the palmar face
         # over the drive's fan: it stands only where it lies a flank clear of the fan
-        b, tools = clevis(sec, self.joint, 0.0, lt.hubs().get(child_joint(self.link).name),
-                          lambda poly: clear_of_fans(lt, sec, start, poly))
+        def stop_clear(poly):
+            return clear_of_fans(lt, sec, start, poly)
+        b, tools = clevis(sec, self.joint, 0.0, lt.hubs().get(child_joint(self.link).name), stop_clear)
         body += b + b3
         tools += hub_grooves(sec, lt)
         # the drive's run from the magnet face toward G1 (routing), a clearance hole that ends inside
@@ -109,9 +110,9 @@ class FingerBase(RoutedPart, Part):
         u_in = (end - self.tendon_entry) / np.linalg.norm(end - self.tendon_entry)
         guide.append(cylinder(self.tendon_entry - u_in, end, t.tendon_hole / 2.0))
         guide += drive_fan_tools(lt, sec, start)
-        # the near relief leaves through the clevis slot's back wall along the chord at rest: opened
-        # along it, a relief wide, it leaves square (as a sphere it left a 0.7 mm rim at 28 deg)
-        guide.append(cylinder(s_near, s_near + NEAR_RELIEF_RUN * u, t.tendon_relief / 2.0))
+        # the near relief leaves through the clevis slot's back wall along the chord at rest, past the
+        # flexion stop's wedge
+        guide.append(near_relief(sec, s_near, u, stop_wedge(sec, self.joint, 0.0, stop_clear)))
         # magnet pockets, opening on the magnet face
         for c in self.magnet_centres():
             tools.append(cylinder(c - np.array([0.0, 1.0, 0.0]),

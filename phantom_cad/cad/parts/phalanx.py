@@ -115,18 +115,42 @@ def clevis(sec: DigitSection, joint: str, y: float, hub_x: float | None = None, 
         half = W / 2.0 + 1.0
         quadrant = box(-half, half, y - sec.slot_back - recess, y, -T, 0.0)
         slot = slot.fuse(quadrant.cut(cyl_x(rb, -half - 1.0, half + 1.0, y, 0.0)))
-    poly = sec.stop_polygon(sec.q_stop[joint])
+    poly = stop_wedge(sec, joint, y, stop_clear)
     if poly is not None:   # keep the flexion-stop wedge: the slot tool leaves it standing
-        poly = [(py + y, pz) for py, pz in (poly if stop_clear is None else stop_clear(poly))]
         slot = slot.cut(prism_x(poly, -half - 0.5, half + 0.5))
     tools = [slot, cyl_x(t.axle_press / 2.0, -W / 2.0 - 1.0, W / 2.0 + 1.0, y, 0.0)]
     return body, tools
 
 
-#: how far (mm) a G1 eyelet's near relief runs on along the chord at rest (into the clevis slot:
-#: as a sphere it left a 0.7 mm rim at 28 deg on the finger bases, 0.47 mm on the 170 mm hand's
-#: thumb CMC base)
+def stop_wedge(sec: DigitSection, joint: str, y: float, stop_clear=None) -> list[tuple[float, float]] | None:
+    """The (y, z) outline, link frame, of the flexion stop that :func:`clevis` (its axis at ``y``)
+    leaves standing in its slot (``stop_clear`` as there), or None where there is none."""
+    poly = sec.stop_polygon(sec.q_stop[joint])
+    if poly is None:
+        return None
+    return [(py + y, pz) for py, pz in (poly if stop_clear is None else stop_clear(poly))]
+
+
+#: how far (mm) a G1 eyelet's near relief runs on along the chord at rest at least (into the clevis
+#: slot: as a sphere it left a 0.7 mm rim at 28 deg on the finger bases, 0.47 mm on the 170 mm
+#: hand's thumb CMC base)
 NEAR_RELIEF_RUN = 2.0
+
+
+def near_relief(sec: DigitSection, s_near, u, wedge):
+    """The tool that opens a G1 eyelet's near relief sphere (centre ``s_near``) along the chord at
+    rest (``u``, toward G2), a relief wide: :data:`NEAR_RELIEF_RUN`, and on until its end lies wholly
+    a clearance in front of the flexion stop (``wedge``: :func:`stop_wedge`, or None). Where the
+    relief grazes the palmar face, an end under the wedge left a fin between it and the wedge's
+    slope; in front of the wedge the slot is empty, so the longer run cuts nothing else."""
+    t = sec.tol
+    rr = t.tendon_relief / 2.0
+    run = NEAR_RELIEF_RUN
+    if wedge is not None and u[1] > 0.0:
+        edge = max(py for py, _ in wedge)       # the wedge's foremost point: its edge on the palmar face
+        # the end's disc reaches rr |u_z| behind its centre
+        run = max(run, (edge + t.clearance + rr * abs(u[2]) - s_near[1]) / u[1])
+    return cylinder(s_near, s_near + run * u, rr)
 
 
 def _eyelet_axis(sec: DigitSection, centre_yz, toward_yz):

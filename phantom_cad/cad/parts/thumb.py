@@ -30,7 +30,7 @@ from ...kinematics.topology import CMC_Q, JOINTS, link
 from ..measure import eyelet_centres, point_line_distance
 from .base import PALMAR_DOWN, Part, child_joint
 from .common import DigitSection, box, build, cylinder, cylinder_floor, mm, prism_x, sphere, transform
-from .phalanx import NEAR_RELIEF_RUN, clevis, eyelet, eyelet_boss_axis, hub_grooves
+from .phalanx import clevis, eyelet, eyelet_boss_axis, hub_grooves, near_relief, stop_wedge
 from .drive_fans import drive_fan_tools, guide_entry
 from .tendons import RoutedPart, link_tendons, anchor_tools, channel_tools
 
@@ -185,9 +185,9 @@ class ThumbCMCBase(RoutedPart, Part):
         G = np.array([0.0, *G1])
         side_body = b + b3
         guide += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - G)))
-        # the near relief leaves through the clevis slot's back along the chord at rest, as on the
-        # finger bases
-        guide.append(cylinder(s_near, s_near + NEAR_RELIEF_RUN * u, t.tendon_relief / 2.0))
+        # the near relief leaves through the clevis slot's back along the chord at rest, past the
+        # flexion stop's wedge, as on the finger bases
+        guide.append(near_relief(sec, s_near, u, stop_wedge(sec, self.joint, L)))
         # the tendon comes down the CMC axis (through the hub's central bore, from the palm's
         # arch above) and turns along the arm to the eyelet: CMC rotation leaves its length alone.
         # The turn is rounded by a sphere one tendon radius wider than the bore (a sphere as wide
