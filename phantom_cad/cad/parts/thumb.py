@@ -187,10 +187,9 @@ class ThumbCMCBase(RoutedPart, Part):
         guide += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - G)))
         # the near relief leaves through the clevis slot's back along the chord at rest, past the
         # flexion stop's wedge, as on the finger bases. Its run has the near sphere's radius and
-        # starts at its centre, so the two touch along a great circle: in one boolean with the
-        # sphere the cut can leave the sphere's back half standing (where the sphere dips 0.03 mm
-        # through the palmar face, on a 205 x 95 mm hand, a 40 s, 9 GB cut of two solids), so the
-        # run is cut in a boolean of its own, after the guide
+        # starts at its centre, so the two touch along a great circle; in one boolean with the
+        # sphere, where the sphere grazes the palmar face (0.03 mm through it on a 205 x 95 mm
+        # hand), the cut left the sphere's back half as a second solid: the run is cut after
         relief = [near_relief(sec, s_near, u, stop_wedge(sec, self.joint, L))]
         # the tendon comes down the CMC axis (through the hub's central bore, from the palm's
         # arch above) and turns along the arm to the eyelet: CMC rotation leaves its length alone.
