@@ -81,16 +81,18 @@ def hand_export(hand_build, shared_root, part_cache):
 #: the sized hand of the tests: `phantom-cad size --hand-length 160 --hand-breadth 72`
 SIZED_HAND = (160.0, 72.0, "sized_160")
 
+#: a large sized hand: `phantom-cad size --hand-length 205 --hand-breadth 95` (its thumb CMC
+#: base's near relief sphere dips 0.03 mm through the palmar face)
+SIZED_HAND_205 = (205.0, 95.0, "sized_205")
 
-@pytest.fixture(scope="session")
-def sized_file(shared_root):
-    """(parameter file, the command's CompletedProcess) of :data:`SIZED_HAND`:
-    ``phantom-cad size --hand-length 160 --hand-breadth 72 --name sized_160`` (the CMC placement
-    searched, the preflight rules checked) run once per test run, its file in the run's folder."""
+
+def _sized(shared_root, length: float, breadth: float, name: str):
+    """(parameter file, the command's CompletedProcess) of ``phantom-cad size --hand-length
+    LENGTH --hand-breadth BREADTH --name NAME`` (the CMC placement searched, the preflight rules
+    checked), run once per test run, its file in the run's folder."""
     import subprocess
     import sys
 
-    length, breadth, name = SIZED_HAND
     path = shared_root / f"{name}.toml"
 
     def make():
@@ -98,6 +100,18 @@ def sized_file(shared_root):
                                "--hand-breadth", str(breadth), "--name", name, "--out", str(path)],
                               capture_output=True, text=True)
     return path, shared.once(shared_root, f"size-{name}", make)
+
+
+@pytest.fixture(scope="session")
+def sized_file(shared_root):
+    """(parameter file, the command's CompletedProcess) of :data:`SIZED_HAND`, made once per run."""
+    return _sized(shared_root, *SIZED_HAND)
+
+
+@pytest.fixture(scope="session")
+def sized_file_205(shared_root):
+    """(parameter file, the command's CompletedProcess) of :data:`SIZED_HAND_205`, made once per run."""
+    return _sized(shared_root, *SIZED_HAND_205)
 
 
 @pytest.fixture(scope="session")

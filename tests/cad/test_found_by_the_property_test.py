@@ -131,3 +131,18 @@ def test_the_lowest_cmc_the_heel_rule_accepts_builds(variant):
     base_part, base = _build(p, "thumb_cmc_base")
     gap = placed(palm, rest["palm"]).distance_to(placed(base, rest["thumb_cmc_base"]))
     assert gap >= base_part.sec.tol.clearance - 1e-6
+
+
+@pytest.mark.slow
+def test_sized_205_thumb_cmc_base_is_one_solid(sized_file_205):
+    """The file ``phantom-cad size --hand-length 205 --hand-breadth 95`` writes: its thumb CMC
+    base's near relief sphere dips 0.03 mm through the palmar face, and with its run (tangent to
+    it along a great circle) in one boolean the cut left the sphere's back half standing as a
+    second solid. The part is one valid solid that measures as designed."""
+    from phantom_cad.params.io import load_params
+
+    path, proc = sized_file_205
+    assert proc.returncode == 0, proc.stderr
+    p = load_params(path)
+    pt, shape = _build(p, "thumb_cmc_base")
+    assert pt.verify(shape) == []
