@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from phantom_cad.kinematics import finger_clearance as FC
+from phantom_cad.kinematics.opposition import segment_distance
 
 
 def rot(axis: str, deg: float) -> np.ndarray:
@@ -46,11 +47,15 @@ def test_the_separating_gap_is_a_lower_bound():
 
 
 def test_segment_distance():
+    """The segment distance the boxes' edges are measured with (``opposition.segment_distance``), by
+    hand: crossing segments one apart, parallel ones offset along and across, a segment above."""
+    def dist(*q):
+        return float(segment_distance(p0, p1, *q)[0])
+
     p0, p1 = np.array([0.0, 0, 0]), np.array([1.0, 0, 0])
-    assert FC.segment_distance(p0, p1, np.array([0.5, 1, -1.0]), np.array([0.5, 1, 1.0])) == pytest.approx(1.0)
-    assert FC.segment_distance(p0, p1, np.array([3.0, 0, 4.0]), np.array([5.0, 0, 4.0])) == pytest.approx(
-        math.hypot(2.0, 4.0))
-    assert FC.segment_distance(p0, p1, np.array([0.2, 2, 0.0]), np.array([0.7, 2, 0.0])) == pytest.approx(2.0)
+    assert dist(np.array([0.5, 1, -1.0]), np.array([0.5, 1, 1.0])) == pytest.approx(1.0)
+    assert dist(np.array([3.0, 0, 4.0]), np.array([5.0, 0, 4.0])) == pytest.approx(math.hypot(2.0, 4.0))
+    assert dist(np.array([0.2, 2, 0.0]), np.array([0.7, 2, 0.0])) == pytest.approx(2.0)
 
 
 def test_the_grid_holds_the_collision_checks():

@@ -20,6 +20,7 @@ import numpy as np
 from .dimensions import slot_back
 from .hand_params import HandParams
 from .link_frames import link_transforms
+from .opposition import segment_distance
 from .topology import FINGERS, SERVOS, digit_links
 
 #: fractions of each finger servo's travel the clearance is measured at: every 5 %, which holds the
@@ -158,26 +159,8 @@ def _separated_distance(a, b) -> np.ndarray:
     # every edge of a against every edge of b
     p0, p1 = pa[:, _EDGES[:, 0]], pa[:, _EDGES[:, 1]]               # (n, 12, 3)
     q0, q1 = pb[:, _EDGES[:, 0]], pb[:, _EDGES[:, 1]]
-    d = segment_distance(p0[:, :, None], p1[:, :, None], q0[:, None], q1[:, None])
+    d = segment_distance(p0[:, :, None], p1[:, :, None], q0[:, None], q1[:, None])[0]
     return np.minimum(best, d.reshape(len(d), -1).min(axis=1))
-
-
-def segment_distance(p0, p1, q0, q1) -> np.ndarray:
-    """The least distance between segments p0-p1 and q0-q1 (arrays (..., 3), broadcast)."""
-    d1, d2, r = p1 - p0, q1 - q0, p0 - q0
-    a = np.einsum("...i,...i", d1, d1)
-    e = np.einsum("...i,...i", d2, d2)
-    f = np.einsum("...i,...i", d2, r)
-    c = np.einsum("...i,...i", d1, r)
-    b = np.einsum("...i,...i", d1, d2)
-    den = a * e - b * b
-    s = np.where(den > 1e-18 * a * e, np.clip((b * f - c * e) / np.where(den > 0, den, 1.0), 0.0, 1.0), 0.0)
-    t = (b * s + f) / e
-    # t outside [0, 1]: clamp it and solve s again
-    s = np.where(t < 0.0, np.clip(-c / a, 0.0, 1.0), np.where(t > 1.0, np.clip((b - c) / a, 0.0, 1.0), s))
-    t = np.clip(t, 0.0, 1.0)
-    gap = (p0 + s[..., None] * d1) - (q0 + t[..., None] * d2)
-    return np.linalg.norm(gap, axis=-1)
 
 
 def neighbour_clearance(params: HandParams, hand, fractions=GRID) -> tuple[float, tuple[str, str]]:
