@@ -33,8 +33,6 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 WORK = Path("/tmp/phantom_force_table")
-#: the paper's Table II (N): five trials per digit with a digital force gauge
-TABLE_II = {"thumb": 3.35, "index": 2.87, "middle": 2.51, "ring": 2.73, "pinky": 2.33}
 LABELS = {"default": "default", "left": "left", "sized_160": "160 x 72 mm", "hand_length_170": "170 mm example",
           "slender": "slender"}
 
@@ -96,6 +94,8 @@ def measure(params, folder: Path, fraction: float) -> dict:
 
 
 def main(argv: list[str]) -> None:
+    from phantom_cad.cli.force import TABLE_II
+
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("hands", nargs="*", default=["default", "sized_160", "hand_length_170"])
     ap.add_argument("--fraction", type=float, default=0.5, help="every servo at this fraction of its travel")
