@@ -12,6 +12,9 @@ from collections.abc import Mapping
 #: two perimeters of a 0.4 mm nozzle: the thinnest flank beside a tendon groove (m); the routing
 #: model (``kinematics.routing.layout``) spaces the grooves by it
 FLANK = 0.8e-3
+#: how far past its joint boss a loop hub's groove is cut through the hub's rim (m;
+#: ``cad.parts.tendons.groove_outer``)
+HUB_GROOVE_PAST_BOSS = 1.0e-3
 
 
 def digit_path(digit: str) -> tuple[str, ...]:
@@ -53,6 +56,15 @@ def magnet_pocket_offset(pocket: float, wall: float) -> float:
     in any one unit). One implementation: the finger base and the palm cut them there, the palm's
     layout rules (``kinematics.thenar.socket_pocket_gap``) keep the thenar clear of them."""
     return (pocket + wall) / 2.0
+
+
+def finger_base_thickness_ceiling(base_length: float, magnet_thickness: float, magnet_clearance: float,
+                                  wall: float) -> float:
+    """The thickest finger whose base holds, from its magnet face to the MCP axis (``base_length``):
+    the magnet pockets (the magnet's thickness and its clearance deep), a ``wall`` and the MCP loop
+    hub's groove, cut :data:`HUB_GROOVE_PAST_BOSS` past the joint boss (half the thickness). The
+    groove's rim sweeps toward the magnet face over the pockets' floor. SI units."""
+    return 2.0 * (base_length - magnet_thickness - magnet_clearance - wall - HUB_GROOVE_PAST_BOSS)
 
 
 def servo_screw_offset(body_length: float, flange_span: float) -> float:

@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import math
 
-from ..kinematics.dimensions import (FLANK, digit_field, finger_columns, printed_hole, servo_pilot_wall,
-                                     slot_back)
+from ..kinematics.dimensions import (FLANK, HUB_GROOVE_PAST_BOSS, digit_field, finger_base_thickness_ceiling,
+                                     finger_columns, printed_hole, servo_pilot_wall, slot_back)
 from ..units import DEG, MM
 from .errors import ParamError
 
@@ -187,12 +187,16 @@ def _guides(c, fingers, thumb, palm, hardware, printing, cad) -> None:
                           f"(palm.arc_offset_deg = {palm.arc_offset / DEG:g}), they need "
                           f"{need / MM:.3f} mm (half widths + hole_clearance)")
     for n, f in fingers.items():
-        # magnets, the MCP boss and a wall fit between the base's magnet face and the MCP axis
-        base_need = f.thickness / 2.0 + hardware.magnet_thickness + printing.magnet_clearance + printing.hole_clearance
-        if cad.finger_base_length < base_need - 1e-12:
+        # the magnet pockets, a wall and the MCP loop hub's groove fit between the base's magnet face
+        # and the MCP axis
+        ceiling = finger_base_thickness_ceiling(cad.finger_base_length, hardware.magnet_thickness,
+                                                printing.magnet_clearance, MIN_WALL)
+        if f.thickness > ceiling + 1e-12:
+            base_need = cad.finger_base_length + (f.thickness - ceiling) / 2.0
             raise c.error("finger_base_length_mm", cad.finger_base_length / MM,
-                          f"must be >= {base_need / MM:.3f} mm (fingers.{n}: half thickness + magnet "
-                          "thickness + magnet and joint clearances)")
+                          f"must be >= {base_need / MM:.3f} mm (fingers.{n}: the magnet pockets (magnet "
+                          f"thickness + clearance), a wall of {MIN_WALL / MM:g} mm and the MCP loop hub's groove "
+                          f"({HUB_GROOVE_PAST_BOSS / MM:g} mm past the boss, half the thickness))")
     for n, f in fingers.items():
         # the MCP clevis in the finger base: its slot (and, past 90 degrees of the module's stop,
         # its recess of half a thickness) leaves a wall before the magnet face

@@ -14,10 +14,11 @@ from typing import Callable
 
 from .. import units
 from ..errors import ParamError, UserError
-from ..kinematics.dimensions import FLANK, digit_entry, printed_hole
+from ..kinematics.dimensions import FLANK, digit_entry, finger_base_thickness_ceiling, printed_hole
 from ..kinematics.hand_params import HandParams
 from ..kinematics.topology import DIGITS, FINGERS, chain
 from ..params import DEFAULT_PARAMS, load_document, parse
+from ..params.rules import MIN_WALL
 from . import solvers as S
 from .inputs import Person, check_person, read_segments
 
@@ -134,9 +135,11 @@ def build_document(person: Person) -> dict:
         given = person.segments.get(d, {})
         ceiling, seg = S.thickness_limit(lengths[d], spec.segments, limits, spec.keys, cl)
         if d != "thumb":
-            # the finger base holds the MCP boss and the magnets between its magnet face and the MCP
-            # axis (params.rules._guides)
-            ceiling = min(ceiling, 2.0 * (cad["finger_base_length_mm"] - magnet[1] - pr["magnet_clearance_mm"] - cl))
+            # the finger base holds the magnets, a wall and the MCP loop hub's groove between its magnet
+            # face and the MCP axis (params.rules._guides)
+            ceiling = min(ceiling, units.mm(finger_base_thickness_ceiling(
+                units.m(cad["finger_base_length_mm"]), units.m(magnet[1]), units.m(pr["magnet_clearance_mm"]),
+                MIN_WALL)))
         if d == "thumb":
             # the smallest pulley outside the axle bore, the largest (in ratio) inside the joint boss
             ratio = max(r["pulley_radius_mm"].values()) / min(r["pulley_radius_mm"].values())

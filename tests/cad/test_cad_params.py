@@ -52,11 +52,21 @@ def test_cheek_too_thick_for_the_pinky_tongue(document):
 
 
 def test_finger_base_too_short_for_the_magnets(document):
-    # index: 16/2 + 3 + 0.1 + 0.2 = 11.3 mm
-    e = _fails(document, lambda d: d["cad"].__setitem__("finger_base_length_mm", 11.0))
+    # index: 3 mm magnet + 0.1 clearance, 0.8 wall, the hub groove 1 mm past the 8 mm boss: 12.9 mm
+    e = _fails(document, lambda d: d["cad"].__setitem__("finger_base_length_mm", 12.8))
     assert e.field == "cad.finger_base_length_mm"
-    assert e.rule == ("must be >= 11.300 mm (fingers.index: half thickness + magnet thickness "
-                      "+ magnet and joint clearances)")
+    assert e.rule == ("must be >= 12.900 mm (fingers.index: the magnet pockets (magnet thickness + "
+                      "clearance), a wall of 0.8 mm and the MCP loop hub's groove (1 mm past the boss, half the "
+                      "thickness))")
+
+
+def test_a_thick_finger_needs_a_longer_base(document):
+    """16.5 mm: the groove's rim (9.25 mm from the MCP axis) 0.65 mm from the pockets' floor (9.9 mm)."""
+    def thick(d):
+        d["fingers"]["middle"]["thickness_mm"] = 16.5
+    e = _fails(document, thick)
+    assert e.field == "cad.finger_base_length_mm"
+    assert e.rule.startswith("must be >= 13.150 mm (fingers.middle:")
 
 
 def test_finger_bases_too_long_collide(document):
@@ -86,9 +96,10 @@ def test_finger_bases_too_long_collide(document):
 
 def test_guide_eyelet_inside_the_boss(document):
     # a 2 mm eyelet and index 17.8 mm thick: 8.9 + 0.2 + 1 = 10.1 mm > d2 = 10 (its 18.33 mm distal
-    # still takes two 17.8 + 2 * 0.2 mm joint bosses)
+    # still takes two 17.8 + 2 * 0.2 mm joint bosses; a 14 mm base holds its magnets and hub groove)
     def edit(d):
         d["cad"]["eyelet_length_mm"] = 2.0
+        d["cad"]["finger_base_length_mm"] = 14.0
         d["fingers"]["index"]["thickness_mm"] = 17.8
     e = _fails(document, edit)
     assert (e.field, e.value) == ("fingers.index.guide.d2_mm", 10.0)

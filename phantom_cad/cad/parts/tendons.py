@@ -31,7 +31,7 @@ import numpy as np
 from ... import units
 from ...kinematics import routing
 from ...kinematics import routing_paths
-from ...kinematics.dimensions import FLANK
+from ...kinematics.dimensions import FLANK, HUB_GROOVE_PAST_BOSS
 from ...kinematics.hand_params import HandParams
 from ...kinematics.link_frames import THUMB_MP
 from ...kinematics.memo import memoised
@@ -253,7 +253,7 @@ def groove_outer(sec, g: Groove) -> float:
     the parent's cheek), or past the tongue's corners (a groove in the child's tongue: the strands
     beyond the arc belong to the parent, and sweep through the tongue's plane as the joint turns)."""
     if g.role == "hub":
-        return sec.boss_radius + 1.0
+        return sec.boss_radius + units.mm(HUB_GROOVE_PAST_BOSS)
     return math.hypot(sec.slot_back, sec.thickness / 2.0) + 1.0
 
 
