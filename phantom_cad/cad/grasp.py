@@ -2,8 +2,9 @@
 hold, with OpenCascade's distances (docs/opposition.md, docs/parts.md "Power grasp").
 
 Both grasps close a digit from rest onto something that holds still, by a bisection on the digit's
-command (``close_onto``): the solids' distance must end in (0, reach] mm (0 is touching or
-overlapping: OpenCascade cannot tell the two apart, so it is never accepted).
+command (``close_onto``): the solids' distance must end in (CONFUSION_MM, reach] mm (0 is touching or
+overlapping: OpenCascade cannot tell the two apart, and on overlapping solids its distance can come
+out a few 1e-15 mm instead of 0, so nothing at or under its confusion tolerance is accepted).
 
 **Pinch** (``solid_contact``). The kinematic model (``kinematics.opposition``) finds where the
 fingertips' capsules meet; the capsules lie inside the printed tips, so there the solids touch or
@@ -50,6 +51,9 @@ REACH_MM = 1.0
 CANDIDATES = 8
 #: bisection steps on the finger's command (2^-40 of its travel)
 STEPS = 40
+#: OpenCascade's confusion tolerance (Precision::Confusion, model units: mm): two points nearer than
+#: this are one, so a distance at or under it is a contact, not a gap
+CONFUSION_MM = 1e-7
 #: how far (mm) the power grasp's cylinder lies off the palm's palmar face: in contact, within reach
 PALM_GAP_MM = 0.5
 #: ``resting_axis_z`` stops rising when its clearance is within this of the gap (mm)
@@ -64,7 +68,7 @@ THUMB_CMC_STEPS, THUMB_FLEX_STEPS = 21, 5
 
 def close_onto(distance_at, reach_mm: float = REACH_MM):
     """Bisection on a command fraction s in [0, 1] (0 the digit at rest, 1 at the end of the move)
-    for a distance in (0, reach_mm]: ``distance_at(s)`` returns (distance mm, anything); the result
+    for a distance in (CONFUSION_MM, reach_mm]: ``distance_at(s)`` returns (distance mm, anything); the result
     is (s, that tuple) or None when the digit is already within reach at rest, never gets within
     reach at s = 1, or the bisection ends without a distance in the band."""
     first = distance_at(0.0)
@@ -79,7 +83,7 @@ def close_onto(distance_at, reach_mm: float = REACH_MM):
         r = distance_at(s)
         if r[0] > reach_mm:
             lo = s
-        elif r[0] <= 0.0:
+        elif r[0] <= CONFUSION_MM:
             hi = s
         else:
             return s, r

@@ -107,6 +107,43 @@ def test_a_sized_pinky_bases_return_channel_keeps_two_perimeters(sized_file):
 
 
 @pytest.mark.slow
+def test_a_sized_thumbs_mp_relief_leaves_no_skin(sized_file_205):
+    """The 205 x 95 mm hand's thumb CMC base (16.5 mm thick, its palmar face at z = -8.25 mm): the MP
+    guide eyelet's near relief sphere (1 mm radius) dips under half its radius through the face,
+    under the MP flexion stop's wedge; cut as the default hand's is it left a 0.04 mm skin there.
+    Rays straight up the middle (x = 0, every 0.02 mm) from the clevis slot's back to the relief's
+    end, where they enter the part at or under the face, cross two perimeters of material or more
+    before the relief (the keel under the eyelet's exit, then the open slot under the rest), and
+    ``export.walls`` (trimesh rays) finds no wall under two perimeters on the part (above the relief
+    the stop's wedge tapers: an edge, not a wall)."""
+    from phantom_cad.cad.parts.phalanx import eyelet
+    from phantom_cad.cad.parts.thumb import ThumbCMCBase
+    from phantom_cad.export.step_stl import tessellate
+    from phantom_cad.kinematics.topology import link
+    from phantom_cad.params.io import load_params
+
+    path, proc = sized_file_205
+    assert proc.returncode == 0, proc.stderr
+    params = load_params(path)
+    part = ThumbCMCBase.for_link(params, link("thumb_cmc_base"))
+    face = -part.sec.thickness / 2.0
+    s_near = eyelet(part.sec, *part.guide_boss())[3][0]
+    assert face == -8.25 and face - 0.5 < s_near[2] - 1.0 < face          # the case: through, but shallowly
+    v, f = tessellate(part.build(), 0.02)[:2]
+    mesh = trimesh.Trimesh(v, f, process=False)
+    ys = np.arange(part.length - part.sec.slot_back + 0.01, s_near[1] + 2.0, 0.02)
+    origins = np.column_stack([np.zeros_like(ys), ys, np.full_like(ys, face - 5.0)])
+    hits, ray, _ = mesh.ray.intersects_location(origins, np.tile([0.0, 0.0, 1.0], (len(ys), 1)), multiple_hits=True)
+    bar = wall_bar_mm(params)
+    for i in range(len(ys)):
+        z = np.sort(hits[ray == i, 2])
+        assert len(z) % 2 == 0, (ys[i], z)
+        low = z[::2] <= face + 0.01
+        assert np.all(z[1::2][low] - z[::2][low] >= bar), (ys[i], z)
+    assert part_walls({"thumb_cmc_base": (v, f)}, params)["thumb_cmc_base"]["wall_thinnest"] >= bar
+
+
+@pytest.mark.slow
 def test_a_sized_pinky_bases_flexion_stop_leaves_no_fin(sized_file):
     """The 160 x 72 mm hand's pinky base: the MCP guide eyelet's near relief (1 mm radius) grazes
     the palmar face (y = -T / 2 = -6.25 mm) under the MCP flexion stop's wedge, its roof 0.1 mm above

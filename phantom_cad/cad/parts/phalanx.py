@@ -92,11 +92,13 @@ def _segment_axis_distance(a, b) -> float:
     return float(np.linalg.norm(a + t * d))
 
 
-def clevis(sec: DigitSection, joint: str, y: float, hub_x: float | None = None, stop_clear=None):
+def clevis(sec: DigitSection, joint: str, y: float, hub_x: float | None = None, stop_clear=None,
+           standing=()):
     """Parent side of a joint whose axis is parallel to x through (y, 0); a loop's hub (groove
     plane ``hub_x``) is the material the slot leaves beside that side's cheek. ``stop_clear``: a
     function that takes the flexion stop's (y, z) outline (joint frame) and returns the outline the
-    slot leaves standing (``drive_fans.clear_of_fans``); default: the whole outline."""
+    slot leaves standing (``drive_fans.clear_of_fans``); default: the whole outline. ``standing``:
+    more (y, z) outlines (link frame) the slot leaves standing (:func:`relief_opening`'s keel)."""
     t = sec.tol
     rb, W, T, sw = sec.boss_radius, sec.width, sec.thickness, sec.slot_width
     body = [cyl_x(rb, -W / 2.0, W / 2.0, y, 0.0)]
@@ -118,6 +120,8 @@ def clevis(sec: DigitSection, joint: str, y: float, hub_x: float | None = None, 
     poly = stop_wedge(sec, joint, y, stop_clear)
     if poly is not None:   # keep the flexion-stop wedge: the slot tool leaves it standing
         slot = slot.cut(prism_x(poly, -half - 0.5, half + 0.5))
+    for outline in standing:
+        slot = slot.cut(prism_x(outline, -half - 0.5, half + 0.5))
     tools = [slot, cyl_x(t.axle_press / 2.0, -W / 2.0 - 1.0, W / 2.0 + 1.0, y, 0.0)]
     return body, tools
 
@@ -143,6 +147,11 @@ def near_relief(sec: DigitSection, s_near, u, wedge):
     a clearance in front of the flexion stop (``wedge``: :func:`stop_wedge`, or None). Where the
     relief grazes the palmar face, an end under the wedge left a fin between it and the wedge's
     slope; in front of the wedge the slot is empty, so the longer run cuts nothing else."""
+    return cylinder(s_near, s_near + near_relief_run(sec, s_near, u, wedge) * u, sec.tol.tendon_relief / 2.0)
+
+
+def near_relief_run(sec: DigitSection, s_near, u, wedge) -> float:
+    """How far (mm) :func:`near_relief` runs from the sphere's centre along ``u``."""
     t = sec.tol
     rr = t.tendon_relief / 2.0
     run = NEAR_RELIEF_RUN
@@ -150,7 +159,45 @@ def near_relief(sec: DigitSection, s_near, u, wedge):
         edge = max(py for py, _ in wedge)       # the wedge's foremost point: its edge on the palmar face
         # the end's disc reaches rr |u_z| behind its centre
         run = max(run, (edge + t.clearance + rr * abs(u[2]) - s_near[1]) / u[1])
-    return cylinder(s_near, s_near + run * u, rr)
+    return run
+
+
+#: how much wider (mm, each side) than the near relief :func:`relief_opening`'s slot is: its sides
+#: stand off the relief's, never tangent to them
+RELIEF_SLOT_MARGIN = 0.2
+
+
+def relief_opening(sec: DigitSection, s_near, u, wedge, pad_end: float, floor: float):
+    """For a G1 eyelet whose near relief (sphere at ``s_near``, run along ``u``: :func:`near_relief`;
+    ``wedge``: :func:`stop_wedge` with no ``stop_clear``) would leave a skin on the palmar face
+    (z = -thickness / 2): its lowest point within a wall above the face, or through it by less than
+    half its radius (a rim under 60 deg). (the keel's (y, z) outline, the slot) or None elsewhere.
+
+    The keel, under the eyelet's exit from ``pad_end`` (the clevis slot's back) to the sphere's
+    centre, down to ``floor`` or a wall under the sphere, a wall beside the relief each side, holds
+    the hole and the sphere's back half a wall off the face: the tendon keeps the rounded back half
+    to bend on. It stands in the clevis slot, which must leave it standing as it leaves the wedge
+    (:func:`clevis`'s ``standing``). The slot, a little wider than the relief, from its axis down through
+    the face, opens the rest (the sphere's front half and the run)."""
+    rr = sec.tol.tendon_relief / 2.0
+    wall = mm(FLANK)
+    face = -sec.thickness / 2.0
+    low = float(s_near[2]) - rr
+    if not face - rr / 2.0 < low < face + wall:
+        return None
+    end = np.asarray(s_near, float) + near_relief_run(sec, s_near, u, wedge) * np.asarray(u, float)
+    bottom = min(floor, low - wall)
+    keel = [(pad_end, bottom), (float(s_near[1]), bottom), (float(s_near[1]), face), (pad_end, face)]
+    w = rr + RELIEF_SLOT_MARGIN
+    slot = prism_x([(s_near[1], s_near[2]), (end[1], end[2]), (end[1], bottom - 1.0), (s_near[1], bottom - 1.0)],
+                   -w, w)
+    return keel, slot
+
+
+def keel_body(sec: DigitSection, keel):
+    """The keel of :func:`relief_opening` as a solid: a wall beside the relief each side."""
+    w = sec.tol.tendon_relief / 2.0 + mm(FLANK)
+    return prism_x(keel, -w, w)
 
 
 def _eyelet_axis(sec: DigitSection, centre_yz, toward_yz):

@@ -30,7 +30,8 @@ from ...kinematics.topology import CMC_Q, JOINTS, link
 from ..measure import eyelet_centres, point_line_distance
 from .base import PALMAR_DOWN, Part, child_joint
 from .common import DigitSection, box, build, cylinder, cylinder_floor, mm, prism_x, sphere, transform
-from .phalanx import clevis, eyelet, eyelet_boss_axis, hub_grooves, near_relief, stop_wedge
+from .phalanx import (clevis, eyelet, eyelet_boss_axis, hub_grooves, keel_body, near_relief, relief_opening,
+                      stop_wedge)
 from .drive_fans import drive_fan_tools, guide_entry
 from .tendons import RoutedPart, link_tendons, anchor_tools, channel_tools
 
@@ -178,10 +179,17 @@ class ThumbCMCBase(RoutedPart, Part):
         if zf < -T / 2.0:     # the pad, from the hub to the clevis slot's back
             arm.append(box(-W / 2.0, W / 2.0, 0.0, L - sec.slot_back, zf, -T / 2.0 + 0.01))
         lt = link_tendons(self.params, self.link.name)
-        b, tools = clevis(sec, self.joint, L, lt.hubs().get(child_joint(self.link).name))
-        tools += hub_grooves(sec, lt)
         G1, toward = self.guide_boss()
         b3, guide, u, (s_near, s_far) = eyelet(sec, G1, toward)
+        wedge = stop_wedge(sec, self.joint, L)
+        # where the near relief would leave a skin on the palmar face: a keel under the eyelet's exit
+        # and a slot under the rest (relief_opening)
+        opening = relief_opening(sec, s_near, u, wedge, L - sec.slot_back, zf)
+        b, tools = clevis(sec, self.joint, L, lt.hubs().get(child_joint(self.link).name),
+                          standing=[opening[0]] if opening else ())
+        if opening:
+            arm.append(keel_body(sec, opening[0]))
+        tools += hub_grooves(sec, lt)
         G = np.array([0.0, *G1])
         side_body = b + b3
         guide += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - G)))
@@ -189,8 +197,9 @@ class ThumbCMCBase(RoutedPart, Part):
         # flexion stop's wedge, as on the finger bases. Its run has the near sphere's radius and
         # starts at its centre, so the two touch along a great circle; in one boolean with the
         # sphere, where the sphere grazes the palmar face (0.03 mm through it on a 205 x 95 mm
-        # hand), the cut left the sphere's back half as a second solid: the run is cut after
-        relief = [near_relief(sec, s_near, u, stop_wedge(sec, self.joint, L))]
+        # hand), the cut left the sphere's back half as a second solid: the run is cut after, with
+        # the slot that opens the relief there (relief_opening)
+        relief = [near_relief(sec, s_near, u, wedge), *([opening[1]] if opening else [])]
         # the tendon comes down the CMC axis (through the hub's central bore, from the palm's
         # arch above) and turns along the arm to the eyelet: CMC rotation leaves its length alone.
         # The turn is rounded by a sphere one tendon radius wider than the bore (a sphere as wide
