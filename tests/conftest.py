@@ -81,15 +81,15 @@ def hand_export(hand_build, shared_root, part_cache):
 #: the sized hand of the tests: `phantom-cad size --hand-length 160 --hand-breadth 72`
 SIZED_HAND = (160.0, 72.0, "sized_160")
 
-#: a large sized hand: `phantom-cad size --hand-length 205 --hand-breadth 95` (its thumb CMC
-#: base's near relief sphere dips 0.03 mm through the palmar face)
-SIZED_HAND_205 = (205.0, 95.0, "sized_205")
+#: a large sized left hand: `phantom-cad size --hand-length 205 --hand-breadth 95 --side left` (its
+#: thumb CMC base's near relief sphere dips 0.03 mm through the palmar face)
+SIZED_HAND_205 = (205.0, 95.0, "sized_205", "left")
 
 
-def _sized(shared_root, length: float, breadth: float, name: str):
+def _sized(shared_root, length: float, breadth: float, name: str, side: str = "right"):
     """(parameter file, the command's CompletedProcess) of ``phantom-cad size --hand-length
-    LENGTH --hand-breadth BREADTH --name NAME`` (the CMC placement searched, the preflight rules
-    checked), run once per test run, its file in the run's folder."""
+    LENGTH --hand-breadth BREADTH --side SIDE --name NAME`` (the CMC placement searched, the
+    preflight rules checked), run once per test run, its file in the run's folder."""
     import subprocess
     import sys
 
@@ -97,7 +97,7 @@ def _sized(shared_root, length: float, breadth: float, name: str):
 
     def make():
         return subprocess.run([sys.executable, "-m", "phantom_cad", "size", "--hand-length", str(length),
-                               "--hand-breadth", str(breadth), "--name", name, "--out", str(path)],
+                               "--hand-breadth", str(breadth), "--side", side, "--name", name, "--out", str(path)],
                               capture_output=True, text=True)
     return path, shared.once(shared_root, f"size-{name}", make)
 
@@ -114,20 +114,32 @@ def sized_file_205(shared_root):
     return _sized(shared_root, *SIZED_HAND_205)
 
 
-@pytest.fixture(scope="session")
-def sized_hand(sized_file, shared_root, part_cache):
-    """(document, BuildResult) of :data:`SIZED_HAND`: the file ``phantom-cad size`` wrote
-    (``sized_file``), built with the run's part cache, unsliced; made once per run."""
+def _sized_build(sized, name: str, shared_root, part_cache):
+    """(document, BuildResult) of a sized file (``_sized``'s), built with the run's part cache,
+    unsliced; made once per run."""
     import tomllib
 
-    path, proc = sized_file
+    path, proc = sized
     assert proc.returncode == 0, proc.stderr
 
     def make():
         from phantom_cad.export.pipeline import build_hand
 
-        return build_hand(path, shared_root / "exports" / SIZED_HAND[2], cache_dir=part_cache, jobs=2, slice=False)
-    return tomllib.loads(path.read_text(encoding="utf-8")), shared.once(shared_root, f"export-{SIZED_HAND[2]}", make)
+        return build_hand(path, shared_root / "exports" / name, cache_dir=part_cache, jobs=2, slice=False)
+    return tomllib.loads(path.read_text(encoding="utf-8")), shared.once(shared_root, f"export-{name}", make)
+
+
+@pytest.fixture(scope="session")
+def sized_hand(sized_file, shared_root, part_cache):
+    """(document, BuildResult) of :data:`SIZED_HAND`: the file ``phantom-cad size`` wrote
+    (``sized_file``), built with the run's part cache, unsliced; made once per run."""
+    return _sized_build(sized_file, SIZED_HAND[2], shared_root, part_cache)
+
+
+@pytest.fixture(scope="session")
+def sized_hand_205(sized_file_205, shared_root, part_cache):
+    """(document, BuildResult) of :data:`SIZED_HAND_205` (``sized_file_205``), as ``sized_hand``."""
+    return _sized_build(sized_file_205, SIZED_HAND_205[2], shared_root, part_cache)
 
 
 @pytest.fixture(scope="session")
@@ -202,7 +214,8 @@ def power_grasps(hand_parts, shared_root):
 #: session fixtures that build a whole hand or every part of one: a test that uses any of them
 #: (directly or through another fixture) is in the slow tier (`make test`, not `make test-fast`)
 SLOW_FIXTURES = frozenset({
-    "hand_build", "hand_export", "hand_entries", "hand_parts", "hand_meshes", "power_grasps", "sized_hand",  # here
+    "hand_build", "hand_export", "hand_entries", "hand_parts", "hand_meshes", "power_grasps",  # here
+    "sized_hand", "sized_hand_205",                      # here
     "built", "placed",                                   # tests/cad/conftest.py
     "pkg", "standin_build",                              # tests/export/conftest.py (the stand-in through workers)
     "part_cache",                                        # a build that shares the run's cache

@@ -1,6 +1,7 @@
 """``phantom-cad check``: every row green on the default hand (the functional rows too: opposition,
 the power grasp and its hold, walls, tendon paths), the rows comparing sources on the left hand and a
-second parameter file, and each deliberate corruption of an export is caught and named.
+second parameter file, two sized hands (205 x 95 mm as a left hand all green; 160 x 72 mm failing
+its palm's walls and its hold), and each deliberate corruption of an export is caught and named.
 
 The corruptions are made here with ElementTree / numpy on copies of a built export: a joint
 origin shifted by 0.1 mm, a mimic multiplier changed, a mass scaled, a mesh moved by 0.3 mm,
@@ -78,17 +79,56 @@ def test_the_default_hand_is_all_green(export):
         assert what in checks
 
 
-@pytest.mark.xfail(strict=True, reason="the sized 160 x 72 mm hand: its 29.6 mm cylinder is not held palm down (it "
-                   "falls, the palm does not touch it: nothing holds its wrist side from below; "
-                   "docs/sizing.md, limitations)")
-def test_a_sized_hand_is_all_green(sized_hand):
-    """The hand ``phantom-cad size`` makes for 160 x 72 mm (tests/conftest.py)."""
+#: the power grasp's hold row of the check
+HOLD = "held palm down"
+
+
+@pytest.fixture(scope="module")
+def sized_checks():
+    """{fixture name: the check's rows} of the sized hands, each checked once (``_sized_rows``)."""
+    return {}
+
+
+def _sized_rows(request, sized_checks, hand: str):
+    """The check's rows on a hand ``phantom-cad size`` makes (tests/conftest.py): ``sized_hand``,
+    160 x 72 mm; ``sized_hand_205``, 205 x 95 mm, a left hand."""
     from phantom_cad.export.check import check_export
     from phantom_cad.params import parse
 
-    doc, result = sized_hand
-    rows = check_export(result.out_dir, parse(doc), samples=4, settle=2)
-    assert [(r.check, r.item, r.measured) for r in rows if not r.ok and not r.check.startswith("check_urdf")] == []
+    if hand not in sized_checks:
+        doc, result = request.getfixturevalue(hand)
+        sized_checks[hand] = check_export(result.out_dir, parse(doc), samples=4, settle=2)
+    return sized_checks[hand]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("hand", [
+    pytest.param("sized_hand", marks=pytest.mark.xfail(
+        strict=True, reason="the 160 x 72 mm hand's palm: 0.24 mm of wall between the pinky socket's magnet "
+        "pocket and its drive's coupler bore (docs/sizing.md, limitations)")),
+    "sized_hand_205",
+])
+def test_a_sized_hand_is_green_but_for_the_hold(request, sized_checks, hand):
+    """Every row of a sized hand's check is green but, perhaps, the power grasp's hold (below);
+    check_urdf may be "not run" where liburdfdom-tools is missing."""
+    rows = _sized_rows(request, sized_checks, hand)
+    assert [(r.check, r.item, r.measured) for r in rows
+            if not r.ok and HOLD not in r.check and not r.check.startswith("check_urdf")] == []
+    assert len([r for r in rows if HOLD in r.check]) == 1
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("hand", [
+    pytest.param("sized_hand", marks=pytest.mark.xfail(
+        strict=True, reason="the 160 x 72 mm hand's 29.6 mm cylinder is not held palm down: it falls, nothing "
+        "holds its wrist half from below (docs/sizing.md, limitations)")),
+    "sized_hand_205",
+])
+def test_a_sized_hand_holds_its_cylinder(request, sized_checks, hand):
+    """The power grasp's hold row (MuJoCo). The 205 x 95 mm left hand holds its 38 mm cylinder; the
+    right hand of the same file does not (docs/sizing.md, limitations: the hold is marginal there)."""
+    (row,) = [r for r in _sized_rows(request, sized_checks, hand) if HOLD in r.check]
+    assert row.ok, row.measured
 
 
 def test_the_fist_row_reports_the_fingertips_distances(export):
