@@ -191,22 +191,30 @@ def test_gui_lists_servos_travel_and_digest(viewer, model):
     assert model.params.digest in viewer.info.content
 
 
-def test_stale_export_is_rebuilt(export, part_cache, tmp_path, monkeypatch):
-    """An export whose manifest records another digest is rebuilt (from the cache) before viewing."""
+@pytest.mark.parametrize("stale", ["params digest", "code digest"])
+def test_stale_export_is_rebuilt(export, part_cache, tmp_path, monkeypatch, stale):
+    """An export whose manifest records another parameter digest, or another code digest (built by
+    other phantom_cad code), is rebuilt (from the cache) before viewing."""
     import json
 
     from phantom_cad.cli.view import ensure_export
+    from phantom_cad.export.cache import code_digest
 
     copy = tmp_path / "phantom"
     shutil.copytree(export, copy)
     man = json.loads((copy / "manifest.json").read_text())
-    man["params"]["digest"] = "0" * 64
+    if stale == "params digest":
+        man["params"]["digest"] = "0" * 64
+    else:
+        man["code_digest"] = "0" * 64
     (copy / "manifest.json").write_text(json.dumps(man))
     monkeypatch.setenv("PHANTOM_CAD_CACHE", str(part_cache))   # the fixture's cache
     messages = []
     params, out, urdf = ensure_export(None, copy, messages.append)
     assert len(messages) == 1 and "000000000000" in messages[0] and "building" in messages[0]
-    assert json.loads((copy / "manifest.json").read_text())["params"]["digest"] == params.digest
+    assert ("other phantom_cad code" in messages[0]) == (stale == "code digest")
+    man = json.loads((copy / "manifest.json").read_text())
+    assert (man["params"]["digest"], man["code_digest"]) == (params.digest, code_digest())
     assert urdf.is_file() and urdf.name.endswith(".local.urdf")
 
 

@@ -15,7 +15,7 @@ def check(
                                 show_default="params/phantom.toml"),
     out: Optional[Path] = typer.Option(None, "--out", "-o",
                                        help="Export folder to check (default that of phantom-cad build); built "
-                                            "first when missing or built from other parameters."),
+                                            "first when missing or built from other parameters or by other code."),
     side: Optional[str] = typer.Option(None, "--side", help="Override hand.side: right or left."),
     samples: int = typer.Option(8, "--samples", min=1, help="Random servo commands for the pose checks."),
     settle: int = typer.Option(3, "--settle", min=0,

@@ -58,7 +58,7 @@ CAMERA_SHIFT = 0.12
 def ensure_export(params_path, out, log: Callable[[str], None]):
     """(params, export folder, local URDF) of the hand in ``params_path`` (default
     params/phantom.toml); builds the export into ``out`` (default the build's default,
-    exports/<hand>) first when it is missing or was built from other parameters
+    exports/<hand>) first when it is missing or was built from other parameters or by other code
     (export.pipeline.ensure_export, not sliced: the viewer needs no print estimates)."""
     from ..calibration.effects import PARAMS_EFFECTS
     from ..export import pipeline
@@ -328,7 +328,7 @@ def view(
                                           help="Parameter file (default: params/phantom.toml)."),
     out: Optional[Path] = typer.Option(None, "--out", "-o", file_okay=False,
                                        help="Export folder to show (default exports/<hand.name>); built "
-                                            "first when missing or built from other parameters."),
+                                            "first when missing or built from other parameters or by other code."),
     port: int = typer.Option(DEFAULT_PORT, "--port", min=0, max=65535,
                              help="Port to serve on (0: any free port; a busy one: the next free one)."),
     host: str = typer.Option(DEFAULT_HOST, "--host",

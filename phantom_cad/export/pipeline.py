@@ -432,16 +432,32 @@ def export_problem(out: Path, digest: str, side: str) -> str | None:
     return None
 
 
+def other_code(out: Path) -> str | None:
+    """Why the export in ``out`` was not written by this phantom_cad's code (the manifest's
+    ``code_digest``, ``cache.code_digest``), or None."""
+    from .cache import code_digest
+
+    try:
+        built = json.loads((out / "manifest.json").read_text(encoding="utf-8")).get("code_digest")
+    except (OSError, ValueError, AttributeError):
+        return f"{out / 'manifest.json'} is unreadable"
+    if built != code_digest():
+        return (f"the export {out} was built by other phantom_cad code (code digest {str(built)[:12]}, this "
+                f"one's {code_digest()[:12]})")
+    return None
+
+
 def ensure_export(params_path: str | os.PathLike | None = None, out_dir: str | os.PathLike | None = None,
                   side: str | None = None, log: Callable[[str], None] | None = None, effects=None,
                   **build_kwargs) -> tuple[Path, HandParams]:
     """(export folder, params) of an export of ``params_path`` (``side`` overriding the file's),
     built first (:func:`build_hand`, cached) when ``out_dir`` holds none, one built from other
-    parameters or one without its robot description (:func:`export_problem`). For the commands
-    that read an export (check, view)."""
+    parameters, one without its robot description (:func:`export_problem`) or one built by other
+    code (:func:`other_code`: after an update, what it measures would be the old code's). For the
+    commands that read an export (check, view)."""
     path, _document, params, file_side = load_build_params(params_path, side, effects)
     out = Path(out_dir) if out_dir is not None else _default_out(params, side, file_side)
-    reason = export_problem(out, params.digest, params.side)
+    reason = export_problem(out, params.digest, params.side) or other_code(out)
     if reason is not None:
         (log or (lambda msg: None))(f"{reason}; building it first from {path} (cached parts are reused)")
         build_hand(path, out, side=side, log=log, effects=effects, **build_kwargs)
