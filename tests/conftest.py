@@ -86,19 +86,55 @@ SIZED_HAND = (160.0, 72.0, "sized_160")
 SIZED_HAND_205 = (205.0, 95.0, "sized_205", "left")
 
 
-def _sized(shared_root, length: float, breadth: float, name: str, side: str = "right"):
+#: a person measured digit by digit (mm, joint centre to joint centre): 190.2 x 85 mm, each segment
+#: within 8 % of the reference's ratio
+SIZED_DIGITS = (190.2, 85.0, "sized_digits", "right", """\
+[thumb]
+metacarpal = 45.3
+proximal = 39.4
+distal = 30.3
+
+[index]
+proximal = 45.1
+middle = 26.9
+distal = 17.1
+
+[middle]
+proximal = 47.6
+middle = 33.2
+distal = 21.0
+
+[ring]
+proximal = 47.3
+middle = 30.8
+distal = 22.0
+
+[pinky]
+proximal = 41.8
+middle = 22.9
+distal = 18.1
+""")
+
+
+def _sized(shared_root, length: float, breadth: float, name: str, side: str = "right", segments: str = ""):
     """(parameter file, the command's CompletedProcess) of ``phantom-cad size --hand-length
-    LENGTH --hand-breadth BREADTH --side SIDE --name NAME`` (the CMC placement searched, the
-    preflight rules checked), run once per test run, its file in the run's folder."""
+    LENGTH --hand-breadth BREADTH --side SIDE --name NAME [--segments FILE]`` (the CMC placement
+    searched, the preflight rules checked; ``segments``: the file's text), run once per test run, its
+    files in the run's folder."""
     import subprocess
     import sys
 
     path = shared_root / f"{name}.toml"
 
     def make():
+        extra = []
+        if segments:
+            person = shared_root / f"{name}_segments.toml"
+            person.write_text(segments, encoding="utf-8")
+            extra = ["--segments", str(person)]
         return subprocess.run([sys.executable, "-m", "phantom_cad", "size", "--hand-length", str(length),
-                               "--hand-breadth", str(breadth), "--side", side, "--name", name, "--out", str(path)],
-                              capture_output=True, text=True)
+                               "--hand-breadth", str(breadth), "--side", side, "--name", name, "--out", str(path),
+                               *extra], capture_output=True, text=True)
     return path, shared.once(shared_root, f"size-{name}", make)
 
 
@@ -140,6 +176,12 @@ def sized_hand(sized_file, shared_root, part_cache):
 def sized_hand_205(sized_file_205, shared_root, part_cache):
     """(document, BuildResult) of :data:`SIZED_HAND_205` (``sized_file_205``), as ``sized_hand``."""
     return _sized_build(sized_file_205, SIZED_HAND_205[2], shared_root, part_cache)
+
+
+@pytest.fixture(scope="session")
+def sized_hand_digits(shared_root, part_cache):
+    """(document, BuildResult) of :data:`SIZED_DIGITS`, sized once and built as ``sized_hand``."""
+    return _sized_build(_sized(shared_root, *SIZED_DIGITS), SIZED_DIGITS[2], shared_root, part_cache)
 
 
 @pytest.fixture(scope="session")
@@ -215,7 +257,7 @@ def power_grasps(hand_parts, shared_root):
 #: (directly or through another fixture) is in the slow tier (`make test`, not `make test-fast`)
 SLOW_FIXTURES = frozenset({
     "hand_build", "hand_export", "hand_entries", "hand_parts", "hand_meshes", "power_grasps",  # here
-    "sized_hand", "sized_hand_205",                      # here
+    "sized_hand", "sized_hand_205", "sized_hand_digits",  # here
     "built", "placed",                                   # tests/cad/conftest.py
     "pkg", "standin_build",                              # tests/export/conftest.py (the stand-in through workers)
     "part_cache",                                        # a build that shares the run's cache

@@ -1,7 +1,8 @@
 """``phantom-cad check``: every row green on the default hand (the functional rows too: opposition,
 the power grasp and its hold, walls, tendon paths), the rows comparing sources on the left hand and a
-second parameter file, two sized hands (205 x 95 mm as a left hand all green; 160 x 72 mm failing
-its palm's walls and its hold), and each deliberate corruption of an export is caught and named.
+second parameter file, three sized hands (205 x 95 mm as a left hand and a person measured digit by
+digit all green; 160 x 72 mm failing its palm's walls and its hold), and each deliberate corruption
+of an export is caught and named.
 
 The corruptions are made here with ElementTree / numpy on copies of a built export: a joint
 origin shifted by 0.1 mm, a mimic multiplier changed, a mass scaled, a mesh moved by 0.3 mm,
@@ -91,7 +92,8 @@ def sized_checks():
 
 def _sized_rows(request, sized_checks, hand: str):
     """The check's rows on a hand ``phantom-cad size`` makes (tests/conftest.py): ``sized_hand``,
-    160 x 72 mm; ``sized_hand_205``, 205 x 95 mm, a left hand."""
+    160 x 72 mm; ``sized_hand_205``, 205 x 95 mm, a left hand; ``sized_hand_digits``, a person
+    measured digit by digit."""
     from phantom_cad.export.check import check_export
     from phantom_cad.params import parse
 
@@ -106,7 +108,7 @@ def _sized_rows(request, sized_checks, hand: str):
     pytest.param("sized_hand", marks=pytest.mark.xfail(
         strict=True, reason="the 160 x 72 mm hand's palm: 0.24 mm of wall between the pinky socket's magnet "
         "pocket and its drive's coupler bore (docs/sizing.md, limitations)")),
-    "sized_hand_205",
+    "sized_hand_205", "sized_hand_digits",
 ])
 def test_a_sized_hand_is_green_but_for_the_hold(request, sized_checks, hand):
     """Every row of a sized hand's check is green but, perhaps, the power grasp's hold (below);
@@ -122,7 +124,7 @@ def test_a_sized_hand_is_green_but_for_the_hold(request, sized_checks, hand):
     pytest.param("sized_hand", marks=pytest.mark.xfail(
         strict=True, reason="the 160 x 72 mm hand's 29.6 mm cylinder is not held palm down: it falls, nothing "
         "holds its wrist half from below (docs/sizing.md, limitations)")),
-    "sized_hand_205",
+    "sized_hand_205", "sized_hand_digits",
 ])
 def test_a_sized_hand_holds_its_cylinder(request, sized_checks, hand):
     """The power grasp's hold row (MuJoCo). The 205 x 95 mm left hand holds its 38 mm cylinder; the
