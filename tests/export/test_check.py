@@ -103,13 +103,16 @@ def _sized_rows(request, sized_checks, hand: str):
     return sized_checks[hand]
 
 
+def _sized_hands(why_160: str) -> list:
+    """The sized hands' fixture names, the 160 x 72 mm hand's a strict xfail for ``why_160``."""
+    return [pytest.param("sized_hand", marks=pytest.mark.xfail(strict=True, reason=f"the 160 x 72 mm hand's {why_160} "
+                                                              "(docs/sizing.md, limitations)")),
+            "sized_hand_205", "sized_hand_digits"]
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("hand", [
-    pytest.param("sized_hand", marks=pytest.mark.xfail(
-        strict=True, reason="the 160 x 72 mm hand's palm: 0.24 mm of wall between the pinky socket's magnet "
-        "pocket and its drive's coupler bore (docs/sizing.md, limitations)")),
-    "sized_hand_205", "sized_hand_digits",
-])
+@pytest.mark.parametrize("hand", _sized_hands("palm: 0.24 mm of wall between the pinky socket's magnet pocket and "
+                                              "its drive's coupler bore"))
 def test_a_sized_hand_is_green_but_for_the_hold(request, sized_checks, hand):
     """Every row of a sized hand's check is green but, perhaps, the power grasp's hold (below);
     check_urdf may be "not run" where liburdfdom-tools is missing."""
@@ -120,12 +123,8 @@ def test_a_sized_hand_is_green_but_for_the_hold(request, sized_checks, hand):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("hand", [
-    pytest.param("sized_hand", marks=pytest.mark.xfail(
-        strict=True, reason="the 160 x 72 mm hand's 29.6 mm cylinder is not held palm down: it falls, nothing "
-        "holds its wrist half from below (docs/sizing.md, limitations)")),
-    "sized_hand_205", "sized_hand_digits",
-])
+@pytest.mark.parametrize("hand", _sized_hands("29.6 mm cylinder is not held palm down: it falls, nothing holds "
+                                              "its wrist half from below"))
 def test_a_sized_hand_holds_its_cylinder(request, sized_checks, hand):
     """The power grasp's hold row (MuJoCo). The 205 x 95 mm left hand holds its 38 mm cylinder; the
     right hand of the same file does not (docs/sizing.md, limitations: the hold is marginal there)."""
