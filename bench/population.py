@@ -242,12 +242,33 @@ def csv_text(records: list[Record]) -> str:
     return buf.getvalue()
 
 
+#: the failing rows the table names briefly (``brief``): (a pattern on the row's line, its brief form)
+BRIEF = (
+    (re.compile(r"held palm down.*?\((?:squeezed ([\d.]+) mm >= [\d.]+; )?moved ([\d.]+) mm"),
+     lambda m: f"hold (moved {m[2]} mm{f', squeezed {m[1]} mm' if m[1] else ''})"),
+    (re.compile(r"held palm down.*?\(squeezed ([\d.]+) mm"), lambda m: f"hold (squeezed {m[1]} mm)"),
+    (re.compile(r"^walls >= .*?: (\w+) \(([\d.]+) mm"), lambda m: f"walls ({m[1]} {m[2]} mm)"),
+    (re.compile(r"^thumb pad to .*?: (\w+): ([^(]+?) \("), lambda m: f"opposition ({m[1]}: {m[2]})"),
+)
+
+
+def brief(line: str) -> str:
+    """A failing row's line (``Record.failing``) as the table names it: the hold, the walls and the
+    opposition briefly, any other row whole."""
+    for pattern, form in BRIEF:
+        m = pattern.search(line)
+        if m:
+            return form(m)
+    return line
+
+
 def markdown_table(records: list[Record]) -> str:
-    """The table docs/sizing.md carries: one row a person."""
+    """The table docs/sizing.md carries: one row a person (the failing rows brief, ``brief``; the
+    CSV and JSON keep them whole)."""
     out = ["| person | length x breadth (mm) | outcome | failing rows, or the binding rule | s (wall) | CPU s |",
            "|---|---|---|---|---:|---:|"]
     for r in records:
-        why = r.binding if r.outcome == "refused" else "; ".join(r.failing) if r.failing else r.error
+        why = r.binding if r.outcome == "refused" else "; ".join(map(brief, r.failing)) if r.failing else r.error
         out.append(f"| {r.name} | {r.hand_length:g} x {r.hand_breadth:g} | {r.outcome} | {why.replace('|', '/')} | "
                    f"{r.seconds:.0f} | {r.cpu_seconds:.0f} |")
     return "\n".join(out) + "\n"
