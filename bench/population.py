@@ -268,7 +268,8 @@ def markdown_table(records: list[Record]) -> str:
     out = ["| person | length x breadth (mm) | outcome | failing rows, or the binding rule | s (wall) | CPU s |",
            "|---|---|---|---|---:|---:|"]
     for r in records:
-        why = r.binding if r.outcome == "refused" else "; ".join(map(brief, r.failing)) if r.failing else r.error
+        why = (r.binding if r.outcome == "refused" else "; ".join(map(brief, r.failing)) if r.failing
+               else " / ".join(r.error.replace("\\n", "\n").splitlines()[:2]))     # a build's error: its first two lines
         out.append(f"| {r.name} | {r.hand_length:g} x {r.hand_breadth:g} | {r.outcome} | {why.replace('|', '/')} | "
                    f"{r.seconds:.0f} | {r.cpu_seconds:.0f} |")
     return "\n".join(out) + "\n"
