@@ -341,6 +341,10 @@ def _field(document, path, value):
     # the thickest finger (16) + 2 x 0.2
     ("palm.thickness_mm", 16.2, "palm.thickness_mm", "must exceed the thickest finger (16 mm)"),
     ("palm.heel_height_mm", -1.0, "palm.heel_height_mm", "must be >= 0"),
+    ("palm.tendon_drop_mm", -0.1, "palm.tendon_drop_mm", "must be >= 0"),
+    # the tendons cross the magnet face at -14 / 2 + 2.4 = -4.6 mm; their 0.6 + 2 x 0.2 = 1 mm hole
+    # keeps 0.8 mm above the 14 mm pinky's palmar face down to -7 + 0.8 + 0.5 = -5.7 mm
+    ("palm.tendon_drop_mm", 1.2, "palm.tendon_drop_mm", "must be <= 1.100 mm"),
     # a heel of height 11 (the file's) and no length
     ("palm.heel_length_mm", 0.0, "palm.heel_length_mm", "must be > 0 with the other heel dimension"),
     ("print.stl_tolerance_mm", 1e-9, "print.stl_tolerance_mm", "must be >= 0.001"),

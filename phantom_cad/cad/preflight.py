@@ -14,7 +14,7 @@ from .. import units
 from ..params import ParamError
 from ..params.rules import MIN_WALL
 from ..kinematics.hand_params import HandParams
-from ..kinematics.topology import SERVOS
+from ..kinematics.topology import SERVOS, chain
 from .parts.common import mm
 
 
@@ -26,7 +26,8 @@ def check(params: HandParams) -> None:
     CMC pulley's cavity a wall under the dorsal face; and if the routing model finds no clamp
     position for a loop or a drive (``routing.routes`` raises the ParamError: a joint's travel too
     large for its loop's pulleys and carrier), or a finger drive's coupler has no room in its palm
-    channel or does not come out at the service angle (``couplers.couplers``), or if the tendons are
+    channel or does not come out at the service angle (``couplers.couplers``) or its bore passes within
+    two perimeters of a magnet pocket (``couplers.pocket_walls``), or if the tendons are
     too soft for the routed statics to couple every joint (``statics.hand_statics``: what ``Hand``
     computes, so a file that validates makes a model), or if the palm's heel
     reaches past the metacarpal block's front; and if the thenar's cuts (journal, cavity, turn) come
@@ -97,6 +98,14 @@ def check(params: HandParams) -> None:
                              "limiters)", src)
     routing.routes(params)
     couplers.couplers(params)
+    walls = couplers.pocket_walls(params)
+    digit = min(walls, key=walls.get)
+    if walls[digit] < MIN_WALL - 1e-9:
+        raise ParamError("palm.tendon_drop_mm", round(mm(params.palm.tendon_drop), 6),
+                         f"the {digit} drive's coupler bore passes {mm(walls[digit]):.3f} mm from a magnet pocket of "
+                         f"its socket (it runs level toward servo {SERVOS[chain(digit).servo].label}): the wall "
+                         f"must be >= {mm(MIN_WALL):g} mm, two perimeters; a larger palm.tendon_drop_mm (the "
+                         "finger tendons lower) or smaller magnets open it", src)
     statics.hand_statics(params)
     # the print aids refuse in their constructors what they cannot make (the angle gauge: faces too
     # short for their marks), which every build makes beside the parts

@@ -50,6 +50,13 @@ def slot_back(thickness: float, hole_clearance: float) -> float:
     return thickness / 2.0 + hole_clearance
 
 
+def tendon_height(thinnest: float, wall: float, drop: float) -> float:
+    """z of the finger tendons where they cross the magnet face (any one unit): one palm ``wall``
+    above the palmar face of the ``thinnest`` finger, lowered by ``drop`` (``palm.tendon_drop_mm``:
+    where a drive's coupler bore would pass too near a magnet pocket)."""
+    return -thinnest / 2.0 + wall - drop
+
+
 def magnet_pocket_offset(pocket: float, wall: float) -> float:
     """Lateral offset (+-x of the magnet face's centre) of each of the two magnet pockets of a
     finger base and its palm socket: the pockets (diameter ``pocket``) one ``wall`` apart (lengths

@@ -50,6 +50,7 @@ import math
 import numpy as np
 
 from .. import units
+from . import dimensions
 from .dimensions import finger_columns, slot_back
 from .hand_params import Guide, HandParams
 from .topology import FINGERS, SERVOS, chain, joint, link
@@ -168,8 +169,10 @@ def T_palm_thumb_cmc_base(params: HandParams, q15: float = 0.0) -> np.ndarray:
 
 def tendon_height(params: HandParams) -> float:
     """z of every finger tendon where it crosses the magnet face (palm and finger base):
-    one wall above the palmar face of the thinnest finger."""
-    return -min(f.thickness for f in params.fingers.values()) / 2.0 + params.palm.wall
+    one wall above the palmar face of the thinnest finger, less ``palm.tendon_drop_mm``
+    (:func:`.dimensions.tendon_height`)."""
+    return dimensions.tendon_height(min(f.thickness for f in params.fingers.values()), params.palm.wall,
+                                    params.palm.tendon_drop)
 
 
 def servo_pulley_lip(params: HandParams) -> float:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 
 from ..kinematics.dimensions import (FLANK, HUB_GROOVE_PAST_BOSS, digit_field, finger_base_thickness_ceiling,
-                                     finger_columns, printed_hole, servo_pilot_wall, slot_back)
+                                     finger_columns, printed_hole, servo_pilot_wall, slot_back, tendon_height)
 from ..units import DEG, MM
 from .errors import ParamError
 
@@ -124,8 +124,17 @@ def _magnets(c, fingers, palm, hardware, printing, cad) -> None:
                          "(the thinnest wall an FDM printer makes)", c.source)
     pocket = printed_hole(hardware.magnet_diameter + 2.0 * printing.magnet_clearance, printing.hole_compensation)
     span = 2.0 * pocket + palm.wall          # both pockets and the wall between them
-    tendon_z = -min(f.thickness for f in fingers.values()) / 2.0 + palm.wall
-    relief = 2.0 * (hardware.tendon_diameter + 2.0 * printing.hole_clearance)
+    thinnest = min(f.thickness for f in fingers.values())
+    tendon_z = tendon_height(thinnest, palm.wall, palm.tendon_drop)
+    hole = hardware.tendon_diameter + 2.0 * printing.hole_clearance
+    relief = 2.0 * hole
+    lowest = -thinnest / 2.0 + MIN_WALL + hole / 2.0
+    if tendon_z < lowest - 1e-12:
+        raise ParamError("palm.tendon_drop_mm", round(palm.tendon_drop / MM, 6),
+                         f"must be <= {(palm.tendon_drop + tendon_z - lowest) / MM:.3f} mm: the finger tendons "
+                         f"enter their bases {-tendon_z / MM:.3f} mm below the centre, and the tendon hole "
+                         f"({hole / MM:.3f} mm) must keep a {MIN_WALL / MM:g} mm wall above the thinnest finger's "
+                         f"palmar face (thickness_mm = {thinnest / MM:g})", c.source)
     for n, f in fingers.items():
         if span + 2.0 * MIN_WALL > f.width + 1e-12:
             raise ParamError("hardware.magnet.diameter_mm", round(hardware.magnet_diameter / MM, 6),
@@ -140,7 +149,8 @@ def _magnets(c, fingers, palm, hardware, printing, cad) -> None:
         if tendon_z + relief / 2.0 > -pocket / 2.0 + 1e-12:
             raise ParamError("hardware.magnet.diameter_mm", round(hardware.magnet_diameter / MM, 6),
                              f"the tendon enters the fingers.{n} base {-tendon_z / MM:.3f} mm below its centre "
-                             f"(one palm.wall_mm above the thinnest finger's palmar face); its channel "
+                             f"(one palm.wall_mm above the thinnest finger's palmar face, less "
+                             f"palm.tendon_drop_mm); its channel "
                              f"({relief / MM:.3f} mm) must pass below the magnet pockets ({pocket / MM:.3f} mm)",
                              c.source)
     if pocket + 2.0 * palm.wall > palm.thickness + 1e-12:

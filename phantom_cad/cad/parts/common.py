@@ -406,6 +406,28 @@ def sphere(c, r: float):
     return b.Solid.make_sphere(r).moved(b.Location(tuple(float(v) for v in c)))
 
 
+def turn_sphere(c, r: float, into, out):
+    """A sphere rounding a channel's turn at c, from direction ``into`` to ``out``, with its poles
+    and its seam away from the two channels: a channel through a sphere's pole or along its seam
+    can leave OpenCascade's cut with no solid at all (the two channels lie on its equator, the
+    seam opposite their bisector)."""
+    b = bd()
+    a = -np.asarray(into, float) / np.linalg.norm(into)       # the openings, seen from c
+    o = np.asarray(out, float) / np.linalg.norm(out)
+    n = np.cross(a, o)
+    if np.linalg.norm(n) < 1e-9:                                # straight on: any normal will do
+        n = np.cross(a, np.eye(3)[int(np.argmin(np.abs(a)))])
+    n /= np.linalg.norm(n)
+    seam = -(a + o)
+    if np.linalg.norm(seam) < 1e-9:
+        seam = np.cross(n, a)
+    seam -= n * (seam @ n)
+    seam /= np.linalg.norm(seam)
+    plane = b.Plane(origin=tuple(float(v) for v in c), x_dir=tuple(float(v) for v in seam),
+                    z_dir=tuple(float(v) for v in n))
+    return b.Solid.make_sphere(r, plane=plane)
+
+
 def prism_x(poly_yz, x0: float, x1: float):
     """Extrude a (y, z) polygon along x from x0 to x1."""
     b = bd()

@@ -51,8 +51,10 @@ class FingerBase(RoutedPart, Part):
     def inputs(self) -> dict:
         doc = self.params.document
         return {**self.common_inputs(), "finger": canon.plain(digit_entry(doc, self.finger)),
-                # the tendon height at the magnet face follows the thinnest finger
-                "thicknesses_mm": {f: doc["fingers"][f]["thickness_mm"] for f in FINGERS}}
+                # the tendon height at the magnet face follows the thinnest finger and the palm's
+                # tendon drop (an optional key: looked up in the palm's table, absent 0)
+                "thicknesses_mm": {f: doc["fingers"][f]["thickness_mm"] for f in FINGERS},
+                "tendon_drop_mm": next((v for k, v in doc["palm"].items() if k == "tendon_drop_mm"), 0.0)}
 
     def verify(self, shape) -> list[str]:
         """The metacarpal-side guide eyelet at d1 from the MCP axis; two magnet pockets."""

@@ -44,7 +44,7 @@ from ...kinematics.topology import FINGERS, LINKS, chain
 from ...kinematics.vectors import clipped_acos
 from ..measure import circular_pockets
 from .base import Part
-from .common import DigitSection, Tolerances, box, build, cylinder, mm, prism_x, sphere, transform
+from .common import DigitSection, Tolerances, box, build, cylinder, mm, prism_x, transform, turn_sphere
 from . import wrist
 from .servos import ServoMount
 
@@ -338,7 +338,7 @@ class Palm(ServoMount, Part):
         pts = self.thumb_tendon_path()
         u = (pts[1] - pts[0]) / np.linalg.norm(pts[1] - pts[0])
         tools.append(cylinder(pts[0] - u, pts[1], t.tendon_hole / 2.0))
-        tools.append(sphere(pts[1], t.tendon_relief / 2.0))            # the turn
+        tools.append(turn_sphere(pts[1], t.tendon_relief / 2.0, u, pts[2] - pts[1]))
         tools.append(cylinder(pts[1], pts[2] - (pts[1] - pts[2]), t.tendon_hole / 2.0))
         tools += self.thumb_channel_relief(pts)
         # (the CMC loop's two strands run in the cavity's slot toward servo 6: no channel)
