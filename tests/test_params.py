@@ -341,10 +341,9 @@ def _field(document, path, value):
     # the thickest finger (16) + 2 x 0.2
     ("palm.thickness_mm", 16.2, "palm.thickness_mm", "must exceed the thickest finger (16 mm)"),
     ("palm.heel_height_mm", -1.0, "palm.heel_height_mm", "must be >= 0"),
-    ("palm.tendon_drop_mm", -0.1, "palm.tendon_drop_mm", "must be >= 0"),
-    # the tendons cross the magnet face at -14 / 2 + 2.4 = -4.6 mm; their 0.6 + 2 x 0.2 = 1 mm hole
-    # keeps 0.8 mm above the 14 mm pinky's palmar face down to -7 + 0.8 + 0.5 = -5.7 mm
-    ("palm.tendon_drop_mm", 1.2, "palm.tendon_drop_mm", "must be <= 1.100 mm"),
+    ("palm.magnet_lift_mm", -0.1, "palm.magnet_lift_mm", "must be >= 0"),
+    # 5.4 mm pockets keep 0.8 mm under the 14 mm pinky's dorsal face up to 7 - 0.8 - 2.7 = 3.5 mm
+    ("palm.magnet_lift_mm", 3.6, "palm.magnet_lift_mm", "must be <= 3.500 mm"),
     # a heel of height 11 (the file's) and no length
     ("palm.heel_length_mm", 0.0, "palm.heel_length_mm", "must be > 0 with the other heel dimension"),
     ("print.stl_tolerance_mm", 1e-9, "print.stl_tolerance_mm", "must be >= 0.001"),

@@ -101,11 +101,11 @@ def check(params: HandParams) -> None:
     walls = couplers.pocket_walls(params)
     digit = min(walls, key=walls.get)
     if walls[digit] < MIN_WALL - 1e-9:
-        raise ParamError("palm.tendon_drop_mm", round(mm(params.palm.tendon_drop), 6),
+        raise ParamError("palm.magnet_lift_mm", round(mm(params.palm.magnet_lift), 6),
                          f"the {digit} drive's coupler bore passes {mm(walls[digit]):.3f} mm from a magnet pocket of "
                          f"its socket (it runs level toward servo {SERVOS[chain(digit).servo].label}): the wall "
-                         f"must be >= {mm(MIN_WALL):g} mm, two perimeters; a larger palm.tendon_drop_mm (the "
-                         "finger tendons lower) or smaller magnets open it", src)
+                         f"must be >= {mm(MIN_WALL):g} mm, two perimeters; a larger palm.magnet_lift_mm (the "
+                         "pockets higher) or smaller magnets open it", src)
     statics.hand_statics(params)
     # the print aids refuse in their constructors what they cannot make (the angle gauge: faces too
     # short for their marks), which every build makes beside the parts

@@ -12,7 +12,7 @@ import numpy as np
 from .. import units
 from ..errors import ParamError
 from . import frames as F
-from .dimensions import magnet_pocket_offset, printed_hole
+from .dimensions import magnet_pocket_centres, printed_hole
 from .hand_params import HandParams
 from .memo import memoised
 from .routing import Point, Strand, routes
@@ -58,14 +58,14 @@ def pocket_walls(params: HandParams) -> dict[str, float]:
     magnet pockets (right-hand frames): the bore's axis from the tendon's exit on the socket face
     toward the servo pulley's tangent point (it runs level, at the tendon's height), sampled to the
     bore's end; each pocket a flat-bottomed cylinder into the face. Where the drive runs off the
-    socket's axis toward its servo the bore drifts sideways under a pocket; lowering the tendons
-    (``palm.tendon_drop_mm``) or smaller magnets open the wall."""
+    socket's axis toward its servo the bore drifts sideways under a pocket; lifting the pockets
+    (``palm.magnet_lift_mm``) or smaller magnets open the wall."""
     from . import forearm_layout as FL
 
     hw, pr = params.hardware, params.print
     pocket = printed_hole(hw.magnet_diameter + 2.0 * pr.magnet_clearance, pr.hole_compensation)
     depth = hw.magnet_thickness + pr.magnet_clearance
-    offset = magnet_pocket_offset(pocket, params.palm.wall)
+    centres = magnet_pocket_centres(pocket, params.palm.wall, params.palm.magnet_lift)
     out = {}
     for digit, cp in couplers(params).items():
         s = chain(digit).servo
@@ -76,8 +76,8 @@ def pocket_walls(params: HandParams) -> dict[str, float]:
         axis = face + np.linspace(0.0, cp.bore_end, 1201)[:, None] * u
         into = -T[:3, 1]
         gaps = []
-        for sx in (-offset, offset):
-            v = axis - (T @ np.array([sx, 0.0, 0.0, 1.0]))[:3]
+        for sx, sz in centres:
+            v = axis - (T @ np.array([sx, 0.0, sz, 1.0]))[:3]
             t = v @ into
             radial = np.linalg.norm(v - t[:, None] * into, axis=1)
             gaps.append(np.hypot(np.maximum(radial - pocket / 2.0, 0.0), np.maximum.reduce([-t, t - depth, 0.0 * t])))

@@ -50,11 +50,18 @@ def slot_back(thickness: float, hole_clearance: float) -> float:
     return thickness / 2.0 + hole_clearance
 
 
-def tendon_height(thinnest: float, wall: float, drop: float) -> float:
+def tendon_height(thinnest: float, wall: float) -> float:
     """z of the finger tendons where they cross the magnet face (any one unit): one palm ``wall``
-    above the palmar face of the ``thinnest`` finger, lowered by ``drop`` (``palm.tendon_drop_mm``:
-    where a drive's coupler bore would pass too near a magnet pocket)."""
-    return -thinnest / 2.0 + wall - drop
+    above the palmar face of the ``thinnest`` finger."""
+    return -thinnest / 2.0 + wall
+
+
+def magnet_pocket_centres(pocket: float, wall: float, lift: float) -> tuple[tuple[float, float], ...]:
+    """(x, z) on a finger base's magnet face and its palm socket's face of the two magnet pockets'
+    centres (any one unit): :func:`magnet_pocket_offset` either side, ``lift``
+    (``palm.magnet_lift_mm``) dorsal of the face's centre."""
+    s = magnet_pocket_offset(pocket, wall)
+    return ((-s, lift), (s, lift))
 
 
 def magnet_pocket_offset(pocket: float, wall: float) -> float:

@@ -169,10 +169,8 @@ def T_palm_thumb_cmc_base(params: HandParams, q15: float = 0.0) -> np.ndarray:
 
 def tendon_height(params: HandParams) -> float:
     """z of every finger tendon where it crosses the magnet face (palm and finger base):
-    one wall above the palmar face of the thinnest finger, less ``palm.tendon_drop_mm``
-    (:func:`.dimensions.tendon_height`)."""
-    return dimensions.tendon_height(min(f.thickness for f in params.fingers.values()), params.palm.wall,
-                                    params.palm.tendon_drop)
+    one wall above the palmar face of the thinnest finger (:func:`.dimensions.tendon_height`)."""
+    return dimensions.tendon_height(min(f.thickness for f in params.fingers.values()), params.palm.wall)
 
 
 def servo_pulley_lip(params: HandParams) -> float:

@@ -122,7 +122,7 @@ class Palm:
     thumb_cmc_axis: tuple[float, float, float]   # roll, pitch, yaw (rad)
     heel_height: float = 0.0     # m below the palmar face (0: a flat palm)
     heel_length: float = 0.0     # m from the palm's back face distally
-    tendon_drop: float = 0.0     # m the finger tendons cross the magnet face below one wall above the palmar face
+    magnet_lift: float = 0.0     # m the magnet pockets sit dorsal of the magnet face's centre
 
     @property
     def arc_radius(self) -> float:

@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 from .. import units
-from .dimensions import magnet_pocket_offset, printed_hole
+from .dimensions import magnet_pocket_centres, printed_hole
 from .frames import (T_palm_socket, T_palm_thumb_cmc_base, cmc_pulley_radius, pulley_cavity_margin, tendon_relief,
                      trans)
 from .hand_params import HandParams
@@ -149,20 +149,20 @@ def socket_pocket_gap(params: HandParams, T0: np.ndarray | None = None) -> tuple
     """(gap (m), finger, cut): the least distance from the finger sockets' magnet pockets to the
     thenar's cuts (:func:`thenar_cuts`), and where it is; negative where a cut reaches into a
     pocket. Each pocket (diameter and depth as the finger base's, at
-    ``dimensions.magnet_pocket_offset`` either side of its socket's centre, ``frames.T_palm_socket``)
+    ``dimensions.magnet_pocket_centres`` on its socket's face, ``frames.T_palm_socket``)
     is sampled on its wall and bottom; a point's distance to a cut is the largest of its radial and
     its two axial distances (a lower bound: the gap is never overstated).
     ``T0``: another CMC placement than the file's (T_palm_cmc_base at rest)."""
     pr, hw = params.print, params.hardware
     pocket = printed_hole(hw.magnet_diameter + 2.0 * pr.magnet_clearance, pr.hole_compensation)
     depth = hw.magnet_thickness + pr.magnet_clearance
-    off = magnet_pocket_offset(pocket, params.palm.wall)
+    centres = magnet_pocket_centres(pocket, params.palm.wall, params.palm.magnet_lift)
     a = np.linspace(0.0, 2.0 * math.pi, 72, endpoint=False)
     rings = [(r, d) for d in np.linspace(0.0, depth, 7) for r in (pocket / 2.0,)] + \
             [(pocket / 2.0 * k / 4.0, depth) for k in range(4)]
     # socket frame: y the face's outward normal, the pockets reach depth behind the face
-    local = np.vstack([np.c_[sx + r * np.cos(a), np.full_like(a, -d), r * np.sin(a), np.ones_like(a)]
-                       for sx in (-off, off) for r, d in rings])
+    local = np.vstack([np.c_[sx + r * np.cos(a), np.full_like(a, -d), sz + r * np.sin(a), np.ones_like(a)]
+                       for sx, sz in centres for r, d in rings])
     T0 = T_palm_thumb_cmc_base(params) if T0 is None else T0
     Ti = np.linalg.inv(T0)
     cuts = thenar_cuts(params, T0)

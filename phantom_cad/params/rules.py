@@ -125,16 +125,14 @@ def _magnets(c, fingers, palm, hardware, printing, cad) -> None:
     pocket = printed_hole(hardware.magnet_diameter + 2.0 * printing.magnet_clearance, printing.hole_compensation)
     span = 2.0 * pocket + palm.wall          # both pockets and the wall between them
     thinnest = min(f.thickness for f in fingers.values())
-    tendon_z = tendon_height(thinnest, palm.wall, palm.tendon_drop)
-    hole = hardware.tendon_diameter + 2.0 * printing.hole_clearance
-    relief = 2.0 * hole
-    lowest = -thinnest / 2.0 + MIN_WALL + hole / 2.0
-    if tendon_z < lowest - 1e-12:
-        raise ParamError("palm.tendon_drop_mm", round(palm.tendon_drop / MM, 6),
-                         f"must be <= {(palm.tendon_drop + tendon_z - lowest) / MM:.3f} mm: the finger tendons "
-                         f"enter their bases {-tendon_z / MM:.3f} mm below the centre, and the tendon hole "
-                         f"({hole / MM:.3f} mm) must keep a {MIN_WALL / MM:g} mm wall above the thinnest finger's "
-                         f"palmar face (thickness_mm = {thinnest / MM:g})", c.source)
+    tendon_z = tendon_height(thinnest, palm.wall)
+    relief = 2.0 * (hardware.tendon_diameter + 2.0 * printing.hole_clearance)
+    highest = thinnest / 2.0 - MIN_WALL - pocket / 2.0
+    if palm.magnet_lift > max(highest, 0.0) + 1e-12:
+        raise ParamError("palm.magnet_lift_mm", round(palm.magnet_lift / MM, 6),
+                         f"must be <= {highest / MM:.3f} mm: the magnet pockets ({pocket / MM:.3f} mm) must keep a "
+                         f"{MIN_WALL / MM:g} mm wall under the thinnest finger's dorsal face (thickness_mm = "
+                         f"{thinnest / MM:g})", c.source)
     for n, f in fingers.items():
         if span + 2.0 * MIN_WALL > f.width + 1e-12:
             raise ParamError("hardware.magnet.diameter_mm", round(hardware.magnet_diameter / MM, 6),
@@ -146,11 +144,10 @@ def _magnets(c, fingers, palm, hardware, printing, cad) -> None:
             raise ParamError("hardware.magnet.diameter_mm", round(hardware.magnet_diameter / MM, 6),
                              f"a magnet pocket ({pocket / MM:.3f} mm) must fit in the fingers.{n} magnet face "
                              f"(thickness_mm = {f.thickness / MM:g})", c.source)
-        if tendon_z + relief / 2.0 > -pocket / 2.0 + 1e-12:
+        if tendon_z + relief / 2.0 > palm.magnet_lift - pocket / 2.0 + 1e-12:
             raise ParamError("hardware.magnet.diameter_mm", round(hardware.magnet_diameter / MM, 6),
                              f"the tendon enters the fingers.{n} base {-tendon_z / MM:.3f} mm below its centre "
-                             f"(one palm.wall_mm above the thinnest finger's palmar face, less "
-                             f"palm.tendon_drop_mm); its channel "
+                             f"(one palm.wall_mm above the thinnest finger's palmar face); its channel "
                              f"({relief / MM:.3f} mm) must pass below the magnet pockets ({pocket / MM:.3f} mm)",
                              c.source)
     if pocket + 2.0 * palm.wall > palm.thickness + 1e-12:

@@ -329,7 +329,7 @@ def parse(document: Mapping[str, Any], source: str | None = None,
         thumb_cmc_axis=tuple(v * DEG for v in p.vector("thumb_cmc_axis_deg", 3, ge=-180, le=180)),
         heel_height=p.number("heel_height_mm", ge=0, default=0.0) * MM,
         heel_length=p.number("heel_length_mm", ge=0, default=0.0) * MM,
-        tendon_drop=p.number("tendon_drop_mm", ge=0, default=0.0) * MM,
+        magnet_lift=p.number("magnet_lift_mm", ge=0, default=0.0) * MM,
     )
     if (palm.heel_height > 0.0) != (palm.heel_length > 0.0):
         key, v = (("palm.heel_length_mm", palm.heel_length) if palm.heel_height > 0.0

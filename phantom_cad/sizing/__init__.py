@@ -213,34 +213,34 @@ def build_document(person: Person) -> dict:
     palm["thumb_cmc_offset_mm"] = [round(v * hl / S.REFERENCE_LENGTH, 4) for v in ref["palm"]["thumb_cmc_offset_mm"]]
     flexed_spacing(doc)
     palm["thickness_mm"] = palm_thickness(doc)
-    tendon_drop(doc)
+    magnet_lift(doc)
     return doc
 
 
-#: the grid (mm) palm.tendon_drop_mm is solved on
-DROP_STEP = 0.1
+#: the grid (mm) palm.magnet_lift_mm is solved on
+LIFT_STEP = 0.1
 
 
-def tendon_drop(doc: dict) -> None:
-    """Lower the finger tendons (``palm.tendon_drop_mm``, on a 0.1 mm grid) until every drive's
-    coupler bore keeps two perimeters to its socket's magnet pockets (``couplers.pocket_walls``, the
-    rule ``cad.preflight`` checks) at the document's placement; not at all where the bores clear,
-    and no lower than the rule allows (the tendon hole a wall above the thinnest finger's palmar
-    face): where nothing clears the document keeps the tendons where they were, and the rule
-    refuses it naming the wall."""
+def magnet_lift(doc: dict) -> None:
+    """Lift the magnet pockets on the finger bases' magnet faces and the palm sockets
+    (``palm.magnet_lift_mm``, on a 0.1 mm grid) until every finger drive's coupler bore, which runs
+    below them toward its servo, keeps two perimeters to them (``couplers.pocket_walls``, the rule
+    ``cad.preflight`` checks) at the document's placement; not at all where the bores clear, and
+    no higher than the rule allows (a wall under the thinnest finger's dorsal face): where nothing
+    clears the document keeps the pockets centred, and the rule refuses it naming the wall."""
     from ..kinematics import couplers
 
     palm = doc["palm"]
-    palm.pop("tendon_drop_mm", None)
+    palm.pop("magnet_lift_mm", None)
     for k in range(200):
         if k:
-            palm["tendon_drop_mm"] = round(k * DROP_STEP, 6)
+            palm["magnet_lift_mm"] = round(k * LIFT_STEP, 6)
         try:
             if min(couplers.pocket_walls(parse(doc)).values()) >= MIN_WALL - 1e-12:
                 return
         except ParamError:
             break
-    palm.pop("tendon_drop_mm", None)
+    palm.pop("magnet_lift_mm", None)
 
 
 def flexed_spacing(doc: dict) -> None:
@@ -385,7 +385,7 @@ def size(person: Person, check: Callable[[HandParams], None] | None = None, sear
             solved = copy.deepcopy(doc)
             solved["palm"]["thumb_cmc_offset_mm"] = [round(float(units.mm(v)), 4) for v in sol.offset]
             solved["palm"]["thumb_cmc_axis_deg"] = [round(float(units.deg(v)), 4) for v in sol.axis]
-            tendon_drop(solved)
+            magnet_lift(solved)
             consider(solved, True)
     if best is None:
         raise error

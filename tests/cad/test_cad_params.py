@@ -149,8 +149,9 @@ def test_a_wide_servo_widens_the_forearm_row(document):
         doc["servo"]["body_mm"] = [23.2, width, 25.3]
         if width == 20.0:
             # the wider row turns the pinky's drive further off its socket's axis: its coupler bore
-            # would leave 0.75 mm to a magnet pocket (couplers.pocket_walls), 0.84 mm 0.1 mm lower
-            doc["palm"]["tendon_drop_mm"] = 0.1
+            # would leave 0.75 mm to a magnet pocket (couplers.pocket_walls), 0.84 mm with the
+            # pockets 0.1 mm higher
+            doc["palm"]["magnet_lift_mm"] = 0.1
         p = parse(doc)
         preflight.check(p)
         ks = sorted(FL.row_servos(p), key=lambda k: FL.row_servos(p)[k][0, 3])

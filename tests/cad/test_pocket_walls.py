@@ -49,13 +49,13 @@ def _sized_160(tmp_path) -> dict:
 @pytest.mark.parametrize("hand", ["default", "sized_160"])
 def test_pocket_walls_are_opencascades_distance(document, tmp_path, hand):
     """The default hand (its pinky's wall 0.97 mm), and the 160 x 72 mm hand ``size`` makes with its
-    tendons where they were before it lowered them (``palm.tendon_drop_mm`` = 0: one palm wall above
-    the 12.5 mm ring and pinky's palmar face), where the pinky's drive, 21 deg off its socket's axis,
-    passes about 0.16 mm from a pocket (a file the rule refuses; the palm is still made of the same
-    cuts)."""
+    pockets where they were before it lifted them (``palm.magnet_lift_mm`` = 0: centred on the
+    magnet face, the tendons one palm wall above the 12.5 mm ring and pinky's palmar face), where the
+    pinky's drive, 21 deg off its socket's axis, passes about 0.15 mm from a pocket (a file the rule
+    refuses; the palm is still made of the same cuts)."""
     if hand == "sized_160":
         document = _sized_160(tmp_path)
-        assert document["palm"].pop("tendon_drop_mm") > 0.0
+        assert document["palm"].pop("magnet_lift_mm") > 0.0
     p = parse(document)
     walls = {f: w * 1000.0 for f, w in pocket_walls(p).items()}
     occ = _occ_walls(p)
@@ -66,26 +66,26 @@ def test_pocket_walls_are_opencascades_distance(document, tmp_path, hand):
 
 
 def test_a_bore_too_near_its_pockets_is_refused(tmp_path):
-    """``params validate`` refuses the 160 x 72 mm hand with its tendons not lowered: one line
-    naming palm.tendon_drop_mm, the digit, the wall OpenCascade measures (above) and the rule; the
-    file ``size`` wrote, with the drop, validates."""
+    """``params validate`` refuses the 160 x 72 mm hand with its pockets not lifted: one line
+    naming palm.magnet_lift_mm, the digit, the wall OpenCascade measures (above) and the rule; the
+    file ``size`` wrote, with the lift, validates."""
     import subprocess
     import sys
 
     import tomli_w
 
     document = _sized_160(tmp_path)
-    drop = document["palm"].pop("tendon_drop_mm")
-    path = tmp_path / "undropped.toml"
+    lift = document["palm"].pop("magnet_lift_mm")
+    path = tmp_path / "unlifted.toml"
     path.write_text(tomli_w.dumps(document), encoding="utf-8")
     run = subprocess.run([sys.executable, "-m", "phantom_cad", "params", "validate", str(path)],
                          capture_output=True, text=True)
     assert run.returncode == 2
     lines = run.stderr.strip().splitlines()
     assert len(lines) == 1
-    assert lines[0].startswith(f"error: {path}: palm.tendon_drop_mm = 0.0: the pinky drive's coupler bore passes 0.1")
-    assert lines[0].endswith("the wall must be >= 0.8 mm, two perimeters; a larger palm.tendon_drop_mm (the finger "
-                             "tendons lower) or smaller magnets open it")
+    assert lines[0].startswith(f"error: {path}: palm.magnet_lift_mm = 0.0: the pinky drive's coupler bore passes 0.1")
+    assert lines[0].endswith("the wall must be >= 0.8 mm, two perimeters; a larger palm.magnet_lift_mm (the "
+                             "pockets higher) or smaller magnets open it")
     assert pocket_walls(parse(document))["pinky"] < 0.8e-3
-    document["palm"]["tendon_drop_mm"] = drop
+    document["palm"]["magnet_lift_mm"] = lift
     assert min(pocket_walls(parse(document)).values()) >= 0.8e-3

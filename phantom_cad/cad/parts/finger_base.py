@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ... import canon
-from ...kinematics.dimensions import digit_entry, magnet_pocket_offset
+from ...kinematics.dimensions import digit_entry, magnet_pocket_centres
 from ...kinematics.frames import tendon_height
 from ...kinematics.hand_params import HandParams
 from ...kinematics.topology import FINGERS, digit_links
@@ -51,10 +51,10 @@ class FingerBase(RoutedPart, Part):
     def inputs(self) -> dict:
         doc = self.params.document
         return {**self.common_inputs(), "finger": canon.plain(digit_entry(doc, self.finger)),
-                # the tendon height at the magnet face follows the thinnest finger and the palm's
-                # tendon drop (an optional key: looked up in the palm's table, absent 0)
+                # the tendon height at the magnet face follows the thinnest finger; the pockets'
+                # lift is an optional key of the palm's table (absent: 0)
                 "thicknesses_mm": {f: doc["fingers"][f]["thickness_mm"] for f in FINGERS},
-                "tendon_drop_mm": next((v for k, v in doc["palm"].items() if k == "tendon_drop_mm"), 0.0)}
+                "magnet_lift_mm": next((v for k, v in doc["palm"].items() if k == "magnet_lift_mm"), 0.0)}
 
     def verify(self, shape) -> list[str]:
         """The metacarpal-side guide eyelet at d1 from the MCP axis; two magnet pockets."""
@@ -69,15 +69,12 @@ class FingerBase(RoutedPart, Part):
             out.append(f"{self.name}: {n} magnet pockets, expected {self.MAGNETS}")
         return out
 
-    @property
-    def magnet_offset(self) -> float:
-        """Lateral offset (+/-x) of the two magnet pockets: one wall between them."""
-        t = self.sec.tol
-        return magnet_pocket_offset(t.magnet_pocket_d, t.wall)
-
     def magnet_centres(self) -> list[np.ndarray]:
-        """Centres of the magnet pocket openings on the magnet face (link frame, mm)."""
-        return [np.array([s * self.magnet_offset, -self.length, 0.0]) for s in (-1.0, 1.0)]
+        """Centres of the magnet pocket openings on the magnet face (link frame, mm;
+        ``dimensions.magnet_pocket_centres``)."""
+        t = self.sec.tol
+        return [np.array([x, -self.length, z])
+                for x, z in magnet_pocket_centres(t.magnet_pocket_d, t.wall, mm(self.params.palm.magnet_lift))]
 
     @property
     def tendon_entry(self) -> np.ndarray:

@@ -108,9 +108,8 @@ class Palm(ServoMount, Part):
     def magnet_centres(self, finger: str) -> list[np.ndarray]:
         """Opening centres of the socket's magnet pockets, palm frame (mm)."""
         from .finger_base import FingerBase
-        s = FingerBase(self.params, finger).magnet_offset
         T = self.T_socket(finger)
-        return [(T @ np.array([sx, 0.0, 0.0, 1.0]))[:3] for sx in (-s, s)]
+        return [(T @ np.array([x, 0.0, z, 1.0]))[:3] for x, _, z in FingerBase(self.params, finger).magnet_centres()]
 
     @property
     def couplers(self) -> dict:
