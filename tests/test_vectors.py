@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from phantom_cad.kinematics.dimensions import digit_entry, digit_field, digit_path
-from phantom_cad.kinematics.vectors import clipped_acos, perpendicular_frame
+from phantom_cad.kinematics.vectors import (clipped_acos, nearest_on_box, nearest_on_cylinder,
+                                            perpendicular_frame)
 
 
 def test_clipped_acos_by_hand():
@@ -36,6 +37,26 @@ def test_perpendicular_frame_along_x_by_hand():
     # the axis least along x is y: v = x cross y = z, w = x cross z = -y
     v, w = perpendicular_frame([1.0, 0.0, 0.0])
     assert np.allclose(v, [0.0, 0.0, 1.0]) and np.allclose(w, [0.0, -1.0, 0.0])
+
+
+def test_nearest_on_a_box_by_hand():
+    """The unit cube: (2, 3, 0.5) is nearest its edge at (1, 1, 0.5), sqrt(1 + 4) away; a point
+    inside is its own nearest point; a box open up (z to infinity) is 0 above it."""
+    q = np.array([[2.0, 3.0, 0.5], [0.5, 0.5, 0.5], [0.5, 0.5, 7.0]])
+    d, n = nearest_on_box(q, (0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
+    assert d.tolist() == pytest.approx([math.sqrt(5.0), 0.0, 6.0])
+    assert np.allclose(n, [[1.0, 1.0, 0.5], [0.5, 0.5, 0.5], [0.5, 0.5, 1.0]])
+    assert nearest_on_box(q[2:], (0.0, 0.0, 0.0), (1.0, 1.0, np.inf))[0].tolist() == [0.0]
+
+
+def test_nearest_on_a_cylinder_by_hand():
+    """Radius 2 about z from 0 to 1: (3, 4, 5) is 5 from the axis, nearest the rim at (1.2, 1.6, 1):
+    (1.8, 2.4, 4) away, 5; open up, 3 (its radial distance); a point on the axis inside is its own."""
+    q = np.array([[3.0, 4.0, 5.0], [0.0, 0.0, 0.5]])
+    d, n = nearest_on_cylinder(q, 0.0, 1.0, 2.0)
+    assert d.tolist() == pytest.approx([5.0, 0.0])
+    assert np.allclose(n, [[1.2, 1.6, 1.0], [0.0, 0.0, 0.5]])
+    assert nearest_on_cylinder(q[:1], 0.0, np.inf, 2.0)[0].tolist() == pytest.approx([3.0])
 
 
 def test_a_digit_in_the_parameter_file():

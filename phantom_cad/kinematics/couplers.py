@@ -19,6 +19,7 @@ from .routing import Point, Strand, routes
 from .routing_paths import pose, strand_nodes, strand_path
 from .routing_rules import WRAP_MARGIN, servo_clamp_wrap
 from .topology import CHAINS, SERVOS, chain, joint, link
+from .vectors import nearest_on_cylinder
 
 
 @dataclass(frozen=True)
@@ -74,13 +75,9 @@ def pocket_walls(params: HandParams) -> dict[str, float]:
         tangent = (FL.T_palm_servo(params, s) @ np.array([-F.servo_radius(params, s), 0.0, 0.0, 1.0]))[:3]
         u = (tangent - face) / np.linalg.norm(tangent - face)
         axis = face + np.linspace(0.0, cp.bore_end, 1201)[:, None] * u
-        into = -T[:3, 1]
-        gaps = []
-        for sx, sz in centres:
-            v = axis - (T @ np.array([sx, 0.0, sz, 1.0]))[:3]
-            t = v @ into
-            radial = np.linalg.norm(v - t[:, None] * into, axis=1)
-            gaps.append(np.hypot(np.maximum(radial - pocket / 2.0, 0.0), np.maximum.reduce([-t, t - depth, 0.0 * t])))
+        R = np.c_[T[:3, 0], T[:3, 2], -T[:3, 1]]              # a pocket's frame: z into the face
+        gaps = [nearest_on_cylinder((axis - (T @ np.array([sx, 0.0, sz, 1.0]))[:3]) @ R, 0.0, depth, pocket / 2.0)[0]
+                for sx, sz in centres]
         out[digit] = float(np.min(gaps)) - cp.bore / 2.0
     return out
 

@@ -1,6 +1,7 @@
 """Vector helpers that the kinematics and every layer above share: the angle a cosine gives
 (clipped, as rounding puts two unit vectors' dot product just past +-1), the cross product of
-two 3-vectors and a frame across an axis. numpy only."""
+two 3-vectors, a frame across an axis, and the nearest points of a box and a cylinder to many
+points. numpy only."""
 
 from __future__ import annotations
 
@@ -33,3 +34,20 @@ def perpendicular_frame(u) -> tuple[np.ndarray, np.ndarray]:
     v = np.cross(u, np.eye(3)[int(np.argmin(np.abs(u)))])
     v /= np.linalg.norm(v)
     return v, np.cross(u, v)
+
+
+def nearest_on_box(q: np.ndarray, lo, hi) -> tuple[np.ndarray, np.ndarray]:
+    """(distance, nearest point) from each of the points ``q`` (n, 3) to the solid axis-aligned box
+    [lo, hi] (a bound may be infinite: a box open that way); 0 and the point itself inside."""
+    n = np.clip(q, lo, hi)
+    return np.linalg.norm(q - n, axis=1), n
+
+
+def nearest_on_cylinder(q: np.ndarray, z0: float, z1: float, r: float) -> tuple[np.ndarray, np.ndarray]:
+    """(distance, nearest point) from each of the points ``q`` (n, 3) to the solid cylinder of
+    radius ``r`` about the z axis from z0 to z1 (z1 may be infinite: open up); 0 and the point
+    itself inside."""
+    rho = np.hypot(q[:, 0], q[:, 1])
+    k = np.minimum(rho, r) / np.maximum(rho, 1e-300)
+    n = np.c_[q[:, 0] * k, q[:, 1] * k, np.clip(q[:, 2], z0, z1)]
+    return np.linalg.norm(q - n, axis=1), n

@@ -10,6 +10,7 @@ import pytest
 from phantom_cad.kinematics.couplers import pocket_walls
 from phantom_cad.kinematics.topology import FINGERS, chain
 from phantom_cad.params import parse
+from tests.support.sized import sized_document
 
 pytest.importorskip("build123d")
 
@@ -34,18 +35,6 @@ def _occ_walls(params) -> dict[str, float]:
     return out
 
 
-def _sized_160(tmp_path) -> dict:
-    import subprocess
-    import sys
-    import tomllib
-
-    out = tmp_path / "h160.toml"
-    run = subprocess.run([sys.executable, "-m", "phantom_cad", "size", "--hand-length", "160", "--hand-breadth",
-                          "72", "--no-search", "--out", str(out)], capture_output=True, text=True)
-    assert run.returncode == 0, run.stderr
-    return tomllib.loads(out.read_text(encoding="utf-8"))
-
-
 @pytest.mark.parametrize("hand", ["default", "sized_160"])
 def test_pocket_walls_are_opencascades_distance(document, tmp_path, hand):
     """The default hand (its pinky's wall 0.97 mm), and the 160 x 72 mm hand ``size`` makes with its
@@ -54,7 +43,7 @@ def test_pocket_walls_are_opencascades_distance(document, tmp_path, hand):
     pinky's drive, 21 deg off its socket's axis, passes about 0.15 mm from a pocket (a file the rule
     refuses; the palm is still made of the same cuts)."""
     if hand == "sized_160":
-        document = _sized_160(tmp_path)
+        document = sized_document(tmp_path, 160.0, 72.0)
         assert document["palm"].pop("magnet_lift_mm") > 0.0
     p = parse(document)
     walls = {f: w * 1000.0 for f, w in pocket_walls(p).items()}
@@ -74,7 +63,7 @@ def test_a_bore_too_near_its_pockets_is_refused(tmp_path):
 
     import tomli_w
 
-    document = _sized_160(tmp_path)
+    document = sized_document(tmp_path, 160.0, 72.0)
     lift = document["palm"].pop("magnet_lift_mm")
     path = tmp_path / "unlifted.toml"
     path.write_text(tomli_w.dumps(document), encoding="utf-8")

@@ -111,8 +111,7 @@ def _sized_hands(why_160: str) -> list:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("hand", _sized_hands("forearm module: 0.29 mm of wall between servo 6's loop channel "
-                                              "and servo 1's pocket"))
+@pytest.mark.parametrize("hand", ["sized_hand", "sized_hand_205", "sized_hand_digits"])
 def test_a_sized_hand_is_green_but_for_the_hold(request, sized_checks, hand):
     """Every row of a sized hand's check is green but, perhaps, the power grasp's hold (below);
     check_urdf may be "not run" where liburdfdom-tools is missing."""

@@ -428,6 +428,39 @@ def turn_sphere(c, r: float, into, out):
     return b.Solid.make_sphere(r, plane=plane)
 
 
+def channel_slots(p, u, length: float, r: float, gaps, flank: float) -> list:
+    """Slots joining a channel (radius ``r``, its axis from ``p`` along the unit vector ``u`` for
+    ``length``) to each cut whose wall to it is under ``flank`` somewhere along it: a box a channel
+    wide, along the run from a channel radius before the first such point to one past the last,
+    from the channel's axis toward the cut's nearest point into it (past where any of those
+    points' walls was: the cut's nearest face turns along the run). ``gaps``: per cut, a function
+    of points (n, 3) giving (distance, nearest point); a cut the channel already runs into is left
+    as it is."""
+    p, u = np.asarray(p, float), np.asarray(u, float)
+    s = np.linspace(0.0, length, int(length / 0.05) + 1)
+    axis = p + s[:, None] * u
+    out = []
+    for gap in gaps:
+        d, near = gap(axis)
+        close = d < r + flank
+        if not close.any() or d.min() < 1e-9:
+            continue
+        i = int(np.argmin(d))
+        y = near[i] - axis[i]
+        y -= u * (y @ u)
+        M = np.eye(4)
+        M[:3, 0], M[:3, 1], M[:3, 2], M[:3, 3] = u, y / np.linalg.norm(y), np.cross(u, y / np.linalg.norm(y)), p
+        out.append(transform(box(s[close].min() - r, s[close].max() + r, 0.0, 2.0 * (r + flank) + 0.5, -r, r), M))
+    return out
+
+
+def extrude_up(poly, height: float):
+    """A planar polygon (3D vertices in order) extruded ``height`` along +z."""
+    b = bd()
+    wire = b.Wire.make_polygon([b.Vector(*(float(v) for v in p)) for p in poly], close=True)
+    return b.Solid.extrude(b.Face(wire), b.Vector(0, 0, height))
+
+
 def prism_x(poly_yz, x0: float, x1: float):
     """Extrude a (y, z) polygon along x from x0 to x1."""
     b = bd()

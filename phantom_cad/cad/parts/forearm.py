@@ -26,11 +26,13 @@ import numpy as np
 
 from ...kinematics import forearm_layout as FL
 from ...kinematics import frames as F
+from ...kinematics.dimensions import FLANK
 from ...kinematics.hand_params import HandParams
 from ...kinematics.topology import FOREARM, SERVO_MOUNT, SERVOS, link
+from ...kinematics.vectors import nearest_on_box, nearest_on_cylinder
 from ..measure import circular_pockets
 from .base import Part
-from .common import Tolerances, box, build, cylinder, mm, polygon_cylinder, swept_up, transform
+from .common import Tolerances, box, build, channel_slots, cylinder, mm, polygon_cylinder, swept_up, transform
 from . import wrist
 from .servos import ServoMount
 
@@ -105,6 +107,28 @@ class Forearm(ServoMount, Part):
         T = np.linalg.inv(self.T_palm_part())
         return [transform(b, T) for b in self.body()]
 
+    def pocket_gap(self, servo: int, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(distance, nearest point) from each of ``points`` (palm frame, mm) to servo ``servo``'s
+        pocket as the one-row module cuts it: its body and ear pockets and its pulley's cavity,
+        open up along the shaft through the block's top."""
+        T = self.T_servo(servo)
+        q = (points - T[:3, 3]) @ T[:3, :3]                   # servo frame
+        zc0, _ = self.cavity_span(servo)
+        found = [nearest_on_box(q, lo, hi) for lo, hi in self.open_pockets(servo, np.inf)]
+        found.append(nearest_on_cylinder(q, zc0, np.inf, self.cavity_radius(servo)))
+        k = np.argmin([d for d, _ in found], axis=0)
+        near = np.choose(k[:, None], [n for _, n in found])
+        return np.min([d for d, _ in found], axis=0), near @ T[:3, :3].T + T[:3, 3]
+
+    def pocket_slots(self, servo: int, side: float, length: float) -> list:
+        """Slots (``common.channel_slots``) joining a drive's channel to the other servos' pockets
+        where it passes one less than a flank (two perimeters) away: the strand runs past the
+        pocket's corner in the open, as beside its own servo (``drive_slot``), rather than behind a
+        sliver of wall."""
+        p, u = self.drive_line(servo, side)
+        gaps = [lambda pts, j=j: self.pocket_gap(j, pts) for j in FOREARM_SERVOS if j != servo]
+        return channel_slots(p, u, length, self.tol.tendon_hole / 2.0, gaps, mm(FLANK))
+
     def build(self):
         t = self.tol
         x0, x1, y0, y1, z0, z1 = self.extents()
@@ -134,6 +158,7 @@ class Forearm(ServoMount, Part):
             for side in self.strand_sides(k):
                 p, u = self.drive_line(k, side)
                 tools.append(cylinder(p - u, p + u * reach, t.tendon_hole / 2.0))
+                tools += self.pocket_slots(k, side, reach)
                 slot = self.drive_slot(k, t.tendon_hole, side=side)
                 if slot is not None:
                     tools.append(transform(box(slot[0][0], slot[1][0], slot[0][1], slot[1][1], slot[0][2], slot[1][2]),

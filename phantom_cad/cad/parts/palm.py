@@ -39,12 +39,14 @@ from ...kinematics import forearm_layout as FL
 from ...kinematics import frames as F
 from ...kinematics import servo_geometry as SG
 from ...kinematics import thenar as TH
+from ...kinematics.dimensions import FLANK
 from ...kinematics.hand_params import HandParams
 from ...kinematics.topology import FINGERS, LINKS, chain
-from ...kinematics.vectors import clipped_acos
+from ...kinematics.vectors import clipped_acos, nearest_on_box, nearest_on_cylinder
 from ..measure import circular_pockets
 from .base import Part
-from .common import DigitSection, Tolerances, box, build, cylinder, mm, prism_x, transform, turn_sphere
+from .common import (DigitSection, Tolerances, box, build, channel_slots, cylinder, extrude_up, mm, prism_x, transform,
+                     turn_sphere)
 from . import wrist
 from .servos import ServoMount
 
@@ -182,25 +184,70 @@ class Palm(ServoMount, Part):
         below = 1.0 + t["journal_r"] * math.sqrt(max(1.0 - az * az, 0.0)) / az
         journal = cylinder((0.0, 0.0, t["face"] - below), (0.0, 0.0, q - h + 0.5), t["journal_r"])
         cavity = cylinder((0.0, 0.0, q - h), (0.0, 0.0, q + h), R)
-        def swept(v: np.ndarray, length: float):
-            """The cavity swept ``length`` along the unit vector v of the pulley's plane."""
+        return [journal, cavity, *(transform(box(0.0, length, -R, R, -h, h), M) for M, length in self.cavity_sweeps())]
+
+    def cavity_sweeps(self) -> list[tuple[np.ndarray, float]]:
+        """(frame, length) of each sweep of the CMC pulley's cavity (CMC base frame: the frame's x
+        along the sweep in the pulley's plane, its origin on the axis at the pulley's mid-plane; the
+        sweep a box from x = 0 to the length, the cavity's radius either side, its height): toward
+        servo 6 (servo 6's pulley lies in that plane) out of the palm, and, where the cavity reaches
+        the palm's back face (``servo_geometry.palm_back`` is its back), on out through that face (a
+        cylinder tangent to the face, or one sampled a hair inside it, left a skin of 0 to 0.55 mm)."""
+        t = self.thenar()
+        R, h, q = t["cavity_r"], t["cavity_h"], t["pulley"]
+
+        def frame(v: np.ndarray) -> np.ndarray:
             M = np.eye(4)
             M[:3, 0], M[:3, 1], M[:3, 2], M[:3, 3] = v, np.cross([0.0, 0.0, 1.0], v), (0.0, 0.0, 1.0), (0.0, 0.0, q)
-            return transform(box(0.0, length, -R, R, -h, h), M)
+            return M
 
-        # the slot: the cavity swept toward servo 6 (in the pulley's plane, servo 6's pulley lies in
-        # it) out of the palm
         phi = FL.cmc_loop_direction(self.params) + math.pi
-        tools = [journal, cavity, swept(np.array([math.cos(phi), math.sin(phi), 0.0]), 4.0 * R + 60.0)]
-        # the back: the cavity reaches the palm's back face (servo_geometry.palm_back is its back), so it
-        # is swept on out through that face, in the pulley's plane (a cylinder tangent to the face,
-        # or one sampled a hair inside it, left a skin of 0 to 0.55 mm)
+        out = [(frame(np.array([math.cos(phi), math.sin(phi), 0.0])), 4.0 * R + 60.0)]
         back = self.back_sweep()
         if back is not None:
             v, n = back
-            depth = ((T0 @ np.array([0.0, 0.0, q, 1.0]))[1] - mm(SG.palm_back(self.params)) + 2.0 * (R + h)) / n
-            tools.append(swept(v, depth))
-        return tools
+            depth = ((self.T_cmc() @ np.array([0.0, 0.0, q, 1.0]))[1] - mm(SG.palm_back(self.params)) + 2.0 * (R + h)) / n
+            out.append((frame(v), depth))
+        return out
+
+    def thenar_gap(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(distance, nearest point) from each of ``points`` (palm frame, mm) to the thenar's cuts
+        (:meth:`thenar_tools`: the journal, the CMC pulley's cavity and its sweeps)."""
+        t = self.thenar()
+        R, h, q = t["cavity_r"], t["cavity_h"], t["pulley"]
+        Tc = self.T_cmc()
+        az = Tc[2, 2]
+        below = 1.0 + t["journal_r"] * math.sqrt(max(1.0 - az * az, 0.0)) / az
+        local = (points - Tc[:3, 3]) @ Tc[:3, :3]               # CMC base frame
+        found = [(nearest_on_cylinder(local, t["face"] - below, q - h + 0.5, t["journal_r"]), Tc),
+                 (nearest_on_cylinder(local, q - h, q + h, R), Tc)]
+        for M, length in self.cavity_sweeps():
+            W = Tc @ M
+            found.append((nearest_on_box((points - W[:3, 3]) @ W[:3, :3], (0.0, -R, -h), (length, R, h)), W))
+        d = np.array([dn[0] for dn, _ in found])
+        near = np.array([dn[1] @ W[:3, :3].T + W[:3, 3] for dn, W in found])
+        k = np.argmin(d, axis=0)
+        return d[k, np.arange(len(points))], near[k, np.arange(len(points))]
+
+    def cavity_lip_openings(self) -> list:
+        """Where a sweep of the CMC pulley's cavity (:meth:`cavity_sweeps`, tilted with the CMC axis)
+        rises within two perimeters (and the mesh's tolerance) of the palm's dorsal face, the lip
+        between them is cut away: its top face's part that close, extruded up through the dorsal
+        face (palm frame). Nothing where every sweep stays below."""
+        t = self.thenar()
+        R, h = t["cavity_r"], t["cavity_h"]
+        Tc = self.T_cmc()
+        top = self.thickness / 2.0
+        out = []
+        for M, length in self.cavity_sweeps():
+            W = Tc @ M
+            corners = [(W @ np.array([x, y, h, 1.0]))[:3] for x, y in ((0.0, -R), (length, -R), (length, R), (0.0, R))]
+            cos = abs(W[2, 2])                              # the top face's tilt from the dorsal face
+            lip = (mm(FLANK) + mm(self.params.print.stl_tolerance) * 2.0) / max(cos, 1e-6)
+            poly = _clip_above(corners, top - lip)
+            if len(poly) >= 3:
+                out.append(extrude_up(poly, top + 1.0 - min(p[2] for p in poly)))
+        return out
 
     def back_sweep(self) -> tuple[np.ndarray, float] | None:
         """(v, n): the unit vector, in the CMC base frame and the pulley's plane, along which the
@@ -320,6 +367,9 @@ class Palm(ServoMount, Part):
             exit_ = (T @ np.array([0.0, 0.0, self.tendon_z, 1.0]))[:3]
             u = (tangent - exit_) / np.linalg.norm(tangent - exit_)
             tools.append(cylinder(exit_ - u, tangent + u, t.tendon_hole / 2.0))
+            # where it passes the thenar's cuts less than a flank away, it runs into them by a slot
+            tools += channel_slots(exit_, u, float(np.linalg.norm(tangent - exit_)), t.tendon_hole / 2.0,
+                                   [self.thenar_gap], mm(FLANK))
             # the drive's coupler (crimp stop and loop): a bore from the socket face to a clearance
             # past where it is at full travel (couplers.couplers)
             cp = self.couplers[f]
@@ -331,7 +381,7 @@ class Palm(ServoMount, Part):
                 body.append(transform(rail, _mm(F.T_palm_finger_base(self.params, f))))
         # the thenar: the journal, the CMC pulley's cavity and its radial slot
         Tc = self.T_cmc()
-        tools += [transform(tool, Tc) for tool in self.thenar_tools()]
+        tools += [transform(tool, Tc) for tool in self.thenar_tools()] + self.cavity_lip_openings()
         # thumb drive: from servo 1's pulley level to its turn above the cavity, down the CMC axis
         # (its run on down the column is the CMC base's)
         pts = self.thumb_tendon_path()
@@ -346,3 +396,15 @@ class Palm(ServoMount, Part):
             tools.append(cylinder(p + np.array([0, 0, 1.0]), p - np.array([0, 0, t.screw_engagement]),
                                   t.screw_pilot / 2.0))
         return body, tools
+
+
+def _clip_above(poly: list[np.ndarray], z: float) -> list[np.ndarray]:
+    """The part of a planar polygon (its vertices in order) at or above height z
+    (Sutherland-Hodgman against one plane)."""
+    out = []
+    for a, b in zip(poly, poly[1:] + poly[:1]):
+        if a[2] >= z:
+            out.append(a)
+        if (a[2] >= z) != (b[2] >= z):
+            out.append(a + (b - a) * (z - a[2]) / (b[2] - a[2]))
+    return out

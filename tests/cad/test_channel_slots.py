@@ -1,0 +1,39 @@
+"""``common.channel_slots``: a channel that passes a cut less than a flank away runs into it by a
+slot, worked by hand on boxes."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from phantom_cad.kinematics.vectors import nearest_on_box
+
+pytest.importorskip("build123d")
+
+
+def test_a_channel_passing_a_pocket_runs_into_it():
+    """A channel of radius 0.5 along x from 0 to 20; a pocket x 8..12, y 1..4, z -2..2: 0.5 mm of
+    wall where it passes (under a 0.8 mm flank) and under the flank where its distance to the
+    pocket, hypot(dx, 1), is under 1.3: from x = 12 - sqrt(1.3^2 - 1) = 7.169 to 12.831. The slot
+    runs a channel radius further each way, from the axis 2 (0.5 + 0.8) + 0.5 = 3.1 into the pocket,
+    a channel wide. A pocket from y = 2 (1.5 mm of wall) gets none."""
+    from phantom_cad.cad.parts.common import channel_slots
+
+    reach = math.sqrt(1.3 ** 2 - 1.0)
+    near = lambda pts: nearest_on_box(pts, (8.0, 1.0, -2.0), (12.0, 4.0, 2.0))     # noqa: E731
+    far = lambda pts: nearest_on_box(pts, (8.0, 2.0, -2.0), (12.0, 4.0, 2.0))      # noqa: E731
+    slots = channel_slots((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), 20.0, 0.5, [near, far], 0.8)
+    assert len(slots) == 1
+    bb = slots[0].bounding_box()
+    assert tuple(bb.min) == pytest.approx((8.0 - reach - 0.5, 0.0, -0.5), abs=0.05)
+    assert tuple(bb.max) == pytest.approx((12.0 + reach + 0.5, 3.1, 0.5), abs=0.05)
+    assert slots[0].volume == pytest.approx((4.0 + 2.0 * reach + 1.0) * 3.1 * 1.0, rel=0.02)
+
+
+def test_a_channel_already_in_a_pocket_is_left_alone():
+    from phantom_cad.cad.parts.common import channel_slots
+
+    inside = lambda pts: nearest_on_box(pts, (8.0, -1.0, -2.0), (12.0, 4.0, 2.0))  # noqa: E731
+    assert channel_slots(np.zeros(3), np.array([1.0, 0.0, 0.0]), 20.0, 0.5, [inside], 0.8) == []
