@@ -11,6 +11,7 @@ import numpy as np
 
 from .. import units
 from ..errors import ParamError
+from . import forearm_layout as FL
 from . import frames as F
 from .dimensions import magnet_pocket_centres, printed_hole
 from .hand_params import HandParams
@@ -61,8 +62,6 @@ def pocket_walls(params: HandParams) -> dict[str, float]:
     bore's end; each pocket a flat-bottomed cylinder into the face. Where the drive runs off the
     socket's axis toward its servo the bore drifts sideways under a pocket; lifting the pockets
     (``palm.magnet_lift_mm``) or smaller magnets open the wall."""
-    from . import forearm_layout as FL
-
     hw, pr = params.hardware, params.print
     pocket = printed_hole(hw.magnet_diameter + 2.0 * pr.magnet_clearance, pr.hole_compensation)
     depth = hw.magnet_thickness + pr.magnet_clearance

@@ -177,14 +177,20 @@ class Palm(ServoMount, Part):
         out of the palm toward servo 6 (CMC base frame): the loop's two strands run in it, in the
         pulley's plane, and the pulley slides in through it."""
         t = self.thenar()
-        T0 = self.T_cmc()
         R, h, q = t["cavity_r"], t["cavity_h"], t["pulley"]
-        # from below the palmar face all round (the axis is tilted: the journal's end disc too)
-        az = T0[2, 2]
-        below = 1.0 + t["journal_r"] * math.sqrt(max(1.0 - az * az, 0.0)) / az
-        journal = cylinder((0.0, 0.0, t["face"] - below), (0.0, 0.0, q - h + 0.5), t["journal_r"])
+        z0, z1, rj = self.journal()
+        journal = cylinder((0.0, 0.0, z0), (0.0, 0.0, z1), rj)
         cavity = cylinder((0.0, 0.0, q - h), (0.0, 0.0, q + h), R)
         return [journal, cavity, *(transform(box(0.0, length, -R, R, -h, h), M) for M, length in self.cavity_sweeps())]
+
+    def journal(self) -> tuple[float, float, float]:
+        """(z0, z1, radius) of the CMC column's journal (CMC base frame): from below the palmar face
+        all round (the axis is tilted: the journal's end disc too) to half a millimetre into the
+        pulley's cavity."""
+        t = self.thenar()
+        az = self.T_cmc()[2, 2]
+        below = 1.0 + t["journal_r"] * math.sqrt(max(1.0 - az * az, 0.0)) / az
+        return t["face"] - below, t["pulley"] - t["cavity_h"] + 0.5, t["journal_r"]
 
     def cavity_sweeps(self) -> list[tuple[np.ndarray, float]]:
         """(frame, length) of each sweep of the CMC pulley's cavity (CMC base frame: the frame's x
@@ -216,11 +222,8 @@ class Palm(ServoMount, Part):
         t = self.thenar()
         R, h, q = t["cavity_r"], t["cavity_h"], t["pulley"]
         Tc = self.T_cmc()
-        az = Tc[2, 2]
-        below = 1.0 + t["journal_r"] * math.sqrt(max(1.0 - az * az, 0.0)) / az
         local = (points - Tc[:3, 3]) @ Tc[:3, :3]               # CMC base frame
-        found = [(nearest_on_cylinder(local, t["face"] - below, q - h + 0.5, t["journal_r"]), Tc),
-                 (nearest_on_cylinder(local, q - h, q + h, R), Tc)]
+        found = [(nearest_on_cylinder(local, *self.journal()), Tc), (nearest_on_cylinder(local, q - h, q + h, R), Tc)]
         for M, length in self.cavity_sweeps():
             W = Tc @ M
             found.append((nearest_on_box((points - W[:3, 3]) @ W[:3, :3], (0.0, -R, -h), (length, R, h)), W))
