@@ -127,8 +127,9 @@ def _magnets(c, fingers, palm, hardware, printing, cad) -> None:
     thinnest = min(f.thickness for f in fingers.values())
     tendon_z = tendon_height(thinnest, palm.wall)
     relief = 2.0 * (hardware.tendon_diameter + 2.0 * printing.hole_clearance)
-    highest = thinnest / 2.0 - MIN_WALL - pocket / 2.0
-    if palm.magnet_lift > max(highest, 0.0) + 1e-12:
+    # centred pockets (no lift) are held by the rule below that they fit at all
+    highest = max(thinnest / 2.0 - MIN_WALL - pocket / 2.0, 0.0)
+    if palm.magnet_lift > highest + 1e-12:
         raise ParamError("palm.magnet_lift_mm", round(palm.magnet_lift / MM, 6),
                          f"must be <= {highest / MM:.3f} mm: the magnet pockets ({pocket / MM:.3f} mm) must keep a "
                          f"{MIN_WALL / MM:g} mm wall under the thinnest finger's dorsal face (thickness_mm = "
