@@ -28,7 +28,7 @@ from phantom_cad.kinematics.topology import CMC_PULLEY, CMC_Q, CMC_SERVO, FINGER
 from phantom_cad.params.io import DEFAULT_PARAMS, load_params
 
 
-#: issue 12's power grasp: a cylinder of this diameter (mm) across the palm
+#: the power grasp's cylinder across the palm (mm): the paper's 35 mm on its 189 mm hand, the default
 CYLINDER_MM = 35.0
 #: how far (mm) each level of an exploded digit moves along the digit, the forearm module back from the
 #: wrist, the servo pulleys up off their servos
@@ -128,12 +128,13 @@ def postures(p, meshes, solids, out: Path) -> None:
                       + "; target 10 mm (docs/parts.md, known gaps)",
                       elev=5.0, azim=0.0, size_px=1000)
     print(f"wrote {out / 'hand_power.png'}")
-    # issue 12's 35 mm cylinder across the palm at first contact (cad.grasp.power_grasp: the first position
-    # from the palm's distal edge where every finger touches it past its equator, the thumb out of the way;
-    # pressing on, MuJoCo's fingers hold it against the palm's heel, palm down: docs/parts.md)
+    # the 35 mm cylinder laid against the palm's heel at first contact (cad.grasp.power_grasp: every finger
+    # touches it past its equator, the thumb out of the way; pressing on, MuJoCo's fingers hold it against
+    # the heel, palm down: docs/parts.md)
     g, _ = grasp.power_grasp(h, solids, CYLINDER_MM)
     if g is None:
-        sys.exit(f"error: no position across the palm where the four fingers reach past a {CYLINDER_MM} mm cylinder's equator")
+        sys.exit(f"error: the four fingers do not all reach past the equator of a {CYLINDER_MM} mm cylinder laid against "
+                 "the heel")
     T = assembly.pose_transforms(p, h.forward(g.u, compensated=True))
     cv, cf = step_stl.tessellate(g.solid(), 0.05)
     cylinder = render.MeshItem("cylinder", cv, cf, (0.85, 0.85, 0.80), f"{CYLINDER_MM:g} mm cylinder")

@@ -9,8 +9,6 @@ from tests.support import hands, shared
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_PARAMS = ROOT / "params" / "phantom.toml"
-#: the power grasp's cylinder across the palm (mm): the paper's 35 mm
-POWER_GRASP_MM = 35.0
 
 
 @pytest.fixture(scope="session")
@@ -232,10 +230,11 @@ def hand_meshes(hand_entries):
 @pytest.fixture(scope="session")
 def power_grasps(hand_parts, shared_root):
     """``power_grasps(kind)`` -> (hand, grasp, every position tried) of ``cad.grasp.power_grasp``:
-    the 35 mm cylinder across the palm of one of the reference hands, on its export's solids; made
-    once per run."""
+    the power grasp's cylinder (35 mm at 189 mm, scaled with the hand) across the palm of one of the
+    reference hands, on its export's solids; made once per run."""
     from phantom_cad import make_hand
     from phantom_cad.cad import grasp
+    from phantom_cad.kinematics.power_grasp import power_grasp_diameter_mm
 
     done = {}
 
@@ -247,7 +246,7 @@ def power_grasps(hand_parts, shared_root):
             # and the left hand drops it (not yet re-tuned)
             h = make_hand(p, compensation="paper")
             found = shared.once(shared_root, f"power-grasp-{kind}",
-                                lambda: grasp.power_grasp(h, shapes, POWER_GRASP_MM))
+                                lambda: grasp.power_grasp(h, shapes, power_grasp_diameter_mm(p)))
             done[kind] = (h, *found)
         return done[kind]
     return get

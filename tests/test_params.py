@@ -544,7 +544,7 @@ def test_the_cmc_base_keeps_clear_of_the_palms_heel(tmp_path, capsys, document):
     document["hardware"]["screw_diameter_mm"] = 2.5
     path, runs = _refused_by_the_command_line(tmp_path, capsys, document)
     want = (f"error: {path}: palm.thumb_cmc_offset_mm = [-25.75, -73.78, -54.104009]: with palm.thumb_cmc_axis_deg "
-            "and the palm's heel (palm.heel_height_mm = 11, palm.heel_length_mm = 40) the CMC base (its hub, its "
+            "and the palm's heel (palm.heel_height_mm = 11, palm.heel_length_mm = 43.8) the CMC base (its hub, its "
             "column up to the palm and its arm) comes -4.933 mm from the heel (negative: into it); the gap must be "
             ">= print.hole_clearance_mm = 0.2 mm")
     for code, err, files in runs:

@@ -14,7 +14,8 @@ whose closest points lie on both pads (``on_pad``) is returned.
 
 **Power grasp** (``cylinder_grasp``, ``power_grasp``). A cylinder lies across the palm, its axis
 along the knuckle line (the palm frame's x), resting against the palm (``PALM_GAP_MM`` off it,
-``resting_axis_z``) and spanning the finger bases; each finger flexes from rest until one of its
+``resting_axis_z``), laid against its heel where it has one (``kinematics.power_grasp``), and
+spanning the finger bases; each finger flexes from rest until one of its
 phalanges comes within reach of it; the thumb turns out of the way (the first command pair of a grid over its CMC's
 and its IP/MP's travel where its parts clear the cylinder and the closed fingers). The first-contact
 criterion (``CylinderGrasp.past_equator``): every finger touches it before the end of its travel at a
@@ -40,54 +41,19 @@ import numpy as np
 from .. import units
 from ..kinematics import frames, opposition
 from ..kinematics.hand_params import HandParams
+from ..kinematics.power_grasp import PALM_GAP_MM, REACH_MM, STEPS, close_onto, laid_axis_y, wrap_angle_deg
 from ..kinematics.topology import CMC_SERVO, FINGERS, N_SERVOS, THUMB_CHAIN, chain, digit_links
 from .assembly import pose_transforms
 from .measure import placed
 
 
-#: the surface distance (mm) a grasp's contacts must come within to count as touching
-REACH_MM = 1.0
 #: how many of the model's contacts (distinct thumb commands, squarest first) are tried
 CANDIDATES = 8
-#: bisection steps on the finger's command (2^-40 of its travel)
-STEPS = 40
-#: OpenCascade's confusion tolerance (Precision::Confusion, model units: mm): two points nearer than
-#: this are one, so a distance at or under it is a contact, not a gap
-CONFUSION_MM = 1e-7
-#: how far (mm) the power grasp's cylinder lies off the palm's palmar face: in contact, within reach
-PALM_GAP_MM = 0.5
 #: ``resting_axis_z`` stops rising when its clearance is within this of the gap (mm)
 ADVANCE_TOL_MM = 1e-9
-#: the power grasp's cylinder: the paper's 35 mm on its 189 mm hand, scaled with the hand's length
-#: (``power_grasp_diameter_mm``)
-POWER_GRASP_MM, POWER_GRASP_HAND_MM = 35.0, 189.0
 #: the thumb's CMC and IP/MP commands tried (evenly over each travel) to turn it out of the way of the
 #: power grasp's cylinder and the closed fingers
 THUMB_CMC_STEPS, THUMB_FLEX_STEPS = 21, 5
-
-
-def close_onto(distance_at, reach_mm: float = REACH_MM):
-    """Bisection on a command fraction s in [0, 1] (0 the digit at rest, 1 at the end of the move)
-    for a distance in (CONFUSION_MM, reach_mm]: ``distance_at(s)`` returns (distance mm, anything); the result
-    is (s, that tuple) or None when the digit is already within reach at rest, never gets within
-    reach at s = 1, or the bisection ends without a distance in the band."""
-    first = distance_at(0.0)
-    if first[0] <= reach_mm:
-        return None
-    last = distance_at(1.0)
-    if last[0] > reach_mm:
-        return None
-    lo, hi = 0.0, 1.0
-    for _ in range(STEPS):
-        s = 0.5 * (lo + hi)
-        r = distance_at(s)
-        if r[0] > reach_mm:
-            lo = s
-        elif r[0] <= CONFUSION_MM:
-            hi = s
-        else:
-            return s, r
-    return None
 
 
 @dataclass(frozen=True)
@@ -270,13 +236,6 @@ def cylinder_distance(shape, diameter_mm: float, axis_y_mm: float, axis_z_mm: fl
     return d, np.array(tuple(pa))
 
 
-def wrap_angle_deg(point, axis_y_mm: float, axis_z_mm: float) -> float:
-    """The angle (deg, 0-360) of a point (hand frame, mm) about the cylinder's axis, from the palm's
-    contact line (+z, dorsal: toward the palm) toward the fingertips (+y): 90 is the cylinder's
-    distal side, 180 its palmar side, under it."""
-    return float(units.deg(np.arctan2(float(point[1]) - axis_y_mm, float(point[2]) - axis_z_mm)) % 360.0)
-
-
 def resting_axis_z(palm, diameter_mm: float, axis_y_mm: float, x_mm: tuple[float, float],
                    gap_mm: float = PALM_GAP_MM) -> float:
     """The z (mm, hand frame) of the axis of a cylinder across the palm at ``axis_y_mm``, as close to
@@ -382,19 +341,19 @@ def cylinder_grasp(hand, solids: dict, diameter_mm: float, axis_y_mm: float,
                          float(palm.distance_to(cyl)), fingers, thumb_mm)
 
 
-def power_grasp_diameter_mm(params: HandParams) -> float:
-    """The diameter (mm) of the power grasp's cylinder for a hand: :data:`POWER_GRASP_MM` times its
-    length over :data:`POWER_GRASP_HAND_MM`."""
-    return POWER_GRASP_MM * units.mm(params.hand_length) / POWER_GRASP_HAND_MM
-
-
 def power_grasp(hand, solids: dict, diameter_mm: float, step_mm: float = 5.0,
                 reach_mm: float = REACH_MM) -> tuple[CylinderGrasp | None, list[CylinderGrasp]]:
-    """The cylinder of ``diameter_mm`` tried across the palm from its distal edge (the axis over the
-    palm solid's most distal point) toward the wrist in ``step_mm`` steps, as long as the axis lies
-    over the palm: (the first position where every finger reaches past its equator
-    (``CylinderGrasp.past_equator``) or None, every grasp tried)."""
+    """(the grasp of the cylinder of ``diameter_mm`` across the palm if every finger reaches past its
+    equator there (``CylinderGrasp.past_equator``), else None; every grasp tried). On a palm with a
+    heel the cylinder is laid against it (``kinematics.power_grasp.laid_axis_y``), the one position
+    tried; on a flat palm it is tried from the palm's distal edge (the axis over the palm solid's most
+    distal point) toward the wrist in ``step_mm`` steps, as long as the axis lies over the palm, and
+    the first position that wraps is the grasp."""
     p = hand.params
+    laid = laid_axis_y(p, diameter_mm)
+    if laid is not None:
+        g = cylinder_grasp(hand, solids, diameter_mm, laid, reach_mm)
+        return (g if g.past_equator else None), [g]
     T0 = pose_transforms(p)
     box = placed(solids["palm"], T0["palm"]).bounding_box()
     tried = []

@@ -11,9 +11,6 @@ import typer
 
 #: the first line of every file ``size`` writes: it replaces only files that start with it
 MARKER = "# phantom-cad size:"
-#: the 95th-percentile adult palm at the reference hand (mm): breadth, and thickness with the heel
-#: (tests/cad/test_human_scale.py), scaled with the hand length
-PALM_ENVELOPE = (95.0, 35.0)
 
 
 def size(
@@ -64,13 +61,14 @@ def report(p, searched: bool) -> list[str]:
     """What a designer acts on: each digit's section, travel and reach against Table I; the
     opposition; the power grasp's cylinder; the palm against its envelope; the forearm module's
     breadth; the thinnest designed wall."""
-    from ..cad.grasp import power_grasp_diameter_mm
     from ..kinematics import forearm_layout as FL
     from ..kinematics import frames as F
     from ..kinematics import servo_geometry as SG
     from ..kinematics import thenar as TH
     from ..kinematics.model import Hand
+    from ..kinematics.power_grasp import power_grasp_diameter_mm
     from ..params.rules import MIN_WALL
+    from ..sizing import solvers as S
     from ..units import deg, mm
     from . import opposition_lines
 
@@ -97,7 +95,7 @@ def report(p, searched: bool) -> list[str]:
     xt = mm(min(float(pts[k][:, 0].min()) for k in ("journal", "turn")))
     breadth = max(x1, xt) - min(x0, xt)
     thick = mm(p.palm.thickness + p.palm.heel_height)
-    env_b, env_t = (v * k for v in PALM_ENVELOPE)
+    env_b, env_t = (v * k for v in S.PALM_ENVELOPE)
     out.append(f"palm: {breadth:.1f} mm broad (metacarpal block and thenar), {thick:.1f} mm thick with the heel; "
                f"the 95th-percentile envelope at this hand length: {env_b:.1f} x {env_t:.1f} mm"
                f"{'' if breadth <= env_b + 1e-9 and thick <= env_t + 1e-9 else ' (outside it)'}")

@@ -561,21 +561,25 @@ def opposition_rows(params: HandParams, solids: dict, meshes: dict) -> list[Row]
 
 
 def power_grasp_rows(export: Export, params: HandParams, solids: dict, log=lambda msg: None) -> list[Row]:
-    """The power grasp of a cylinder scaled with the hand (``cad.grasp.power_grasp_diameter_mm``):
-    enclosed on the solids (``cad.grasp.power_grasp``: every finger touches it past its equator, the
-    thumb clear), then held palm down in MuJoCo (``export.hold.hold_cylinder``). The commands follow
-    the paper's compensation, as the MuJoCo hold was tuned on it."""
+    """The power grasp of a cylinder scaled with the hand (``kinematics.power_grasp``): enclosed on
+    the solids (``cad.grasp.power_grasp``: laid against the palm's heel, every finger touches it
+    past its equator, the thumb clear), then held palm down in MuJoCo (``export.hold.hold_cylinder``).
+    The commands follow the paper's compensation, as the MuJoCo hold was tuned on it."""
     from ..cad import grasp
+    from ..kinematics.power_grasp import laid_axis_y, power_grasp_diameter_mm
     from .hold import HOLD_KG, MOVED_MM, SQUEEZED_MM, hold_cylinder
 
-    diameter = grasp.power_grasp_diameter_mm(params)
+    diameter = power_grasp_diameter_mm(params)
     g, tried = grasp.power_grasp(Hand(params, None, "paper"), solids, diameter)
     name = f"power grasp: a {diameter:.1f} mm cylinder across the palm"
     if g is None:
         last = tried[-1] if tried else None
         wraps = " / ".join("-" if c is None else f"{c.wrap_deg:.0f}" for c in (last.fingers.values() if last else ()))
-        return [Row(f"{name} enclosed (cad.grasp.power_grasp)", "no position across the palm",
-                    "every finger past its equator", f"wrap {wraps} deg (last tried)", "> 90 deg", False)]
+        where = ("no position across the palm" if laid_axis_y(params, diameter) is None or last is None else
+                 f"against the heel (axis y {last.axis_y_mm:.1f} mm)")
+        return [Row(f"{name} enclosed (cad.grasp.power_grasp)", where, "every finger past its equator",
+                    f"wrap {wraps} deg" + ("" if last is None or len(tried) == 1 else " (last tried)"), "> 90 deg",
+                    False)]
     wraps = [c.wrap_deg for c in g.fingers.values()]
     rows = [Row(f"{name} enclosed (cad.grasp.power_grasp)", " / ".join(g.fingers) + f" (axis y {g.axis_y_mm:.1f} mm)",
                 "every finger past its equator", "wrap " + " / ".join(f"{w:.0f}" for w in wraps) + " deg",

@@ -29,7 +29,7 @@ from ..errors import UserError, one_line
 from ..kinematics import frames
 from ..kinematics.hand_params import HandParams
 from ..kinematics.link_frames import link_transforms
-from ..kinematics.servo_geometry import palm_back
+from ..kinematics.forearm_layout import heel_clear_y
 from ..kinematics.topology import CMC_SERVO, DIGITS, FINGERS, JOINTS, SERVOS, THUMB_CHAIN, chain, digit_links
 from .hold import Trial
 
@@ -316,12 +316,8 @@ def placement(hand, grasp: Grasp, u_approach: np.ndarray, u_close: np.ndarray, h
         # clear of the palm's heel (under the palmar face, from its back face heel_length distally):
         # against its front edge when the knuckle rule would put it into the heel; its bounding
         # circle (the larger half extent) against the heel's front corner
-        r = max(half[0], half[1]) + GAP
-        front = palm_back(p) + p.palm.heel_length
-        bottom = -p.palm.thickness / 2 - p.palm.heel_height
         if p.palm.heel_height > 0.0:
-            y = max(y, front + (math.sqrt(r * r - (z - bottom) ** 2) if z < bottom and r > bottom - z else
-                                r if z >= bottom else 0.0))
+            y = max(y, heel_clear_y(p, z, max(half[0], half[1]) + GAP))
         out[:3, 3] = (bases[:, 0].mean(), y, z)
         return out
     # on the pad of the first pressing finger, at the closing posture (the finger is there from the

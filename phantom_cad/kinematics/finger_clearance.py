@@ -29,8 +29,8 @@ GRID = tuple(k / 20.0 for k in range(21))
 
 # the 8 corners (as signs) and 12 edges (corner index pairs) of a box
 _SIGNS = np.array(list(itertools.product((-1.0, 1.0), repeat=3)))
-_EDGES = np.array([(i, j) for i in range(8) for j in range(i + 1, 8)
-                   if np.count_nonzero(_SIGNS[i] != _SIGNS[j]) == 1])
+BOX_EDGES = np.array([(i, j) for i in range(8) for j in range(i + 1, 8)
+                      if np.count_nonzero(_SIGNS[i] != _SIGNS[j]) == 1])
 
 
 def link_boxes(params: HandParams, finger: str) -> dict[str, list[tuple[np.ndarray, np.ndarray]]]:
@@ -55,20 +55,20 @@ def link_boxes(params: HandParams, finger: str) -> dict[str, list[tuple[np.ndarr
     return out
 
 
-def posed_boxes(params: HandParams, hand, fractions=GRID) -> dict[str, tuple]:
+def posed_boxes(params: HandParams, hand, fractions=GRID, compensated: bool = False) -> dict[str, tuple]:
     """{finger: (fixed, moving)} of every finger's boxes over its servo's travel, each a tuple
     (centres (n, 3), axes (n, 3, 3), half extents (n, 3)) in the palm frame (right hand, m):
     ``fixed`` the finger base's (n = 1), ``moving`` the phalanges' at each fraction (n =
     len(fractions) x boxes, the fraction slowest). ``hand``: the model (``Hand``) whose ``forward``
-    poses the fingers (ideal coupling, as the collision check poses them); each finger hangs on its
-    own servo, so one pose per fraction holds all four."""
+    poses the fingers (ideal coupling, as the collision check poses them, or ``compensated``); each
+    finger hangs on its own servo, so one pose per fraction holds all four."""
     servos = [s.index for s in SERVOS if s.digit in FINGERS]
     boxes = {f: link_boxes(params, f) for f in FINGERS}
     out = {f: ([], []) for f in FINGERS}
     for k, frac in enumerate(fractions):
         u = np.array(hand.u_min, float)
         u[servos] += frac * (hand.u_max[servos] - hand.u_min[servos])
-        T = link_transforms(params, hand.forward(u), mirrored=False)
+        T = link_transforms(params, hand.forward(u, compensated=compensated), mirrored=False)
         for f in FINGERS:
             fixed, moving = out[f]
             for ln in digit_links(f):
@@ -141,7 +141,8 @@ def separating_gap(a, b) -> np.ndarray:
     return np.concatenate(gaps, axis=1).max(axis=1)
 
 
-def _corners(box) -> np.ndarray:
+def box_corners(box) -> np.ndarray:
+    """The 8 corners (n, 8, 3) of boxes (centres, axes, half extents), in :data:`BOX_EDGES`' order."""
     c, R, h = box
     return c[:, None, :] + np.einsum("nij,nkj->nki", R, _SIGNS * h[:, None, :])
 
@@ -154,11 +155,11 @@ def _point_box(p: np.ndarray, box) -> np.ndarray:
 
 
 def _separated_distance(a, b) -> np.ndarray:
-    pa, pb = _corners(a), _corners(b)
+    pa, pb = box_corners(a), box_corners(b)
     best = np.minimum(_point_box(pa, b), _point_box(pb, a))
     # every edge of a against every edge of b
-    p0, p1 = pa[:, _EDGES[:, 0]], pa[:, _EDGES[:, 1]]               # (n, 12, 3)
-    q0, q1 = pb[:, _EDGES[:, 0]], pb[:, _EDGES[:, 1]]
+    p0, p1 = pa[:, BOX_EDGES[:, 0]], pa[:, BOX_EDGES[:, 1]]               # (n, 12, 3)
+    q0, q1 = pb[:, BOX_EDGES[:, 0]], pb[:, BOX_EDGES[:, 1]]
     d = segment_distance(p0[:, :, None], p1[:, :, None], q0[:, None], q1[:, None])[0]
     return np.minimum(best, d.reshape(len(d), -1).min(axis=1))
 

@@ -159,6 +159,18 @@ def heel_box(params: HandParams) -> tuple[np.ndarray, np.ndarray] | None:
             np.array([x1, y0 + pm.heel_length, -pm.thickness / 2.0]))
 
 
+def heel_clear_y(params: HandParams, z: float, r: float) -> float:
+    """The least y (m) of the centre of a circle of radius ``r`` at height ``z`` (m, palm frame)
+    moving along y that keeps it clear of the heel (:func:`heel_box`): ``r`` in front of its front
+    face where the circle's centre lies at its height, else off its lower front edge, and at its
+    front where the circle passes under it. The heel must exist."""
+    front = float(heel_box(params)[1][1])
+    bottom = -params.palm.thickness / 2.0 - params.palm.heel_height
+    if z >= bottom:
+        return front + r
+    return front + (math.sqrt(r * r - (z - bottom) ** 2) if r > bottom - z else 0.0)
+
+
 def heel_gap(params: HandParams) -> float:
     """The least distance (m) from the palm's heel (:func:`heel_box`) to the CMC base at rest (its
     hub: thumb.width_mm across, thumb.thickness_mm thick about the CMC axis; its column up the axis

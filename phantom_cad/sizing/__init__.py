@@ -209,12 +209,51 @@ def build_document(person: Person) -> dict:
     thickest = max(digit_entry(doc, f)["thickness_mm"] for f in FINGERS)
     palm["thickness_mm"] = max(S.scaled(ref["palm"]["thickness_mm"], hl), S.up(thickest + 2.0 * cl + 1e-6))
     palm["heel_height_mm"] = S.scaled(ref["palm"]["heel_height_mm"], hl)
-    palm["heel_length_mm"] = S.scaled(ref["palm"]["heel_length_mm"], hl)
+    palm["heel_length_mm"] = S.scaled(ref["palm"]["heel_length_mm"], hl)       # placed by heel()
     palm["thumb_cmc_offset_mm"] = [round(v * hl / S.REFERENCE_LENGTH, 4) for v in ref["palm"]["thumb_cmc_offset_mm"]]
     flexed_spacing(doc)
     palm["thickness_mm"] = palm_thickness(doc)
+    heel(doc)
     magnet_lift(doc)
     return doc
+
+
+#: how far (mm) behind the most distal position where every finger wraps the power grasp's cylinder
+#: the heel lays it: a few tenths of a millimetre covers where the fingers' boxes and their parts
+#: meet it apart (kinematics.power_grasp); the hold in MuJoCo keeps within its limits over a few
+#: millimetres behind it (docs/parts.md "Power grasp")
+HEEL_MARGIN = 1.0
+#: the grid (mm) the heel's length is solved on
+HEEL_STEP = 0.1
+
+
+def heel(doc: dict) -> None:
+    """The palm's heel (``palm.heel_height_mm``, ``heel_length_mm``): as deep as the 95th-percentile
+    palm envelope at this hand length leaves below the metacarpal block (:data:`solvers.PALM_ENVELOPE`,
+    at least the reference's heel in proportion), and as long as puts the power grasp's cylinder,
+    laid against it (``kinematics.power_grasp.laid_axis_y``), :data:`HEEL_MARGIN` behind the most
+    distal position where every finger's first contact lies past its equator (``wrapping_axis_y``).
+    Infeasible where no position across the palm wraps."""
+    from ..kinematics import power_grasp as PG
+    from ..kinematics.forearm_layout import heel_box, heel_clear_y
+    from ..kinematics.model import Hand
+    from ..kinematics.servo_geometry import palm_back
+
+    palm = doc["palm"]
+    envelope = S.PALM_ENVELOPE[1] * doc["hand"]["hand_length_mm"] / S.REFERENCE_LENGTH
+    palm["heel_height_mm"] = max(palm["heel_height_mm"], S.down(envelope - palm["thickness_mm"]))
+    p = parse(doc)
+    diameter = PG.power_grasp_diameter_mm(p)
+    wraps = PG.wrapping_axis_y(p, Hand(p, compensation="paper"), diameter)      # as the check closes it
+    if wraps is None:
+        raise Infeasible(f"no position across the palm where every finger's first contact with the power grasp's "
+                         f"{diameter:.1f} mm cylinder lies past its equator (a finger meets it first on its "
+                         "distal side)")
+    # the cylinder's axis lies a fixed distance in front of the heel's front: the heel's length moves both
+    ahead = heel_clear_y(p, units.m(PG.resting_z(p, diameter)), units.m(diameter / 2.0 + PG.PALM_GAP_MM)) \
+        - float(heel_box(p)[1][1])
+    front = units.m(wraps - HEEL_MARGIN) - ahead
+    palm["heel_length_mm"] = round(round(units.mm(front - palm_back(p)) / HEEL_STEP) * HEEL_STEP, 6)
 
 
 #: the grid (mm) palm.magnet_lift_mm is solved on

@@ -16,6 +16,9 @@ from ..params.rules import MAX_FINGER_PITCH, MIN_WALL
 REFERENCE_LENGTH = 189.0
 #: its hand breadth across metacarpals 2-5: the 50th-percentile British man (docs/sizing.md)
 REFERENCE_BREADTH = 85.0
+#: the 95th-percentile adult palm at the reference hand (mm): breadth, and thickness with the heel
+#: (tests/cad/test_human_scale.py), scaled with the hand length
+PALM_ENVELOPE = (95.0, 35.0)
 #: the largest servo travel a drive's clamp keeps inside its wrap margins (routing_rules: 180 deg less
 #: twice the 8 deg margin)
 MAX_SERVO_TRAVEL = 164.0

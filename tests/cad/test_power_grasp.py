@@ -1,14 +1,15 @@
-"""Power grasp, its first-contact half: a 35 mm cylinder across the palm, every finger
-flexing onto it touches it past its equator; default hand, left hand and the 170 mm hand
-(params/examples/small.toml). Whether the closing hand then holds it is simulated in MuJoCo
-(tests/export/test_mjcf.py: it does, against the palm's heel).
+"""Power grasp, its first-contact half: the hand's cylinder (35 mm at 189 mm, scaled with the
+hand) across the palm, laid against its heel, every finger flexing onto it touches it past its
+equator; default hand, left hand and the 170 mm hand (params/examples/small.toml). Whether the
+closing hand then holds it is simulated in MuJoCo (tests/export/test_mjcf.py: it does, against the
+palm's heel).
 
-``cad.grasp.power_grasp`` lays the cylinder on the palm's palmar face, axis along the knuckle line,
-from the palm's distal edge toward the wrist in 5 mm steps, flexes each finger from rest until it
-comes within 1 mm of it and turns the thumb out of the way; it returns the first position where
-every finger touches the cylinder past its equator. What it returns is measured again here, each
-with a tool of its own: the cylinder rebuilt from the parameter file's palm thickness (in front
-of the heel) and the finger bases' measured extents; the commands within the travel; OpenCascade's distances from the palm and from each
+``cad.grasp.power_grasp`` lays the cylinder on the palm's palmar face against the heel, axis along
+the knuckle line (``kinematics.power_grasp.laid_axis_y``), flexes each finger from rest until it
+comes within 1 mm of it and turns the thumb out of the way. What it returns is measured again here,
+each with a tool of its own: the cylinder rebuilt from the parameter file's palm thickness and the
+finger bases' measured extents, half a millimetre off the heel (a box of the file's heel
+dimensions); the commands within the travel; OpenCascade's distances from the palm and from each
 finger's phalanges to it, in (0, 1] mm; the wrap angle of each finger's closest point about the
 cylinder's axis, from the point's coordinates, over 90 deg (at first contact the finger presses it
 toward the palm); and manifold3d: no part of the hand overlaps the cylinder (a 256-sided prism of
@@ -19,7 +20,6 @@ contacts may touch).
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -29,11 +29,9 @@ from phantom_cad.cad import measure
 from phantom_cad.export.interference import interference, may_touch
 from phantom_cad.kinematics.topology import FINGERS
 
-from tests.conftest import POWER_GRASP_MM
 from tests.support.hands import HANDS
 
-#: the power grasp's cylinder across the palm (mm), and the distance its contacts must come within
-DIAMETER_MM = POWER_GRASP_MM
+#: the distance (mm) the grasp's contacts must come within
 REACH_MM = 1.0
 #: manifold3d's overlap (mm^3) that counts as interpenetration: the command sweep's bar
 OVERLAP_MM3 = 0.01
@@ -49,49 +47,50 @@ def hand(request, hand_parts, hand_meshes, power_grasps):
     return request.param, p, h, shapes, hand_meshes(request.param), g, tried
 
 
-def _cylinder(p, shapes, y: float):
+def _cylinder(p, shapes, diameter: float, y: float):
     """The test's own cylinder: build123d's Cylinder along x, half a millimetre under the palm's
-    palmar face (-thickness_mm / 2 in the parameter file: it lies in front of the heel, checked
-    here), over the finger bases' x extent at rest (their solids' boxes)."""
-    from build123d import Cylinder, Pos, Rot
+    palmar face (-thickness_mm / 2 in the parameter file), over the finger bases' x extent at rest
+    (their solids' boxes); (the cylinder, its axis's z, that extent, the heel: a box from the palm
+    solid's back face heel_length_mm forward, heel_height_mm under the palmar face, across the palm)."""
+    from build123d import Box, Cylinder, Pos, Rot
 
     T0 = assembly.pose_transforms(p)
     palm = p.document["palm"]
-    heel_front = measure.placed(shapes["palm"], T0["palm"]).bounding_box().min.Y + palm["heel_length_mm"]
-    assert heel_front < y - DIAMETER_MM / 2
-    z = -palm["thickness_mm"] / 2 - 0.5 - DIAMETER_MM / 2
+    bb = measure.placed(shapes["palm"], T0["palm"]).bounding_box()
+    T, H, L = palm["thickness_mm"], palm["heel_height_mm"], palm["heel_length_mm"]
+    heel = Pos((bb.min.X + bb.max.X) / 2, bb.min.Y + L / 2, -T / 2 - H / 2) * Box(bb.max.X - bb.min.X, L, H)
+    z = -T / 2 - 0.5 - diameter / 2
     boxes = [measure.placed(shapes[f"{f}_base"], T0[f"{f}_base"]).bounding_box() for f in FINGERS]
     x0, x1 = min(b.min.X for b in boxes), max(b.max.X for b in boxes)
-    return Pos((x0 + x1) / 2, y, z) * Rot(0, 90, 0) * Cylinder(DIAMETER_MM / 2, x1 - x0), z, (x0, x1)
-
-
-def test_the_cylinder_scales_with_the_hand():
-    """The cylinder ``phantom-cad check`` closes the hand on: the paper's 35 mm on its 189 mm hand
-    (params/phantom.toml), in proportion on the 170 mm hand: 35 x 170 / 189 = 31.48 mm."""
-    from phantom_cad import load_params
-
-    root = Path(__file__).resolve().parents[2]
-    assert grasp.power_grasp_diameter_mm(load_params(root / "params" / "phantom.toml")) == pytest.approx(35.0)
-    assert grasp.power_grasp_diameter_mm(load_params(root / "params" / "examples" / "small.toml")) == pytest.approx(
-        31.48, abs=0.005)
+    return Pos((x0 + x1) / 2, y, z) * Rot(0, 90, 0) * Cylinder(diameter / 2, x1 - x0), z, (x0, x1), heel
 
 
 def test_the_cylinder_is_found(hand):
+    """The hand's own cylinder (35 mm at 189 mm: 35 x 170 / 189 mm on the 170 mm hand), laid against
+    the heel: its axis half a millimetre plus its radius from the heel's lower front edge (the heel's
+    front at the palm's back face plus heel_length_mm, its face heel_height_mm under the palmar
+    face), and OpenCascade's distance from the heel to it half a millimetre."""
     kind, p, h, shapes, meshes, g, tried = hand
     report = [(round(t.axis_y_mm, 1), {f: c and round(c.wrap_deg) for f, c in t.fingers.items()}) for t in tried]
-    assert g is not None, f"{kind}: no position across the palm where all four fingers reach past its equator: {report}"
-    cyl, z, x = _cylinder(p, shapes, g.axis_y_mm)
+    assert g is not None, f"{kind}: the fingers do not all reach past its equator against the heel: {report}"
+    assert len(tried) == 1
+    D = 35.0 * p.document["hand"]["hand_length_mm"] / 189.0
+    assert g.diameter_mm == pytest.approx(D, abs=1e-9)
+    cyl, z, x, heel = _cylinder(p, shapes, D, g.axis_y_mm)
     assert g.axis_z_mm == pytest.approx(z, abs=1e-9) and g.x_mm == pytest.approx(x, abs=1e-9)
     assert abs(g.solid().volume - cyl.volume) < 1e-6 * cyl.volume
     # the cylinder's volume by hand: pi r^2 l
-    assert cyl.volume == pytest.approx(math.pi * (DIAMETER_MM / 2) ** 2 * (x[1] - x[0]), rel=1e-6)
+    assert cyl.volume == pytest.approx(math.pi * (D / 2) ** 2 * (x[1] - x[0]), rel=1e-6)
+    edge = (heel.bounding_box().max.Y, heel.bounding_box().min.Z)
+    assert math.hypot(g.axis_y_mm - edge[0], z - edge[1]) == pytest.approx(D / 2 + 0.5, abs=1e-6)
+    assert heel.distance_to(cyl) == pytest.approx(0.5, abs=1e-6)
 
 
 def test_every_finger_wraps_the_cylinder(hand):
     kind, p, h, shapes, meshes, g, tried = hand
     assert g is not None
     assert np.all(g.u >= h.u_min - 1e-12) and np.all(g.u <= h.u_max + 1e-12)
-    cyl, z, _ = _cylinder(p, shapes, g.axis_y_mm)
+    cyl, z, _, _ = _cylinder(p, shapes, g.diameter_mm, g.axis_y_mm)
     T = assembly.pose_transforms(p, h.forward(g.u, compensated=True))
     palm = measure.placed(shapes["palm"], T["palm"]).distance_to(cyl)
     assert 0.0 < palm <= REACH_MM
@@ -111,11 +110,12 @@ def test_nothing_interpenetrates_at_the_grasp(hand):
     kind, p, h, shapes, meshes, g, tried = hand
     assert g is not None
     T = assembly.pose_transforms(p, h.forward(g.u, compensated=True))
-    c = manifold3d.Manifold.cylinder(g.x_mm[1] - g.x_mm[0], DIAMETER_MM / 2, DIAMETER_MM / 2, 256)
+    R = g.diameter_mm / 2
+    c = manifold3d.Manifold.cylinder(g.x_mm[1] - g.x_mm[0], R, R, 256)
     c = c.rotate((0.0, 90.0, 0.0)).translate((g.x_mm[0], g.axis_y_mm, g.axis_z_mm))
     lo, hi = np.array(c.bounding_box()[:3]), np.array(c.bounding_box()[3:])
-    assert lo == pytest.approx([g.x_mm[0], g.axis_y_mm - 17.5, g.axis_z_mm - 17.5], abs=1e-3)
-    assert hi == pytest.approx([g.x_mm[1], g.axis_y_mm + 17.5, g.axis_z_mm + 17.5], abs=1e-3)
+    assert lo == pytest.approx([g.x_mm[0], g.axis_y_mm - R, g.axis_z_mm - R], abs=1e-3)
+    assert hi == pytest.approx([g.x_mm[1], g.axis_y_mm + R, g.axis_z_mm + R], abs=1e-3)
     # the cylinder as one more part, in the hand frame: it may touch nothing
     mesh = c.to_mesh()
     r = interference({**meshes, "cylinder": (np.asarray(mesh.vert_properties)[:, :3], np.asarray(mesh.tri_verts))},

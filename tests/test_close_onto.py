@@ -1,9 +1,9 @@
-"""``cad.grasp.close_onto``, the bisection both grasps close a digit with, on distances written
+"""``kinematics.power_grasp.close_onto``, the bisection both grasps close a digit with, on distances written
 out by hand (no solids)."""
 
 import pytest
 
-from phantom_cad.cad.grasp import CONFUSION_MM, REACH_MM, close_onto
+from phantom_cad.kinematics.power_grasp import CONFUSION_MM, REACH_MM, close_onto
 
 
 def test_it_stops_in_the_band():
