@@ -196,7 +196,7 @@ def fingertips_to_palm(hand, solids: dict) -> dict[str, float]:
     """{finger: the distance (mm, OpenCascade's) from its distal phalanx to the palm} at
     :func:`full_travel` (the analytic model's joint angles), the palm at rest. ``solids``: the palm
     and the fingers' distal phalanges in their link frames (mm). A report, not a requirement: under
-    the paper's Table I limits the curled fingertips stay 14-29 mm from the palm (docs/parts.md
+    the paper's Table I limits the curled fingertips stay 11-26 mm from the palm (docs/parts.md
     "Power grasp")."""
     p = hand.params
     T = pose_transforms(p, hand.forward(full_travel(hand)))

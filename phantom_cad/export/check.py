@@ -469,7 +469,7 @@ def mesh_rows(export: Export, props: dict) -> list[Row]:
 def fist_rows(hand: Hand, solids: dict) -> list[Row]:
     """The fingertips' distances to the palm at full travel (``cad.grasp.fingertips_to_palm``, on
     the STEP solids): a report that never fails. Under the paper's Table I limits a curled fingertip
-    stays 14-29 mm from the palm, and the power grasp's cylinder needs that room (docs/parts.md)."""
+    stays 11-26 mm from the palm, and the power grasp's cylinder needs that room (docs/parts.md)."""
     from ..cad.grasp import fingertips_to_palm
 
     far = fingertips_to_palm(hand, solids)

@@ -410,12 +410,12 @@ CYLINDER_KG = 0.1
 
 @pytest.fixture(scope="module", params=HANDS)
 def cylinder_grasp(request, hand_export, power_grasps):
-    """(``cad.grasp.power_grasp`` of a reference hand on the power grasp's cylinder
-    (35 mm across the palm, tests/conftest.py): where the solids say every finger reaches past its
-    equator, and the thumb's commands that clear it; the hand's MJCF scene), on the solids of the
-    hand's export (each part's BREP from the cache entry its manifest names: tests/conftest.py).
-    The palm's heel holds the cylinder: without it the fingertips would squeeze it toward the
-    wrist and it would fall out palm down (docs/parts.md)."""
+    """(``cad.grasp.power_grasp`` of a reference hand on the power grasp's cylinder (35 mm at
+    189 mm, scaled with the hand; tests/conftest.py), laid against the palm's heel, where the solids
+    say every finger reaches past its equator, and the thumb's commands that clear it; the hand's
+    MJCF scene), on the solids of the hand's export (each part's BREP from the cache entry its
+    manifest names: tests/conftest.py). The palm's heel holds the cylinder: without it the
+    fingertips would squeeze it toward the wrist and it would fall out palm down (docs/parts.md)."""
     kind = request.param
     _, g, _ = power_grasps(kind)
     assert g is not None
@@ -428,9 +428,8 @@ def test_the_closed_hand_holds_a_cylinder_palm_down(cylinder_grasp):
     thumb turns, gravity off); then every finger servo commanded to the end of its travel for 2 s;
     then gravity toward the palm's palmar side (the palm facing down) for 3 s: the closing fingers
     squeeze it less than 5 mm toward the wrist (the palm's heel holds it there), then it moves
-    less than 5 mm and has come to rest, no warning, and the palm touches it. Where: the default
-    and 170 mm hands' heels touch it behind its axis (15-16 mm behind it); the left hand's palm at
-    its axis only (squeezed 3.0 mm, moved 0.8 mm): docs/parts.md."""
+    less than 5 mm and has come to rest, no warning, and the palm touches it (each hand's figures:
+    docs/parts.md, "Power grasp")."""
     from phantom_cad.export.hold import hold_cylinder
     from phantom_cad.kinematics.topology import SERVOS
 
