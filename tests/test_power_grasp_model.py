@@ -1,7 +1,7 @@
 """``kinematics.power_grasp``: the power grasp's cylinder on the model (no solids). Where it is laid
-against the heel, worked by hand from the parameter file's palm; the gaps between the fingers' boxes
-and the cylinder against the separating-axis distance of ``finger_clearance`` to a thin box along
-the axis; the most distal position where every finger wraps it, and the heel ``size`` puts behind
+against the heel, worked by hand from the parameter file's palm; the gaps between the fingers'
+shapes and the cylinder against the separating-axis distance of ``finger_clearance`` to a thin box
+along the axis; the most distal position where every finger wraps it, and the heel ``size`` puts behind
 it. The solids' side (each reference hand wraps the cylinder laid against its heel, MuJoCo holds it)
 is tests/cad/test_power_grasp.py and tests/export/test_mjcf.py."""
 
@@ -55,28 +55,33 @@ def test_the_cylinder_scales_with_the_hand():
 
 
 @pytest.mark.parametrize("finger", FINGERS)
-def test_the_gaps_are_the_boxes_distances_to_the_axis(finger):
-    """Over the first half of each finger's travel (every box apart from the axis), the gap of
-    ``cylinder_gaps`` at each pose is the least separating-axis distance of its boxes
-    (``finger_clearance.box_distance``, corners and edges in 3D) to a 2 m box 1e-9 mm thin along the
-    cylinder's axis, less the radius."""
+def test_the_gaps_are_the_shapes_distances_to_the_axis(finger):
+    """Over the first half of each finger's travel (every shape apart from the axis), the gap of
+    ``cylinder_gaps`` at each pose is the least separating-axis distance of its shapes
+    (``finger_clearance.box_distance``, corners and edges in 3D: the boxes, and each rounded end's
+    axis as a box of no thickness, less the end's radius) to a 2 m box 1e-9 mm thin along the
+    cylinder's axis, less the cylinder's radius."""
+    from phantom_cad.kinematics.finger_clearance import rounded_ends
+
     p = load_params(DEFAULT)
     hand = Hand(p, None, "paper")
     y, z, D = -30.0, -30.0, 35.0
-    segments, links = PG.posed_links(p, hand)[finger]
-    gap, point, box = PG.cylinder_gaps(segments, D, y, z)
-    moving = posed_boxes(p, hand, PG.CONTACT_GRID, compensated=True)[finger][1]
+    segments, links, radii = PG.posed_links(p, hand)[finger]
+    ends = rounded_ends(p, finger)
+    assert sorted(set(radii[radii > 0])) == sorted(set(units.mm(r) for _, r in ends.values()))
+    gap, point, box = PG.cylinder_gaps(segments, radii, D, y, z)
+    moving = posed_boxes(p, hand, PG.CONTACT_GRID, compensated=True, rounded=True)[finger][1]
     n = len(links)
     axis = (np.tile(units.m(np.array([0.0, y, z])), (n, 1)), np.tile(np.eye(3), (n, 1, 1)),
             np.tile([1.0, 1e-12, 1e-12], (n, 1)))
     half = np.flatnonzero(PG.CONTACT_GRID <= 0.5)
     assert gap[half].min() > 0.0
     for i in half[::20]:
-        boxes = tuple(v[i * n:(i + 1) * n] for v in moving)
-        want = units.mm(box_distance(boxes, axis)) - D / 2.0
+        shapes = tuple(v[i * n:(i + 1) * n] for v in moving)
+        want = units.mm(box_distance(shapes, axis)) - radii - D / 2.0
         assert gap[i] == pytest.approx(want.min(), abs=1e-6)
         assert int(box[i]) == int(want.argmin())
-        assert np.hypot(*(point[i] - [y, z])) - D / 2.0 == pytest.approx(gap[i], abs=1e-9)
+        assert np.hypot(*(point[i] - [y, z])) - radii[box[i]] - D / 2.0 == pytest.approx(gap[i], abs=1e-9)
 
 
 def test_the_wrapping_axis_is_the_first_that_wraps():

@@ -18,6 +18,7 @@ import itertools
 import numpy as np
 
 from .dimensions import slot_back
+from .frames import fingertip
 from .hand_params import HandParams
 from .link_frames import link_transforms
 from .opposition import segment_distance
@@ -33,12 +34,31 @@ BOX_EDGES = np.array([(i, j) for i in range(8) for j in range(i + 1, 8)
                       if np.count_nonzero(_SIGNS[i] != _SIGNS[j]) == 1])
 
 
-def link_boxes(params: HandParams, finger: str) -> dict[str, list[tuple[np.ndarray, np.ndarray]]]:
-    """{link name: [(centre, half extents)]} of a finger's link boxes in their link frames (m)."""
+def rounded_ends(params: HandParams, finger: str) -> dict[str, tuple[float, float]]:
+    """{phalanx link: (y, r)} of each phalanx's rounded far end in its link frame (m): a half
+    cylinder about the link's x at y of radius r, across the finger: the clevis boss round its far
+    joint's axis (y its length, r half its thickness) or the fingertip (``frames.fingertip``)."""
+    d = params.fingers[finger]
+    out = {}
+    for ln in digit_links(finger)[1:]:
+        if ln.segment == "distal":
+            L, r, _ = fingertip(params, finger)
+            out[ln.name] = (L - r, r)
+        else:
+            out[ln.name] = (getattr(d, ln.segment), d.thickness / 2.0)
+    return out
+
+
+def link_boxes(params: HandParams, finger: str, rounded: bool = False) -> dict[str, list[tuple[np.ndarray, np.ndarray]]]:
+    """{link name: [(centre, half extents)]} of a finger's link boxes in their link frames (m).
+    ``rounded``: each phalanx's main box stops at its rounded end's axis (:func:`rounded_ends`),
+    and the axis follows as a box of no thickness (half extents (W / 2, 0, 0)), round which the
+    caller takes the end's radius; else the main box reaches over the end."""
     d = params.fingers[finger]
     W, T = d.width, d.thickness
     back = slot_back(T, params.print.hole_clearance)
     tongue = W / 2.0 - params.cad.cheek
+    ends = rounded_ends(params, finger)
 
     def box(x0, x1, y0, y1):
         lo, hi = np.array([x0, y0, -T / 2.0]), np.array([x1, y1, T / 2.0])
@@ -49,13 +69,15 @@ def link_boxes(params: HandParams, finger: str) -> dict[str, list[tuple[np.ndarr
         if ln.parent_joint is None:           # the finger base: magnet face to the MCP clevis boss
             out[ln.name] = [box(-W / 2.0, W / 2.0, -params.cad.finger_base_length, T / 2.0)]
             continue
-        L = getattr(d, ln.segment)
-        far = L if ln.segment == "distal" else L + T / 2.0
-        out[ln.name] = [box(-W / 2.0, W / 2.0, 0.0, far), box(-tongue, tongue, -back, 0.0)]
+        y, r = ends[ln.name]
+        out[ln.name] = [box(-W / 2.0, W / 2.0, 0.0, y if rounded else y + r), box(-tongue, tongue, -back, 0.0)]
+        if rounded:
+            out[ln.name].append((np.array([0.0, y, 0.0]), np.array([W / 2.0, 0.0, 0.0])))
     return out
 
 
-def posed_boxes(params: HandParams, hand, fractions=GRID, compensated: bool = False) -> dict[str, tuple]:
+def posed_boxes(params: HandParams, hand, fractions=GRID, compensated: bool = False,
+                rounded: bool = False) -> dict[str, tuple]:
     """{finger: (fixed, moving)} of every finger's boxes over its servo's travel, each a tuple
     (centres (n, 3), axes (n, 3, 3), half extents (n, 3)) in the palm frame (right hand, m):
     ``fixed`` the finger base's (n = 1), ``moving`` the phalanges' at each fraction (n =
@@ -63,7 +85,7 @@ def posed_boxes(params: HandParams, hand, fractions=GRID, compensated: bool = Fa
     poses the fingers (ideal coupling, as the collision check poses them, or ``compensated``); each
     finger hangs on its own servo, so one pose per fraction holds all four."""
     servos = [s.index for s in SERVOS if s.digit in FINGERS]
-    boxes = {f: link_boxes(params, f) for f in FINGERS}
+    boxes = {f: link_boxes(params, f, rounded) for f in FINGERS}
     out = {f: ([], []) for f in FINGERS}
     for k, frac in enumerate(fractions):
         u = np.array(hand.u_min, float)

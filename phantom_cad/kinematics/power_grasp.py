@@ -7,10 +7,13 @@ mm like ``cad.grasp``, which measures the same grasp on the solids).
   palmar face (:func:`resting_z`); on a palm with a heel, laid against it, :data:`PALM_GAP_MM` off
   the heel's front edge (:func:`laid_axis_y`: as a hand lays a bar into its palm, the heel stopping
   it on its wrist side).
-* How each finger first meets it, flexing from rest (:func:`first_contacts`): the finger's links as
-  the boxes that hold them (``finger_clearance.link_boxes``) over a fine grid of its command; the
-  wrap angle of the closest point about the axis (:func:`wrap_angle_deg`). The boxes hold the parts'
-  rounded ends by their corners, so a box meets the cylinder no later than its part does.
+* How each finger first meets it, flexing from rest (:func:`first_contacts`): each of the finger's
+  phalanges as a box to its rounded far end's axis and that end round it (the clevis boss, the
+  fingertip: ``finger_clearance.link_boxes``, ``rounded_ends``), over a fine grid of its command;
+  the wrap angle of the closest point about the axis (:func:`wrap_angle_deg`). The shapes hold the
+  parts, the rounded ends as the parts have them: which phalanx meets the cylinder first is the
+  parts' (a box's corner past a round end would meet it early, and make the fingertip wrap it
+  where the part's proximal phalanx meets it first).
 * :func:`wrapping_axis_y`: the most distal axis at which every finger's first contact lies past
   the cylinder's equator, which ``sizing`` puts the heel behind.
 
@@ -24,7 +27,7 @@ import math
 import numpy as np
 
 from .. import units
-from .finger_clearance import BOX_EDGES, box_corners, link_boxes, posed_boxes
+from .finger_clearance import BOX_EDGES, box_corners, link_boxes, posed_boxes, rounded_ends
 from .forearm_layout import heel_box, heel_clear_y
 from .hand_params import HandParams
 from .servo_geometry import palm_back
@@ -113,8 +116,8 @@ def first_contacts(params: HandParams, hand, diameter_mm: float, axis_y_mm: floa
     posed = posed if posed is not None else posed_links(params, hand)
     z = resting_z(params, diameter_mm) if axis_z_mm is None else axis_z_mm
     out = {}
-    for f, (segments, links) in posed.items():
-        gap, point, box = cylinder_gaps(segments, diameter_mm, axis_y_mm, z)
+    for f, (segments, links, radii) in posed.items():
+        gap, point, box = cylinder_gaps(segments, radii, diameter_mm, axis_y_mm, z)
         within = np.flatnonzero(gap <= REACH_MM)
         if gap[0] <= REACH_MM or not len(within):
             out[f] = None
@@ -124,18 +127,20 @@ def first_contacts(params: HandParams, hand, diameter_mm: float, axis_y_mm: floa
     return out
 
 
-def cylinder_gaps(segments: np.ndarray, diameter_mm: float, axis_y_mm: float, axis_z_mm: float):
-    """(the least gap (mm) at each pose, the nearest point (y, z) there, the box it lies on) between
-    boxes whose edges projected along x are ``segments`` (poses, boxes, 12, 2, 2; mm) and the
-    cylinder: the distance from the axis to a box's outline, less the radius. Where the axis lies
-    outside an outline, the outline's nearest point lies on a projected edge (the hull's edges are
-    among them, the others lie inside it); inside, it is past contact, and no gap counts then."""
+def cylinder_gaps(segments: np.ndarray, radii: np.ndarray, diameter_mm: float, axis_y_mm: float,
+                  axis_z_mm: float):
+    """(the least gap (mm) at each pose, the nearest point (y, z) there, the shape it lies on)
+    between shapes whose edges projected along x are ``segments`` (poses, shapes, 12, 2, 2; mm),
+    each grown by its radius (``radii``, mm), and the cylinder: the distance from the axis to a
+    shape's outline, less both radii. Where the axis lies outside an outline, the outline's nearest
+    point lies on a projected edge (the hull's edges are among them, the others lie inside it);
+    inside, it is past contact, and no gap counts then."""
     q = np.array([axis_y_mm, axis_z_mm])
     a, b = segments[..., 0, :], segments[..., 1, :]
     ab = b - a
     t = np.clip(np.einsum("...i,...i", q - a, ab) / np.maximum(np.einsum("...i,...i", ab, ab), 1e-18), 0.0, 1.0)
     near = a + t[..., None] * ab
-    d = np.linalg.norm(near - q, axis=-1)                                  # (poses, boxes, 12)
+    d = np.linalg.norm(near - q, axis=-1) - np.asarray(radii)[None, :, None]   # (poses, shapes, 12)
     flat = d.reshape(d.shape[0], -1)
     k = flat.argmin(axis=1)
     box, edge = np.divmod(k, d.shape[2])
@@ -144,16 +149,23 @@ def cylinder_gaps(segments: np.ndarray, diameter_mm: float, axis_y_mm: float, ax
 
 
 def posed_links(params: HandParams, hand) -> dict:
-    """{finger: (its moving links' box edges projected along x (fractions, boxes, 12, 2, 2) mm,
-    the link of each box)} over :data:`CONTACT_GRID` (``finger_clearance.posed_boxes``, compensated)."""
-    boxes = posed_boxes(params, hand, CONTACT_GRID, compensated=True)
+    """{finger: (its moving links' shapes' edges projected along x (fractions, shapes, 12, 2, 2) mm,
+    the link of each shape, each shape's radius mm)} over :data:`CONTACT_GRID`
+    (``finger_clearance.posed_boxes``, compensated): each phalanx a box to its rounded end's axis,
+    the tongue behind its joint, and the end round that axis (an edge, its radius the end's: the
+    projection of the half cylinder lies within it)."""
+    boxes = posed_boxes(params, hand, CONTACT_GRID, compensated=True, rounded=True)
     out = {}
     for f in FINGERS:
-        per_link = link_boxes(params, f)
-        links = [ln.name for ln in digit_links(f)[1:] for _ in per_link[ln.name]]
+        per_link, ends = link_boxes(params, f, rounded=True), rounded_ends(params, f)
+        links, radii = [], []
+        for ln in digit_links(f)[1:]:
+            n = len(per_link[ln.name])
+            links += [ln.name] * n
+            radii += [0.0] * (n - 1) + [units.mm(ends[ln.name][1])]
         corners = units.mm(box_corners(boxes[f][1]))[:, :, 1:]                     # (n, 8, (y, z))
         segments = corners[:, BOX_EDGES]                                           # (n, 12, 2, 2)
-        out[f] = (segments.reshape(len(CONTACT_GRID), len(links), *segments.shape[1:]), links)
+        out[f] = (segments.reshape(len(CONTACT_GRID), len(links), *segments.shape[1:]), links, np.array(radii))
     return out
 
 
