@@ -219,9 +219,9 @@ def build_document(person: Person) -> dict:
 
 
 #: how far (mm) behind the most distal position where every finger wraps the power grasp's cylinder
-#: the heel lays it: a few tenths of a millimetre covers where the fingers' boxes and their parts
-#: meet it apart (kinematics.power_grasp); the hold in MuJoCo keeps within its limits over a few
-#: millimetres behind it (docs/parts.md "Power grasp")
+#: the heel lays it: it covers where the model's shapes and the parts meet it apart
+#: (kinematics.power_grasp); the hold in MuJoCo keeps within its limits over a few millimetres
+#: behind that position (docs/parts.md "Power grasp")
 HEEL_MARGIN = 1.0
 #: the grid (mm) the heel's length is solved on
 HEEL_STEP = 0.1
