@@ -109,10 +109,10 @@ def first_contacts(params: HandParams, hand, diameter_mm: float, axis_y_mm: floa
     """{finger: (fraction of its travel, link, wrap angle deg) or None} where each finger, flexing
     from rest (the model's compensated joint angles), first comes within :data:`REACH_MM` of the
     cylinder whose axis runs along x at (axis_y_mm, axis_z_mm) (default :func:`resting_z`): its
-    links' boxes over :data:`CONTACT_GRID`; None where it is within reach at rest or never is.
-    The cylinder is taken as long as the hand is wide, so a box's distance to it is its outline's
-    (projected along x) distance to the axis, less the radius. ``posed``: :func:`posed_links`'s,
-    reused across cylinders."""
+    phalanges' shapes (:func:`posed_links`) over :data:`CONTACT_GRID`; None where it is within
+    reach at rest or never is. The cylinder is taken as long as the hand is wide, so a shape's
+    distance to it is its outline's (projected along x) distance to the axis, less the radius.
+    ``posed``: :func:`posed_links`'s, reused across cylinders."""
     posed = posed if posed is not None else posed_links(params, hand)
     z = resting_z(params, diameter_mm) if axis_z_mm is None else axis_z_mm
     out = {}

@@ -27,8 +27,8 @@ _SOURCES = {"default": (None, None), "left": (None, "left"), "hand_length_170": 
 HANDS = ("default", "left", "hand_length_170")
 #: the hands exported sliced (when PrusaSlicer is installed) as a user would, the description's
 #: masses then the slicer's: the default hand (the tests read its estimates) and the 170 mm hand
-#: (its cylinder hold, tests/export/test_mjcf.py, passes on the slicer's masses, not on volume x
-#: density x infill); the left hand's parts meet PrusaSlicer through their projects
+#: (its cylinder hold, tests/export/test_mjcf.py, on the slicer's masses as a user's export has
+#: them); the left hand's parts meet PrusaSlicer through their projects
 #: (tests/export/test_project3mf.py). ``"default_unsliced"`` is the default hand exported without
 #: the slicer (its parts from the run's cache): masses that do not vary from run to run, for the
 #: grasp table (tests/export/test_grasps.py)
