@@ -414,6 +414,15 @@ def test_the_command_writes_a_file_that_validates(tmp_path, argv, request):
 
     reach = opposition.reach(Hand(load_params(out)))
     assert all(reach[f].gap <= 0.0 for f in opposition.OPPOSED)
+    # the heel where sizing.heel puts it at the placement written (the 205 mm hand's is searched: the
+    # thenar moves the palm's back face, from which the heel's length counts)
+    from phantom_cad.params import load_document
+    from phantom_cad.sizing import heel
+
+    doc = load_document(out)
+    solved = copy.deepcopy(doc)
+    heel(solved)
+    assert solved["palm"] == doc["palm"]
     # what a second run writes over is its own output
     assert out.read_text().startswith("# phantom-cad size:")
 

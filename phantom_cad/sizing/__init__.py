@@ -424,6 +424,10 @@ def size(person: Person, check: Callable[[HandParams], None] | None = None, sear
             solved = copy.deepcopy(doc)
             solved["palm"]["thumb_cmc_offset_mm"] = [round(float(units.mm(v)), 4) for v in sol.offset]
             solved["palm"]["thumb_cmc_axis_deg"] = [round(float(units.deg(v)), 4) for v in sol.axis]
+            try:
+                heel(solved)        # its length counts from the palm's back face, which the thenar may move
+            except (Infeasible, ParamError):
+                pass                # consider() refuses what does not validate
             magnet_lift(solved)
             consider(solved, True)
     if best is None:
