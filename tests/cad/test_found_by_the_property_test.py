@@ -86,11 +86,15 @@ def test_the_longest_servo_body_the_rule_accepts_builds(variant):
 def test_the_cmc_nearest_the_sockets_the_rule_accepts_builds(variant):
     """The CMC 26.99 mm behind the index MCP, where the thenar's cuts come 0.80 mm from the index
     socket's magnet pockets (the least gap the rule accepts, ``thenar.socket_pocket_gap``): the palm is
-    one valid solid and its check finds all 8 magnet pockets."""
+    one valid solid and its check finds all 8 magnet pockets. The thenar so far forward moves the
+    palm's back face forward too, which leaves the heel 41.8 mm of block: its length is 40 mm here."""
     from phantom_cad.cad import preflight
     from phantom_cad.kinematics.thenar import socket_pocket_gap
 
-    p = variant(lambda d: d["palm"].__setitem__("thumb_cmc_offset_mm", [-25.75, -26.99, -32.81]))
+    def edit(d):
+        d["palm"]["thumb_cmc_offset_mm"] = [-25.75, -26.99, -32.81]
+        d["palm"]["heel_length_mm"] = 40.0
+    p = variant(edit)
     preflight.check(p)
     assert socket_pocket_gap(p)[0] == pytest.approx(0.8e-3, abs=0.02e-3)
     pt, shape = _build(p, "palm")
