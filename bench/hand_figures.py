@@ -166,10 +166,10 @@ def postures(p, meshes, solids, out: Path) -> None:
     fname = "hand_power_held.png"
     render.render_png(_tips_labelled(hand_only, T, FINGERS) + [cylinder], out / fname,
                       title=f"held in MuJoCo, palm down: the {CYLINDER_MM:g} mm cylinder after 2 s of closing and 3 s of gravity",
-                      subtitle=f"gravity toward the palmar side (down here); squeezed {held.squeezed_mm:.1f} mm toward the "
-                      f"wrist onto the heel, then moved {held.moved_mm:.1f} mm; seen from the ulnar side",
+                      subtitle=f"gravity toward the palmar side (down here); let go in the closed hand, moved "
+                      f"{held.released_mm:.1f} mm, then {held.moved_mm:.1f} mm palm down; seen from the ulnar side",
                       elev=5.0, azim=0.0, size_px=1000)
-    print(f"wrote {out / fname}: squeezed {held.squeezed_mm:.1f} mm, moved {held.moved_mm:.1f} mm palm down, "
+    print(f"wrote {out / fname}: let go, moved {held.released_mm:.1f} mm, then {held.moved_mm:.1f} mm palm down, "
           f"servo torques {held.servo_torques.round(3).tolist()} N m")
     # opposition: the commands where the thumb's pad comes within 1 mm of each opposed fingertip's pad on
     # the solids (cad.grasp.solid_contact: the model's contacts, squarest first, the finger flexed onto

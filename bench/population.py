@@ -244,9 +244,9 @@ def csv_text(records: list[Record]) -> str:
 
 #: the failing rows the table names briefly (``brief``): (a pattern on the row's line, its brief form)
 BRIEF = (
-    (re.compile(r"held palm down.*?\((?:squeezed ([\d.]+) mm >= [\d.]+; )?moved ([\d.]+) mm"),
-     lambda m: f"hold (moved {m[2]} mm{f', squeezed {m[1]} mm' if m[1] else ''})"),
-    (re.compile(r"held palm down.*?\(squeezed ([\d.]+) mm"), lambda m: f"hold (squeezed {m[1]} mm)"),
+    (re.compile(r"held palm down.*?\((?:let go, moved ([\d.]+) mm >= [\d.]+; )?moved ([\d.]+) mm"),
+     lambda m: f"hold (moved {m[2]} mm{f', let go {m[1]} mm' if m[1] else ''})"),
+    (re.compile(r"held palm down.*?\(let go, moved ([\d.]+) mm"), lambda m: f"hold (let go {m[1]} mm)"),
     (re.compile(r"^walls >= .*?: (\w+) \(([\d.]+) mm"), lambda m: f"walls ({m[1]} {m[2]} mm)"),
     (re.compile(r"^thumb pad to .*?: (\w+): ([^(]+?) \("), lambda m: f"opposition ({m[1]}: {m[2]})"),
 )

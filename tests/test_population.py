@@ -79,17 +79,17 @@ def test_the_per_digit_people_lie_within_8_percent_of_the_ratios():
 def test_the_table_names_the_failing_rows_briefly():
     """Lines as ``run_person`` writes them (``check: item (measured, tolerance T)``), written out here."""
     hold = ("power grasp: a 28.9 mm cylinder across the palm held palm down, 100 g (MuJoCo, export.hold): scene.xml "
-            "(squeezed 5.9 mm >= 5; moved 231.9 mm >= 5 palm down; still moving at 80.4 mm/s; the palm does not "
-            "touch it, tolerance squeezed < 5, moved < 5 mm, at rest)")
-    squeezed = ("power grasp: a 38.0 mm cylinder across the palm held palm down, 100 g (MuJoCo, export.hold): "
-                "scene.xml (squeezed 11.2 mm >= 5, tolerance squeezed < 5, moved < 5 mm, at rest)")
+            "(let go, moved 5.9 mm >= 5; moved 231.9 mm >= 5 palm down; still moving at 80.4 mm/s; the palm does not "
+            "touch it, tolerance let go < 5, palm down < 5 mm, at rest)")
+    let_go = ("power grasp: a 38.0 mm cylinder across the palm held palm down, 100 g (MuJoCo, export.hold): "
+              "scene.xml (let go, moved 11.2 mm >= 5, tolerance let go < 5, palm down < 5 mm, at rest)")
     walls = ("walls >= two perimeters on every part (28 parts; export.walls, trimesh rays): palm (0.204 mm, "
              "tolerance >= 0.76 mm)")
     pads = ("thumb pad to the index, middle, ring pads on the solids (cad.grasp.solid_contact), no interpenetration: "
             "index: no pad-to-pad contact (- / 0.243 / 0.254 mm, tolerance <= 1 mm)")
     other = "tendon paths outside material (cad.clearance): index_in in palm at 50% (3 points, tolerance 0)"
-    assert [pop.brief(x) for x in (hold, squeezed, walls, pads, other)] == [
-        "hold (moved 231.9 mm, squeezed 5.9 mm)", "hold (squeezed 11.2 mm)", "walls (palm 0.204 mm)",
+    assert [pop.brief(x) for x in (hold, let_go, walls, pads, other)] == [
+        "hold (moved 231.9 mm, let go 5.9 mm)", "hold (let go 11.2 mm)", "walls (palm 0.204 mm)",
         "opposition (index: no pad-to-pad contact)", other]
 
 

@@ -567,7 +567,7 @@ def power_grasp_rows(export: Export, params: HandParams, solids: dict, log=lambd
     The commands follow the paper's compensation, as the MuJoCo hold was tuned on it."""
     from ..cad import grasp
     from ..kinematics.power_grasp import laid_axis_y, power_grasp_diameter_mm
-    from .hold import HOLD_KG, MOVED_MM, SQUEEZED_MM, hold_cylinder
+    from .hold import HOLD_KG, MOVED_MM, RELEASED_MM, hold_cylinder
 
     diameter = power_grasp_diameter_mm(params)
     g, tried = grasp.power_grasp(Hand(params, None, "paper"), solids, diameter)
@@ -592,8 +592,8 @@ def power_grasp_rows(export: Export, params: HandParams, solids: dict, log=lambd
     h = hold_cylinder(export.scene, g)
     why = h.problems()
     rows.append(Row(f"{name} held palm down, {HOLD_KG * 1e3:g} g (MuJoCo, export.hold)", export.scene.name, "held",
-                    "; ".join(why) if why else f"squeezed {h.squeezed_mm:.1f} mm, moved {h.moved_mm:.1f} mm",
-                    f"squeezed < {SQUEEZED_MM:g}, moved < {MOVED_MM:g} mm, at rest", not why))
+                    "; ".join(why) if why else f"let go, moved {h.released_mm:.1f} mm; palm down, {h.moved_mm:.1f} mm",
+                    f"let go < {RELEASED_MM:g}, palm down < {MOVED_MM:g} mm, at rest", not why))
     return rows
 
 

@@ -8,11 +8,13 @@ its approach commands with the object's contacts off and gravity off (the hand m
 around it); the object's contacts come on and the hand takes its closing commands; then gravity
 comes on. MuJoCo is imported inside.
 
-:func:`hold_cylinder`: a free solid cylinder lies where ``cad.grasp.power_grasp`` puts it (its axis
-along the palm frame's x); the thumb turns to its commands there (1 s); every finger servo is
-commanded to the end of its travel (2 s); then gravity comes on toward the palm's palmar side (the
-scene's -z: the palm facing down, 3 s). It reports what MuJoCo did; what counts as held is the
-caller's (tests/export/test_mjcf.py).
+:func:`hold_cylinder`: a solid cylinder is presented where ``cad.grasp.power_grasp`` puts it (its
+axis along the palm frame's x), as a user hands it over and as the grasp library presents its
+objects; the thumb turns to its commands there (1 s); every finger servo is commanded to the end
+of its travel (2 s); the cylinder is let go (gravity off, 0.5 s: where the closed fingers and the
+palm put it); then gravity comes on toward the palm's palmar side (the scene's -z: the palm facing
+down, 3 s). It reports what MuJoCo did; what counts as held is :meth:`Hold.problems`
+(tests/export/test_mjcf.py, ``export.check``).
 """
 
 from __future__ import annotations
@@ -25,18 +27,19 @@ import numpy as np
 from .. import units
 from ..kinematics.topology import CMC_SERVO, JOINTS, SERVOS, THUMB_CHAIN, chain, FINGERS
 
-#: the simulated phases (s): the thumb turning, the fingers closing, the palm facing down
-THUMB_S, CLOSE_S, HOLD_S = 1.0, 2.0, 3.0
+#: the simulated phases (s): the thumb turning, the fingers closing, the cylinder let go, the palm
+#: facing down
+THUMB_S, CLOSE_S, RELEASE_S, HOLD_S = 1.0, 2.0, 0.5, 3.0
 #: the weld that holds a presented object: a time constant of four steps, critically damped (MuJoCo's
 #: default, 20 ms, lets a closing digit knock it centimetres away)
 PRESENTED_SOLREF = (0.002, 1.0)
 #: the free object's body, joint and (first) geom name in the scene
 OBJECT = "object"
-#: the cylinder the closed hand holds palm down (kg), and what counts as held: the closing fingers
-#: squeeze it less than SQUEEZED_MM (the palm's heel holds it on its wrist side), palm down it moves
-#: less than MOVED_MM and ends slower than RESTING_MM_S, no warning, the palm touching it
+#: the cylinder the closed hand holds palm down (kg), and what counts as held: let go, the closed
+#: fingers move it less than RELEASED_MM (the palm's heel holds it on its wrist side), palm down it
+#: moves less than MOVED_MM and ends slower than RESTING_MM_S, no warning, the palm touching it
 HOLD_KG = 0.1
-SQUEEZED_MM, MOVED_MM, RESTING_MM_S = 5.0, 5.0, 10.0
+RELEASED_MM, MOVED_MM, RESTING_MM_S = 5.0, 5.0, 10.0
 
 
 class Trial:
@@ -165,8 +168,8 @@ class Hold:
     """What MuJoCo did with a cylinder in the closing hand (palm frame: mm, rad)."""
     diameter_mm: float
     mass_kg: float
-    start_mm: np.ndarray            # the cylinder's centre when the fingers start closing
-    closed_mm: np.ndarray           # ... when gravity comes on
+    start_mm: np.ndarray            # the cylinder's centre where it was presented
+    closed_mm: np.ndarray           # ... let go in the closed hand, when gravity comes on
     end_mm: np.ndarray              # ... at the end
     speed_mm_s: float               # its linear speed at the end
     warnings: dict                  # MuJoCo's warnings raised during the run: {name: count}
@@ -178,8 +181,8 @@ class Hold:
     gravity: np.ndarray             # the scene's gravity in the hold phase (m/s^2)
 
     @property
-    def squeezed_mm(self) -> float:
-        """How far the closing fingers moved the cylinder."""
+    def released_mm(self) -> float:
+        """How far the closed fingers moved the cylinder when it was let go."""
         return float(np.linalg.norm(self.closed_mm - self.start_mm))
 
     @property
@@ -190,8 +193,8 @@ class Hold:
     def problems(self) -> list[str]:
         """Why the cylinder does not count as held (empty: held; the limits above)."""
         out = [f"{k} x{n}" for k, n in self.warnings.items()]
-        if self.squeezed_mm >= SQUEEZED_MM:
-            out.append(f"squeezed {self.squeezed_mm:.1f} mm >= {SQUEEZED_MM:g}")
+        if self.released_mm >= RELEASED_MM:
+            out.append(f"let go, moved {self.released_mm:.1f} mm >= {RELEASED_MM:g}")
         if self.moved_mm >= MOVED_MM:
             out.append(f"moved {self.moved_mm:.1f} mm >= {MOVED_MM:g} palm down")
         if self.speed_mm_s >= RESTING_MM_S:
@@ -216,10 +219,12 @@ def hold_cylinder(scene: str | Path, grasp, mass_kg: float = HOLD_KG) -> Hold:
         body.mass, body.explicitinertial = mass_kg, True
         body.inertia = [mass_kg * (3 * r * r + length * length) / 12] * 2 + [mass_kg * r * r / 2]
 
-    t = Trial(scene, T, build)
+    t = Trial(scene, T, build, presented=True)
     t.approach({k: g.u[k] for k in (THUMB_CHAIN.servo, CMC_SERVO)}, THUMB_S)
     start = t.position_mm()
     t.close(t.top([chain(f).servo for f in FINGERS]), CLOSE_S)
+    t.release()
+    t.run(RELEASE_S)
     closed = t.position_mm()
     t.hold(t.gravity, HOLD_S)
     palm = t.mj.mj_name2id(t.m, t.mj.mjtObj.mjOBJ_BODY, "palm")

@@ -423,13 +423,13 @@ def cylinder_grasp(request, hand_export, power_grasps):
 
 
 def test_the_closed_hand_holds_a_cylinder_palm_down(cylinder_grasp):
-    """MuJoCo, contacts on (``export.hold.hold_cylinder``): a free cylinder (100 g, solid) where
+    """MuJoCo, contacts on (``export.hold.hold_cylinder``): a cylinder (100 g, solid) presented where
     ``cad.grasp`` puts it, the thumb at its commands there (the cylinder's contacts off while the
     thumb turns, gravity off); then every finger servo commanded to the end of its travel for 2 s;
-    then gravity toward the palm's palmar side (the palm facing down) for 3 s: the closing fingers
-    squeeze it less than 5 mm toward the wrist (the palm's heel holds it there), then it moves
-    less than 5 mm and has come to rest, no warning, and the palm touches it (each hand's figures:
-    docs/parts.md, "Power grasp")."""
+    the cylinder let go (gravity off): the closed fingers move it less than 5 mm (the palm's heel
+    holds it on its wrist side); then gravity toward the palm's palmar side (the palm facing down)
+    for 3 s: it moves less than 5 mm and has come to rest, no warning, and the palm touches it
+    (each hand's figures: docs/parts.md, "Power grasp")."""
     from phantom_cad.export.hold import hold_cylinder
     from phantom_cad.kinematics.topology import SERVOS
 
@@ -439,10 +439,10 @@ def test_the_closed_hand_holds_a_cylinder_palm_down(cylinder_grasp):
     assert [_name(m, mujoco.mjtObj.mjOBJ_JOINT, m.actuator_trnid[a, 0]) for a in range(m.nu)] == [s.name for s in SERVOS]
     assert m.opt.gravity == pytest.approx([0.0, 0.0, -9.81])          # the palm frame's -z: palmar
     h = hold_cylinder(scene, g, mass_kg=CYLINDER_KG)
-    what = (f"squeezed {h.squeezed_mm:.1f} mm while closing, then moved {h.moved_mm:.1f} mm palm down; "
+    what = (f"let go, moved {h.released_mm:.1f} mm; then moved {h.moved_mm:.1f} mm palm down; "
             f"servo torques {h.servo_torques.round(3).tolist()}")
     assert h.warnings == {}, what
-    assert h.squeezed_mm < 5.0, what              # held on its wrist side while the fingers close
+    assert h.released_mm < 5.0, what              # the closed fingers hold it against the heel
     assert h.moved_mm < 5.0, what
     assert h.speed_mm_s < 10.0, what              # it has come to rest
     assert h.palm_contacts_y_mm, what             # against the palm
