@@ -50,3 +50,76 @@ def test_a_turn_spheres_poles_and_seam_lie_off_its_channels(into, out):
         for o in openings:
             assert p @ o <= 1e-6, (p, o)
     assert s.volume == pytest.approx(4.0 / 3.0 * np.pi, rel=1e-6)
+
+
+@pytest.mark.slow
+def test_a_205_9_x_85_mm_thumb_proximal_phalanx_leaves_no_skin(tmp_path):
+    """The thumb's proximal phalanx of ``size --hand-length 205.9 --hand-breadth 85``: its eyelet's
+    near relief sphere (1 mm) bottomed 0.42 mm above the 16.5 mm phalanx's palmar face, past the end
+    of the drive's fan, and left a 0.51 mm skin there (the population's walls row). The well under
+    it opens it: nothing of the part stands between the sphere and the face, and every wall
+    measured on its mesh is two perimeters (``export.walls``)."""
+    from phantom_cad import units
+    from phantom_cad.cad.parts.phalanx import eyelet
+    from phantom_cad.cad.parts.tendons import link_tendons
+    from phantom_cad.export import step_stl
+    from phantom_cad.export.walls import thin_walls, wall_bar_mm
+
+    out = tmp_path / "h205.toml"
+    run = subprocess.run([sys.executable, "-m", "phantom_cad", "size", "--hand-length", "205.9",
+                          "--hand-breadth", "85", "--out", str(out)], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    p = load_params(out)
+    pt = part(p, "thumb_proximal")
+    sec = pt.sec
+    _, _, _, (s_near, _) = eyelet(sec, sec.guide_points()[1],
+                                  link_tendons(p, pt.link.name).eyelet_toward(sec.guide_points()[1]), clip_palmar=True)
+    low, face = s_near[2] - sec.tol.tendon_relief / 2.0, -sec.thickness / 2.0
+    assert 0.0 < low - face < 0.8                      # the case: a skin under the sphere
+    shape = pt.build()
+    assert not solid_problems("thumb_proximal", shape)
+    for dy in (-0.5, 0.0, 0.5):
+        assert not shape.is_inside((0.0, float(s_near[1]) + dy, (low + face) / 2.0))
+    v, f = step_stl.tessellate(shape, units.mm(p.print.stl_tolerance))
+    walls = thin_walls(np.asarray(v), np.asarray(f), wall_bar_mm(p))
+    assert walls["wall_thinnest"] >= wall_bar_mm(p), walls
+
+
+@pytest.mark.slow
+def test_a_170_4_x_68_4_mm_forearm_leaves_no_roof_over_servo_6s_strand(tmp_path):
+    """The forearm module of ``size --hand-length 170.4 --hand-breadth 68.4``: servo 6's strand
+    toward the palm, from its tilted pulley, enters the block through the top at about 20 deg, and
+    beside the pocket its channel's roof tapered to 0.06 mm (the population's walls row). The slot
+    over it opens the channel to the top there: nothing of the part stands over the channel where
+    its roof was under a wall, and every wall measured on its mesh is two perimeters."""
+    from phantom_cad import units
+    from phantom_cad.cad.parts import wrist
+    from phantom_cad.cad.parts.forearm import FOREARM_SERVOS
+    from phantom_cad.export import step_stl
+    from phantom_cad.export.walls import thin_walls, wall_bar_mm
+
+    out = tmp_path / "h170.toml"
+    run = subprocess.run([sys.executable, "-m", "phantom_cad", "size", "--hand-length", "170.4",
+                          "--hand-breadth", "68.4", "--out", str(out)], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    p = load_params(out)
+    fa = part(p, "forearm")
+    x0, x1, y0, y1, z0, z1 = fa.extents()
+    servo6 = FOREARM_SERVOS[-1]
+    p0, u = fa.drive_line(servo6, -1.0)
+    r = fa.tol.tendon_hole / 2.0
+    s = np.linspace(0.0, y1 - y0 + 2.0 * wrist.TAB_LENGTH, 2001)
+    axis = p0 + s[:, None] * u
+    gap = np.min([fa.pocket_gap(k, axis)[0] for k in FOREARM_SERVOS], axis=0)
+    roof = z1 - axis[:, 2] - r
+    under = (axis[:, 0] > x0) & (axis[:, 0] < x1) & (axis[:, 1] > y0) & (axis[:, 1] < y1) & (gap > r) \
+        & (roof > 0.0) & (roof < 0.8)
+    assert under.any()                            # the case: a roof under two perimeters
+    shape = fa.build()
+    T = np.linalg.inv(fa.T_palm_part())           # the part is placed in its own (the forearm's) frame
+    for a, h in zip(axis[under], roof[under]):
+        q = T @ np.array([a[0], a[1], a[2] + r + h / 2.0, 1.0])
+        assert not shape.is_inside(tuple(float(v) for v in q[:3]))
+    v, f = step_stl.tessellate(shape, units.mm(p.print.stl_tolerance))
+    walls = thin_walls(np.asarray(v), np.asarray(f), wall_bar_mm(p))
+    assert walls["wall_thinnest"] >= wall_bar_mm(p), walls

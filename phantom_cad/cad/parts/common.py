@@ -428,14 +428,26 @@ def turn_sphere(c, r: float, into, out):
     return b.Solid.make_sphere(r, plane=plane)
 
 
+def channel_slot(p, u, s0: float, s1: float, toward, r: float, flank: float):
+    """A slot opening a channel (radius ``r``, its axis from ``p`` along the unit vector ``u``) from
+    ``s0`` to ``s1`` along it: a box a channel wide, from a channel radius before ``s0`` to one past
+    ``s1``, from the axis toward ``toward`` (a direction; its part square to the axis) two channel
+    radii and flanks and half a millimetre."""
+    p, u = np.asarray(p, float), np.asarray(u, float)
+    y = np.asarray(toward, float) - u * (np.asarray(toward, float) @ u)
+    y /= np.linalg.norm(y)
+    M = np.eye(4)
+    M[:3, 0], M[:3, 1], M[:3, 2], M[:3, 3] = u, y, np.cross(u, y), p
+    return transform(box(s0 - r, s1 + r, 0.0, 2.0 * (r + flank) + 0.5, -r, r), M)
+
+
 def channel_slots(p, u, length: float, r: float, gaps, flank: float) -> list:
-    """Slots joining a channel (radius ``r``, its axis from ``p`` along the unit vector ``u`` for
-    ``length``) to each cut whose wall to it is under ``flank`` somewhere along it: a box a channel
-    wide, along the run from a channel radius before the first such point to one past the last,
-    from the channel's axis toward the cut's nearest point into it (past where any of those
-    points' walls was: the cut's nearest face turns along the run). ``gaps``: per cut, a function
-    of points (n, 3) giving (distance, nearest point); a cut the channel already runs into is left
-    as it is."""
+    """Slots (:func:`channel_slot`) joining a channel (radius ``r``, its axis from ``p`` along the
+    unit vector ``u`` for ``length``) to each cut whose wall to it is under ``flank`` somewhere along
+    it: along the run from the first such point to the last, from the channel's axis toward the
+    cut's nearest point into it (past where any of those points' walls was: the cut's nearest face
+    turns along the run). ``gaps``: per cut, a function of points (n, 3) giving (distance, nearest
+    point); a cut the channel already runs into is left as it is."""
     p, u = np.asarray(p, float), np.asarray(u, float)
     s = np.linspace(0.0, length, int(length / 0.05) + 1)
     axis = p + s[:, None] * u
@@ -446,11 +458,7 @@ def channel_slots(p, u, length: float, r: float, gaps, flank: float) -> list:
         if not close.any() or d.min() < 1e-9:
             continue
         i = int(np.argmin(d))
-        y = near[i] - axis[i]
-        y -= u * (y @ u)
-        M = np.eye(4)
-        M[:3, 0], M[:3, 1], M[:3, 2], M[:3, 3] = u, y / np.linalg.norm(y), np.cross(u, y / np.linalg.norm(y)), p
-        out.append(transform(box(s[close].min() - r, s[close].max() + r, 0.0, 2.0 * (r + flank) + 0.5, -r, r), M))
+        out.append(channel_slot(p, u, s[close].min(), s[close].max(), near[i] - axis[i], r, flank))
     return out
 
 

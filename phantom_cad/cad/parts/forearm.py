@@ -32,7 +32,8 @@ from ...kinematics.topology import FOREARM, SERVO_MOUNT, SERVOS, link
 from ...kinematics.vectors import nearest_on_box, nearest_on_cylinder
 from ..measure import circular_pockets
 from .base import Part
-from .common import Tolerances, box, build, channel_slots, cylinder, mm, polygon_cylinder, swept_up, transform
+from .common import (Tolerances, box, build, channel_slot, channel_slots, cylinder, mm, polygon_cylinder, swept_up,
+                     transform)
 from . import wrist
 from .servos import ServoMount
 
@@ -129,6 +130,25 @@ class Forearm(ServoMount, Part):
         gaps = [lambda pts, j=j: self.pocket_gap(j, pts) for j in FOREARM_SERVOS if j != servo]
         return channel_slots(p, u, length, self.tol.tendon_hole / 2.0, gaps, mm(FLANK))
 
+    def top_slot(self, servo: int, side: float, length: float) -> list:
+        """A slot (``common.channel_slot``) opening a drive's channel up through the block's top
+        where it runs under it less than a flank (two perimeters): servo 6's strands, from its
+        tilted pulley, enter the block through the top at about 20 deg, and the roof over the
+        channel's entry tapered to nothing (0.06 mm under the top beside the pocket on a 170 mm
+        hand). Only where the channel's roof is material: beside the pockets it is open anyway."""
+        x0, x1, y0, y1, _, z1 = self.extents()
+        p, u = self.drive_line(servo, side)
+        r = self.tol.tendon_hole / 2.0
+        s = np.linspace(0.0, length, int(length / 0.05) + 1)
+        axis = p + s[:, None] * u
+        roof = z1 - axis[:, 2] - r
+        inside = (axis[:, 0] > x0) & (axis[:, 0] < x1) & (axis[:, 1] > y0) & (axis[:, 1] < y1)
+        open_ = np.min([self.pocket_gap(k, axis)[0] for k in FOREARM_SERVOS], axis=0) < r
+        thin = inside & ~open_ & (roof > -2.0 * r) & (roof < mm(FLANK))
+        if not thin.any():
+            return []
+        return [channel_slot(p, u, s[thin].min(), s[thin].max(), (0.0, 0.0, 1.0), r, mm(FLANK))]
+
     def build(self):
         t = self.tol
         x0, x1, y0, y1, z0, z1 = self.extents()
@@ -159,6 +179,7 @@ class Forearm(ServoMount, Part):
                 p, u = self.drive_line(k, side)
                 tools.append(cylinder(p - u, p + u * reach, t.tendon_hole / 2.0))
                 tools += self.pocket_slots(k, side, reach)
+                tools += self.top_slot(k, side, reach)
                 slot = self.drive_slot(k, t.tendon_hole, side=side)
                 if slot is not None:
                     tools.append(transform(box(slot[0][0], slot[1][0], slot[0][1], slot[1][1], slot[0][2], slot[1][2]),

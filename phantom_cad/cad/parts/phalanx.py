@@ -34,6 +34,10 @@ from .tendons import (LinkTendons, RoutedPart, link_tendons, anchor_tools, chann
 #: how far (rad) the drive's knot well behind G2 leans distally from the palmar normal (see
 #: Phalanx.build): straight down, it left a 0.45-0.75 mm web beside the eyelet's near relief
 KNOT_WELL_LEAN = units.rad(35.0)
+#: how far (rad) the well under G2's near relief sphere leans proximally from the palmar normal,
+#: where the sphere would leave a skin on the palmar face (Phalanx.build): away from the eyelet's
+#: hole and the knot well, into the drive's fan
+NEAR_WELL_LEAN = units.rad(20.0)
 
 # ---------------------------------------------------------------------------
 # shared joint features: each returns (body_parts, cutting_tools), link frame, mm
@@ -362,6 +366,15 @@ class Phalanx(RoutedPart, Part):
             drop = s_far[2] + T / 2.0 + 1.0
             tools.append(cylinder(s_far, (0.0, s_far[1] + drop * math.tan(KNOT_WELL_LEAN), -T / 2.0 - 1.0),
                                   t.tendon_relief / 2.0))
+            # where the near relief sphere's lowest point stands less than a wall above the palmar
+            # face (0.4 mm on the 205 mm hands' thumb), a well opens it through the face, leaning
+            # proximally (the hole's palmar edge and the knot well stay whole), a little wider than
+            # the sphere (never tangent to it)
+            rr, face = t.tendon_relief / 2.0, -T / 2.0
+            if face < s_near[2] - rr < face + mm(FLANK):
+                drop = s_near[2] - face + 1.0
+                tools.append(cylinder(s_near, (0.0, s_near[1] - drop * math.tan(NEAR_WELL_LEAN), face - 1.0),
+                                      rr + RELIEF_SLOT_MARGIN))
             flanks = tuple(g.x + k * g.width / 2.0 for g in lt.tongue_grooves(parent_joint(self.link).name)
                            for k in (-1.0, 1.0))
             tools += drive_fan_tools(lt, sec, float(np.linalg.norm(s_near - np.array([0.0, *G2]))),
