@@ -13,7 +13,8 @@ back into its own. Why the servos are here and not in the palm: docs/parts.md.
   ``forearm_layout.drops_straight``), pulley cavities, M2 pilot holes under the flange ears;
 * each drive's channel (the loop's two) from its pulley through the front wall, on to the palm,
   joined by a slot to its servo's drop-in pocket where it runs beside it closer than a flank
-  (``ServoMount.drive_slot``);
+  (``ServoMount.drive_slot``), to another servo's pocket likewise (``pocket_slots``), and opened up
+  through the block's top where it enters it under less than a flank (``top_slot``);
 * a tab over the palm's dorsal face at the wrist with two M2 clearance holes: the module screws
   onto the palm there.
 """
