@@ -242,8 +242,8 @@ def power_grasps(hand_parts, shared_root):
         if kind not in done:
             p, shapes = hand_parts(kind)
             # the grasp's commands and the hold in tests/export/test_mjcf.py are set on the paper's
-            # compensation: with the routed statics the default hand squeezes the cylinder 5.6 mm
-            # and the left hand drops it (not yet re-tuned)
+            # compensation: with the routed statics (measured with the cylinder free while the
+            # fingers closed) the default hand squeezed the cylinder 5.6 mm and the left hand dropped it
             h = make_hand(p, compensation="paper")
             found = shared.once(shared_root, f"power-grasp-{kind}",
                                 lambda: grasp.power_grasp(h, shapes, power_grasp_diameter_mm(p)))
