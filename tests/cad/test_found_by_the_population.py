@@ -16,16 +16,21 @@ from phantom_cad.params import load_params
 pytest.importorskip("build123d")
 
 
+def _sized(tmp_path, length: str, breadth: str):
+    """The parameters ``phantom-cad size --hand-length length --hand-breadth breadth`` writes."""
+    out = tmp_path / "sized.toml"
+    run = subprocess.run([sys.executable, "-m", "phantom_cad", "size", "--hand-length", length,
+                          "--hand-breadth", breadth, "--out", str(out)], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    return load_params(out)
+
+
 @pytest.mark.slow
 def test_a_213_x_85_mm_palm_builds(tmp_path):
     """The palm of ``size --hand-length 213 --hand-breadth 85``: the thumb drive turns at a 1 mm
     sphere onto the CMC axis, and with the sphere's pole and seam where OpenCascade put them the cut
     left no solid at all."""
-    out = tmp_path / "h213.toml"
-    run = subprocess.run([sys.executable, "-m", "phantom_cad", "size", "--hand-length", "213",
-                          "--hand-breadth", "85", "--out", str(out)], capture_output=True, text=True)
-    assert run.returncode == 0, run.stderr
-    pt = part(load_params(out), "palm")
+    pt = part(_sized(tmp_path, "213", "85"), "palm")
     shape = pt.build()
     assert not solid_problems("palm", shape)
     assert pt.verify(shape) == []
@@ -65,11 +70,7 @@ def test_a_205_9_x_85_mm_thumb_proximal_phalanx_leaves_no_skin(tmp_path):
     from phantom_cad.export import step_stl
     from phantom_cad.export.walls import thin_walls, wall_bar_mm
 
-    out = tmp_path / "h205.toml"
-    run = subprocess.run([sys.executable, "-m", "phantom_cad", "size", "--hand-length", "205.9",
-                          "--hand-breadth", "85", "--out", str(out)], capture_output=True, text=True)
-    assert run.returncode == 0, run.stderr
-    p = load_params(out)
+    p = _sized(tmp_path, "205.9", "85")
     pt = part(p, "thumb_proximal")
     sec = pt.sec
     _, _, _, (s_near, _) = eyelet(sec, sec.guide_points()[1],
@@ -98,11 +99,7 @@ def test_a_170_4_x_68_4_mm_forearm_leaves_no_roof_over_servo_6s_strand(tmp_path)
     from phantom_cad.export import step_stl
     from phantom_cad.export.walls import thin_walls, wall_bar_mm
 
-    out = tmp_path / "h170.toml"
-    run = subprocess.run([sys.executable, "-m", "phantom_cad", "size", "--hand-length", "170.4",
-                          "--hand-breadth", "68.4", "--out", str(out)], capture_output=True, text=True)
-    assert run.returncode == 0, run.stderr
-    p = load_params(out)
+    p = _sized(tmp_path, "170.4", "68.4")
     fa = part(p, "forearm")
     x0, x1, y0, y1, z0, z1 = fa.extents()
     servo6 = FOREARM_SERVOS[-1]
