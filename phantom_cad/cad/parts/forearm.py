@@ -134,9 +134,9 @@ class Forearm(ServoMount, Part):
     def top_slot(self, servo: int, side: float, length: float) -> list:
         """A slot (``common.channel_slot``) opening a drive's channel up through the block's top
         where it runs under it less than a flank (two perimeters): servo 6's strands, from its
-        tilted pulley, enter the block through the top at about 20 deg, and the roof over the
-        channel's entry tapered to nothing (0.06 mm under the top beside the pocket on a 170 mm
-        hand). Only where the channel's roof is material: beside the pockets it is open anyway."""
+        tilted pulley, can enter the block through the top at about 20 deg, where the roof over the
+        channel's entry would taper to nothing. Only where the channel's roof is material: beside
+        the pockets it is open anyway."""
         x0, x1, y0, y1, _, z1 = self.extents()
         p, u = self.drive_line(servo, side)
         r = self.tol.tendon_hole / 2.0
