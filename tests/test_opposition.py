@@ -362,3 +362,30 @@ def test_solve_meets_a_callers_constraint(hand):
     assert sol.offset[0] >= x0 - 1e-12 and sol.offset[1] >= y0 - 1e-12
     assert sol.violation == pytest.approx(max(x0 - sol.offset[0], y0 - sol.offset[1]), abs=1e-15)
     assert sol.violation <= 0.0 and sol.intrusion <= 0.0
+
+
+@pytest.mark.parametrize("dx_mm, refused", [(0.0, False), (2.0, False), (4.0, True), (8.0, True)])
+def test_the_search_keeps_the_cmc_base_off_the_heel_as_the_pre_build_check_does(dx_mm, refused):
+    """The default CMC moved ulnar by dx: at 4 mm its base comes 0.15 mm from the heel, under the
+    0.2 mm clearance ``cad.preflight`` refuses; the search's constraint (the file's heel, the
+    placement given) is positive exactly where the pre-build check refuses the moved file, and by
+    the clearance less the gap that file's own ``heel_gap`` measures."""
+    from phantom_cad.cad import preflight
+    from phantom_cad.kinematics import forearm_layout as FL
+    from phantom_cad.params import DEFAULT_PARAMS, ParamError, load_document, parse
+
+    doc = load_document(DEFAULT_PARAMS)
+    doc["palm"]["thumb_cmc_offset_mm"][0] += dx_mm
+    moved = parse(doc)
+    T0 = F.thumb_cmc_placement(moved.palm.thumb_cmc_offset, moved.palm.thumb_cmc_axis)
+    v = TP.thenar_constraint(load_params())(T0)
+    try:
+        preflight.check(moved)
+        why = None
+    except ParamError as exc:
+        why = str(exc)
+    assert (why is not None) == refused and (v > 0.0) == refused, (why, v)
+    if refused:
+        assert "heel" in why
+        gap = FL.heel_gap(moved)
+        assert v == pytest.approx(moved.print.hole_clearance + TP.SLACK - gap, abs=1e-12)

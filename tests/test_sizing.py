@@ -500,3 +500,25 @@ def test_the_print_aids_refuse_before_a_file_is_written(tmp_path, capsys, monkey
     assert code == 2 and err.startswith("error: ") and len(err.splitlines()) == 1
     assert "the angle gauge's faces (22.2 mm" in err and "need (22.5 mm)" in err
     assert not out.exists()
+
+
+def test_a_placement_whose_thumb_tip_end_meets_a_pad_is_not_kept():
+    """The 170.4 x 76.8 mm hand at a placement whose capsules meet every pad inside the cone but
+    whose thumb's tip end meets the index pad on the printed tips (tests/test_printed_tips.py):
+    it ranks below a placement that meets all three there, even one with a smaller margin, and
+    were it the best, the refusal names the index and the printed tips."""
+    from dataclasses import replace
+
+    from phantom_cad.sizing import Sizing, _opposition, opposition_refusal
+    from tests.support.hands import rim_hand
+
+    p = rim_hand().params
+    margin, unpinched = _opposition(p)
+    assert margin > 0.0 and unpinched == ("index",)
+    rim = Sizing(p.document, p, margin, True, unpinched)
+    assert not rim.opposes
+    assert replace(rim, margin=0.0, unpinched=()).rank > rim.rank
+    assert replace(rim, margin=0.0, unpinched=()).opposes
+    line = opposition_refusal(Person(170.4, 76.8, "right", "rim"), rim, preflight.check, False, 0)
+    assert line.startswith("--hand-length 170.4 --hand-breadth 76.8: on the printed tips the thumb's pad meets "
+                           "no index pad"), line

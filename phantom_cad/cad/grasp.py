@@ -8,9 +8,9 @@ out a few 1e-15 mm instead of 0, so nothing at or under its confusion tolerance 
 
 **Pinch** (``solid_contact``). The kinematic model (``kinematics.opposition``) finds where the
 fingertips' capsules meet; the capsules lie inside the printed tips, so there the solids touch or
-overlap. For each of the model's contacts (``model_contacts``: squarest first, one per distinct
+overlap. For each of the model's contacts (``opposition.contact_commands``: squarest first, one per distinct
 thumb command), the thumb holds still and the finger flexes onto it from rest. The first contact
-whose closest points lie on both pads (``on_pad``) is returned.
+whose closest points lie on both pads (``printed_tips.on_pad``) is returned.
 
 **Power grasp** (``cylinder_grasp``, ``power_grasp``). A cylinder lies across the palm, its axis
 along the knuckle line (the palm frame's x), resting against the palm (``PALM_GAP_MM`` off it,
@@ -38,17 +38,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import units
-from ..kinematics import frames, opposition
-from ..kinematics.hand_params import HandParams
+from ..kinematics import opposition
+from ..kinematics.printed_tips import Pinch, first_pinch
 from ..kinematics.power_grasp import PALM_GAP_MM, REACH_MM, STEPS, close_onto, laid_axis_y, wrap_angle_deg
-from ..kinematics.topology import CMC_SERVO, FINGERS, N_SERVOS, THUMB_CHAIN, chain, digit_links
+from ..kinematics.topology import CMC_SERVO, FINGERS, THUMB_CHAIN, chain, digit_links
 from .assembly import pose_transforms
 from .measure import placed
 
 
-#: how many of the model's contacts (distinct thumb commands, squarest first) are tried
-CANDIDATES = 8
 #: ``resting_axis_z`` stops rising when its clearance is within this of the gap (mm)
 ADVANCE_TOL_MM = 1e-9
 #: the thumb's CMC and IP/MP commands tried (evenly over each travel) to turn it out of the way of the
@@ -56,84 +53,27 @@ ADVANCE_TOL_MM = 1e-9
 THUMB_CMC_STEPS, THUMB_FLEX_STEPS = 21, 5
 
 
-@dataclass(frozen=True)
-class SolidContact:
-    """A measured pinch: the commands (rad, one per servo), the solids' distance there (mm) and
-    the closest points (hand frame, mm) on the thumb's and the finger's distal phalanges."""
-    finger: str
-    u: np.ndarray
-    distance_mm: float
-    thumb_point: np.ndarray
-    finger_point: np.ndarray
-    tried: tuple[str, ...]       # the model contacts tried before it (why each was passed over)
-
-
-def model_contacts(hand, finger: str, n: int = CANDIDATES) -> list[np.ndarray]:
-    """The model's command vectors where the thumb's tip meets the finger's (capsules overlapping
-    by at most ``opposition.CONTACT_BAND``), squarest first (the facing angle), one per distinct
-    thumb command, at most n."""
-    p = hand.params
-    T0 = frames.thumb_cmc_placement(p.palm.thumb_cmc_offset, p.palm.thumb_cmc_axis)
-    thumb = opposition.thumb_tips(hand).placed(T0)
-    tips = opposition.finger_tips(hand, finger)
-    gap, angle = opposition.contacts(thumb, tips)
-    ok = (gap <= 0.0) & (gap >= -opposition.CONTACT_BAND)
-    out, seen = [], set()
-    for flat in np.argsort(np.where(ok, angle, np.inf), axis=None, kind="stable"):
-        i, j = np.unravel_index(int(flat), gap.shape)
-        if not ok[i, j] or len(out) == n:
-            break
-        if i in seen:
-            continue
-        seen.add(i)
-        u = np.zeros(N_SERVOS)
-        u[THUMB_CHAIN.servo], u[CMC_SERVO] = thumb.u[i]
-        u[chain(finger).servo] = tips.u[j, 0]
-        out.append(u)
-    return out
-
-
-def on_pad(params: HandParams, T_hand_link: np.ndarray, digit: str, point) -> bool:
-    """Whether a point (hand frame, mm) of a digit's distal phalanx lies on its pad: in the link's
-    frame on its palmar half (z <= 0) and its distal half (y >= L / 2, ``frames.fingertip``)."""
-    x = np.linalg.solve(T_hand_link, np.r_[np.asarray(point, float), 1.0])[:3]
-    return bool(x[2] <= 0.0 and x[1] >= units.mm(frames.fingertip(params, digit)[0]) / 2.0)
-
-
 def _distal(digit: str) -> str:
     return digit_links(digit)[-1].name
 
 
 def solid_contact(hand, solids: dict, finger: str, reach_mm: float = REACH_MM,
-                  n: int = CANDIDATES) -> SolidContact | None:
-    """The first of the model's contacts (``model_contacts``) at which the finger, flexing from rest
-    onto the still thumb, brings the two distal phalanges within (0, reach_mm] mm of each other with
-    the closest points on both pads; None when none of the n does. ``solids``: the built parts in
-    their link frames (mm), at least the two distal phalanges."""
+                  n: int = opposition.CANDIDATES) -> Pinch | None:
+    """The first of the model's contacts (``opposition.contact_commands``) at which the finger,
+    flexing from rest onto the still thumb, brings the two distal phalanges within (0, reach_mm] mm of
+    each other with the closest points on both pads; None when none of the n does
+    (``printed_tips.first_pinch`` with OpenCascade's distance). ``solids``: the built parts in their
+    link frames (mm), at least the two distal phalanges."""
     p = hand.params
     a_name, b_name = _distal(THUMB_CHAIN.digit), _distal(finger)
-    k = chain(finger).servo
-    tried: list[str] = []
-    for u_end in model_contacts(hand, finger, n):
-        def measure(s: float):
-            u = u_end.copy()
-            u[k] = s * u_end[k]
-            T = pose_transforms(p, hand.forward(u, compensated=True))
-            a, b = placed(solids[a_name], T[a_name]), placed(solids[b_name], T[b_name])
-            d, pa, pb = a.distance_to_with_closest_points(b)
-            return d, u, T, np.array(tuple(pa)), np.array(tuple(pb))
 
-        where = f"{units.deg(u_end).round(2).tolist()} deg"
-        found = close_onto(measure, reach_mm)
-        if found is None:
-            tried.append(f"{where}: not within (0, {reach_mm}] mm from rest to the contact, or already at rest")
-            continue
-        _, (d, u, T, pa, pb) = found
-        if not (on_pad(p, T[a_name], THUMB_CHAIN.digit, pa) and on_pad(p, T[b_name], finger, pb)):
-            tried.append(f"{where}: {d:.3f} mm apart, not pad to pad")
-            continue
-        return SolidContact(finger, u, float(d), pa, pb, tuple(tried))
-    return None
+    def distance(u):
+        T = pose_transforms(p, hand.forward(u, compensated=True))
+        a, b = placed(solids[a_name], T[a_name]), placed(solids[b_name], T[b_name])
+        d, pa, pb = a.distance_to_with_closest_points(b)
+        return d, T[a_name], T[b_name], np.array(tuple(pa)), np.array(tuple(pb))
+
+    return first_pinch(hand, finger, distance, reach_mm, n)
 
 
 # ---------------------------------------------------------------------------

@@ -20,7 +20,7 @@ from .memo import memoised
 from .servo_geometry import (drive_clearances_of, drive_runs_of, envelope_points, envelope_width, aimed_servo, coplanar_servo,
                              forearm_front, forearm_pitch, forearm_top, palm_back, servo_boxes, servo_envelope,
                              servo_gaps, servo_target, spaced)
-from .thenar import T_cmc_base_pulley, thenar
+from .thenar import T_cmc_base_pulley, thenar, thenar_layout
 from .topology import CMC_SERVO, FINGERS, SERVOS, chain
 
 
@@ -171,17 +171,18 @@ def heel_clear_y(params: HandParams, z: float, r: float) -> float:
     return front + (math.sqrt(r * r - (z - bottom) ** 2) if r > bottom - z else 0.0)
 
 
-def heel_gap(params: HandParams) -> float:
+def heel_gap(params: HandParams, T0: np.ndarray | None = None) -> float:
     """The least distance (m) from the palm's heel (:func:`heel_box`) to the CMC base at rest (its
     hub: thumb.width_mm across, thumb.thickness_mm thick about the CMC axis; its column up the axis
     to the palm's palmar face; the metacarpal's arm, as wide and thick, out to the MP axis);
     negative where they overlap; inf for a flat palm. Their surfaces are sampled; a point's distance
-    to the box is the largest of its distances beyond the box's faces (a lower bound)."""
+    to the box is the largest of its distances beyond the box's faces (a lower bound). ``T0``:
+    another CMC placement than the file's (T_palm_cmc_base at rest)."""
     box = heel_box(params)
     if box is None:
         return math.inf
     th = params.thumb
-    t = thenar(params)
+    t = thenar(params) if T0 is None else thenar_layout(params, T0)
     W, T, L = th.width, th.thickness, th.metacarpal
     a = np.linspace(0.0, 2.0 * math.pi, 48, endpoint=False)
     pts = [np.c_[r * np.cos(a), r * np.sin(a), np.full_like(a, s)]
@@ -191,7 +192,7 @@ def heel_gap(params: HandParams) -> float:
     g = np.array([(x, y, z) for x in -W / 2.0 + W * u for y in L * u for z in (-T / 2.0, T / 2.0)] +
                  [(x, y, z) for x in (-W / 2.0, W / 2.0) for y in L * u for z in -T / 2.0 + T * u])
     local = np.vstack(pts + [g])
-    T0 = T_palm_thumb_cmc_base(params)
+    T0 = T_palm_thumb_cmc_base(params) if T0 is None else T0
     P = local @ T0[:3, :3].T + T0[:3, 3]
     lo, hi = box
     return float(np.maximum(lo - P, P - hi).max(axis=1).min())

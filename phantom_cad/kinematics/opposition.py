@@ -37,7 +37,7 @@ from .. import units
 from . import frames as F
 from . import link_frames as LF
 from .hand_params import HandParams
-from .topology import CMC_Q, FINGERS, N_SERVOS, OPPOSED_FINGERS, SERVOS, THUMB_CHAIN, chain, digit_links, joint, link
+from .topology import CMC_Q, CMC_SERVO, FINGERS, N_SERVOS, OPPOSED_FINGERS, SERVOS, THUMB_CHAIN, chain, digit_links, joint, link
 
 
 #: the half angle (rad) of the cone around a pad's normal in which a contact counts as pad to pad
@@ -51,6 +51,9 @@ THUMB = THUMB_CHAIN.digit
 #: a pair of commands counts as *in contact* when its capsules overlap by at most this (m): the
 #: pads have met on the way there and press by less than a grid step
 CONTACT_BAND = 3e-3
+#: how many of the model's contacts (distinct thumb commands, squarest first) a pinch on the printed
+#: tips or the solids tries (:func:`contact_commands`)
+CANDIDATES = 8
 
 
 @dataclass(frozen=True)
@@ -341,6 +344,32 @@ def reach(hand, thumb: ThumbTips | None = None, T0: np.ndarray | None = None, fi
         out[f] = Reach(f, float(masked[i, j]), tuple(float(v) for v in tt.u[i]), float(ft.u[j, 0]),
                        float(gap.min()), PAD_CONE - float(touching[k, m]),
                        (*(float(v) for v in tt.u[k]), float(ft.u[m, 0])))
+    return out
+
+
+def contact_commands(hand, finger: str, n: int = CANDIDATES) -> list[np.ndarray]:
+    """The model's command vectors (6,) where the thumb's tip meets the finger's (capsules
+    overlapping by at most :data:`CONTACT_BAND`), squarest first (the facing angle), one per
+    distinct thumb command, at most n: where a pinch is tried on the printed tips
+    (``printed_tips``) and on the solids (``cad.grasp``)."""
+    p = hand.params
+    T0 = F.thumb_cmc_placement(p.palm.thumb_cmc_offset, p.palm.thumb_cmc_axis)
+    thumb = thumb_tips(hand).placed(T0)
+    tips = finger_tips(hand, finger)
+    gap, angle = contacts(thumb, tips)
+    ok = (gap <= 0.0) & (gap >= -CONTACT_BAND)
+    out, seen = [], set()
+    for flat in np.argsort(np.where(ok, angle, np.inf), axis=None, kind="stable"):
+        i, j = np.unravel_index(int(flat), gap.shape)
+        if not ok[i, j] or len(out) == n:
+            break
+        if i in seen:
+            continue
+        seen.add(i)
+        u = np.zeros(N_SERVOS)
+        u[_servo(THUMB)], u[CMC_SERVO] = thumb.u[i]
+        u[_servo(finger)] = tips.u[j, 0]
+        out.append(u)
     return out
 
 

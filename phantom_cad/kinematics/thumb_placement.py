@@ -25,6 +25,7 @@ from .. import units
 from . import forearm_layout as FL
 from . import frames as F
 from . import thenar as TH
+from .dimensions import FLANK
 from .hand_params import HandParams
 from .opposition import (CONTACT_BAND, OPPOSED, PAD_CONE, ThumbTips, Tips, segment_closest, facing_angle, norm3, pad_pairs, xyz,
                          finger_tips, reach, thumb_tips)
@@ -33,6 +34,9 @@ from .topology import FINGERS
 
 #: the search's price (rad of margin) of a metre of the thumb inside the palm envelope
 INTRUSION_WEIGHT = 100.0
+#: what :func:`thenar_constraint` keeps its rules by (m, rad): a placement on a rule's edge, written
+#: to a file with four decimals (``sizing``, ``params opposition --solve``), still keeps it
+SLACK, SLACK_RAD = 1e-6, 1e-5
 
 
 @dataclass(frozen=True)
@@ -137,16 +141,22 @@ def carpus(params: HandParams) -> float:
 def thenar_constraint(params: HandParams, human: bool = True):
     """The placement search's ``constraint`` for the palm's thenar (``thenar.thenar``): metres by
     which a placement T0 misses ``frames.thenar_margins`` (the CMC axis's tilt priced at the thumb's
-    half width per radian) and, with ``human``, by which the journal's and the turn's walls reach
-    radial of a palm of human breadth (:func:`human_edge`; the pulley's cavity may open there) and
-    the thenar reaches behind the carpus (:func:`carpus`)."""
+    half width per radian), the print's hole clearance off the palm's heel
+    (``forearm_layout.heel_gap``) and two perimeters off the finger sockets' magnet pockets
+    (``thenar.socket_pocket_gap``; both rules ``cad.preflight`` checks), and, with ``human``, by which
+    the journal's and the turn's walls reach radial of a palm of human breadth (:func:`human_edge`;
+    the pulley's cavity may open there) and the thenar reaches behind the carpus (:func:`carpus`)."""
     edge = human_edge(params)
     back = F.wrist_y(params) - carpus(params)
     lever = params.thumb.width / 2.0
+    clearance = params.print.hole_clearance
 
     def violation(T0: np.ndarray) -> float:
         m = TH.thenar_margins(params, T0)
-        v = max(-m["tilt"], 0.0) * lever + max(-m["base"], 0.0) + max(-m["turn"], 0.0)
+        v = max(SLACK_RAD - m["tilt"], 0.0) * lever + max(SLACK - m["base"], 0.0) + max(SLACK - m["turn"], 0.0)
+        if T0[2, 2] > 0.0:              # the axis climbs into the palm: the thenar's cuts exist
+            v += (max(clearance + SLACK - FL.heel_gap(params, T0), 0.0)
+                  + max(FLANK + SLACK - TH.socket_pocket_gap(params, T0)[0], 0.0))
         if m["tilt"] < 0.0 or not human:
             return v
         pts = TH.thenar_points(params, T0)

@@ -47,6 +47,18 @@ class Sizing:
     params: HandParams        # the document validated
     margin: float             # rad: the opposition margin of the placement chosen
     searched: bool            # the placement is the search's (False: the reference's, scaled, was better)
+    unpinched: tuple[str, ...] = ()   # the opposed fingers whose pads the thumb's misses on the printed tips
+
+    @property
+    def opposes(self) -> bool:
+        """The thumb's pad meets the index, middle and ring pads squarely on the model (margin >= 0)
+        and on the printed tips."""
+        return self.margin >= 0.0 and not self.unpinched
+
+    @property
+    def rank(self) -> tuple:
+        """Better placements rank higher: the printed tips' pinches missed, then the margin."""
+        return -len(self.unpinched), self.margin
 
 
 def template() -> dict:
@@ -364,18 +376,26 @@ def nearest_length(person: Person, check: Callable[[HandParams], None]) -> float
     return good
 
 
-def _margin(params: HandParams) -> float:
-    from ..kinematics import opposition
+def _opposition(params: HandParams) -> tuple[float, tuple[str, ...]]:
+    """The opposition margin (rad, ``kinematics.opposition``) and the opposed fingers whose pads the
+    thumb's pad does not meet on the printed tips (``kinematics.printed_tips``: where the tips'
+    square ends meet first, as the solids' do)."""
+    from ..kinematics import opposition, printed_tips
     from ..kinematics.model import Hand
 
-    reach = opposition.reach(Hand(params))
-    return min(reach[f].margin for f in opposition.OPPOSED)
+    hand = Hand(params)
+    reach = opposition.reach(hand)
+    margin = min(reach[f].margin for f in opposition.OPPOSED)
+    if margin < 0.0:
+        return margin, opposition.OPPOSED
+    return margin, tuple(f for f in opposition.OPPOSED if printed_tips.printed_pinch(hand, f) is None)
 
 
 #: the placement searches (population, generations) tried in turn, one seed each, while the best
-#: placement leaves the opposition margin below zero: ``params opposition --solve``'s, then larger
-#: ones (the landscape has several optima: docs/opposition.md)
-SEARCHES = ((8, 60), (12, 80), (12, 80))
+#: placement does not oppose (:attr:`Sizing.opposes`): ``params opposition --solve``'s, then larger
+#: ones (the landscape has several optima: docs/opposition.md; the search maximizes the capsules'
+#: margin, and of its optima some meet the printed tips pad to pad and some do not)
+SEARCHES = ((8, 60),) + ((12, 80),) * 5
 
 
 def size(person: Person, check: Callable[[HandParams], None] | None = None, search: bool = True,
@@ -407,9 +427,10 @@ def size(person: Person, check: Callable[[HandParams], None] | None = None, sear
         except ParamError as exc:
             error = error or exc
             return
-        m = _margin(p)
-        if best is None or m > best.margin + 1e-9:
-            best = Sizing(d, p, m, searched)
+        margin, unpinched = _opposition(p)
+        found = Sizing(d, p, margin, searched, unpinched)
+        if best is None or found.rank > (best.rank[0], best.margin + 1e-9):
+            best = found
 
     consider(doc, False)
     if search:
@@ -417,7 +438,7 @@ def size(person: Person, check: Callable[[HandParams], None] | None = None, sear
         from ..kinematics.model import Hand
 
         for k, (population, generations) in enumerate(SEARCHES[:searches]):
-            if k and best is not None and best.margin >= 0.0:
+            if k and best is not None and best.opposes:
                 break
             sol = thumb_placement.solve(Hand(start), seed=seed + k, population=population,
                                         generations=generations, constraint=thumb_placement.thenar_constraint(start))
@@ -432,27 +453,33 @@ def size(person: Person, check: Callable[[HandParams], None] | None = None, sear
             consider(solved, True)
     if best is None:
         raise error
-    if not best.margin >= 0.0:
+    if not best.opposes:
         raise UserError(opposition_refusal(person, best, check, search, seed))
     return best
 
 
 def opposition_refusal(person: Person, best: Sizing, check, search: bool, seed: int) -> str:
     """Why a file that validates is refused: the thumb's pad does not meet the pads of index,
-    middle and ring squarely (``kinematics.opposition``: margin < 0) at either placement; and the
-    nearest input that works, if the breadth of the reference hand's proportion does."""
+    middle and ring squarely (``kinematics.opposition``: margin < 0), or not on the printed tips
+    (``kinematics.printed_tips``), at any placement tried; and the nearest input that works, if the
+    breadth of the reference hand's proportion does."""
     from dataclasses import replace
 
     from ..kinematics import opposition
     from ..kinematics.model import Hand
 
-    reach = opposition.reach(Hand(best.params))
-    worst = min(opposition.OPPOSED, key=lambda f: reach[f].margin)
-    what = ("never faces the thumb's" if not math.isfinite(reach[worst].gap) or reach[worst].gap > 0.0
-            else f"meets the thumb's {-units.deg(reach[worst].margin):.1f} deg outside the "
-                 f"{units.deg(opposition.PAD_CONE):g} deg pad cone")
-    rule = (f"--hand-length {person.hand_length:g} --hand-breadth {person.hand_breadth:g}: the {worst} pad {what} "
-            f"(opposition margin {units.deg(best.margin):+.1f} deg, must be >= 0 for index, middle and ring)")
+    if best.margin >= 0.0:
+        rule = (f"--hand-length {person.hand_length:g} --hand-breadth {person.hand_breadth:g}: on the printed tips the "
+                f"thumb's pad meets no {' or '.join(best.unpinched)} pad (their square ends meet first; "
+                f"opposition margin {units.deg(best.margin):+.1f} deg on the capsules)")
+    else:
+        reach = opposition.reach(Hand(best.params))
+        worst = min(opposition.OPPOSED, key=lambda f: reach[f].margin)
+        what = ("never faces the thumb's" if not math.isfinite(reach[worst].gap) or reach[worst].gap > 0.0
+                else f"meets the thumb's {-units.deg(reach[worst].margin):.1f} deg outside the "
+                     f"{units.deg(opposition.PAD_CONE):g} deg pad cone")
+        rule = (f"--hand-length {person.hand_length:g} --hand-breadth {person.hand_breadth:g}: the {worst} pad {what} "
+                f"(opposition margin {units.deg(best.margin):+.1f} deg, must be >= 0 for index, middle and ring)")
     breadth = round(person.hand_length * S.REFERENCE_BREADTH / S.REFERENCE_LENGTH)
     if breadth != person.hand_breadth:
         try:

@@ -84,3 +84,22 @@ def entry_meshes(entries: dict[str, Path]) -> dict:
         with np.load(d / "mesh.npz") as m:
             out[n] = (m["vertices"], m["faces"].astype(np.int64))
     return out
+
+
+#: the placement ``phantom-cad size --hand-length 170.4 --hand-breadth 76.8`` searched when its rule
+#: was the capsules' opposition margin alone (offset mm, axis deg): there the thumb's tip end, not its
+#: pad, meets the index pad, on the solids and on the printed tips (tests/test_printed_tips.py,
+#: tests/cad/test_printed_tips_on_solids.py)
+RIM_PLACEMENT = ([-22.687, -64.409, -30.4604], [-22.6133, 20.9841, -52.114])
+
+
+def rim_hand():
+    """The 170.4 x 76.8 mm hand ``size`` writes (the reference placement scaled) moved to
+    :data:`RIM_PLACEMENT`: a Hand."""
+    from phantom_cad import make_hand
+    from phantom_cad.params import parse
+    from phantom_cad.sizing import Person, size
+
+    doc = copy.deepcopy(size(Person(170.4, 76.8, "right", "rim"), search=False).document)
+    doc["palm"]["thumb_cmc_offset_mm"], doc["palm"]["thumb_cmc_axis_deg"] = RIM_PLACEMENT
+    return make_hand(parse(doc))
