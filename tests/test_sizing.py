@@ -522,3 +522,14 @@ def test_a_placement_whose_thumb_tip_end_meets_a_pad_is_not_kept():
     line = opposition_refusal(Person(170.4, 76.8, "right", "rim"), rim, preflight.check, False, 0)
     assert line.startswith("--hand-length 170.4 --hand-breadth 76.8: on the printed tips the thumb's pad meets "
                            "no index pad"), line
+
+
+def test_the_report_gives_the_pinch_on_the_printed_tips():
+    """The default hand's line: where OpenCascade finds the pinches on the built tips
+    (tests/cad/test_printed_tips_on_solids.py; 0.911, 0.831 and 0.552 mm there)."""
+    from phantom_cad.cli.size import report
+    from phantom_cad.params import load_params
+
+    line = next(s for s in report(load_params(), False) if "on the printed tips" in s)
+    assert ("index 0.91 mm at u1 8.2, u6 27.0, index 40.0 deg; middle 0.83 mm at u1 4.1, u6 9.0, middle 53.0 deg; "
+            "ring 0.55 mm at u1 0.0, u6 4.5, ring 49.5 deg") in line

@@ -57,6 +57,26 @@ def size(
     typer.echo("\n".join(report(result.params, result.searched)))
 
 
+def printed_pinch_lines(hand) -> list[str]:
+    """Where the thumb's pad meets each opposed pad on the printed tips (``kinematics.printed_tips``:
+    the model's contacts, the finger closed onto the still thumb as ``phantom-cad check`` closes
+    the solids)."""
+    from ..kinematics import opposition
+    from ..kinematics.printed_tips import printed_pinch
+    from ..kinematics.topology import CMC_SERVO, SERVOS, THUMB_CHAIN, chain
+    from ..units import deg
+
+    u1, u6 = THUMB_CHAIN.servo, CMC_SERVO
+    parts = []
+    for f in opposition.OPPOSED:
+        c = printed_pinch(hand, f)
+        parts.append(f"{f} no pad-to-pad contact" if c is None else
+                     f"{f} {c.distance_mm:.2f} mm at {SERVOS[u1].label} {deg(c.u[u1]):.1f}, {SERVOS[u6].label} "
+                     f"{deg(c.u[u6]):.1f}, {f} {deg(c.u[chain(f).servo]):.1f} deg")
+    return ["  on the printed tips (the finger closed onto the still thumb, as check closes the solids): "
+            + "; ".join(parts)]
+
+
 def report(p, searched: bool) -> list[str]:
     """What a designer acts on: each digit's section, travel and reach against Table I; the
     opposition; the power grasp's cylinder; the palm against its envelope; the forearm module's
@@ -82,7 +102,7 @@ def report(p, searched: bool) -> list[str]:
         reach = ", ".join(f"{j.upper()} {deg(hi[i]):.1f}/{deg(lim[1]):.1f}"
                           for j, i, lim in zip(c.joints, spec.q_index, c.limits))
         out.append(f"{spec.digit:7s} {mm(d.width):6.1f} {mm(d.thickness):6.1f} {deg(c.travel[1]):11.1f}  {reach}")
-    out += ["", *opposition_lines(hand)]
+    out += ["", *opposition_lines(hand), *printed_pinch_lines(hand)]
     out.append(f"  (CMC placement: {'searched' if searched else 'the reference hand scaled'}; "
                f"offset {[round(mm(v), 2) for v in p.palm.thumb_cmc_offset]} mm)")
     out.append("")

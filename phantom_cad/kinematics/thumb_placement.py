@@ -6,8 +6,9 @@
   margin*, the smallest margin (:attr:`.opposition.Reach.margin`) of index, middle and ring, with
   the thumb's links kept out of the palm a human-scale hand has (``palm_envelope``); ``oppose``
   (e.g. ``opposition.PAD_OPPOSE``) holds the pads' normals within it of facing each other too.
-* ``thenar_constraint(params)``: the search's constraint for the palm's thenar (``thenar.thenar``)
-  and a palm of human breadth.
+* ``thenar_constraint(params)``: the search's constraint for the palm's thenar (``thenar.thenar``),
+  the pre-build rules a placement can break (the heel, the finger sockets' magnet pockets) and a
+  palm of human breadth.
 
 The capsules, their contacts and the reach are :mod:`.opposition`'s; the search works its margin out
 on the capsule pairs that can matter only.
