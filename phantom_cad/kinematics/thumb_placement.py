@@ -276,8 +276,9 @@ def solve(hand, bounds: Bounds | None = None, seed: int = 0, coarse=(11, 11, 21)
     Method: differential evolution (scipy, seeded: deterministic) on a coarse command grid (``coarse``: n1,
     n6, n_finger), the file's placement in its first population, then Nelder-Mead from the best.
     The result is judged on :func:`.opposition.reach`'s fine grid (21 x 21 x 41), which contains
-    the coarse one, so the fine margin is at least the searched one. ``oppose`` (rad): the pads' normals
-    held within it of facing each other too (:func:`.opposition.reach`)."""
+    the coarse one, so the fine margin is at least the searched one; where it misses a pad and the
+    file's placement keeps the rules and meets every pad, the file's is returned. ``oppose`` (rad):
+    the pads' normals held within it of facing each other too (:func:`.opposition.reach`)."""
     from scipy.optimize import differential_evolution, minimize
 
     p = hand.params
@@ -317,6 +318,14 @@ def solve(hand, bounds: Bounds | None = None, seed: int = 0, coarse=(11, 11, 21)
             and clear[1] is not None:
         x = clear[1]                    # the penalty was not enough: the best clear placement
     fine = reach(hand, thumb=fine_thumb, T0=_placement(x), oppose=oppose)
+    start = init[0]
+    if min(fine[f].margin for f in OPPOSED) < 0.0 and palm_intrusion(fine_thumb, _placement(start), env) <= 0.0 \
+            and _violation(_placement(start)) <= 0.0:
+        # the search ended where a pad is missed: the placement it started from, if it keeps the
+        # rules and meets every pad, is the better answer
+        at_start = reach(hand, thumb=fine_thumb, T0=_placement(start), oppose=oppose)
+        if min(at_start[f].margin for f in OPPOSED) >= 0.0:
+            x, fine = start, at_start
     return Solution(tuple(float(v) for v in x[:3]), tuple(float(v) for v in x[3:]),
                     min(fine[f].margin for f in OPPOSED), fine, count[0],
                     palm_intrusion(fine_thumb, _placement(x), env),
