@@ -6,17 +6,18 @@ like ``cad.grasp``, which measures the same pinch on the solids).
 clevis slot's back to the tip's axis and a half cylinder about the link's x beyond it. Where the
 capsules meet at an angle, the square ends' rims stand up to 2.8 mm proud of the capsule's round
 ends, and the solids meet there first: a contact the capsules put on the pad can land on the tip's
-end on the solids (the thumb's rim, 0.1-2.4 mm dorsal of its pad: docs/sizing.md).
+end on the solids (the thumb's rim, 0.1-2.4 mm dorsal of its pad: docs/opposition.md, "On the
+printed tips").
 
 :class:`PrintedTip` is that shape, with the exact distance of a point to it (the least of the
 distances to the box and to the half cylinder, each a clamp). Two tips' distance is the least
 distance of either tip's surface samples (:data:`SPACING_MM` apart, the rims included) to the other
 tip: at most the samples' spacing over the true one, never under it.
 
-:func:`printed_pinch` closes the finger onto the still thumb as ``cad.grasp.solid_contact`` closes
-the solids (the model's contacts ``opposition.contact_commands``, the same bisection
-``power_grasp.close_onto``, the same pad test :func:`on_pad`), on these shapes: what ``size`` asks
-of a placement before it writes it.
+:func:`first_pinch` closes the finger onto the still thumb at the model's contacts
+(``opposition.contact_commands``, the bisection ``power_grasp.close_onto``, the pad test
+:func:`on_pad`) for any distance: :func:`printed_pinch` with these shapes' (what ``size`` asks of a
+placement before it writes it), ``cad.grasp.solid_contact`` with OpenCascade's on the solids.
 """
 
 from __future__ import annotations
