@@ -174,7 +174,7 @@ def run_person(person: Person, out_root: str | os.PathLike, cache_dir: str | os.
 
     try:
         sized = size(SizingPerson(person.hand_length, person.hand_breadth, "right", person.name, person.segments),
-                     check=preflight.check, search=search)
+                     check=preflight.check, search=search, floor=preflight.cmc_base_floor)
     except (UserError, ParamError) as exc:
         rec["error"] = f"error: {one_line(exc)}"
         rec["binding"] = binding_rule(one_line(exc))

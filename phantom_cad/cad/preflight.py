@@ -33,7 +33,8 @@ def check(params: HandParams) -> None:
     reaches past the metacarpal block's front; and if the thenar's cuts (journal, cavity, turn) come
     within two perimeters of a finger socket's magnet pockets (``thenar.socket_pocket_gap``), or a
     servo's flange screw pilot opens above the forearm module's top (``forearm_layout.pilot_headroom``),
-    or the CMC base comes within a clearance of the palm's heel (``forearm_layout.heel_gap``); or if
+    or the CMC base comes within a clearance of the palm's heel (``forearm_layout.heel_gap``) or of the
+    forearm module's block (``forearm_layout.forearm_gap``); or if
     a print aid the build makes beside the parts refuses the file (``print_aids.AIDS``: the angle
     gauge's faces too short for its marks)."""
     from ..kinematics import couplers
@@ -72,7 +73,8 @@ def check(params: HandParams) -> None:
                          f"with palm.thumb_cmc_axis_deg the palm's {names[cut]} comes {mm(gap):.3f} mm from the "
                          f"fingers.{finger} socket's magnet pockets (negative: into them); the gap must be >= "
                          f"{mm(MIN_WALL):g} mm, two perimeters", src)
-    heel = FL.heel_gap(params)
+    floor = cmc_base_floor(params)
+    heel = FL.heel_gap(params, floor=floor)
     if heel < params.print.hole_clearance - 1e-12:
         raise ParamError("palm.thumb_cmc_offset_mm", [round(mm(v), 6) for v in params.palm.thumb_cmc_offset],
                          f"with palm.thumb_cmc_axis_deg and the palm's heel (palm.heel_height_mm = "
@@ -80,6 +82,13 @@ def check(params: HandParams) -> None:
                          f"the CMC base (its hub, its column up to the palm and its arm) comes {mm(heel):.3f} mm from "
                          f"the heel (negative: into it); the gap must be >= print.hole_clearance_mm = "
                          f"{mm(params.print.hole_clearance):g} mm", src)
+    module = FL.forearm_gap(params, floor=floor)
+    if module < params.print.hole_clearance - 1e-12:
+        raise ParamError("palm.thumb_cmc_offset_mm", [round(mm(v), 6) for v in params.palm.thumb_cmc_offset],
+                         f"with palm.thumb_cmc_axis_deg the CMC base (its hub, its column up to the palm and its arm) "
+                         f"comes {mm(module):.3f} mm from the forearm module's block behind the palm (negative: into "
+                         f"it); the gap must be >= print.hole_clearance_mm = {mm(params.print.hole_clearance):g} mm",
+                         src)
     head, k = FL.pilot_headroom(params)
     if head < -1e-12:
         raise ParamError("servo.body_mm", [round(mm(v), 6) for v in params.servo.body],
@@ -113,3 +122,12 @@ def check(params: HandParams) -> None:
 
     for aid in AIDS:
         aid(params)
+
+
+def cmc_base_floor(params: HandParams) -> float:
+    """z (m, the CMC base's frame) of the CMC base's lowest face: below its hub's palmar face where
+    the MP guide's boss hangs lower (``cad.parts.thumb.ThumbCMCBase.palmar_floor``). The placement
+    search is given it (``thumb_placement.thenar_constraint``): it does not depend on the placement."""
+    from .parts.thumb import ThumbCMCBase
+
+    return units.m(ThumbCMCBase(params).palmar_floor)

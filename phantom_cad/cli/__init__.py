@@ -170,7 +170,10 @@ def params_opposition(params: Optional[Path] = ParamsOpt,
     typer.echo("\n".join(opposition_lines(hand, oppose=oppose)))
     if not solve:
         return
-    sol = thumb_placement.solve(hand, constraint=thumb_placement.thenar_constraint(p), oppose=oppose)
+    from ..cad import preflight
+
+    sol = thumb_placement.solve(hand, constraint=thumb_placement.thenar_constraint(p, floor=preflight.cmc_base_floor(p)),
+                                oppose=oppose)
     b = thumb_placement.default_bounds(p)
     typer.echo("")
     typer.echo(f"solved ({sol.evaluations} evaluations; bounds: CMC "

@@ -45,7 +45,7 @@ def size(
                         "(it names the export folder; the default is the output file's stem)")
     measured = read_segments(segments) if segments is not None else {}
     person = Person(hand_length, hand_breadth, side, name, measured)
-    result = solve(person, check=preflight.check, search=search)
+    result = solve(person, check=preflight.check, search=search, floor=preflight.cmc_base_floor)
     given = ", ".join(f"{d}.{k} {v:g}" for d, t in measured.items() for k, v in t.items())
     header = (f"{MARKER} hand length {hand_length:g} mm, hand breadth {hand_breadth:g} mm, {side} hand"
               f"{f', measured: {given}' if given else ''}\n"

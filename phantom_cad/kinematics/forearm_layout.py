@@ -1,8 +1,8 @@
 """The forearm module's servos as placed: the one row the module is built from (the iterative row
 solver), the switch between it and the two staggered rows (:mod:`.forearm_stagger`), each servo's
 frame, and what the placed servos set: the palm's ulnar face, the CMC loop's direction, the drives'
-runs and clearances, the palm's heel and its gap to the CMC base, the module's points, width,
-flange pilots' headroom and frame. The servo geometry both layouts share is :mod:`.servo_geometry`'s.
+runs and clearances, the palm's heel, the module's points, block, width, flange pilots' headroom
+and frame, and the gaps from the heel and the block to the CMC base. The servo geometry both layouts share is :mod:`.servo_geometry`'s.
 numpy only; frames as in :mod:`.frames`."""
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from .cmc_base_gap import cmc_base_gap
 from .dimensions import printed_hole, servo_screw_offset
 from .forearm_stagger import staggered_servos
 from .frames import (T_palm_socket, T_palm_thumb_cmc_base, servo_radius, socket_x, tendon_height, tendon_relief, trans,
@@ -20,7 +21,7 @@ from .memo import memoised
 from .servo_geometry import (drive_clearances_of, drive_runs_of, envelope_points, envelope_width, aimed_servo, coplanar_servo,
                              forearm_front, forearm_pitch, forearm_top, palm_back, servo_boxes, servo_envelope,
                              servo_gaps, servo_target, spaced)
-from .thenar import T_cmc_base_pulley, thenar, thenar_layout
+from .thenar import T_cmc_base_pulley, thenar_points
 from .topology import CMC_SERVO, FINGERS, SERVOS, chain
 
 
@@ -171,31 +172,42 @@ def heel_clear_y(params: HandParams, z: float, r: float) -> float:
     return front + (math.sqrt(r * r - (z - bottom) ** 2) if r > bottom - z else 0.0)
 
 
-def heel_gap(params: HandParams, T0: np.ndarray | None = None) -> float:
-    """The least distance (m) from the palm's heel (:func:`heel_box`) to the CMC base at rest (its
-    hub: thumb.width_mm across, thumb.thickness_mm thick about the CMC axis; its column up the axis
-    to the palm's palmar face; the metacarpal's arm, as wide and thick, out to the MP axis);
-    negative where they overlap; inf for a flat palm. Their surfaces are sampled; a point's distance
-    to the box is the largest of its distances beyond the box's faces (a lower bound). ``T0``:
-    another CMC placement than the file's (T_palm_cmc_base at rest)."""
+def heel_gap(params: HandParams, T0: np.ndarray | None = None, floor: float | None = None) -> float:
+    """The distance (m) from the palm's heel (:func:`heel_box`) to the CMC base at rest
+    (``cmc_base_gap.cmc_base_gap``; ``T0``: another CMC placement than the file's, ``floor`` the
+    base's lowest face as there); negative where they overlap; inf for a flat palm."""
     box = heel_box(params)
     if box is None:
         return math.inf
-    th = params.thumb
-    t = thenar(params) if T0 is None else thenar_layout(params, T0)
-    W, T, L = th.width, th.thickness, th.metacarpal
-    a = np.linspace(0.0, 2.0 * math.pi, 48, endpoint=False)
-    pts = [np.c_[r * np.cos(a), r * np.sin(a), np.full_like(a, s)]
-           for r, s0, s1 in ((W / 2.0, -T / 2.0, T / 2.0), (t["column_r"], T / 2.0, max(t["face"], T / 2.0)))
-           for s in np.linspace(s0, s1, 9)]
-    u = np.linspace(0.0, 1.0, 13)
-    g = np.array([(x, y, z) for x in -W / 2.0 + W * u for y in L * u for z in (-T / 2.0, T / 2.0)] +
-                 [(x, y, z) for x in (-W / 2.0, W / 2.0) for y in L * u for z in -T / 2.0 + T * u])
-    local = np.vstack(pts + [g])
-    T0 = T_palm_thumb_cmc_base(params) if T0 is None else T0
-    P = local @ T0[:3, :3].T + T0[:3, 3]
-    lo, hi = box
-    return float(np.maximum(lo - P, P - hi).max(axis=1).min())
+    return cmc_base_gap(params, *box, T0, floor)
+
+
+def forearm_box(params: HandParams, T0: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) (m, palm frame, right hand) of the forearm module's block: one palm wall around
+    every one of its servos' envelopes (:func:`forearm_points`), its front face
+    (:func:`forearm_front`), its top a wall above the palm's dorsal face (:func:`forearm_top`, flush
+    with the tab). ``T0``: another CMC placement than the file's; the block moves along y with the
+    palm's back face it stands behind (the back of that placement's thenar where it reaches
+    further back than the wrist crease), its servos where the file's row holds them."""
+    w = params.palm.wall
+    pts = forearm_points(params)
+    lo = np.array([pts[:, 0].min() - w, pts[:, 1].min() - w, pts[:, 2].min() - w])
+    hi = np.array([pts[:, 0].max() + w, forearm_front(params), forearm_top(params)])
+    if T0 is not None:
+        back = min(float(v[:, 1].min()) for v in thenar_points(params, T0).values())
+        shift = min(wrist_y(params), back) - palm_back(params)
+        lo[1] += shift
+        hi[1] += shift
+    return lo, hi
+
+
+def forearm_gap(params: HandParams, T0: np.ndarray | None = None, floor: float | None = None) -> float:
+    """The distance (m) from the forearm module's block (:func:`forearm_box`, moved with ``T0``) to
+    the CMC base at rest (``cmc_base_gap.cmc_base_gap``; ``T0`` and ``floor`` as there); negative
+    where they overlap. The module stands behind the palm's back face; the CMC's hub hangs below
+    the palm, and where its axis leans back as it goes down, the hub reaches behind the thenar's
+    cuts that set that face."""
+    return cmc_base_gap(params, *forearm_box(params, T0), T0, floor)
 
 
 def forearm_points(params: HandParams) -> np.ndarray:

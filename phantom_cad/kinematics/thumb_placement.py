@@ -139,14 +139,18 @@ def carpus(params: HandParams) -> float:
     return params.hand_length - (m.metacarpal + m.proximal + m.middle + m.distal)
 
 
-def thenar_constraint(params: HandParams, human: bool = True):
+def thenar_constraint(params: HandParams, human: bool = True, floor: float | None = None):
     """The placement search's ``constraint`` for the palm's thenar (``thenar.thenar``): metres by
     which a placement T0 misses ``frames.thenar_margins`` (the CMC axis's tilt priced at the thumb's
     half width per radian), the print's hole clearance off the palm's heel
-    (``forearm_layout.heel_gap``) and two perimeters off the finger sockets' magnet pockets
-    (``thenar.socket_pocket_gap``; both rules ``cad.preflight`` checks), and, with ``human``, by which
+    (``forearm_layout.heel_gap``) and off the forearm module's block (``forearm_layout.forearm_gap``:
+    the file's servo row, moved along y with the placement's thenar), and two perimeters off the
+    finger sockets' magnet pockets (``thenar.socket_pocket_gap``; the rules ``cad.preflight``
+    checks), and, with ``human``, by which
     the journal's and the turn's walls reach radial of a palm of human breadth (:func:`human_edge`;
-    the pulley's cavity may open there) and the thenar reaches behind the carpus (:func:`carpus`)."""
+    the pulley's cavity may open there) and the thenar reaches behind the carpus (:func:`carpus`).
+    ``floor``: the CMC base's lowest face (``cad.preflight.cmc_base_floor``; by default its hub's
+    palmar face, which the part's MP guide boss can reach below)."""
     edge = human_edge(params)
     back = F.wrist_y(params) - carpus(params)
     lever = params.thumb.width / 2.0
@@ -156,7 +160,8 @@ def thenar_constraint(params: HandParams, human: bool = True):
         m = TH.thenar_margins(params, T0)
         v = max(SLACK_RAD - m["tilt"], 0.0) * lever + max(SLACK - m["base"], 0.0) + max(SLACK - m["turn"], 0.0)
         if T0[2, 2] > 0.0:              # the axis climbs into the palm: the thenar's cuts exist
-            v += (max(clearance + SLACK - FL.heel_gap(params, T0), 0.0)
+            v += (max(clearance + SLACK - FL.heel_gap(params, T0, floor), 0.0)
+                  + max(clearance + SLACK - FL.forearm_gap(params, T0, floor), 0.0)
                   + max(FLANK + SLACK - TH.socket_pocket_gap(params, T0)[0], 0.0))
         if m["tilt"] < 0.0 or not human:
             return v

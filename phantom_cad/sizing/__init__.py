@@ -399,9 +399,10 @@ SEARCHES = ((8, 60),) + ((12, 80),) * 5
 
 
 def size(person: Person, check: Callable[[HandParams], None] | None = None, search: bool = True,
-         seed: int = 0, searches: int = len(SEARCHES)) -> Sizing:
+         seed: int = 0, searches: int = len(SEARCHES), floor: Callable[[HandParams], float] | None = None) -> Sizing:
     """The person's validated parameter file. ``check``: what else a file must pass (the CAD
-    layer's ``preflight.check``); ``search``: search the CMC placement (seconds) rather than keep
+    layer's ``preflight.check``); ``floor``: the CMC base's lowest face the search keeps off the
+    palm's heel and the forearm module (the CAD layer's ``preflight.cmc_base_floor``); ``search``: search the CMC placement (seconds) rather than keep
     the reference's scaled with the hand length, with up to ``searches`` of :data:`SEARCHES` (seeds
     ``seed``, ``seed + 1``, ...) while the margin stays below zero. Of the placements, the one with
     the larger opposition margin that validates is kept. A UserError or ParamError (one line) when nothing
@@ -437,11 +438,12 @@ def size(person: Person, check: Callable[[HandParams], None] | None = None, sear
         from ..kinematics import thumb_placement
         from ..kinematics.model import Hand
 
+        constraint = thumb_placement.thenar_constraint(start, floor=floor(start) if floor else None)
         for k, (population, generations) in enumerate(SEARCHES[:searches]):
             if k and best is not None and best.opposes:
                 break
             sol = thumb_placement.solve(Hand(start), seed=seed + k, population=population,
-                                        generations=generations, constraint=thumb_placement.thenar_constraint(start))
+                                        generations=generations, constraint=constraint)
             solved = copy.deepcopy(doc)
             solved["palm"]["thumb_cmc_offset_mm"] = [round(float(units.mm(v)), 4) for v in sol.offset]
             solved["palm"]["thumb_cmc_axis_deg"] = [round(float(units.deg(v)), 4) for v in sol.axis]
@@ -454,11 +456,11 @@ def size(person: Person, check: Callable[[HandParams], None] | None = None, sear
     if best is None:
         raise error
     if not best.opposes:
-        raise UserError(opposition_refusal(person, best, check, search, seed))
+        raise UserError(opposition_refusal(person, best, check, search, seed, floor))
     return best
 
 
-def opposition_refusal(person: Person, best: Sizing, check, search: bool, seed: int) -> str:
+def opposition_refusal(person: Person, best: Sizing, check, search: bool, seed: int, floor=None) -> str:
     """Why a file that validates is refused: the thumb's pad does not meet the pads of index,
     middle and ring squarely (``kinematics.opposition``: margin < 0), or not on the printed tips
     (``kinematics.printed_tips``), at any placement tried; and the nearest input that works, if the
@@ -483,7 +485,7 @@ def opposition_refusal(person: Person, best: Sizing, check, search: bool, seed: 
     breadth = round(person.hand_length * S.REFERENCE_BREADTH / S.REFERENCE_LENGTH)
     if breadth != person.hand_breadth:
         try:
-            size(replace(person, hand_breadth=breadth), check, search, seed, searches=1)
+            size(replace(person, hand_breadth=breadth), check, search, seed, searches=1, floor=floor)
             return f"{rule}; nearest that works: --hand-breadth {breadth:g} (the reference hand's proportion)"
         except UserError:
             pass

@@ -122,7 +122,7 @@ def test_the_widest_servo_body_the_rule_accepts_builds(variant):
 
 @pytest.mark.slow
 def test_the_lowest_cmc_the_heel_rule_accepts_builds(variant):
-    """The CMC 40.0 mm below the index MCP, 0.245 mm from the palm's heel by the rule's measure
+    """The CMC 40.0 mm below the index MCP, 0.242 mm from the palm's heel by the rule's measure
     (``forearm_layout.heel_gap``; 40.4 mm is refused): the palm and the CMC base, where the assembly
     places them, stay at least a clearance apart (OpenCascade's distance; the column in its journal
     is a clearance from the palm by design)."""

@@ -135,8 +135,8 @@ class Forearm(ServoMount, Part):
         """A slot (``common.channel_slot``) opening a drive's channel up through the block's top
         where it runs under it less than a flank (two perimeters): servo 6's strands, from its
         tilted pulley, can enter the block through the top at about 20 deg, where the roof over the
-        channel's entry would taper to nothing. Only where the channel's roof is material: beside
-        the pockets it is open anyway."""
+        channel's entry would taper to nothing. Where the roof is material, and on along the same
+        thin run where the channel runs open beside a pocket."""
         x0, x1, y0, y1, _, z1 = self.extents()
         p, u = self.drive_line(servo, side)
         r = self.tol.tendon_hole / 2.0
@@ -145,10 +145,18 @@ class Forearm(ServoMount, Part):
         roof = z1 - axis[:, 2] - r
         inside = (axis[:, 0] > x0) & (axis[:, 0] < x1) & (axis[:, 1] > y0) & (axis[:, 1] < y1)
         open_ = np.min([self.pocket_gap(k, axis)[0] for k in FOREARM_SERVOS], axis=0) < r
-        thin = inside & ~open_ & (roof > -2.0 * r) & (roof < mm(FLANK))
-        if not thin.any():
+        thin = inside & (roof > -2.0 * r) & (roof < mm(FLANK))
+        need = np.flatnonzero(thin & ~open_)
+        if not len(need):
             return []
-        return [channel_slot(p, u, s[thin].min(), s[thin].max(), (0.0, 0.0, 1.0), r, mm(FLANK))]
+        # on through the thin run's open stretches next to where the roof is material: a slot
+        # ending where the channel meets a pocket leaves a crumb between the two
+        i, j = need[0], need[-1]
+        while i > 0 and thin[i - 1]:
+            i -= 1
+        while j < len(s) - 1 and thin[j + 1]:
+            j += 1
+        return [channel_slot(p, u, s[i], s[j], (0.0, 0.0, 1.0), r, mm(FLANK))]
 
     def build(self):
         t = self.tol

@@ -34,13 +34,10 @@ def socket_x(params: HandParams) -> tuple[float, float]:
 
 
 def forearm_block(params: HandParams) -> tuple[float, float, float, float, float, float]:
-    """x0, x1, y0, y1, z0, z1 (palm frame, mm) of the forearm module's block: one palm wall around
-    every one of its servos' envelopes (``servo_geometry.servo_envelope``), its front face
-    ``servo_geometry.forearm_front``, its top a wall above the palm's dorsal face (flush with the tab)."""
-    w = mm(params.palm.wall)
-    pts = units.mm(FL.forearm_points(params))
-    return (pts[:, 0].min() - w, pts[:, 0].max() + w, pts[:, 1].min() - w, mm(SG.forearm_front(params)),
-            pts[:, 2].min() - w, mm(params.palm.thickness) / 2.0 + w)
+    """x0, x1, y0, y1, z0, z1 (palm frame, mm) of the forearm module's block
+    (``forearm_layout.forearm_box``)."""
+    lo, hi = FL.forearm_box(params)
+    return (mm(lo[0]), mm(hi[0]), mm(lo[1]), mm(hi[1]), mm(lo[2]), mm(hi[2]))
 
 
 def tab(params: HandParams) -> tuple[np.ndarray, np.ndarray]:
