@@ -37,7 +37,7 @@ from .. import units
 from . import frames as F
 from . import link_frames as LF
 from .hand_params import HandParams
-from .topology import CMC_Q, CMC_SERVO, FINGERS, N_SERVOS, OPPOSED_FINGERS, SERVOS, THUMB_CHAIN, chain, digit_links, joint, link
+from .topology import CMC_Q, CMC_SERVO, FINGERS, N_SERVOS, OPPOSED_FINGERS, THUMB_CHAIN, chain, digit_links, joint, link
 
 
 #: the half angle (rad) of the cone around a pad's normal in which a contact counts as pad to pad
@@ -197,7 +197,7 @@ class ThumbTips:
 
 
 def thumb_tips(hand, n1: int = 21, n6: int = 21) -> ThumbTips:
-    s1, s6 = _servo(THUMB), next(s.index for s in SERVOS if s.drive == "loop")
+    s1, s6 = _servo(THUMB), CMC_SERVO
     g1, g6 = np.meshgrid(_travel(hand, s1, n1), _travel(hand, s6, n6), indexing="ij")
     u = np.zeros((n1 * n6, N_SERVOS))
     u[:, s1], u[:, s6] = g1.ravel(), g6.ravel()
