@@ -4,10 +4,11 @@ thumb.width_mm about the CMC axis), the column up the axis into the palm, and th
 arm (a box as wide out to the MP axis). ``forearm_layout.heel_gap`` and ``forearm_layout.forearm_gap``
 read it; the pre-build check and the placement search keep to both.
 
-Each of the two shapes is convex, so their distance is found on features: along every edge of the
-box (the distance from a point on it to the convex solid is convex along it: least by shrinking
-brackets), and along every straight line on the solid's boundary (the arm's twelve edges, the
-cylinders' generators every 360 / :data:`GENERATORS` deg round) to the box. Exact for the box
+The box and each of the base's solids are convex, so the distance between them is found on
+features: along every edge of the box to the solid (the distance from a point to a convex solid is
+convex along a line: least by shrinking brackets), and along every straight line on the solid's
+boundary (the arm's twelve edges, the cylinders' generators every 360 / :data:`GENERATORS` deg
+round) to the box; the least over the solids. Exact for the box
 pairs; for a cylinder within its generators' sagitta (under 0.01 mm at 12 mm radius).
 Signed: negative where they overlap. numpy only; palm frame, right hand, m."""
 

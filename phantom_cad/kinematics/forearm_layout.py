@@ -2,8 +2,8 @@
 solver), the switch between it and the two staggered rows (:mod:`.forearm_stagger`), each servo's
 frame, and what the placed servos set: the palm's ulnar face, the CMC loop's direction, the drives'
 runs and clearances, the palm's heel, the module's points, block, width, flange pilots' headroom
-and frame, and the gaps from the heel and the block to the CMC base. The servo geometry both layouts share is :mod:`.servo_geometry`'s.
-numpy only; frames as in :mod:`.frames`."""
+and frame, and the gaps from the heel and the block to the CMC base. The servo geometry both
+layouts share is :mod:`.servo_geometry`'s. numpy only; frames as in :mod:`.frames`."""
 
 from __future__ import annotations
 
