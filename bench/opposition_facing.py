@@ -25,6 +25,7 @@ import time
 
 
 from phantom_cad import load_params, make_hand
+from phantom_cad.cad.preflight import cmc_base_floor
 from phantom_cad.kinematics import frames as F
 from phantom_cad.kinematics import opposition as O
 from phantom_cad.kinematics import thumb_placement as TP
@@ -47,7 +48,7 @@ def row(label, params, T0, reach, seconds):
     z = T0[:3, 2]
     c = ", ".join(f"{v * 1e3:.1f}" for v in T0[:3, 3])
     held = TH.thenar_margins(params, T0)
-    viol = TP.thenar_constraint(params)(T0)
+    viol = TP.thenar_constraint(params, floor=cmc_base_floor(params))(T0)
     margin = min(reach[f].margin for f in O.OPPOSED)
     meet = " / ".join(("yes" if reach[f].reaches else "no") for f in O.OPPOSED)
     print(f"| {label} | {c} | {math.degrees(math.acos(z[2])):.0f} | {math.degrees(margin):+.1f} | {meet} | "
@@ -81,9 +82,9 @@ def main(argv):
     T0 = F.thumb_cmc_placement(params.palm.thumb_cmc_offset, params.palm.thumb_cmc_axis)
     t = time.perf_counter()
     row("the file's placement", params, T0, O.reach(hand, oppose=O.PAD_OPPOSE, fingers=O.OPPOSED), time.perf_counter() - t)
-    cases = [("thenar and human palm, default bounds (as `--solve`)", None, TP.thenar_constraint(params)),
-             ("thenar and human palm, wide bounds", wide_bounds(params), TP.thenar_constraint(params)),
-             ("thenar only (no human palm), wide bounds", wide_bounds(params), TP.thenar_constraint(params, human=False)),
+    cases = [("thenar and human palm, default bounds (as `--solve`)", None, TP.thenar_constraint(params, floor=cmc_base_floor(params))),
+             ("thenar and human palm, wide bounds", wide_bounds(params), TP.thenar_constraint(params, floor=cmc_base_floor(params))),
+             ("thenar only (no human palm), wide bounds", wide_bounds(params), TP.thenar_constraint(params, human=False, floor=cmc_base_floor(params))),
              ("palm envelope only, wide bounds", wide_bounds(params), None)]
     for label, bounds, constraint in cases:
         t = time.perf_counter()
@@ -100,7 +101,7 @@ def main_twist(params, path, seed, twist):
     for psi in twist:
         hand = make_hand(twisted(path, psi))
         t = time.perf_counter()
-        s = TP.solve(hand, seed=seed, population=16, generations=150, constraint=TP.thenar_constraint(params),
+        s = TP.solve(hand, seed=seed, population=16, generations=150, constraint=TP.thenar_constraint(params, floor=cmc_base_floor(params)),
                      oppose=O.PAD_OPPOSE)
         T0 = F.thumb_cmc_placement(s.offset, s.axis)
         loose = O.reach(hand, T0=T0, fingers=O.OPPOSED)

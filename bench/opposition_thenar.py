@@ -18,6 +18,7 @@ import sys
 import time
 
 from phantom_cad import load_params, make_hand
+from phantom_cad.cad.preflight import cmc_base_floor
 from phantom_cad.kinematics import opposition as O, thumb_placement as TP
 from phantom_cad.params.io import DEFAULT_PARAMS
 
@@ -31,7 +32,7 @@ def main(argv):
     print("|---:|---|---|---:|---|---:|---:|")
     for seed in seeds:
         t = time.perf_counter()
-        s = TP.solve(hand, seed=seed, population=16, generations=150, constraint=TP.thenar_constraint(params))
+        s = TP.solve(hand, seed=seed, population=16, generations=150, constraint=TP.thenar_constraint(params, floor=cmc_base_floor(params)))
         c = ", ".join(f"{v * 1e3:.4f}" for v in s.offset)
         a = ", ".join(f"{math.degrees(v):.4f}" for v in s.axis)
         meet = " / ".join(("yes" if s.reach[f].reaches else "no") for f in O.OPPOSED)
