@@ -185,6 +185,17 @@ def root_frame(points: np.ndarray, side: str, origin: int) -> np.ndarray:
     return p - p[:, origin:origin + 1]
 
 
+def _build(config, folder: str):
+    """``config.build()`` with its scratch files inside ``folder``: dex-retargeting writes its copy
+    of the URDF to a ``tempfile.mkdtemp`` it never removes, one folder per call."""
+    saved = tempfile.tempdir
+    tempfile.tempdir = folder
+    try:
+        return config.build()
+    finally:
+        tempfile.tempdir = saved
+
+
 def retarget(hand, points: np.ndarray, method: str = "vector") -> Retargeted:
     """Retarget keypoints (T, 21, 3) onto ``hand`` (the kinematic model, ``phantom_cad.make_hand``;
     its side: the human hand's) with ``method`` ("vector" or "position"), each frame warm-started
@@ -213,7 +224,7 @@ def retarget(hand, points: np.ndarray, method: str = "vector") -> Retargeted:
         urdf.write_bytes(urdf_bytes(model, None, f"{model.name} hand ({model.side}), kinematics only"))
         doc = RC.config(model, method, str(urdf))
         table = dict(doc["retargeting"], low_pass_alpha=1.0)   # each frame's own result, unfiltered
-        retargeting = RetargetingConfig.from_dict(table).build()
+        retargeting = _build(RetargetingConfig.from_dict(table), tmp)
     indices = np.asarray(retargeting.optimizer.target_link_human_indices)
     names = list(retargeting.joint_names)
     order = [names.index(n) for n in JOINT_NAMES]

@@ -142,6 +142,20 @@ def test_position_retargeting_closes_the_fist(hands):
     assert (np.degrees(r.u[2:, fingers]).min(axis=0) > np.degrees(r.u[:2, fingers]).max(axis=0) + CLOSING_DEG).all()
 
 
+
+def test_retargeting_leaves_no_scratch_files(hands, tmp_path, monkeypatch):
+    """dex-retargeting copies the URDF into a folder of its own at each build; a retarget leaves
+    the temporary folder as it found it."""
+    import tempfile
+
+    from phantom_cad import retargeting as R
+
+    pts, _ = H.sequence(["open"], frames_each=1, noise_mm=0.0, seed=4)
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    R.retarget(hands["right"], pts, "vector")
+    assert tempfile.tempdir == str(tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
 # -- the command line: bad input ---------------------------------------------------
 
 def _run(argv, capsys):
@@ -221,7 +235,9 @@ def test_retarget_command_writes_commands_within_the_travel(tmp_path, hands):
 # -- the shipped configs, loaded by dex-retargeting from an export -------------------------
 
 @pytest.mark.parametrize("kind", ["default", "left"])
-def test_dex_retargeting_loads_the_shipped_configs(hand_export, kind):
+def test_dex_retargeting_loads_the_shipped_configs(hand_export, kind, tmp_path, monkeypatch):
+    import tempfile
+
     import yaml
     from dex_retargeting.retargeting_config import RetargetingConfig
 
@@ -238,6 +254,7 @@ def test_dex_retargeting_loads_the_shipped_configs(hand_export, kind):
     hand = make_hand(R.load_params(None, result.side))
     pts, labels = H.sequence(["open", "fist", "point"], frames_each=1, seed=5, side=result.side)
     RetargetingConfig.set_default_urdf_dir(str(pkg))
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))   # build() leaves a copy of the URDF there
     for path in configs:
         doc = yaml.safe_load(path.read_text())
         retargeting = RetargetingConfig.load_from_file(path, override={"low_pass_alpha": 1.0}).build()

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from phantom_cad.kinematics.dimensions import digit_entry, digit_field, digit_path
-from phantom_cad.kinematics.vectors import (clipped_acos, nearest_on_box, nearest_on_cylinder,
+from phantom_cad.kinematics.vectors import (clipped_acos, nearest_on_box, nearest_on_cylinder, nearest_on_swept,
                                             perpendicular_frame)
 
 
@@ -58,6 +58,28 @@ def test_nearest_on_a_cylinder_by_hand():
     assert np.allclose(n, [[1.2, 1.6, 1.0], [0.0, 0.0, 0.5]])
     assert nearest_on_cylinder(q[:1], 0.0, np.inf, 2.0)[0].tolist() == pytest.approx([3.0])
 
+
+
+def test_nearest_on_a_swept_box_by_hand():
+    """The unit cube swept along (1, 0, 1) / sqrt 2 by 10 sqrt 2 (to [10, 11] x [0, 1] x [10, 11]):
+    across x-z a band between the lines x - z = -1 and x - z = 1. (0.5, 0.5, -1) is 1 under the
+    first cube; (5.5, 0.5, 5.5) inside; (8, 0.5, 3) 4 / sqrt 2 past the line x - z = 1, nearest
+    (6, 0.5, 5); (15, 0.5, 15) off the last cube's corner (11, 0.5, 11), 4 sqrt 2; (5.5, 3, 5.5) 2
+    beside the band."""
+    e = np.array([1.0, 0.0, 1.0]) / math.sqrt(2.0)
+    q = np.array([[0.5, 0.5, -1.0], [5.5, 0.5, 5.5], [8.0, 0.5, 3.0], [15.0, 0.5, 15.0], [5.5, 3.0, 5.5]])
+    d, n = nearest_on_swept(q, lambda x: nearest_on_box(x, (0.0, 0.0, 0.0), (1.0, 1.0, 1.0)), e, 10.0 * math.sqrt(2.0))
+    assert d.tolist() == pytest.approx([1.0, 0.0, 2.0 * math.sqrt(2.0), 4.0 * math.sqrt(2.0), 2.0], abs=1e-7)
+    assert np.allclose(n[[0, 1, 2, 3]], [[0.5, 0.5, 0.0], [5.5, 0.5, 5.5], [6.0, 0.5, 5.0], [11.0, 0.5, 11.0]], atol=1e-7)
+    assert np.allclose(np.linalg.norm(q - n, axis=1), d)
+
+
+def test_nearest_on_a_swept_cylinder_by_hand():
+    """A disc of radius 2, z from 0 to 1, swept 5 up its own axis is the cylinder from 0 to 6:
+    (3, 4, 3) is 3 from its side; (0, 0, 9) 3 above its top."""
+    q = np.array([[3.0, 4.0, 3.0], [0.0, 0.0, 9.0]])
+    d, _ = nearest_on_swept(q, lambda x: nearest_on_cylinder(x, 0.0, 1.0, 2.0), np.array([0.0, 0.0, 1.0]), 5.0)
+    assert d.tolist() == pytest.approx([3.0, 3.0], abs=1e-7)
 
 def test_a_digit_in_the_parameter_file():
     doc = {"thumb": {"width_mm": 1}, "fingers": {"ring": {"width_mm": 2}}}

@@ -1,7 +1,7 @@
 """Vector helpers that the kinematics and every layer above share: the angle a cosine gives
 (clipped, as rounding puts two unit vectors' dot product just past +-1), the cross product of
-two 3-vectors, a frame across an axis, and the nearest points of a box and a cylinder to many
-points. numpy only."""
+two 3-vectors, a frame across an axis, and the nearest points of a box, a cylinder and a convex
+solid swept along a line to many points. numpy only."""
 
 from __future__ import annotations
 
@@ -51,3 +51,33 @@ def nearest_on_cylinder(q: np.ndarray, z0: float, z1: float, r: float) -> tuple[
     k = np.minimum(rho, r) / np.maximum(rho, 1e-300)
     n = np.c_[q[:, 0] * k, q[:, 1] * k, np.clip(q[:, 2], z0, z1)]
     return np.linalg.norm(q - n, axis=1), n
+
+
+#: golden-section steps of :func:`nearest_on_swept`: the bracket shrinks by 0.618 a step, to 1e-9
+#: of the sweep's length
+_SWEEP_STEPS = 44
+
+
+def nearest_on_swept(q: np.ndarray, nearest, e, length: float) -> tuple[np.ndarray, np.ndarray]:
+    """(distance, nearest point) from each of the points ``q`` (n, 3) to a convex solid swept along
+    the unit vector ``e`` from 0 to ``length``: ``nearest`` gives (distance, nearest point) of the
+    solid itself (:func:`nearest_on_box`, :func:`nearest_on_cylinder`). The distance to the solid
+    moved by t e is convex in t (a convex set's distance, along a line), so a golden-section search
+    per point finds the least."""
+    q, e = np.asarray(q, float), np.asarray(e, float)
+    g = (math.sqrt(5.0) - 1.0) / 2.0
+    lo, hi = np.zeros(len(q)), np.full(len(q), float(length))
+    a, b = hi - g * (hi - lo), lo + g * (hi - lo)
+    fa, fb = nearest(q - a[:, None] * e)[0], nearest(q - b[:, None] * e)[0]
+    for _ in range(_SWEEP_STEPS):
+        left = fa <= fb                     # the least lies in [lo, b]; else in [a, hi]
+        hi, lo = np.where(left, b, hi), np.where(left, lo, a)
+        a2, b2 = hi - g * (hi - lo), lo + g * (hi - lo)
+        new = np.where(left, a2, b2)
+        fn = nearest(q - new[:, None] * e)[0]
+        # left: the old a is the new b and a2 the new a; else the old b is the new a and b2 the new b
+        a, b, fa, fb = (np.where(left, a2, b), np.where(left, a, b2),
+                        np.where(left, fn, fb), np.where(left, fa, fn))
+    t = (lo + hi) / 2.0
+    d, n = nearest(q - t[:, None] * e)
+    return d, n + t[:, None] * e

@@ -37,3 +37,23 @@ def test_a_channel_already_in_a_pocket_is_left_alone():
 
     inside = lambda pts: nearest_on_box(pts, (8.0, -1.0, -2.0), (12.0, 4.0, 2.0))  # noqa: E731
     assert channel_slots(np.zeros(3), np.array([1.0, 0.0, 0.0]), 20.0, 0.5, [inside], 0.8) == []
+
+
+def test_a_channel_beside_a_pocket_it_then_enters_runs_into_it_up_to_there():
+    """The channel of radius 0.5 along x; a pocket whose part x 4..10, y 0.8..4 runs 0.3 mm of wall
+    beside it and whose part x 10..12, y -1..4 it runs through. Beside, the wall is under the 0.8 mm
+    flank from x = 4 - sqrt(1.3^2 - 0.8^2) = 2.975 (first sample 3.0) on to where the channel enters
+    (last sample 9.95): one slot from 2.5 to 10.45, 3.1 toward +y. Where the pocket lies ahead or
+    behind (its faces at x = 10 and 12, met square) nothing more."""
+    from phantom_cad.cad.parts.common import channel_slots
+
+    def pocket(pts):
+        a, b = nearest_on_box(pts, (4.0, 0.8, -2.0), (10.0, 4.0, 2.0)), nearest_on_box(pts, (10.0, -1.0, -2.0), (12.0, 4.0, 2.0))
+        k = b[0] < a[0]
+        return np.where(k, b[0], a[0]), np.where(k[:, None], b[1], a[1])
+
+    slots = channel_slots((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), 20.0, 0.5, [pocket], 0.8)
+    assert len(slots) == 1
+    bb = slots[0].bounding_box()
+    assert tuple(bb.min) == pytest.approx((2.5, 0.0, -0.5), abs=1e-6)
+    assert tuple(bb.max) == pytest.approx((10.45, 3.1, 0.5), abs=1e-6)

@@ -428,6 +428,14 @@ def turn_sphere(c, r: float, into, out):
     return b.Solid.make_sphere(r, plane=plane)
 
 
+#: a cut whose nearest point lies within this angle (deg) of a channel's axis, ahead or behind, is
+#: not beside it: the channel meets its face square
+SQUARE_DEG = 30.0
+#: a point nearer a cut than this (mm) lies in it: far above a swept cut's search tolerance
+#: (``kinematics.vectors.nearest_on_swept``), far below anything printed
+INSIDE = 1e-6
+
+
 def channel_slot(p, u, s0: float, s1: float, toward, r: float, flank: float):
     """A slot opening a channel (radius ``r``, its axis from ``p`` along the unit vector ``u``) from
     ``s0`` to ``s1`` along it: a box a channel wide, from a channel radius before ``s0`` to one past
@@ -444,21 +452,28 @@ def channel_slot(p, u, s0: float, s1: float, toward, r: float, flank: float):
 def channel_slots(p, u, length: float, r: float, gaps, flank: float) -> list:
     """Slots (:func:`channel_slot`) joining a channel (radius ``r``, its axis from ``p`` along the
     unit vector ``u`` for ``length``) to each cut whose wall to it is under ``flank`` somewhere along
-    it: along the run from the first such point to the last, from the channel's axis toward the
-    cut's nearest point into it (past where any of those points' walls was: the cut's nearest face
-    turns along the run). ``gaps``: per cut, a function of points (n, 3) giving (distance, nearest
-    point); a cut the channel already runs into is left as it is."""
+    it: per run of the axis under a flank from the cut and outside it, from the run's first point to
+    its last (up to where the axis enters the cut), from the channel's axis toward the cut's nearest
+    point into it (past where any of those points' walls was: the cut's nearest face turns along
+    the run). A run where the cut lies only ahead or behind (within :data:`SQUARE_DEG` of the axis:
+    the channel meets its face square) needs none. ``gaps``: per cut, a function of points (n, 3)
+    giving (distance, nearest point)."""
     p, u = np.asarray(p, float), np.asarray(u, float)
     s = np.linspace(0.0, length, int(length / 0.05) + 1)
     axis = p + s[:, None] * u
     out = []
     for gap in gaps:
         d, near = gap(axis)
-        close = d < r + flank
-        if not close.any() or d.min() < 1e-9:
-            continue
-        i = int(np.argmin(d))
-        out.append(channel_slot(p, u, s[close].min(), s[close].max(), near[i] - axis[i], r, flank))
+        to = near - axis
+        across = to - np.outer(to @ u, u)             # the way to the cut, square to the axis
+        beside = np.linalg.norm(across, axis=1) > math.sin(math.radians(SQUARE_DEG)) * d
+        near_ = np.flatnonzero((d < r + flank) & (d >= INSIDE))
+        for run in np.split(near_, np.flatnonzero(np.diff(near_) > 1) + 1):
+            side = run[beside[run]]
+            if not len(side):
+                continue
+            i = side[int(np.argmin(d[side]))]
+            out.append(channel_slot(p, u, s[run[0]], s[run[-1]], across[i], r, flank))
     return out
 
 

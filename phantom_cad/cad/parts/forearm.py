@@ -30,7 +30,7 @@ from ...kinematics import frames as F
 from ...kinematics.dimensions import FLANK
 from ...kinematics.hand_params import HandParams
 from ...kinematics.topology import FOREARM, SERVO_MOUNT, SERVOS, link
-from ...kinematics.vectors import nearest_on_box, nearest_on_cylinder
+from ...kinematics.vectors import nearest_on_box, nearest_on_cylinder, nearest_on_swept
 from ..measure import circular_pockets
 from .base import Part
 from .common import (Tolerances, box, build, channel_slot, channel_slots, cylinder, mm, polygon_cylinder, swept_up,
@@ -109,15 +109,30 @@ class Forearm(ServoMount, Part):
         T = np.linalg.inv(self.T_palm_part())
         return [transform(b, T) for b in self.body()]
 
+    def sweep_up(self, servo: int) -> float:
+        """How far (mm) a servo's pocket and cavity are swept up the module's z where they open
+        straight up (``forearm_layout.drops_straight``): out past the block's top from wherever the
+        servo stands in it."""
+        x0, x1, y0, y1, _, z1 = self.extents()
+        return z1 + 1.0 - (self.T_servo(servo)[2, 3] - (x1 - x0) - (y1 - y0))
+
     def pocket_gap(self, servo: int, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(distance, nearest point) from each of ``points`` (palm frame, mm) to servo ``servo``'s
-        pocket as the one-row module cuts it: its body and ear pockets and its pulley's cavity,
-        open up along the shaft through the block's top."""
+        pocket as the module cuts it: its body and ear pockets and its pulley's cavity, open up
+        along the shaft through the block's top, or swept straight up the module's z
+        (``forearm_layout.drops_straight``)."""
         T = self.T_servo(servo)
         q = (points - T[:3, 3]) @ T[:3, :3]                   # servo frame
-        zc0, _ = self.cavity_span(servo)
-        found = [nearest_on_box(q, lo, hi) for lo, hi in self.open_pockets(servo, np.inf)]
-        found.append(nearest_on_cylinder(q, zc0, np.inf, self.cavity_radius(servo)))
+        zc0, zc1 = self.cavity_span(servo)
+        r = self.cavity_radius(servo)
+        if FL.drops_straight(self.params, servo):
+            e, up = T[2, :3], self.sweep_up(servo)            # the module's z in the servo frame
+            found = [nearest_on_swept(q, lambda x, lo=lo, hi=hi: nearest_on_box(x, lo, hi), e, up)
+                     for lo, hi in self.open_pockets(servo, zc1)]
+            found.append(nearest_on_swept(q, lambda x: nearest_on_cylinder(x, zc0, zc1, r), e, up))
+        else:
+            found = [nearest_on_box(q, lo, hi) for lo, hi in self.open_pockets(servo, np.inf)]
+            found.append(nearest_on_cylinder(q, zc0, np.inf, r))
         k = np.argmin([d for d, _ in found], axis=0)
         near = np.choose(k[:, None], [n for _, n in found])
         return np.min([d for d, _ in found], axis=0), near @ T[:3, :3].T + T[:3, 3]
@@ -172,7 +187,7 @@ class Forearm(ServoMount, Part):
                 # the pocket and the cavity swept straight up out of the block's top: the servo,
                 # its pulley on, drops in along z (along its tilted shaft it would cut into its
                 # neighbour's pocket)
-                up = z1 + 1.0 - (Ts[2, 3] - (x1 - x0) - (y1 - y0))
+                up = self.sweep_up(k)
                 for blo, bhi in self.open_pockets(k, zc1):
                     tools += swept_up(transform(box(blo[0], bhi[0], blo[1], bhi[1], blo[2], bhi[2]), Ts), up)
                 tools += swept_up(transform(polygon_cylinder((0, 0, zc0), (0, 0, zc1), rc), Ts), up)

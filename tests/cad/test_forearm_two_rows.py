@@ -1,0 +1,66 @@
+"""The forearm module built from the two staggered rows (``kinematics.forearm_stagger``) on the
+default hand: one solid, its twelve pilot holes, and every wall two perimeters. The rear row's
+index and ring drives run beside a front servo's pocket (servo 6's, swept straight up the module;
+the little finger's, open along its shaft) and then through it: each is opened into the pocket
+along the run where the wall between them is under two perimeters (``common.channel_slots``), up
+to where it enters."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("build123d")
+
+
+@pytest.fixture
+def two_rows(monkeypatch):
+    from phantom_cad.kinematics import forearm_layout as FL
+
+    monkeypatch.setattr(FL, "forearm_rows", lambda params: 2)
+
+
+def test_the_swept_pocket_is_measured_as_cut(two_rows):
+    """Servo 6's pocket and cavity are swept straight up the module's z (``Forearm.pocket_gap``, as
+    ``Forearm.build`` cuts them): 30 mm straight above its body's centre is in the cut (along its
+    shaft, tilted 28.5 deg, the pocket would have passed 14 mm beside it), and 1 mm under the body's
+    floor, along the shaft, is 1 mm from it (the sweep goes up, away from it)."""
+    from phantom_cad.cad.parts.forearm import Forearm
+    from phantom_cad.kinematics import forearm_layout as FL
+    from phantom_cad.kinematics.topology import SERVOS
+    from phantom_cad.params import load_params
+
+    p = load_params(None)
+    fa = Forearm(p)
+    k = next(s.index for s in SERVOS if s.drive == "loop")
+    assert FL.drops_straight(p, k)
+    T = fa.T_servo(k)
+    lo, hi = fa.open_pockets(k, 0.0)[0]
+    centre = (T @ np.array([*(lo[:2] + hi[:2]) / 2.0, (lo[2] + hi[2]) / 2.0, 1.0]))[:3]
+    under = (T @ np.array([*(lo[:2] + hi[:2]) / 2.0, lo[2] - 1.0, 1.0]))[:3]
+    d, near = fa.pocket_gap(k, np.array([centre + [0.0, 0.0, 30.0], under]))
+    assert d[0] == pytest.approx(0.0, abs=1e-6)
+    assert d[1] == pytest.approx(1.0, abs=1e-6)
+    assert np.allclose(near[1], (T @ np.array([*(lo[:2] + hi[:2]) / 2.0, lo[2], 1.0]))[:3], atol=1e-6)
+
+
+@pytest.mark.slow
+def test_the_two_rows_module_builds_with_walls_of_two_perimeters(two_rows):
+    from phantom_cad import units
+    from phantom_cad.cad.registry import part
+    from phantom_cad.cad.verify import solid_problems
+    from phantom_cad.export import step_stl
+    from phantom_cad.export.walls import thin_walls, wall_bar_mm
+    from phantom_cad.kinematics import forearm_layout as FL
+    from phantom_cad.params import load_params
+
+    p = load_params(None)
+    assert FL.forearm_width(p) < 80.0e-3                  # the two rows, not the one
+    pt = part(p, "forearm")
+    shape = pt.build()
+    assert not solid_problems("forearm", shape)
+    assert pt.verify(shape) == []
+    mesh = step_stl.tessellate(shape, units.mm(p.print.stl_tolerance))
+    v, f = mesh if isinstance(mesh, tuple) else (mesh.vertices, mesh.faces)
+    walls = thin_walls(np.asarray(v), np.asarray(f), wall_bar_mm(p), samples=100_000)
+    assert walls["wall_thinnest"] >= wall_bar_mm(p), walls
