@@ -389,11 +389,18 @@ def swept_up(solid, height: float) -> list:
     """A convex solid of plane faces swept ``height`` straight up +z, as tools: the solid and the
     prism each upward-facing face sweeps (a point above the solid, within ``height``, lies above
     one of those faces: the union is the sweep)."""
+    return swept_along(solid, (0.0, 0.0, height))
+
+
+def swept_along(solid, vector) -> list:
+    """A convex solid of plane faces swept by ``vector``, as tools: the solid and the prism each
+    face turned along the sweep makes (:func:`swept_up` along any direction)."""
     b = bd()
+    v = b.Vector(*(float(c) for c in vector))
     out = [solid]
     for f in solid.faces():
-        if f.normal_at().Z > 1e-9:
-            out.append(b.Solid.extrude(f, b.Vector(0.0, 0.0, height)))
+        if f.normal_at().dot(v) > 1e-9 * v.length:
+            out.append(b.Solid.extrude(f, v))
     return out
 
 

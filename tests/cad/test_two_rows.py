@@ -1,9 +1,11 @@
-"""The forearm module built from the two staggered rows (``kinematics.forearm_stagger``) on the
-default hand: one solid, its twelve pilot holes, and every wall two perimeters. The rear row's
-index and ring drives run beside a front servo's pocket (servo 6's, swept straight up the module;
-the little finger's, open along its shaft) and then through it: each is opened into the pocket
-along the run where the wall between them is under two perimeters (``common.channel_slots``), up
-to where it enters."""
+"""The forearm module and the palm built for the two staggered rows (``kinematics.forearm_stagger``)
+on the default hand: each one solid, the module with its twelve pilot holes, and every wall two
+perimeters. The rear row's index and ring drives run beside a front servo's pocket (servo 6's,
+swept straight up the module; the little finger's, open along its shaft) and then through it: each
+is opened into the pocket along the run where the wall between them is under two perimeters
+(``common.channel_slots``), up to where it enters. In the palm, the CMC pulley cavity's sweep
+toward servo 6, behind it, runs straight back 0.43-0.46 mm inside the thenar block's radial face,
+tilted 28.5 deg to it: the lip is cut away (``Palm.cavity_face_openings``)."""
 
 from __future__ import annotations
 
@@ -45,7 +47,8 @@ def test_the_swept_pocket_is_measured_as_cut(two_rows):
 
 
 @pytest.mark.slow
-def test_the_two_rows_module_builds_with_walls_of_two_perimeters(two_rows):
+@pytest.mark.parametrize("name", ["forearm", "palm"])
+def test_the_two_rows_parts_build_with_walls_of_two_perimeters(two_rows, name):
     from phantom_cad import units
     from phantom_cad.cad.registry import part
     from phantom_cad.cad.verify import solid_problems
@@ -56,9 +59,9 @@ def test_the_two_rows_module_builds_with_walls_of_two_perimeters(two_rows):
 
     p = load_params(None)
     assert FL.forearm_width(p) < 80.0e-3                  # the two rows, not the one
-    pt = part(p, "forearm")
+    pt = part(p, name)
     shape = pt.build()
-    assert not solid_problems("forearm", shape)
+    assert not solid_problems(name, shape)
     assert pt.verify(shape) == []
     mesh = step_stl.tessellate(shape, units.mm(p.print.stl_tolerance))
     v, f = mesh if isinstance(mesh, tuple) else (mesh.vertices, mesh.faces)
