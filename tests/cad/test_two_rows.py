@@ -9,17 +9,56 @@ tilted 28.5 deg to it: the lip is cut away (``Palm.cavity_face_openings``)."""
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 import pytest
 
 pytest.importorskip("build123d")
 
 
+@contextlib.contextmanager
+def _rows_2(monkeypatch):
+    """The default hand's parts laid out in two rows; what was memoised for its digest with one row
+    (the routes, the couplers, the links' tendons) is dropped on the way in and out."""
+    from phantom_cad.kinematics import forearm_layout as FL
+    from phantom_cad.kinematics import memo
+
+    memo.clear()
+    monkeypatch.setattr(FL, "forearm_rows", lambda params: 2)
+    try:
+        yield
+    finally:
+        monkeypatch.undo()
+        memo.clear()
+
+
 @pytest.fixture
 def two_rows(monkeypatch):
-    from phantom_cad.kinematics import forearm_layout as FL
+    with _rows_2(monkeypatch):
+        yield
 
-    monkeypatch.setattr(FL, "forearm_rows", lambda params: 2)
+
+def _palm_strands(params) -> np.ndarray:
+    """Each finger drive's strand in the palm (m, ``couplers.couplers``, memoised): from its socket
+    to its servo's pulley, which the rows move."""
+    from phantom_cad.kinematics import couplers
+
+    return np.array([c.palm_strand for c in couplers.couplers(params).values()], float)
+
+
+def test_the_two_rows_leave_nothing_memoised(monkeypatch):
+    """The couplers made for two rows are not served once the one row is back (the default file's
+    digest is the same)."""
+    from phantom_cad.params import load_params
+
+    p = load_params(None)
+    before = _palm_strands(p)
+    with _rows_2(monkeypatch):
+        during = _palm_strands(p)
+    after = _palm_strands(p)
+    assert during.shape != before.shape or np.abs(during - before).max() > 1e-3
+    assert np.array_equal(after, before)
 
 
 def test_the_swept_pocket_is_measured_as_cut(two_rows):
@@ -67,3 +106,4 @@ def test_the_two_rows_parts_build_with_walls_of_two_perimeters(two_rows, name):
     v, f = mesh if isinstance(mesh, tuple) else (mesh.vertices, mesh.faces)
     walls = thin_walls(np.asarray(v), np.asarray(f), wall_bar_mm(p), samples=100_000)
     assert walls["wall_thinnest"] >= wall_bar_mm(p), walls
+
