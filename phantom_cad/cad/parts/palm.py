@@ -45,15 +45,10 @@ from ...kinematics.topology import FINGERS, LINKS, chain
 from ...kinematics.vectors import clipped_acos, nearest_on_box, nearest_on_cylinder
 from ..measure import circular_pockets
 from .base import Part
-from .common import (DigitSection, Tolerances, as_solid, box, build, channel_slots, cylinder, extrude_up, mm, polygon_cylinder,
-                     prism_x, swept_along, transform,
+from .common import (DigitSection, Tolerances, box, build, channel_slots, cylinder, extrude_up, mm, prism_x, transform,
                      turn_sphere)
 from . import wrist
 from .servos import ServoMount
-
-#: a face of the thenar's cuts turned up to this (deg) from the thenar block's radial face makes a
-#: wall with it (``export.walls.WALL_DEG``: further turned, an edge)
-FACE_DEG = 30.0
 
 
 def _mm(T):
@@ -257,46 +252,6 @@ class Palm(ServoMount, Part):
                 out.append(extrude_up(poly, top + 1.0 - min(p[2] for p in poly)))
         return out
 
-    def cavity_face_openings(self) -> list:
-        """Where the CMC pulley's cavity or a sweep of it (:meth:`thenar_tools`) comes within two
-        perimeters (and the mesh's tolerance, over the cosine of a face turned :data:`FACE_DEG` from
-        it) of the thenar block's radial face (:meth:`thenar_block`), the material between is cut
-        away: that part of the cut (its cavity a prism of plane faces holding the cylinder) swept
-        radially out through the face (palm frame), and on up or down through the dorsal or palmar
-        face where it comes as close to that too. The sweeps, tilted with the CMC axis, run at an
-        angle to the face: a lip left between them would taper to nothing. Nothing where the cuts
-        stay further in."""
-        lo, hi = self.thenar_block()
-        if not np.all(hi > lo):
-            return []
-        t = self.thenar()
-        R, h, q = t["cavity_r"], t["cavity_h"], t["pulley"]
-        Tc = self.T_cmc()
-        lip = (mm(FLANK) + 2.0 * mm(self.params.print.stl_tolerance)) / math.cos(math.radians(FACE_DEG))
-        face, top = float(lo[0]), self.thickness / 2.0
-        cuts = [transform(polygon_cylinder((0.0, 0.0, q - h), (0.0, 0.0, q + h), R, 64), Tc)]
-        cuts += [transform(box(0.0, length, -R, R, -h, h), Tc @ M) for M, length in self.cavity_sweeps()]
-        reach = 2.0 * (hi[1] - lo[1] + hi[2] - lo[2]) + 4.0 * R + 200.0
-        near = box(face - reach, face + lip, lo[1] - reach, hi[1] + reach, lo[2] - reach, hi[2] + reach)
-        out = []
-        for cut in cuts:
-            part = cut & near
-            if part is None or part.volume <= 1e-9:             # None: nothing in common
-                continue
-            opening = _fused(swept_along(part, (-(lip + reach), 0.0, 0.0)))
-            # on out through the dorsal or palmar face where the part comes that close to it too: a
-            # rod would stand along the corner between the two openings
-            inside = part & box(face, face + lip, lo[1], hi[1], -top, top)
-            if inside is None or inside.volume <= 1e-9:
-                continue
-            bb = inside.bounding_box()
-            if bb.max.Z > top - lip:
-                opening = _fused(swept_along(opening, (0.0, 0.0, 2.0 * top)))
-            if bb.min.Z < -top + lip:
-                opening = _fused(swept_along(opening, (0.0, 0.0, -2.0 * top)))
-            out.append(opening)
-        return out
-
     def back_sweep(self) -> tuple[np.ndarray, float] | None:
         """(v, n): the unit vector, in the CMC base frame and the pulley's plane, along which the
         pulley's cavity is swept out through the palm's back face (the palm's -y projected into that
@@ -379,8 +334,7 @@ class Palm(ServoMount, Part):
 
     # -- geometry ----------------------------------------------------------
     def build(self):
-        # the face openings in a cut of their own: each is a cut swept out, its prisms on its faces
-        return build(*self.solids(), self.cavity_face_openings())
+        return build(*self.solids())
 
     def collision_solids(self) -> list:
         """The convex solids the palm is fused from (boxes, the limiter rails' convex prisms),
@@ -445,11 +399,6 @@ class Palm(ServoMount, Part):
             tools.append(cylinder(p + np.array([0, 0, 1.0]), p - np.array([0, 0, t.screw_engagement]),
                                   t.screw_pilot / 2.0))
         return body, tools
-
-
-def _fused(pieces: list):
-    """One solid of a convex sweep's pieces (``common.swept_along``)."""
-    return as_solid(pieces[0].fuse(*pieces[1:]).clean())
 
 
 def _clip_above(poly: list[np.ndarray], z: float) -> list[np.ndarray]:
