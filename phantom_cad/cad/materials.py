@@ -133,7 +133,7 @@ def bill_of_materials(params: HandParams) -> list[dict]:
     from .parts import wrist
     tab = params.palm.wall + engage
     bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} x {units.mm(tab):.0f} self-tapping",
-                "quantity": len(wrist.tab_screws(params)),
+                "quantity": len(wrist.tab_screw_places(params)),
                 "used_in": "the forearm module's tab into the palm's dorsal face at the wrist"})
     bom.append({"item": "screw", "spec": f"M{g(hw.screw_diameter)} horn screw (servo accessory)",
                 "quantity": 2 * N_SERVOS, "used_in": "servo pulleys 1-6 to their horns"})

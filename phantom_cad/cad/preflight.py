@@ -34,7 +34,8 @@ def check(params: HandParams) -> None:
     within two perimeters of a finger socket's magnet pockets (``thenar.socket_pocket_gap``), or a
     servo's flange screw pilot opens above the forearm module's top (``forearm_layout.pilot_headroom``),
     or the CMC base comes within a clearance of the palm's heel (``forearm_layout.heel_gap``) or of the
-    forearm module's block (``forearm_layout.forearm_gap``); or if
+    forearm module's block (``forearm_layout.forearm_gap``); or if no place along the forearm tab
+    keeps a tab screw's pilot two perimeters from the palm's cuts (``Palm.tab_screws``); or if
     a print aid the build makes beside the parts refuses the file (``print_aids.AIDS``: the angle
     gauge's faces too short for its marks)."""
     from ..kinematics import couplers
@@ -116,6 +117,10 @@ def check(params: HandParams) -> None:
                          f"must be >= {mm(MIN_WALL):g} mm, two perimeters; a larger palm.magnet_lift_mm (the "
                          "pockets higher) or smaller magnets open it", src)
     statics.hand_statics(params)
+    # the forearm tab's screws move in along the tab off the palm's cuts; none that clears is refused
+    from .parts.palm import Palm
+
+    Palm(params).tab_screws()
     # the print aids refuse in their constructors what they cannot make (the angle gauge: faces too
     # short for their marks), which every build makes beside the parts
     from .print_aids import AIDS

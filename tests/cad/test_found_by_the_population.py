@@ -198,3 +198,23 @@ def test_digits_07s_forearm_leaves_no_sliver_beside_servo_6s_cavity():
     assert not solid_problems("forearm", shape)
     walls = _thin_walls(p, shape)
     assert walls["wall_thinnest"] >= _bar(p), walls
+
+
+@pytest.mark.slow
+def test_a_170_4_x_85_mm_palm_keeps_two_perimeters_round_the_tab_screw(tmp_path):
+    """The palm of ``size --hand-length 170.4 --hand-breadth 85``: the forearm tab's radial screw,
+    half a tab length in from the tab's end, drilled its pilot (three diameters deep into a 21.5 mm
+    palm) 0.40 mm beside the thumb drive's channel (the population's walls row). The screw moves in
+    along the tab off the channel; both parts drill it there, and every wall measured on the palm's
+    mesh is two perimeters."""
+    from phantom_cad.cad.parts import wrist
+    from phantom_cad.export.walls import wall_bar_mm
+
+    p = _sized(tmp_path, "170.4", "85")
+    pa = part(p, "palm")
+    (place, inward), _ = wrist.tab_screw_places(p)
+    radial = pa.tab_screws()[0]
+    assert inward * (radial[0] - place[0]) > 0.0                   # the case: moved in off its place
+    assert np.allclose(part(p, "forearm").tab_screws(), pa.tab_screws(), atol=0.0)
+    walls = _thin_walls(p, pa.build())
+    assert walls["wall_thinnest"] >= wall_bar_mm(p), walls

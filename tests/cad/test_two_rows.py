@@ -1,9 +1,11 @@
-"""The forearm module built from the two staggered rows (``kinematics.forearm_stagger``) on the
-default hand: one solid, its twelve pilot holes, and every wall two perimeters. The rear row's
-index and ring drives run beside a front servo's pocket (servo 6's, swept straight up the module;
-the little finger's, open along its shaft) and then through it: each is opened into the pocket
-along the run where the wall between them is under two perimeters (``common.channel_slots``), up
-to where it enters."""
+"""The forearm module and the palm built for the two staggered rows (``kinematics.forearm_stagger``)
+on the default hand: each one solid, the module with its twelve pilot holes, and every wall two
+perimeters. The rear row's index and ring drives run beside a front servo's pocket (servo 6's,
+swept straight up the module; the little finger's, open along its shaft) and then through it: each
+is opened into the pocket along the run where the wall between them is under two perimeters
+(``common.channel_slots``), up to where it enters. In the palm, the CMC pulley cavity's sweep
+toward servo 6, behind it, runs straight back 0.43-0.46 mm inside the thenar block's radial face,
+tilted 28.5 deg to it: the lip is cut away (``Palm.cavity_face_openings``)."""
 
 from __future__ import annotations
 
@@ -84,7 +86,7 @@ def test_the_swept_pocket_is_measured_as_cut(two_rows):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["forearm"])
+@pytest.mark.parametrize("name", ["forearm", "palm"])
 def test_the_two_rows_parts_build_with_walls_of_two_perimeters(two_rows, name):
     from phantom_cad import units
     from phantom_cad.cad.registry import part

@@ -93,8 +93,11 @@ class Forearm(ServoMount, Part):
         return wrist.tab(self.params)
 
     def tab_screws(self) -> list[np.ndarray]:
-        """Centres (palm frame) of the tab's two screws on the palm's dorsal face."""
-        return wrist.tab_screws(self.params)
+        """Centres (palm frame) of the tab's two screws on the palm's dorsal face, where the palm
+        drills them (``Palm.tab_screws``)."""
+        from .palm import Palm
+
+        return Palm(self.params).tab_screws()
 
     # -- geometry ----------------------------------------------------------------
     def body(self) -> list:

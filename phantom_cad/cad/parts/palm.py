@@ -45,10 +45,15 @@ from ...kinematics.topology import FINGERS, LINKS, chain
 from ...kinematics.vectors import clipped_acos, nearest_on_box, nearest_on_cylinder
 from ..measure import circular_pockets
 from .base import Part
-from .common import (DigitSection, Tolerances, box, build, channel_slots, cylinder, extrude_up, mm, prism_x, transform,
+from .common import (DigitSection, Tolerances, as_solid, box, build, channel_slots, cylinder, extrude_up, mm, polygon_cylinder,
+                     prism_x, swept_along, transform,
                      turn_sphere)
 from . import wrist
 from .servos import ServoMount
+
+#: a face of the thenar's cuts turned up to this (deg) from the thenar block's radial face makes a
+#: wall with it (``export.walls.WALL_DEG``: further turned, an edge)
+FACE_DEG = 30.0
 
 
 def _mm(T):
@@ -252,6 +257,46 @@ class Palm(ServoMount, Part):
                 out.append(extrude_up(poly, top + 1.0 - min(p[2] for p in poly)))
         return out
 
+    def cavity_face_openings(self) -> list:
+        """Where the CMC pulley's cavity or a sweep of it (:meth:`thenar_tools`) comes within two
+        perimeters (and the mesh's tolerance, over the cosine of a face turned :data:`FACE_DEG` from
+        it) of the thenar block's radial face (:meth:`thenar_block`), the material between is cut
+        away: that part of the cut (its cavity a prism of plane faces holding the cylinder) swept
+        radially out through the face (palm frame), and on up or down through the dorsal or palmar
+        face where it comes as close to that too. The sweeps, tilted with the CMC axis, run at an
+        angle to the face: a lip left between them would taper to nothing. Nothing where the cuts
+        stay further in."""
+        lo, hi = self.thenar_block()
+        if not np.all(hi > lo):
+            return []
+        t = self.thenar()
+        R, h, q = t["cavity_r"], t["cavity_h"], t["pulley"]
+        Tc = self.T_cmc()
+        lip = (mm(FLANK) + 2.0 * mm(self.params.print.stl_tolerance)) / math.cos(math.radians(FACE_DEG))
+        face, top = float(lo[0]), self.thickness / 2.0
+        cuts = [transform(polygon_cylinder((0.0, 0.0, q - h), (0.0, 0.0, q + h), R, 64), Tc)]
+        cuts += [transform(box(0.0, length, -R, R, -h, h), Tc @ M) for M, length in self.cavity_sweeps()]
+        reach = 2.0 * (hi[1] - lo[1] + hi[2] - lo[2]) + 4.0 * R + 200.0
+        near = box(face - reach, face + lip, lo[1] - reach, hi[1] + reach, lo[2] - reach, hi[2] + reach)
+        out = []
+        for cut in cuts:
+            part = cut & near
+            if part is None or part.volume <= 1e-9:             # None: nothing in common
+                continue
+            opening = _fused(swept_along(part, (-(lip + reach), 0.0, 0.0)))
+            # on out through the dorsal or palmar face where the part comes that close to it too: a
+            # rod would stand along the corner between the two openings
+            inside = part & box(face, face + lip, lo[1], hi[1], -top, top)
+            if inside is None or inside.volume <= 1e-9:
+                continue
+            bb = inside.bounding_box()
+            if bb.max.Z > top - lip:
+                opening = _fused(swept_along(opening, (0.0, 0.0, 2.0 * top)))
+            if bb.min.Z < -top + lip:
+                opening = _fused(swept_along(opening, (0.0, 0.0, -2.0 * top)))
+            out.append(opening)
+        return out
+
     def back_sweep(self) -> tuple[np.ndarray, float] | None:
         """(v, n): the unit vector, in the CMC base frame and the pulley's plane, along which the
         pulley's cavity is swept out through the palm's back face (the palm's -y projected into that
@@ -307,6 +352,85 @@ class Palm(ServoMount, Part):
         M[:3, 0], M[:3, 1], M[:3, 2], M[:3, 3] = d, np.cross(z, d), z, a0
         return [transform(box(0.0, float(np.linalg.norm(a1 - a0)), -r, r, -drop, 0.0), M)]
 
+    def finger_drive(self, finger: str) -> tuple[np.ndarray, np.ndarray]:
+        """(exit, tangent) of a finger's drive through the palm (palm frame, mm): from its socket's
+        exit straight back to its servo pulley's tangent point."""
+        tangent, _ = self.drive_line(chain(finger).servo)
+        return (self.T_socket(finger) @ np.array([0.0, 0.0, self.tendon_z, 1.0]))[:3], tangent
+
+    def drive_channels(self) -> list[tuple[str, np.ndarray, np.ndarray, float]]:
+        """(name, a, b, radius) of each drive's channel through the palm, a cylinder from a to b
+        (palm frame, mm): each finger drive from a millimetre before its socket's exit to one past
+        its servo pulley's tangent point; the thumb drive from a millimetre before servo 1's tangent
+        to its turn, and from the turn down the CMC axis past the cavity's ceiling by as much again;
+        its turn a sphere (a = b) of the relief's radius."""
+        r = self.tol.tendon_hole / 2.0
+        out = []
+        for f in FINGERS:
+            exit_, tangent = self.finger_drive(f)
+            u = (tangent - exit_) / np.linalg.norm(tangent - exit_)
+            out.append((f"{f} drive", exit_ - u, tangent + u, r))
+        pts = self.thumb_tendon_path()
+        u = (pts[1] - pts[0]) / np.linalg.norm(pts[1] - pts[0])
+        out += [("thumb drive", pts[0] - u, pts[1], r), ("thumb drive's turn", pts[1], pts[1], self.tol.tendon_relief / 2.0),
+                ("thumb drive", pts[1], pts[2] - (pts[1] - pts[2]), r)]
+        return out
+
+    def pilot_gap(self, centre: np.ndarray) -> tuple[float, str]:
+        """(gap (mm), cut) from a tab screw's pilot at ``centre`` (on the dorsal face; the pilot a
+        cylinder from a millimetre above down its engagement) to the palm's nearest cut it could
+        meet there: a drive's channel (:meth:`drive_channels`, its axis sampled every PILOT_SAMPLE
+        against the pilot's cylinder) or the thenar's cuts (:meth:`thenar_gap` from points on the
+        pilot's side and floor, as far apart)."""
+        t, h = self.tol, PILOT_SAMPLE
+        rp, z0, z1 = t.screw_pilot / 2.0, -t.screw_engagement, 1.0
+        best = (math.inf, "")
+        for name, a, b, r in self.drive_channels():
+            n = max(int(np.ceil(np.linalg.norm(b - a) / h)), 1)
+            axis = a + np.linspace(0.0, 1.0, n + 1)[:, None] * (b - a)
+            d = float(np.min(nearest_on_cylinder(axis - centre, z0, z1, rp)[0])) - r
+            if d < best[0]:
+                best = (d, name)
+        ring = np.linspace(0.0, 2.0 * math.pi, max(int(np.ceil(2.0 * math.pi * rp / h)), 8), endpoint=False)
+        zs = np.linspace(z0, z1, int(np.ceil((z1 - z0) / h)) + 1)
+        side = np.array([(rp * math.cos(a), rp * math.sin(a), z) for z in zs for a in ring])
+        floor = np.array([(rho * math.cos(a), rho * math.sin(a), z0)
+                          for rho in np.arange(0.0, rp, h) for a in ring])
+        d = float(np.min(self.thenar_gap(centre + np.vstack([side, floor]))[0]))
+        return min(best, (d, "thenar's cut (CMC pulley cavity, journal)"))
+
+    def tab_screws(self) -> list[np.ndarray]:
+        """Centres (palm frame, mm) of the forearm tab's two screws on the dorsal face: each at its
+        place (``wrist.tab_screw_places``) or moved in along the tab, in steps of SCREW_STEP, by the
+        least that keeps its pilot two perimeters (``rules.MIN_WALL``) from the palm's cuts
+        (:meth:`pilot_gap`): the pilot reaches three screw diameters into the palm, past the level
+        of the drives that run under a thin palm's dorsal face. Both the palm's pilots and the
+        module's clearance holes are drilled here. ParamError (field ``hardware.screw_diameter_mm``:
+        the pilot's width and depth) where no place up to the tab's middle does."""
+        from ...params import ParamError
+        from ...params.rules import MIN_WALL
+
+        lo, hi = wrist.tab(self.params)
+        middle, wall = (lo[0] + hi[0]) / 2.0, mm(MIN_WALL)
+        out = []
+        for place, inward in wrist.tab_screw_places(self.params):
+            steps = max(int(np.floor(inward * (middle - place[0]) / SCREW_STEP)), 0)
+            closest = (-math.inf, "")
+            for k in range(steps + 1):
+                c = place + np.array([inward * k * SCREW_STEP, 0.0, 0.0])
+                gap = self.pilot_gap(c)
+                if gap[0] >= wall:
+                    out.append(c)
+                    break
+                closest = max(closest, gap)
+            else:
+                raise ParamError("hardware.screw_diameter_mm", round(mm(self.params.hardware.screw_diameter), 6),
+                                 f"the forearm tab's screw pilot in the palm's dorsal face comes within {closest[0]:.3f} "
+                                 f"mm of the {closest[1]} wherever it is placed from x = {place[0]:.1f} mm to the "
+                                 f"tab's middle ({middle:.1f} mm); it must keep {wall:g} mm (two perimeters): "
+                                 "a smaller screw's pilot is narrower and shallower", self.params.source)
+        return out
+
     def limiter_polygon(self, finger: str) -> list[tuple[float, float]]:
         """(y, z) outline, in the finger base frame (MCP axis at the origin), of the palm's
         flexion limiter: from inside the socket block to the plane the proximal phalanx's
@@ -334,7 +458,8 @@ class Palm(ServoMount, Part):
 
     # -- geometry ----------------------------------------------------------
     def build(self):
-        return build(*self.solids())
+        # the face openings in a cut of their own: each is a cut swept out, its prisms on its faces
+        return build(*self.solids(), self.cavity_face_openings())
 
     def collision_solids(self) -> list:
         """The convex solids the palm is fused from (boxes, the limiter rails' convex prisms),
@@ -354,6 +479,8 @@ class Palm(ServoMount, Part):
         if heel is not None:
             body.append(box(heel[0][0], heel[1][0], heel[0][1], heel[1][1], heel[0][2], heel[1][2]))
         tools = []
+        channels = self.drive_channels()
+        channels, thumb = dict(zip(FINGERS, channels)), channels[len(FINGERS):]
         # finger sockets
         for f in FINGERS:
             T = self.T_socket(f)
@@ -366,10 +493,10 @@ class Palm(ServoMount, Part):
                 n = T[:3, 1]
                 tools.append(cylinder(m + n, m - n * t.magnet_pocket_depth, t.magnet_pocket_d / 2.0))
             # tendon: socket exit straight back to the servo pulley's tangent point
-            tangent, _ = self.drive_line(chain(f).servo)
-            exit_ = (T @ np.array([0.0, 0.0, self.tendon_z, 1.0]))[:3]
+            exit_, tangent = self.finger_drive(f)
+            _, a, b, r = channels[f]
             u = (tangent - exit_) / np.linalg.norm(tangent - exit_)
-            tools.append(cylinder(exit_ - u, tangent + u, t.tendon_hole / 2.0))
+            tools.append(cylinder(a, b, r))
             # where it passes the thenar's cuts less than a flank away, it runs into them by a slot
             tools += channel_slots(exit_, u, float(np.linalg.norm(tangent - exit_)), t.tendon_hole / 2.0,
                                    [self.thenar_gap], mm(FLANK))
@@ -389,16 +516,27 @@ class Palm(ServoMount, Part):
         # (its run on down the column is the CMC base's)
         pts = self.thumb_tendon_path()
         u = (pts[1] - pts[0]) / np.linalg.norm(pts[1] - pts[0])
-        tools.append(cylinder(pts[0] - u, pts[1], t.tendon_hole / 2.0))
-        tools.append(turn_sphere(pts[1], t.tendon_relief / 2.0, u, pts[2] - pts[1]))
-        tools.append(cylinder(pts[1], pts[2] - (pts[1] - pts[2]), t.tendon_hole / 2.0))
+        (_, a0, b0, r0), (_, turn, _, rt), (_, a1, b1, r1) = thumb
+        tools += [cylinder(a0, b0, r0), turn_sphere(turn, rt, u, pts[2] - pts[1]), cylinder(a1, b1, r1)]
         tools += self.thumb_channel_relief(pts)
         # (the CMC loop's two strands run in the cavity's slot toward servo 6: no channel)
         # pilot holes for the forearm module's tab screws, down from the dorsal face
-        for p in wrist.tab_screws(self.params):
+        for p in self.tab_screws():
             tools.append(cylinder(p + np.array([0, 0, 1.0]), p - np.array([0, 0, t.screw_engagement]),
                                   t.screw_pilot / 2.0))
         return body, tools
+
+
+#: the spacing (mm) of the points a tab screw's pilot is measured at against the palm's cuts
+PILOT_SAMPLE = 0.05
+
+#: the step (mm) by which a tab screw moves in along the tab off the palm's cuts [choice]
+SCREW_STEP = 0.25
+
+
+def _fused(pieces: list):
+    """One solid of a convex sweep's pieces (``common.swept_along``)."""
+    return as_solid(pieces[0].fuse(*pieces[1:]).clean())
 
 
 def _clip_above(poly: list[np.ndarray], z: float) -> list[np.ndarray]:

@@ -4,7 +4,7 @@ The palm ends at its back face (the wrist crease, or the back of the thenar wher
 column sits further back, ``servo_geometry.palm_back``); the forearm module's front face stands a
 clearance behind it (``servo_geometry.forearm_front``). A tab of the module lies on the palm's dorsal face
 there and two M2 screws hold it: the palm drills their pilots, the module their clearance holes.
-Both parts read this one description.
+Both parts read this one description; the palm moves a screw in along the tab off its cuts.
 """
 
 from __future__ import annotations
@@ -51,13 +51,15 @@ def tab(params: HandParams) -> tuple[np.ndarray, np.ndarray]:
             np.array([min(forearm_x[1], px1), mm(SG.palm_back(params)) + TAB_LENGTH, top + mm(params.palm.wall)]))
 
 
-def tab_screws(params: HandParams) -> list[np.ndarray]:
-    """Centres of the tab's two screws on the palm's dorsal face, half a tab length in from its
-    ends, halfway along its length over the palm."""
+def tab_screw_places(params: HandParams) -> list[tuple[np.ndarray, float]]:
+    """(centre, inward) of each of the tab's two screws at its place on the palm's dorsal face: half a
+    tab length in from its end, halfway along the tab's length over the palm; ``inward`` the sign of
+    x toward the tab's middle. The palm moves a screw in from there off its cuts
+    (``Palm.tab_screws``)."""
     lo, hi = tab(params)
     y = (mm(SG.palm_back(params)) + hi[1]) / 2.0
     inset = TAB_LENGTH / 2.0
-    return [np.array([lo[0] + inset, y, lo[2]]), np.array([hi[0] - inset, y, lo[2]])]
+    return [(np.array([lo[0] + inset, y, lo[2]]), 1.0), (np.array([hi[0] - inset, y, lo[2]]), -1.0)]
 
 
 def thumb_drive_path(params: HandParams) -> list[np.ndarray]:
