@@ -157,6 +157,9 @@ def test_params_opposition_solves_a_placement_the_file_then_reaches(tmp_path):
     for key in ("thumb_cmc_offset_mm", "thumb_cmc_axis_deg"):
         text, n = re.subn(rf"^{key} = \[[^\]]*\]", f"{key} = {solved[key]}", text, flags=re.M)
         assert n == 1
+    # the pockets' lift the placement needs, in place of the file's
+    text = re.sub(r"^magnet_lift_mm = .*\n", "", text, flags=re.M)
+    text = text.replace("\n[palm]\n", f"\n[palm]\nmagnet_lift_mm = {solved['magnet_lift_mm']}\n", 1)
     f = tmp_path / "solved.toml"
     f.write_text(text)
     again = cli("params", "opposition", "-p", f).stdout

@@ -531,5 +531,5 @@ def test_the_report_gives_the_pinch_on_the_printed_tips():
     from phantom_cad.params import load_params
 
     line = next(s for s in report(load_params(), False) if "on the printed tips" in s)
-    assert ("index 0.91 mm at u1 8.2, u6 27.0, index 40.0 deg; middle 0.83 mm at u1 4.1, u6 9.0, middle 53.0 deg; "
-            "ring 0.55 mm at u1 0.0, u6 4.5, ring 49.5 deg") in line
+    assert ("index 0.76 mm at u1 8.2, u6 27.0, index 40.7 deg; middle 0.84 mm at u1 4.1, u6 9.0, middle 53.0 deg; "
+            "ring 0.26 mm at u1 0.0, u6 4.5, ring 50.3 deg") in line

@@ -197,6 +197,17 @@ def params_opposition(params: Optional[Path] = ParamsOpt,
     typer.echo(f"thumb_cmc_offset_mm = [{', '.join(f'{mm(v):.4f}' for v in sol.offset)}]"
                f"  # solved: opposition margin {deg(sol.margin):+.1f} deg (phantom-cad params opposition --solve)")
     typer.echo(f"thumb_cmc_axis_deg = [{', '.join(f'{deg(v):.4f}' for v in sol.axis)}]")
+    # the placement moves the palm's back face and the servos behind it, toward which the finger
+    # drives' coupler bores run below the magnet pockets: lift them as `phantom-cad size` does
+    from ..params import DEFAULT_PARAMS, load_document
+    from ..sizing import magnet_lift
+
+    doc = load_document(p.source or DEFAULT_PARAMS)
+    doc["palm"]["thumb_cmc_offset_mm"] = [round(mm(v), 4) for v in sol.offset]
+    doc["palm"]["thumb_cmc_axis_deg"] = [round(deg(v), 4) for v in sol.axis]
+    magnet_lift(doc)
+    typer.echo(f"magnet_lift_mm = {doc['palm'].get('magnet_lift_mm', 0.0):g}"
+               "  # the pockets' lift this placement needs (as phantom-cad size solves it)")
 
 
 # -- model ---------------------------------------------------------------------

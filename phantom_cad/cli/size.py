@@ -23,8 +23,8 @@ def size(
     segments: Optional[Path] = typer.Option(None, "--segments", help="TOML file of measured segment lengths and "
                                             "widths (mm; docs/sizing.md).", dir_okay=False),
     name: Optional[str] = typer.Option(None, "--name", help="The hand's name (default: the output file's stem)."),
-    search: bool = typer.Option(True, "--search/--no-search", help="Search the thumb's CMC placement for "
-                                "opposition (about 15 s); --no-search keeps the reference's, scaled."),
+    search: bool = typer.Option(True, "--search/--no-search", help="Where the reference's CMC placement, scaled, "
+                                "does not oppose, search one (about 15 s each); --no-search keeps the reference's."),
 ) -> None:
     """Write a complete, validated parameter file for a person's hand: every size-dependent choice
     re-solved for the hand length, breadth and measured segments (docs/sizing.md), and print the

@@ -101,6 +101,9 @@ def mjcf_spec(model: RobotModel, meshdir: str = "../meshes"):
     spec.compiler.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
     spec.option.timestep = TIMESTEP
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    # Coulomb's round friction cone: MuJoCo's default pyramid has its four edges in each contact's
+    # tangent frame, which does not follow a mirror, so on it a left hand grips unlike the right
+    spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
 
     visual = spec.add_default("visual", spec.default)
     visual.geom.group, visual.geom.contype, visual.geom.conaffinity = 2, 0, 0

@@ -14,7 +14,7 @@ import numpy as np
 from .cmc_base_gap import cmc_base_gap
 from .dimensions import printed_hole, servo_screw_offset
 from .forearm_stagger import staggered_servos
-from .frames import (T_palm_socket, T_palm_thumb_cmc_base, servo_radius, socket_x, tendon_height, tendon_relief, trans,
+from .frames import (T_palm_socket, T_palm_thumb_cmc_base, limiter_x_extent, servo_radius, socket_x, tendon_height, tendon_relief, trans,
                      wrist_y)
 from .hand_params import HandParams
 from .memo import memoised
@@ -27,10 +27,13 @@ from .topology import CMC_SERVO, FINGERS, SERVOS, chain
 
 def metacarpal_x(params: HandParams) -> tuple[float, float]:
     """x extent (m, palm frame, right hand) of the palm's metacarpal block: across the sockets
-    (:func:`socket_x`), and ulnar far enough that every finger drive's channel keeps a wall to the
-    block's ulnar face where the drive runs ulnar toward its servo (from its exit under the socket
-    to the palm's back face). The palm's ulnar face; its radial side is the thenar's."""
+    (:func:`socket_x`), ulnar over the flexion limiter rails (:func:`limiter_x_extent`: the arc
+    turns the pinky's rails ulnar past its socket), and far enough that every finger drive's
+    channel keeps a wall to the block's ulnar face where the drive runs ulnar toward its servo
+    (from its exit under the socket to the palm's back face). The palm's ulnar face; its radial
+    side is the thenar's."""
     x0, x1 = socket_x(params)
+    x1 = max(x1, *(limiter_x_extent(params, f)[1] for f in FINGERS))
     y0 = palm_back(params)
     half = tendon_relief(params) / 2.0 + params.palm.wall     # half a tendon hole and a wall
     for f in FINGERS:
@@ -66,10 +69,11 @@ def forearm_servos(params: HandParams) -> dict[int, np.ndarray]:
 
 
 def forearm_rows(params: HandParams) -> int:
-    """How many rows the forearm module holds its servos in: one on every hand
-    (:func:`.forearm_stagger.two_rows` says where two would fit a human forearm; the module is not
-    built from them, docs/sizing.md)."""
-    return 1
+    """How many rows the forearm module holds its servos in: two staggered rows where they fit
+    within a human forearm (:func:`.forearm_stagger.two_rows`), one otherwise."""
+    from .forearm_stagger import two_rows
+
+    return 2 if two_rows(params) else 1
 
 
 def drops_straight(params: HandParams, servo: int) -> bool:

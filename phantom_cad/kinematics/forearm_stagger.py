@@ -1,6 +1,6 @@
 """Two staggered rows of the six servos that fit within a human forearm's breadth
-(:func:`staggered_servos`; :func:`two_rows` says whether they fit). The forearm module is built
-from one row (``forearm_layout.forearm_rows``), not from these. numpy only; frames as in
+(:func:`staggered_servos`; :func:`two_rows` says whether they fit: where they do, the forearm
+module is built from them, ``forearm_layout.forearm_rows``). numpy only; frames as in
 :mod:`.frames`."""
 
 from __future__ import annotations

@@ -143,6 +143,32 @@ def T_palm_socket(params: HandParams, finger: str) -> np.ndarray:
     return T_palm_finger_base(params, finger) @ trans(0.0, -params.cad.finger_base_length, 0.0)
 
 
+def limiter_outline(params: HandParams, finger: str) -> list[tuple[float, float]]:
+    """(y, z) outline (m), in the finger base frame (MCP axis at the origin), of the palm's
+    flexion limiter rails: from a wall inside the socket block to the plane the proximal phalanx's
+    palmar face (z_child = -thickness/2) reaches at the MCP upper limit (Table I), between that
+    face, a clearance below it, and the palm's palmar face. The rails span x from the guide
+    eyelet's boss to the finger's sides (+-width/2)."""
+    d = params.digit(finger)
+    q = d.chain.limits[0][1]
+    s, c = math.sin(q), math.cos(q)
+    rb = d.thickness / 2.0
+    back = -params.cad.finger_base_length - params.palm.wall
+    z_top = -d.thickness / 2.0 - params.print.hole_clearance
+    z_bot = -params.palm.thickness / 2.0
+    y_at = lambda z: (-rb - z * c) / s  # noqa: E731
+    return [(back, z_bot), (y_at(z_bot), z_bot), (y_at(z_top), z_top), (back, z_top)]
+
+
+def limiter_x_extent(params: HandParams, finger: str) -> tuple[float, float]:
+    """x extent (m, palm frame, right hand) of the finger's two limiter rails
+    (:func:`limiter_outline`, +-width/2 across)."""
+    T = T_palm_finger_base(params, finger)
+    w = params.fingers[finger].width / 2.0
+    xs = [float((T @ np.array([sx, y, z, 1.0]))[0]) for y, z in limiter_outline(params, finger) for sx in (-w, w)]
+    return min(xs), max(xs)
+
+
 def socket_x(params: HandParams) -> tuple[float, float]:
     """x extent (m, palm frame, right hand) of the palm's finger sockets: the outer sides of the
     index's and the pinky's (the columns converge toward the wrist, so their faces are widest)."""

@@ -1,9 +1,10 @@
 """A parameter file for a person (``phantom-cad size``): the default hand's file
 (params/phantom.toml) as the template, every size-dependent choice re-solved for the person's hand
-length, breadth and measured segments (:mod:`.solvers`), the thumb's CMC placement searched for
-opposition as ``params opposition --solve`` does (``kinematics.thumb_placement``), and the result
-validated. Imports params and kinematics, never CAD: the caller hands in the CAD layer's
-pre-build check (``cad.preflight.check``). docs/sizing.md."""
+length, breadth and measured segments (:mod:`.solvers`), the thumb's CMC placement the
+reference's scaled where it opposes, else searched for opposition as ``params opposition --solve``
+does (``kinematics.thumb_placement``), and the result validated. Imports params and kinematics,
+never CAD: the caller hands in the CAD layer's pre-build check (``cad.preflight.check``).
+docs/sizing.md."""
 
 from __future__ import annotations
 
@@ -46,7 +47,7 @@ class Sizing:
     document: dict            # the parameter file, as TOML tables
     params: HandParams        # the document validated
     margin: float             # rad: the opposition margin of the placement chosen
-    searched: bool            # the placement is the search's (False: the reference's, scaled, was better)
+    searched: bool            # the placement is the search's (False: the reference's, scaled)
     unpinched: tuple[str, ...] = ()   # the opposed fingers whose pads the thumb's misses on the printed tips
 
     @property
@@ -402,11 +403,13 @@ def size(person: Person, check: Callable[[HandParams], None] | None = None, sear
          seed: int = 0, searches: int = len(SEARCHES), floor: Callable[[HandParams], float] | None = None) -> Sizing:
     """The person's validated parameter file. ``check``: what else a file must pass (the CAD
     layer's ``preflight.check``); ``floor``: the CMC base's lowest face the search keeps off the
-    palm's heel and the forearm module (the CAD layer's ``preflight.cmc_base_floor``); ``search``: search the CMC placement (seconds) rather than keep
-    the reference's scaled with the hand length, with up to ``searches`` of :data:`SEARCHES` (seeds
-    ``seed``, ``seed + 1``, ...) while the margin stays below zero. Of the placements, the one with
-    the larger opposition margin that validates is kept. A UserError or ParamError (one line) when nothing
-    validates."""
+    palm's heel and the forearm module (the CAD layer's ``preflight.cmc_base_floor``). The CMC
+    placement is the reference's, scaled with the hand length, where the thumb's pad meets the
+    index, middle and ring pads on it (:attr:`Sizing.opposes`): the placement whose postures and
+    grasps docs/postures.md and docs/grasps.md measure. Where it does not, and ``search``, it is
+    searched (seconds), with up to ``searches`` of :data:`SEARCHES` (seeds ``seed``, ``seed + 1``,
+    ...) until a placement opposes; of the placements that validate, the best ranked
+    (:attr:`Sizing.rank`) is kept. A UserError or ParamError (one line) when nothing validates."""
     check = check or (lambda p: None)
     try:
         doc = build_document(person)
@@ -440,7 +443,7 @@ def size(person: Person, check: Callable[[HandParams], None] | None = None, sear
 
         constraint = thumb_placement.thenar_constraint(start, floor=floor(start) if floor else None)
         for k, (population, generations) in enumerate(SEARCHES[:searches]):
-            if k and best is not None and best.opposes:
+            if best is not None and best.opposes:
                 break
             sol = thumb_placement.solve(Hand(start), seed=seed + k, population=population,
                                         generations=generations, constraint=constraint)

@@ -179,13 +179,19 @@ def _bar(p) -> float:
 
 
 @pytest.mark.slow
-def test_digits_07s_forearm_leaves_no_sliver_beside_servo_6s_cavity():
+def test_digits_07s_forearm_leaves_no_sliver_beside_servo_6s_cavity(monkeypatch):
     """digits-07-man of the population (190.2 x 85 mm, per-digit lengths given) at the CMC placement
-    the search found then: where servo 6's strand enters the module's top as it leaves its
-    pulley's cavity, the slot over it ended at the cavity and left a wedge 0.32 mm thick between
-    them (the population's walls row). Every wall of the module is two perimeters."""
+    the search found then, in one row of servos as it was built then (its hand is now built from
+    two): where servo 6's strand enters the module's top as it leaves its pulley's cavity, the slot
+    over it ended at the cavity and left a wedge 0.32 mm thick between them (the population's walls
+    row). Every wall of the module is two perimeters."""
+    from phantom_cad.kinematics import forearm_layout as FL
+    from phantom_cad.kinematics import memo
     from phantom_cad.params import parse
     from phantom_cad.sizing import Person, build_document
+
+    monkeypatch.setattr(FL, "forearm_rows", lambda params: 1)
+    memo.clear()        # what its digest memoised with two rows
 
     doc = build_document(Person(190.2, 85.0, "right", "digits-07-man", _DIGITS_07))
     doc["palm"].update(heel_length_mm=46.3, thumb_cmc_offset_mm=[-30.5286, -74.6346, -28.1564],
@@ -195,6 +201,7 @@ def test_digits_07s_forearm_leaves_no_sliver_beside_servo_6s_cavity():
     near, _, _ = _strand_into_the_top(fa)
     assert near.any()
     shape = fa.build()
+    memo.clear()
     assert not solid_problems("forearm", shape)
     walls = _thin_walls(p, shape)
     assert walls["wall_thinnest"] >= _bar(p), walls
@@ -206,11 +213,17 @@ def test_a_170_4_x_85_mm_palm_keeps_two_perimeters_round_the_tab_screw(tmp_path)
     half a tab length in from the tab's end, drilled its pilot (three diameters deep into a 21.5 mm
     palm) 0.40 mm beside the thumb drive's channel (the population's walls row). The screw moves in
     along the tab off the channel; both parts drill it there, and every wall measured on the palm's
-    mesh is two perimeters."""
+    mesh is two perimeters. (The placement is pinned to the one the search gave it then; the
+    reference's, scaled, which ``size`` now keeps where it opposes, leaves the screw in place.)"""
     from phantom_cad.cad.parts import wrist
     from phantom_cad.export.walls import wall_bar_mm
+    from phantom_cad.params import parse
+    from phantom_cad.sizing import Person, build_document
 
-    p = _sized(tmp_path, "170.4", "85")
+    doc = build_document(Person(170.4, 85.0))
+    doc["palm"].update(heel_length_mm=36.7, magnet_lift_mm=0.7, thumb_cmc_offset_mm=[-21.7723, -62.5895, -28.7133],
+                       thumb_cmc_axis_deg=[-29.0935, 12.2702, -71.5575])
+    p = parse(doc)
     pa = part(p, "palm")
     (place, inward), _ = wrist.tab_screw_places(p)
     radial = pa.tab_screws()[0]

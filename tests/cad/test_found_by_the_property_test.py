@@ -53,15 +53,19 @@ def test_the_cmc_base_clears_the_palm_where_the_rule_accepts(variant):
     rule accepts (a clearance below the palmar face: centre at -12 - 0.2 - 7.5 - 0.01 mm): the
     palm and the CMC base, where the assembly places them, stay at least a clearance apart
     (OpenCascade's distance: the base's top under the palmar face, the column in the journal): a
-    placement the rule accepts is one the build makes."""
+    placement the rule accepts is one the build makes. (The placement moves the palm's back face,
+    and with it the servos the coupler bores run toward: the magnet pockets are lifted as
+    ``phantom-cad size`` lifts them.)"""
     from phantom_cad.cad import preflight
     from phantom_cad.cad.assembly import pose_transforms
     from phantom_cad.cad.measure import placed
     from phantom_cad.kinematics.topology import JOINTS
+    from phantom_cad.sizing import magnet_lift
 
     def change(d):
         d["palm"]["thumb_cmc_axis_deg"] = [0.0, 0.0, 0.0]
         d["palm"]["thumb_cmc_offset_mm"] = [-25.0, -70.0, -12.0 - 0.2 - 7.5 - 0.01]
+        magnet_lift(d)
 
     p = variant(change)
     preflight.check(p)

@@ -9,8 +9,8 @@ back into its own. Why the servos are here and not in the palm: docs/parts.md.
   so that its drive leaves the pulley straight toward its finger's socket (the thumb's toward its
   turn onto the CMC axis); servo 6's shaft parallel to the CMC axis, its pulley in the CMC
   pulley's plane (``servo_geometry.coplanar_servo``); pockets and ear slots open along the shafts (the
-  servos drop in, then their pulleys go on; in two rows servo 6's pocket and cavity open straight up,
-  ``forearm_layout.drops_straight``), pulley cavities, M2 pilot holes under the flange ears;
+  servos drop in, then their pulleys go on; in two rows servo 6's pocket and cavity open up the
+  module's z kept square to its body's length, ``forearm_layout.drops_straight``), pulley cavities, M2 pilot holes under the flange ears;
 * each drive's channel (the loop's two) from its pulley through the front wall, on to the palm,
   joined by a slot to its servo's drop-in pocket where it runs beside it closer than a flank
   (``ServoMount.drive_slot``), to another servo's pocket likewise (``pocket_slots``), and opened up
@@ -33,8 +33,8 @@ from ...kinematics.topology import FOREARM, SERVO_MOUNT, SERVOS, link
 from ...kinematics.vectors import nearest_on_box, nearest_on_cylinder, nearest_on_swept
 from ..measure import circular_pockets
 from .base import Part
-from .common import (Tolerances, box, build, channel_slot, channel_slots, cylinder, mm, polygon_cylinder, swept_up,
-                     transform)
+from .common import (Tolerances, box, build, channel_slot, channel_slots, cylinder, mm, polygon_cylinder,
+                     swept_along, transform)
 from . import wrist
 from .servos import ServoMount
 
@@ -112,41 +112,62 @@ class Forearm(ServoMount, Part):
         T = np.linalg.inv(self.T_palm_part())
         return [transform(b, T) for b in self.body()]
 
-    def sweep_up(self, servo: int) -> float:
-        """How far (mm) a servo's pocket and cavity are swept up the module's z where they open
-        straight up (``forearm_layout.drops_straight``): out past the block's top from wherever the
-        servo stands in it."""
+    def drop_vector(self, servo: int) -> np.ndarray:
+        """The sweep (palm frame, mm) that opens a servo's pocket and cavity out of the module's top
+        where it does not open along its shaft (``forearm_layout.drops_straight``): the way the
+        servo drops in, the module's z with its component along the servo's y (its body's length,
+        where the flange pilots stand) taken out, so that the swept body keeps the pilots' walls
+        however the shaft tilts; long enough to rise past the block's top from wherever the servo
+        stands in it."""
         x0, x1, y0, y1, _, z1 = self.extents()
-        return z1 + 1.0 - (self.T_servo(servo)[2, 3] - (x1 - x0) - (y1 - y0))
-
-    def pocket_gap(self, servo: int, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(distance, nearest point) from each of ``points`` (palm frame, mm) to servo ``servo``'s
-        pocket as the module cuts it: its body and ear pockets and its pulley's cavity, open up
-        along the shaft through the block's top, or swept straight up the module's z
-        (``forearm_layout.drops_straight``)."""
         T = self.T_servo(servo)
-        q = (points - T[:3, 3]) @ T[:3, :3]                   # servo frame
+        d = np.array([0.0, 0.0, 1.0]) - T[2, 1] * T[:3, 1]
+        d /= np.linalg.norm(d)
+        return d * (z1 + 1.0 - (T[2, 3] - (x1 - x0) - (y1 - y0))) / d[2]
+
+    def pocket_pieces(self, servo: int) -> list:
+        """Servo ``servo``'s pocket as the module cuts it, one convex piece at a time: its body and
+        ear pockets and its pulley's cavity, open up along the shaft through the block's top, or
+        swept along :meth:`drop_vector` (``forearm_layout.drops_straight``). Per piece, a function
+        of points (n, 3; palm frame, mm) giving (distance, nearest point)."""
+        T = self.T_servo(servo)
         zc0, zc1 = self.cavity_span(servo)
         r = self.cavity_radius(servo)
         if FL.drops_straight(self.params, servo):
-            e, up = T[2, :3], self.sweep_up(servo)            # the module's z in the servo frame
-            found = [nearest_on_swept(q, lambda x, lo=lo, hi=hi: nearest_on_box(x, lo, hi), e, up)
-                     for lo, hi in self.open_pockets(servo, zc1)]
-            found.append(nearest_on_swept(q, lambda x: nearest_on_cylinder(x, zc0, zc1, r), e, up))
+            v = T[:3, :3].T @ self.drop_vector(servo)          # the sweep in the servo frame
+            up = float(np.linalg.norm(v))
+            e = v / up
+            pieces = [lambda x, lo=lo, hi=hi: nearest_on_swept(x, lambda y: nearest_on_box(y, lo, hi), e, up)
+                      for lo, hi in self.open_pockets(servo, zc1)]
+            pieces.append(lambda x: nearest_on_swept(x, lambda y: nearest_on_cylinder(y, zc0, zc1, r), e, up))
         else:
-            found = [nearest_on_box(q, lo, hi) for lo, hi in self.open_pockets(servo, np.inf)]
-            found.append(nearest_on_cylinder(q, zc0, np.inf, r))
+            pieces = [lambda x, lo=lo, hi=hi: nearest_on_box(x, lo, hi) for lo, hi in self.open_pockets(servo, np.inf)]
+            pieces.append(lambda x: nearest_on_cylinder(x, zc0, np.inf, r))
+
+        def palm(piece):
+            def gap(points):
+                d, near = piece((np.asarray(points, float) - T[:3, 3]) @ T[:3, :3])
+                return d, near @ T[:3, :3].T + T[:3, 3]
+            return gap
+        return [palm(piece) for piece in pieces]
+
+    def pocket_gap(self, servo: int, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(distance, nearest point) from each of ``points`` (palm frame, mm) to servo ``servo``'s
+        pocket as the module cuts it (:meth:`pocket_pieces`)."""
+        found = [gap(points) for gap in self.pocket_pieces(servo)]
         k = np.argmin([d for d, _ in found], axis=0)
         near = np.choose(k[:, None], [n for _, n in found])
-        return np.min([d for d, _ in found], axis=0), near @ T[:3, :3].T + T[:3, 3]
+        return np.min([d for d, _ in found], axis=0), near
 
     def pocket_slots(self, servo: int, side: float, length: float) -> list:
         """Slots (``common.channel_slots``) joining a drive's channel to the other servos' pockets
         where it passes one less than a flank (two perimeters) away: the strand runs past the
         pocket's corner in the open, as beside its own servo (``drive_slot``), rather than behind a
-        sliver of wall."""
+        sliver of wall. Each piece of a pocket (:meth:`pocket_pieces`) gets its own: a channel
+        running along a body pocket's edge can pass over the cavity too, and a slot toward the
+        pocket alone leaves a shard between the channel and the cavity."""
         p, u = self.drive_line(servo, side)
-        gaps = [lambda pts, j=j: self.pocket_gap(j, pts) for j in FOREARM_SERVOS if j != servo]
+        gaps = [gap for j in FOREARM_SERVOS if j != servo for gap in self.pocket_pieces(j)]
         return channel_slots(p, u, length, self.tol.tendon_hole / 2.0, gaps, mm(FLANK))
 
     def top_slot(self, servo: int, side: float, length: float) -> list:
@@ -180,20 +201,20 @@ class Forearm(ServoMount, Part):
         t = self.tol
         x0, x1, y0, y1, z0, z1 = self.extents()
         body = self.body()
-        tools = []
+        tools, slots = [], []
         reach = y1 - y0 + 2.0 * wrist.TAB_LENGTH
         for k in FOREARM_SERVOS:
             Ts = self.T_servo(k)
             rc = self.cavity_radius(k)
             zc0, zc1 = self.cavity_span(k)
             if FL.drops_straight(self.params, k):
-                # the pocket and the cavity swept straight up out of the block's top: the servo,
-                # its pulley on, drops in along z (along its tilted shaft it would cut into its
+                # the pocket and the cavity swept up out of the block's top: the servo, its pulley
+                # on, drops in along the drop vector (along its tilted shaft it would cut into its
                 # neighbour's pocket)
-                up = self.sweep_up(k)
+                drop = self.drop_vector(k)
                 for blo, bhi in self.open_pockets(k, zc1):
-                    tools += swept_up(transform(box(blo[0], bhi[0], blo[1], bhi[1], blo[2], bhi[2]), Ts), up)
-                tools += swept_up(transform(polygon_cylinder((0, 0, zc0), (0, 0, zc1), rc), Ts), up)
+                    tools += swept_along(transform(box(blo[0], bhi[0], blo[1], bhi[1], blo[2], bhi[2]), Ts), drop)
+                tools += swept_along(transform(polygon_cylinder((0, 0, zc0), (0, 0, zc1), rc), Ts), drop)
             else:
                 # open along the shaft out of the block's top (a tilted shaft: its corners too)
                 top = (z1 - Ts[2, 3]) / Ts[2, 2] + 1.0 + (x1 - x0) * math.sqrt(max(1.0 - Ts[2, 2] ** 2, 0.0)) / Ts[2, 2]
@@ -205,8 +226,7 @@ class Forearm(ServoMount, Part):
             for side in self.strand_sides(k):
                 p, u = self.drive_line(k, side)
                 tools.append(cylinder(p - u, p + u * reach, t.tendon_hole / 2.0))
-                tools += self.pocket_slots(k, side, reach)
-                tools += self.top_slot(k, side, reach)
+                slots += self.pocket_slots(k, side, reach) + self.top_slot(k, side, reach)
                 slot = self.drive_slot(k, t.tendon_hole, side=side)
                 if slot is not None:
                     tools.append(transform(box(slot[0][0], slot[1][0], slot[0][1], slot[1][1], slot[0][2], slot[1][2]),
@@ -214,5 +234,7 @@ class Forearm(ServoMount, Part):
         for s in self.tab_screws():
             tools.append(cylinder(s - np.array([0, 0, 1.0]), s + np.array([0, 0, 2.0 * t.wall + 1.0]),
                                   t.screw_clear / 2.0))
-        shape = build(body, tools)
+        # the slots in a boolean of their own: their faces are tangent to their channels', and a
+        # cut of both at once where a channel also grazes a pocket can leave a shard of neither
+        shape = build(body, tools, slots)
         return transform(shape, np.linalg.inv(self.T_palm_part()))

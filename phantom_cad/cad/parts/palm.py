@@ -432,19 +432,9 @@ class Palm(ServoMount, Part):
         return out
 
     def limiter_polygon(self, finger: str) -> list[tuple[float, float]]:
-        """(y, z) outline, in the finger base frame (MCP axis at the origin), of the palm's
-        flexion limiter: from inside the socket block to the plane the proximal phalanx's
-        palmar face (z_child = -thickness/2) reaches at the MCP upper limit."""
-        sec = DigitSection(self.params, finger)
-        q = sec.q_max[chain(finger).keys[0]]       # the reference joint (MCP)
-        s, c = math.sin(q), math.cos(q)
-        rb = sec.boss_radius
-        Lb = mm(self.params.cad.finger_base_length)
-        z_top = -sec.thickness / 2.0 - self.tol.clearance
-        z_bot = -self.thickness / 2.0
-        y_at = lambda z: (-rb - z * c) / s  # noqa: E731
-        return [(-Lb - self.tol.wall, z_bot), (y_at(z_bot), z_bot), (y_at(z_top), z_top),
-                (-Lb - self.tol.wall, z_top)]
+        """(y, z) outline (mm), in the finger base frame, of the palm's flexion limiter
+        (``frames.limiter_outline``)."""
+        return [(mm(y), mm(z)) for y, z in F.limiter_outline(self.params, finger)]
 
     def limiter_x(self, finger: str) -> tuple[float, float]:
         """Inner and outer |x| of the two rails: clear of the guide eyelet bosses, flush with the finger."""
