@@ -371,7 +371,7 @@ def teardrop(p0, p1, r: float, up=None, roof: float = units.rad(45.0)):
 
 def polygon_cylinder(p0, p1, r: float, n: int = 32):
     """A prism of ``n`` sides about the axis p0 -> p1 whose flats stand ``r`` from the axis (it
-    holds the cylinder of radius r): a convex solid of plane faces (:func:`swept_up`)."""
+    holds the cylinder of radius r): a convex solid of plane faces (:func:`swept_along`)."""
     b = bd()
     p0, p1 = np.asarray(p0, float), np.asarray(p1, float)
     axis = (p1 - p0) / np.linalg.norm(p1 - p0)
@@ -385,16 +385,10 @@ def polygon_cylinder(p0, p1, r: float, n: int = 32):
     return b.Solid.extrude(b.Face(b.Wire.make_polygon(pts, close=True)), b.Vector(*(p1 - p0)))
 
 
-def swept_up(solid, height: float) -> list:
-    """A convex solid of plane faces swept ``height`` straight up +z, as tools: the solid and the
-    prism each upward-facing face sweeps (a point above the solid, within ``height``, lies above
-    one of those faces: the union is the sweep)."""
-    return swept_along(solid, (0.0, 0.0, height))
-
-
 def swept_along(solid, vector) -> list:
     """A convex solid of plane faces swept by ``vector``, as tools: the solid and the prism each
-    face turned along the sweep makes (:func:`swept_up` along any direction)."""
+    face turned along the sweep makes (a point the sweep reaches outside the solid lies past one
+    of those faces, within ``vector`` of it: the union is the sweep)."""
     b = bd()
     v = b.Vector(*(float(c) for c in vector))
     out = [solid]
