@@ -13,7 +13,7 @@ import numpy as np
 
 from .cmc_base_gap import cmc_base_gap
 from .dimensions import printed_hole, servo_screw_offset
-from .forearm_stagger import staggered_servos
+from .forearm_stagger import staggered_servos, two_rows
 from .frames import (T_palm_socket, T_palm_thumb_cmc_base, limiter_x_extent, servo_radius, socket_x, tendon_height, tendon_relief, trans,
                      wrist_y)
 from .hand_params import HandParams
@@ -71,8 +71,6 @@ def forearm_servos(params: HandParams) -> dict[int, np.ndarray]:
 def forearm_rows(params: HandParams) -> int:
     """How many rows the forearm module holds its servos in: two staggered rows where they fit
     within a human forearm (:func:`.forearm_stagger.two_rows`), one otherwise."""
-    from .forearm_stagger import two_rows
-
     return 2 if two_rows(params) else 1
 
 
