@@ -33,6 +33,12 @@ THUMB_S, CLOSE_S, RELEASE_S, HOLD_S = 1.0, 2.0, 0.5, 3.0
 #: the weld that holds a presented object: a time constant of four steps, critically damped (MuJoCo's
 #: default, 20 ms, lets a closing digit knock it centimetres away)
 PRESENTED_SOLREF = (0.002, 1.0)
+#: the free object's contacts with the hand (MuJoCo's solref, in the scene's time steps): a rigid
+#: object, as stiff as the integrator resolves (a time constant of two steps, critically damped).
+#: Its geoms take priority over the hand's, so this governs. MuJoCo's default time constant, 20 ms,
+#: lets a digit closing at servo speed sink up to 12 mm into an object and pass through a 2 mm key
+#: (docs/grasps.md, "Contacts").
+OBJECT_SOLREF_STEPS = 2.0
 #: the free object's body, joint and (first) geom name in the scene
 OBJECT = "object"
 #: the cylinder the closed hand holds palm down (kg), and what counts as held: let go, the closed
@@ -58,6 +64,9 @@ class Trial:
         body = spec.worldbody.add_body(name=OBJECT, pos=list(T_object[:3, 3]), quat=list(quat))
         body.add_freejoint(name=OBJECT)
         build(mujoco, spec, body)
+        for g in body.geoms:
+            g.priority = 1
+            g.solref = [OBJECT_SOLREF_STEPS * spec.option.timestep, 1.0]
         if presented:       # held where it was put (welded to the world) until :meth:`release`
             spec.add_equality(name=OBJECT, type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY,
                               name1=OBJECT, data=[0.0] * 10 + [1.0, 0.0],   # anchor 0; relpose from the start
