@@ -6,7 +6,8 @@ The procedure, as a user would run it on the printed hand (:class:`Trial`): a fr
 where the grasp says (a pose in the palm frame, which is the scene's world frame); the hand takes
 its approach commands with the object's contacts off and gravity off (the hand moves into place
 around it); the object's contacts come on and the hand takes its closing commands; then gravity
-comes on. MuJoCo is imported inside.
+comes on. The object is rigid: its contacts with the hand take the stiffest time constant the
+integrator resolves (:data:`OBJECT_SOLREF_STEPS`). MuJoCo is imported inside.
 
 :func:`hold_cylinder`: a solid cylinder is presented where ``cad.grasp.power_grasp`` puts it (its
 axis along the palm frame's x), as a user hands it over and as the grasp library presents its
@@ -36,7 +37,7 @@ PRESENTED_SOLREF = (0.002, 1.0)
 #: the free object's contacts with the hand (MuJoCo's solref, in the scene's time steps): a rigid
 #: object, as stiff as the integrator resolves (a time constant of two steps, critically damped).
 #: Its geoms take priority over the hand's, so this governs. MuJoCo's default time constant, 20 ms,
-#: lets a digit closing at servo speed sink up to 12 mm into an object and pass through a 2 mm key
+#: lets a digit closing at servo speed sink up to 12 mm into an object and pass through a 2 mm plate
 #: (docs/grasps.md, "Contacts").
 OBJECT_SOLREF_STEPS = 2.0
 #: the free object's body, joint and (first) geom name in the scene

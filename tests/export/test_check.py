@@ -248,16 +248,17 @@ def _cli_check(tmp_path, cache, *args) -> subprocess.CompletedProcess:
                           cwd=ROOT)
 
 
-@pytest.mark.parametrize("kind, args", [("left", ("--side", "left")),
+@pytest.mark.parametrize("kind, args", [("left", ("--side", "left", "--no-functional")),
                                          ("slender", ("--params", str(ROOT / "params" / "examples" / "slender.toml")))],
                          ids=["left", "slender"])
 def test_check_builds_and_passes_the_left_hand_and_a_second_file(tmp_path, hand_export, part_cache, kind, args):
     """The command builds the hand's export with the run's part cache, where the session's export of
-    the same hand (``hand_export``) left its parts (unsliced, as they are), and checks that its
-    sources agree (the functional rows of the left hand are tests/cad's and tests/export/test_mjcf.py's;
-    slender.toml's cylinder is not held unsliced: docs/descriptions.md)."""
+    the same hand (``hand_export``) left its parts (unsliced, as they are), and checks it: the left
+    hand's sources agree (its functional rows are tests/cad's and tests/export/test_mjcf.py's), and
+    every row of slender.toml's passes, its flat palm's cylinder held palm down included
+    (docs/descriptions.md)."""
     hand_export(kind)
-    proc = _cli_check(tmp_path, part_cache, "--no-slice", "--no-functional", *args)
+    proc = _cli_check(tmp_path, part_cache, "--no-slice", *args)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-2000:]
     assert " 0 failed" in proc.stdout and "FAIL" not in proc.stdout
     assert ("(left)" in proc.stdout) == ("left" in args)

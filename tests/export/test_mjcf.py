@@ -446,3 +446,46 @@ def test_the_closed_hand_holds_a_cylinder_palm_down(cylinder_grasp):
     assert h.moved_mm < 5.0, what
     assert h.speed_mm_s < 10.0, what              # it has come to rest
     assert h.palm_contacts_y_mm, what             # against the palm
+
+
+def test_a_presented_plate_stops_a_finger_closing_at_servo_speed(hand_export):
+    """A rigid object: a 2 mm steel plate presented (welded) 1 mm off the index's pad at 30 % of its
+    travel, the index servo then commanded to the end of its travel at its own speed for 1 s. The
+    plate stops the finger: touching it, the servo at its stall torque, the finger 20 deg or more
+    short of its full-travel MCP angle, no contact deeper than 0.1 mm. (With MuJoCo's default
+    contact, a 20 ms time constant, the finger passes through the plate to the end of its travel.)"""
+    from phantom_cad import load_hand
+    from phantom_cad.export.hold import OBJECT, Trial
+    from phantom_cad.kinematics import frames
+    from phantom_cad.kinematics.link_frames import link_transforms
+    from phantom_cad.kinematics.topology import chain, joint_index
+
+    hand = load_hand()
+    p, k, mcp = hand.params, chain("index").servo, joint_index("index", "mcp")
+    u = np.zeros(len(hand.u_max))
+    u[k] = hand.u_min[k] + 0.3 * (hand.u_max[k] - hand.u_min[k])
+    T = link_transforms(p, hand.forward(u, compensated=True))
+    pad = T["index_distal"] @ frames.T_distal_pad(p, "index")
+    half, side, rho = 0.001, 0.015, 7800.0                       # m, m, kg/m^3
+    T_plate = pad.copy()
+    T_plate[:3, 3] += pad[:3, 2] * (0.001 + half)                 # its near face 1 mm off the pad
+
+    def build(mj, spec, body):
+        body.add_geom(name=OBJECT, type=mj.mjtGeom.mjGEOM_BOX, size=[side, side, half])
+        mass = rho * (2 * side) ** 2 * 2 * half
+        body.mass, body.explicitinertial = mass, True
+        body.inertia = [mass * ((2 * side) ** 2 + (2 * half) ** 2) / 12] * 2 + [mass * 2 * (2 * side) ** 2 / 12]
+
+    t = Trial(hand_export("default").out_dir / "description" / "mjcf" / "scene.xml", T_plate, build, presented=True)
+    t.approach({}, 0.2)
+    t.close(t.top([k]), 1.0)
+    mine = set(int(g) for g in t.geoms)
+    depth = max((-c.dist for c in t.d.contact[:t.d.ncon] if (int(c.geom1) in mine) != (int(c.geom2) in mine)),
+                default=0.0)
+    full = hand.forward(hand.u_max, compensated=True)[mcp]
+    what = (f"MCP {math.degrees(t.q()[mcp]):.1f} deg (full travel {math.degrees(full):.1f}), torque "
+            f"{t.servo_torques()[k]:.3f} N m, deepest contact {depth * 1000:.2f} mm")
+    assert t.touching(), what
+    assert t.q()[mcp] < full - math.radians(20.0), what
+    assert t.servo_torques()[k] == pytest.approx(t.stall_torques()[k], rel=0.01), what
+    assert depth < 1e-4, what
