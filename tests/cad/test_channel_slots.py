@@ -1,5 +1,6 @@
 """``common.channel_slots``: a channel that passes a cut less than a flank away runs into it by a
-slot, worked by hand on boxes."""
+slot, worked by hand on boxes: 0.8 of the channel high (``common.SLOT_CHORD``), its faces crossing
+the channel's."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ def test_a_channel_passing_a_pocket_runs_into_it():
     wall where it passes (under a 0.8 mm flank) and under the flank where its distance to the
     pocket, hypot(dx, 1), is under 1.3: from x = 12 - sqrt(1.3^2 - 1) = 7.169 to 12.831. The slot
     runs a channel radius further each way, from the axis 2 (0.5 + 0.8) + 0.5 = 3.1 into the pocket,
-    a channel wide. A pocket from y = 2 (1.5 mm of wall) gets none."""
+    0.8 mm high (0.8 of the 1 mm channel). A pocket from y = 2 (1.5 mm of wall) gets none."""
     from phantom_cad.cad.parts.common import channel_slots
 
     reach = math.sqrt(1.3 ** 2 - 1.0)
@@ -27,9 +28,9 @@ def test_a_channel_passing_a_pocket_runs_into_it():
     slots = channel_slots((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), 20.0, 0.5, [near, far], 0.8)
     assert len(slots) == 1
     bb = slots[0].bounding_box()
-    assert tuple(bb.min) == pytest.approx((8.0 - reach - 0.5, 0.0, -0.5), abs=0.05)
-    assert tuple(bb.max) == pytest.approx((12.0 + reach + 0.5, 3.1, 0.5), abs=0.05)
-    assert slots[0].volume == pytest.approx((4.0 + 2.0 * reach + 1.0) * 3.1 * 1.0, rel=0.02)
+    assert tuple(bb.min) == pytest.approx((8.0 - reach - 0.5, 0.0, -0.4), abs=0.05)
+    assert tuple(bb.max) == pytest.approx((12.0 + reach + 0.5, 3.1, 0.4), abs=0.05)
+    assert slots[0].volume == pytest.approx((4.0 + 2.0 * reach + 1.0) * 3.1 * 0.8, rel=0.02)
 
 
 def test_a_channel_already_in_a_pocket_is_left_alone():
@@ -55,5 +56,5 @@ def test_a_channel_beside_a_pocket_it_then_enters_runs_into_it_up_to_there():
     slots = channel_slots((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), 20.0, 0.5, [pocket], 0.8)
     assert len(slots) == 1
     bb = slots[0].bounding_box()
-    assert tuple(bb.min) == pytest.approx((2.5, 0.0, -0.5), abs=1e-6)
-    assert tuple(bb.max) == pytest.approx((10.45, 3.1, 0.5), abs=1e-6)
+    assert tuple(bb.min) == pytest.approx((2.5, 0.0, -0.4), abs=1e-6)
+    assert tuple(bb.max) == pytest.approx((10.45, 3.1, 0.4), abs=1e-6)

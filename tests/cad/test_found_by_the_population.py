@@ -231,3 +231,45 @@ def test_a_170_4_x_85_mm_palm_keeps_two_perimeters_round_the_tab_screw(tmp_path)
     assert np.allclose(part(p, "forearm").tab_screws(), pa.tab_screws(), atol=0.0)
     walls = _thin_walls(p, pa.build())
     assert walls["wall_thinnest"] >= wall_bar_mm(p), walls
+
+
+def _forearm_of(length: float, breadth: float):
+    """The forearm module of the document ``size --hand-length LENGTH --hand-breadth BREADTH``
+    writes (the reference's CMC placement scaled, which opposes on these hands)."""
+    from phantom_cad.params import parse
+    from phantom_cad.sizing import Person, build_document
+
+    return part(parse(build_document(Person(length, breadth))), "forearm")
+
+
+@pytest.mark.slow
+def test_a_184_6_x_68_4_mm_forearm_leaves_no_sliver_by_a_drive_slot():
+    """The forearm module of ``size --hand-length 184.6 --hand-breadth 68.4`` (two rows of servos):
+    a finger drive runs beside its own servo's pocket under a flank and is joined to it by a slot
+    (``ServoMount.drive_slot``). With the slot's faces tangent to the channel's cylinder, the cut
+    left a loose sliver 0.05 x 5.1 x 0.3 mm between them (the module had 2 solids)."""
+    from phantom_cad.cad.parts.forearm import FOREARM_SERVOS
+
+    fa = _forearm_of(184.6, 68.4)
+    assert any(fa.drive_slot(k, fa.tol.tendon_hole, side=s) is not None
+               for k in FOREARM_SERVOS for s in fa.strand_sides(k))          # the case
+    shape = fa.build()
+    assert not solid_problems("forearm", shape)
+    assert fa.verify(shape) == []
+
+
+@pytest.mark.slow
+def test_a_191_7_x_68_4_mm_forearm_is_a_valid_solid():
+    """The forearm module of ``size --hand-length 191.7 --hand-breadth 68.4`` (two rows): a drive's
+    channel runs into a neighbouring servo's pocket by a slot (``Forearm.pocket_slots``); with the
+    slot's faces tangent to the channel's cylinder the cut left a channel face OpenCascade finds
+    invalid (the module did not build)."""
+    from phantom_cad.cad.parts.forearm import FOREARM_SERVOS
+
+    fa = _forearm_of(191.7, 68.4)
+    reach = 400.0
+    assert any(fa.pocket_slots(k, s, reach) for k in FOREARM_SERVOS for s in fa.strand_sides(k))   # the case
+    shape = fa.build()
+    assert not solid_problems("forearm", shape)
+    assert fa.verify(shape) == []
+

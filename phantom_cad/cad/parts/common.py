@@ -435,19 +435,24 @@ SQUARE_DEG = 30.0
 #: a point nearer a cut than this (mm) lies in it: far above a swept cut's search tolerance
 #: (``kinematics.vectors.nearest_on_swept``), far below anything printed
 INSIDE = 1e-6
+#: a slot joining a channel to a cut is this fraction of the channel's diameter high, so that its
+#: faces cross the channel's cylinder instead of lying tangent to it: OpenCascade's cut leaves a
+#: loose sliver or an invalid face where a box face grazes a cylinder (sized hands showed both)
+SLOT_CHORD = 0.8
 
 
 def channel_slot(p, u, s0: float, s1: float, toward, r: float, flank: float):
     """A slot opening a channel (radius ``r``, its axis from ``p`` along the unit vector ``u``) from
-    ``s0`` to ``s1`` along it: a box a channel wide, from a channel radius before ``s0`` to one past
-    ``s1``, from the axis toward ``toward`` (a direction; its part square to the axis) two channel
-    radii and flanks and half a millimetre."""
+    ``s0`` to ``s1`` along it: a box :data:`SLOT_CHORD` of a channel wide, from a channel radius
+    before ``s0`` to one past ``s1``, from the axis toward ``toward`` (a direction; its part square
+    to the axis) two channel radii and flanks and half a millimetre."""
     p, u = np.asarray(p, float), np.asarray(u, float)
     y = np.asarray(toward, float) - u * (np.asarray(toward, float) @ u)
     y /= np.linalg.norm(y)
     M = np.eye(4)
     M[:3, 0], M[:3, 1], M[:3, 2], M[:3, 3] = u, y, np.cross(u, y), p
-    return transform(box(s0 - r, s1 + r, 0.0, 2.0 * (r + flank) + 0.5, -r, r), M)
+    h = SLOT_CHORD * r
+    return transform(box(s0 - r, s1 + r, 0.0, 2.0 * (r + flank) + 0.5, -h, h), M)
 
 
 def channel_slots(p, u, length: float, r: float, gaps, flank: float) -> list:

@@ -234,7 +234,7 @@ class Forearm(ServoMount, Part):
         for s in self.tab_screws():
             tools.append(cylinder(s - np.array([0, 0, 1.0]), s + np.array([0, 0, 2.0 * t.wall + 1.0]),
                                   t.screw_clear / 2.0))
-        # the slots in a boolean of their own: their faces are tangent to their channels', and a
-        # cut of both at once where a channel also grazes a pocket can leave a shard of neither
+        # the slots in a boolean of their own: a cut of slots, channels and pockets at once where a
+        # channel also grazes a pocket can leave a shard of neither
         shape = build(body, tools, slots)
         return transform(shape, np.linalg.inv(self.T_palm_part()))

@@ -15,7 +15,7 @@ from ...kinematics import frames as F
 from ...kinematics import servo_geometry as SG
 from ...kinematics.dimensions import FLANK, servo_screw_offset
 from ...kinematics.topology import SERVOS
-from .common import mm
+from .common import SLOT_CHORD, mm
 
 
 class ServoMount:
@@ -80,7 +80,9 @@ class ServoMount:
         ``channel``, leaving the pulley at (side r, 0, 0) along +y) to the servo's own drop-in
         pocket where it runs beside it less than a flank (``dimensions.FLANK``) away (a pulley
         barely wider than half the body: 0.25 mm was left), over ``run`` mm of the drive (default:
-        the pocket's length ahead of the shaft); None where the wall is a flank or more."""
+        the pocket's length ahead of the shaft); None where the wall is a flank or more. From the
+        channel's axis into the pocket, ``common.SLOT_CHORD`` of the channel high: no face of it
+        tangent to the channel's."""
         pockets = self.open_pockets(servo, 0.0)
         edge = min(p[0][0] for p in pockets) if side < 0 else max(p[1][0] for p in pockets)
         r = self.pulley_radius(servo)
@@ -88,8 +90,9 @@ class ServoMount:
             return None
         ahead = max(p[1][1] for p in pockets)
         y1 = ahead if run is None else min(ahead, run)
-        x = sorted((side * (r + channel / 2.0), edge - side * 0.01))
-        return (np.array([x[0], 0.0, -channel / 2.0]), np.array([x[1], y1, channel / 2.0]))
+        x = sorted((side * r, edge - side * 0.01))
+        h = SLOT_CHORD * channel / 2.0
+        return (np.array([x[0], 0.0, -h]), np.array([x[1], y1, h]))
 
     def pilot_tools(self, servo: int) -> list:
         """The flange screws' pilot holes (servo frame), down from the ears' underside."""
