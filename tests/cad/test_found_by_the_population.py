@@ -273,3 +273,83 @@ def test_a_191_7_x_68_4_mm_forearm_is_a_valid_solid():
     assert not solid_problems("forearm", shape)
     assert fa.verify(shape) == []
 
+
+
+def _palm_of(length: float, breadth: float, **placement):
+    """The palm of the document ``size --hand-length LENGTH --hand-breadth BREADTH`` writes, at the
+    CMC placement given (``palm`` keys) where the search found one then."""
+    from phantom_cad.params import parse
+    from phantom_cad.sizing import Person, build_document
+
+    doc = build_document(Person(length, breadth))
+    doc["palm"].update(placement)
+    p = parse(doc)
+    return p, part(p, "palm")
+
+
+#: L205_9-m05-B76_8 of the population: the CMC placement its search found (the reference's, scaled,
+#: did not oppose)
+_L205_9_M05 = dict(heel_length_mm=47.6, thumb_cmc_offset_mm=[-37.5481, -80.4638, -25.342],
+                   thumb_cmc_axis_deg=[-25.0397, 5.6132, -84.1392])
+
+
+@pytest.mark.parametrize("size", [None, (205.9, 76.8), (160.0, 72.0)])
+def test_the_open_space_beside_the_palm_is_outside_every_piece_of_it(size):
+    """Every point of :meth:`Palm.outside_regions` (their open sides cut 40 mm out) lies outside
+    every convex piece the palm is fused from (the default hand and two sized ones)."""
+    from phantom_cad.cad.kernel import import_build123d
+
+    b = import_build123d()
+    pa = part(load_params("params/phantom.toml"), "palm") if size is None else _palm_of(*size, **(
+        _L205_9_M05 if size == (205.9, 76.8) else {}))[1]
+    body, _ = pa.solids()
+    rng = np.random.default_rng(0)
+    for T, lo, hi in pa.outside_regions():
+        lo_, hi_ = np.maximum(lo, -40.0 + np.minimum(hi, 0.0)), np.minimum(hi, 40.0 + np.maximum(lo, 0.0))
+        local = lo_ + rng.random((40, 3)) * (hi_ - lo_)
+        for q in local @ T[:3, :3].T + T[:3, 3]:
+            for piece in body:
+                assert not piece.is_inside(b.Vector(*q), tolerance=1e-6), (lo, hi, q)
+
+
+def test_a_gap_filler_stays_behind_the_knuckles():
+    """On the 205.9 x 76.8 mm hand (L205_9-m05-B76_8's placement) the gap between the index and middle socket blocks is filled:
+    every point of both socket faces (sampled across each, 0.1 mm apart) lies at least a clearance
+    ahead of the filler's front, and the filler reaches into the slab; the default hand has none."""
+    assert part(load_params("params/phantom.toml"), "palm").gap_fillers() == []
+    _, pa = _palm_of(205.9, 76.8, **_L205_9_M05)
+    fillers = pa.gap_fillers()
+    assert len(fillers) == 1
+    lo, hi = fillers[0]
+    assert lo[1] < pa.extents()[3]
+    for f in ("index", "middle"):
+        T, (blo, bhi) = pa.T_socket(f), pa.socket_box(f)
+        xs = np.arange(blo[0], bhi[0], 0.1)
+        face = np.column_stack([xs, np.zeros_like(xs), np.zeros_like(xs), np.ones_like(xs)]) @ T.T
+        between = (face[:, 0] >= lo[0]) & (face[:, 0] <= hi[0])
+        assert between.any()
+        assert np.all(face[between, 1] >= hi[1] + pa.tol.clearance - 1e-9)
+
+
+@pytest.mark.slow
+def test_a_205_9_x_76_8_mm_palm_keeps_two_perimeters_where_drives_pass_its_sides():
+    """The palm of ``size --hand-length 205.9 --hand-breadth 76.8`` at the placement its search found
+    then (two rows of servos): the index
+    drive leaves the metacarpal block's radial face at 9 deg ahead of the thenar block, and left a
+    lip 0.06 mm thick along it; the middle finger's coupler bore, slanting toward its servo, ran
+    0.4 mm beside the gap between the index and middle socket blocks (the population's walls row).
+    The drive is opened to the side by a slot and the gap is filled: every wall measured on the
+    palm's mesh is two perimeters."""
+    from phantom_cad.cad.parts.common import channel_slots
+    from phantom_cad.kinematics.dimensions import FLANK
+
+    p, pa = _palm_of(205.9, 76.8, **_L205_9_M05)
+    e, t = pa.finger_drive("index")
+    u = (t - e) / np.linalg.norm(t - e)
+    assert channel_slots(e, u, float(np.linalg.norm(t - e)), pa.tol.tendon_hole / 2.0, [pa.outside_gap],
+                         FLANK * 1e3)                                    # the case: a slot to the side
+    assert pa.gap_fillers()                                              # and a filled gap
+    shape = pa.build()
+    assert not solid_problems("palm", shape)
+    walls = _thin_walls(p, shape)
+    assert walls["wall_thinnest"] >= _bar(p), walls

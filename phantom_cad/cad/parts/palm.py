@@ -155,6 +155,106 @@ class Palm(ServoMount, Part):
         return (np.array([xs.min(), max(allp[:, 1].min(), self.extents()[2]), -Tp / 2.0]),
                 np.array([x0 + self.tol.wall, allp[:, 1].max(), Tp / 2.0]))
 
+    def socket_box(self, finger: str) -> tuple[np.ndarray, np.ndarray]:
+        """(lo, hi) in its socket frame (``T_socket``, mm) of a finger's socket block: the finger's
+        width across, the palm's thickness, back to the wrist crease, its turned back corners no
+        further (the metacarpal block fills the rest)."""
+        T = self.T_socket(finger)
+        W, Tp = mm(self.params.fingers[finger].width), self.thickness
+        y0 = self.extents()[2]
+        depth = (T[1, 3] - y0 - W / 2.0 * abs(T[1, 0])) / T[1, 1]
+        return np.array([-W / 2.0, -depth, -Tp / 2.0]), np.array([W / 2.0, 0.0, Tp / 2.0])
+
+    def side_region(self, finger: str, side: float):
+        """The open space beside a socket block's side (``side`` -1 radial, +1 ulnar) ahead of the
+        slab, a sliver deep (:data:`OUTSIDE_STEP`), over the stretch of the side up to the socket face
+        no other socket block covers, as (T, lo, hi): a box in the socket frame T, open ahead and
+        palmar and dorsal; None where another block covers the side at the face."""
+        y1 = self.extents()[3]
+        T, (blo, bhi) = self.T_socket(finger), self.socket_box(finger)
+        x = bhi[0] if side > 0 else blo[0]
+        y_slab = (y1 - T[1, 3] - T[1, 0] * x) / T[1, 1]          # where the side meets the slab's front
+        ys = np.arange(max(y_slab, blo[1]), 0.0, OUTSIDE_STEP)
+        if not len(ys):
+            return None
+        pts = np.column_stack([np.full(len(ys), x + side * OUTSIDE_STEP), ys, np.zeros(len(ys))])
+        pts = pts @ T[:3, :3].T + T[:3, 3]
+        covered = np.zeros(len(ys), bool)
+        for g in FINGERS:
+            if g != finger:
+                Tg, (glo, ghi) = self.T_socket(g), self.socket_box(g)
+                covered |= nearest_on_box((pts - Tg[:3, 3]) @ Tg[:3, :3], glo, ghi)[0] == 0.0
+        if covered[-1]:
+            return None
+        first = ys[np.flatnonzero(covered)[-1] + 1] if covered.any() else ys[0]
+        deep = x + side * OUTSIDE_STEP
+        return T, np.array([min(x, deep), first, -np.inf]), np.array([max(x, deep), np.inf, np.inf])
+
+    def outside_regions(self) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """The open space beside the palm's outer side faces as boxes (T, lo, hi; a box in frame T,
+        palm frame mm, open where a bound is infinite): radial of the metacarpal block ahead of the
+        thenar block, ulnar of it, and beside the outer sides of the outermost socket blocks
+        (:meth:`side_region`). Between two socket blocks the palm is filled where it is thin
+        (:meth:`gap_fillers`)."""
+        x0, x1, y0, y1 = self.extents()
+        lo, hi = self.thenar_block()
+        ahead = hi[1] if np.all(hi > lo) else y0
+        inf = np.inf
+        out = [(np.eye(4), np.array([-inf, ahead, -inf]), np.array([x0, y1, inf])),
+               (np.eye(4), np.array([x1, y0, -inf]), np.array([inf, y1, inf]))]
+        for finger, side in ((FINGERS[0], -1.0), (FINGERS[-1], 1.0)):
+            region = self.side_region(finger, side)
+            if region is not None:
+                out.append(region)
+        return out
+
+    def _finger_axes(self, finger: str) -> list[tuple[np.ndarray, float]]:
+        """(points on the axis (n, 3), radius) of a finger's coupler bore and of its drive channel as
+        far as the metacarpal block's back, palm frame (mm)."""
+        exit_, tangent = self.finger_drive(finger)
+        u = (tangent - exit_) / np.linalg.norm(tangent - exit_)
+        back = (self.extents()[2] - exit_[1]) / u[1] if u[1] < 0.0 else np.linalg.norm(tangent - exit_)
+        cp = self.couplers[finger]
+        bore = exit_ + np.arange(0.0, mm(cp.bore_end), OUTSIDE_STEP)[:, None] * u
+        drive = exit_ + np.arange(0.0, back, OUTSIDE_STEP)[:, None] * u
+        return [(bore, mm(cp.bore) / 2.0), (drive, self.tol.tendon_hole / 2.0)]
+
+    def gap_fillers(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """(lo, hi) palm frame (mm) of the boxes filling the gap between two neighbouring socket blocks
+        ahead of the slab where either finger's coupler bore or drive channel runs less than a flank
+        from it (two rows of servos slant the drives toward their servos): between the two
+        sockets' centres, from inside the slab to a clearance behind both socket faces where they
+        face each other. The knuckles' faces and everything ahead of them stay as they are."""
+        Tp, c = self.thickness, self.tol.clearance
+        y1 = self.extents()[3]
+        out = []
+        for a, b in zip(FINGERS, FINGERS[1:]):
+            sides = [r for r in (self.side_region(a, 1.0), self.side_region(b, -1.0)) if r is not None]
+            if not sides:
+                continue
+            thin = False
+            for f in (a, b):
+                for pts, r in self._finger_axes(f):
+                    for T, lo, hi in sides:
+                        d = nearest_on_box((pts - T[:3, 3]) @ T[:3, :3], lo, hi)[0]
+                        thin |= bool(np.any(d - r < mm(FLANK)))
+            if not thin:
+                continue
+            Ta, Tb = self.T_socket(a), self.T_socket(b)
+            wa, wb = mm(self.params.fingers[a].width) / 2.0, mm(self.params.fingers[b].width) / 2.0
+            faces = [Ta[1, 3], (Ta @ np.array([wa, 0.0, 0.0, 1.0]))[1], Tb[1, 3], (Tb @ np.array([-wb, 0.0, 0.0, 1.0]))[1]]
+            out.append((np.array([Ta[0, 3], y1 - 1.0, -Tp / 2.0]), np.array([Tb[0, 3], min(faces) - c, Tp / 2.0])))
+        return out
+
+    def outside_gap(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(distance, nearest point) from each of ``points`` (palm frame, mm) to the open space beside
+        the palm's side faces (:meth:`outside_regions`)."""
+        found = [(nearest_on_box((points - T[:3, 3]) @ T[:3, :3], lo, hi), T) for T, lo, hi in self.outside_regions()]
+        d = np.array([dn[0] for dn, _ in found])
+        near = np.array([dn[1] @ T[:3, :3].T + T[:3, 3] for dn, T in found])
+        k = np.argmin(d, axis=0)
+        return d[k, np.arange(len(points))], near[k, np.arange(len(points))]
+
     def slab_front(self) -> float:
         """The slab stops behind every socket face (its trailing corner), one clearance back."""
         ys = []
@@ -474,11 +574,8 @@ class Palm(ServoMount, Part):
         # finger sockets
         for f in FINGERS:
             T = self.T_socket(f)
-            W = mm(self.params.fingers[f].width)
-            # back to the wrist crease, the block's turned back corners no further (the metacarpal
-            # block fills the rest)
-            depth = (T[1, 3] - y0 - W / 2.0 * abs(T[1, 0])) / T[1, 1]
-            body.append(transform(box(-W / 2.0, W / 2.0, -depth, 0.0, -Tp / 2.0, Tp / 2.0), T))
+            slo, shi = self.socket_box(f)
+            body.append(transform(box(slo[0], shi[0], slo[1], shi[1], slo[2], shi[2]), T))
             for m in self.magnet_centres(f):
                 n = T[:3, 1]
                 tools.append(cylinder(m + n, m - n * t.magnet_pocket_depth, t.magnet_pocket_d / 2.0))
@@ -487,13 +584,22 @@ class Palm(ServoMount, Part):
             _, a, b, r = channels[f]
             u = (tangent - exit_) / np.linalg.norm(tangent - exit_)
             tools.append(cylinder(a, b, r))
-            # where it passes the thenar's cuts less than a flank away, it runs into them by a slot
+            # where it passes the thenar's cuts or a side face less than a flank away (a drive
+            # leaving the palm's side at a slant), it runs into them by a slot
             tools += channel_slots(exit_, u, float(np.linalg.norm(tangent - exit_)), t.tendon_hole / 2.0,
                                    [self.thenar_gap], mm(FLANK))
+            tools += channel_slots(exit_, u, float(np.linalg.norm(tangent - exit_)), t.tendon_hole / 2.0,
+                                   [self.outside_gap], mm(FLANK))
             # the drive's coupler (crimp stop and loop): a bore from the socket face to a clearance
-            # past where it is at full travel (couplers.couplers)
+            # past where it is at full travel (couplers.couplers); opened likewise to the side
+            # where it runs by an outer face under a flank (the slot, narrower than the bore by
+            # more than its clearances, does not let the coupler out)
             cp = self.couplers[f]
             tools.append(cylinder(exit_ - u, exit_ + u * mm(cp.bore_end), mm(cp.bore) / 2.0))
+            tools += channel_slots(exit_ - u, u, 1.0 + mm(cp.bore_end), mm(cp.bore) / 2.0, [self.outside_gap],
+                                   mm(FLANK))
+        for lo, hi in self.gap_fillers():
+            body.append(box(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]))
         # flexion-limiting housing: two rails under each finger base whose sloped fronts are
         # where the proximal phalanx's palmar face lies at the MCP limit (Table I)
         for f in FINGERS:
@@ -516,6 +622,10 @@ class Palm(ServoMount, Part):
                                   t.screw_pilot / 2.0))
         return body, tools
 
+
+#: the spacing (mm) of the points along a socket block's side at which it is found beside the open
+#: space or beside another socket block, and along a drive at which its wall to that space is found
+OUTSIDE_STEP = 0.05
 
 #: the spacing (mm) of the points a tab screw's pilot is measured at against the palm's cuts
 PILOT_SAMPLE = 0.05
