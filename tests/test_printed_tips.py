@@ -16,7 +16,7 @@ from phantom_cad.kinematics import opposition
 from phantom_cad.kinematics.printed_tips import SPACING_MM, PrintedTip, printed_pinch, tips_distance
 from phantom_cad.params import load_params
 
-from tests.support.hands import rim_hand
+from tests.support.hands import rim_hand, under_ring_hand
 
 #: a tip of 20 mm with a 6 mm half cylinder, 16 mm wide and 12 mm thick, its box from y = 4 mm
 TIP = PrintedTip(length=20.0, radius=6.0, half_width=8.0, half_thickness=6.0, back=4.0)
@@ -119,3 +119,35 @@ def test_a_thumb_whose_tip_end_meets_the_index_is_found():
     assert all(reach[f].margin > 0.0 for f in opposition.OPPOSED)
     assert printed_pinch(h, "index") is None
     assert printed_pinch(h, "middle") is not None and printed_pinch(h, "ring") is not None
+
+
+def test_the_middle_phalanx_is_the_parts_width_and_thickness_to_the_dip_axis():
+    """The default ring's middle phalanx: a point under its palmar face halfway along is that far
+    from it, a point on the DIP axis 1 mm beyond its rounded end is 1 mm off, and one just past the
+    PIP axis's plane inside its width is in it."""
+    from phantom_cad.kinematics.topology import digit_links
+
+    p = load_params()
+    mid = PrintedTip.middle_of(p, "ring")
+    d = p.digit("ring")
+    L = F.segment_length(p, digit_links("ring")[-2]) * 1e3
+    h = d.thickness * 1e3 / 2.0
+    pts = np.array([[0.0, L / 2.0, -h - 2.0], [0.0, L + h + 1.0, 0.0], [d.width * 1e3 / 2.0 - 0.1, 0.1, 0.0]])
+    dist, _ = mid.closest(pts)
+    assert dist == pytest.approx([2.0, 1.0, 0.0], abs=1e-9)
+
+
+def test_a_thumb_reaching_under_the_ring_is_passed_over():
+    """The population's 213 x 75 mm hand: at the ring's second contact the thumb's tip meets the
+    ring's middle phalanx as the pads come within reach (the solids overlap there:
+    tests/cad/test_printed_tips_on_solids.py); the pinch found is a later contact, its tip clear."""
+    from phantom_cad.kinematics import link_frames as LF
+    from phantom_cad.kinematics.topology import digit_links
+
+    h = under_ring_hand()
+    c = printed_pinch(h, "ring")
+    assert c is not None and any("middle phalanx" in why for why in c.tried), c
+    T = LF.link_transforms(h.params, h.forward(c.u, compensated=True), mirrored=False)
+    d, _, _ = tips_distance(PrintedTip.of(h.params, "thumb"), F.to_mm(T["thumb_distal"]),
+                            PrintedTip.middle_of(h.params, "ring"), F.to_mm(T[digit_links("ring")[-2].name]))
+    assert d > 0.0

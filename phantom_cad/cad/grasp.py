@@ -10,7 +10,8 @@ out a few 1e-15 mm instead of 0, so nothing at or under its confusion tolerance 
 fingertips' capsules meet; the capsules lie inside the printed tips, so there the solids touch or
 overlap. For each of the model's contacts (``opposition.contact_commands``: squarest first, one per distinct
 thumb command), the thumb holds still and the finger flexes onto it from rest. The first contact
-whose closest points lie on both pads (``printed_tips.on_pad``) is returned.
+whose closest points lie on both pads (``printed_tips.on_pad``), with the thumb's distal phalanx
+clear of the finger's middle one, is returned.
 
 **Power grasp** (``cylinder_grasp``, ``power_grasp``). A cylinder lies across the palm, its axis
 along the knuckle line (the palm frame's x), resting against the palm (``PALM_GAP_MM`` off it,
@@ -40,7 +41,7 @@ import numpy as np
 
 from ..kinematics import opposition
 from ..kinematics.printed_tips import Pinch, first_pinch
-from ..kinematics.power_grasp import PALM_GAP_MM, REACH_MM, STEPS, close_onto, laid_axis_y, wrap_angle_deg
+from ..kinematics.power_grasp import CONFUSION_MM, PALM_GAP_MM, REACH_MM, STEPS, close_onto, laid_axis_y, wrap_angle_deg
 from ..kinematics.topology import CMC_SERVO, FINGERS, THUMB_CHAIN, chain, digit_links
 from .assembly import pose_transforms
 from .measure import placed
@@ -65,7 +66,7 @@ def solid_contact(hand, solids: dict, finger: str, reach_mm: float = REACH_MM,
     (``printed_tips.first_pinch`` with OpenCascade's distance). ``solids``: the built parts in their
     link frames (mm), at least the two distal phalanges."""
     p = hand.params
-    a_name, b_name = _distal(THUMB_CHAIN.digit), _distal(finger)
+    a_name, b_name, m_name = _distal(THUMB_CHAIN.digit), _distal(finger), digit_links(finger)[-2].name
 
     def distance(u):
         T = pose_transforms(p, hand.forward(u, compensated=True))
@@ -73,7 +74,14 @@ def solid_contact(hand, solids: dict, finger: str, reach_mm: float = REACH_MM,
         d, pa, pb = a.distance_to_with_closest_points(b)
         return d, T[a_name], T[b_name], np.array(tuple(pa)), np.array(tuple(pb))
 
-    return first_pinch(hand, finger, distance, reach_mm, n)
+    def blocked(u):
+        if m_name not in solids:
+            return None
+        T = pose_transforms(p, hand.forward(u, compensated=True))
+        d = placed(solids[a_name], T[a_name]).distance_to(placed(solids[m_name], T[m_name]))
+        return None if d > CONFUSION_MM else f"the thumb's tip meets the {finger}'s middle phalanx"
+
+    return first_pinch(hand, finger, distance, reach_mm, n, blocked)
 
 
 # ---------------------------------------------------------------------------

@@ -16,7 +16,8 @@ tip: at most the samples' spacing over the true one, never under it.
 
 :func:`first_pinch` closes the finger onto the still thumb at the model's contacts
 (``opposition.contact_commands``, the bisection ``power_grasp.close_onto``, the pad test
-:func:`on_pad`) for any distance: :func:`printed_pinch` with these shapes' (what ``size`` asks of a
+:func:`on_pad`, the thumb's tip clear of the finger's middle phalanx: on a long thin hand it can
+reach under it, 213 x 75 mm's ring) for any distance: :func:`printed_pinch` with these shapes' (what ``size`` asks of a
 placement before it writes it), ``cad.grasp.solid_contact`` with OpenCascade's on the solids.
 """
 
@@ -50,6 +51,16 @@ class PrintedTip:
     half_width: float       # w
     half_thickness: float   # h
     back: float             # the clevis slot's back: where the box starts
+
+    @classmethod
+    def middle_of(cls, params: HandParams, finger: str) -> "PrintedTip":
+        """A finger's middle phalanx as printed, near enough: its width and thickness from the PIP
+        axis to the DIP axis, rounded about the DIP axis by half its thickness (the clevis's cheeks
+        round the joint's boss)."""
+        d = params.digit(finger)
+        h = units.mm(d.thickness) / 2.0
+        length = units.mm(F.segment_length(params, digit_links(finger)[-2]))
+        return cls(length + h, h, units.mm(d.width) / 2.0, h, 0.0)
 
     @classmethod
     def of(cls, params: HandParams, digit: str) -> "PrintedTip":
@@ -138,12 +149,14 @@ def _distal(digit: str) -> str:
 
 
 def first_pinch(hand, finger: str, distance, reach_mm: float = REACH_MM,
-                n: int = opposition.CANDIDATES) -> Pinch | None:
+                n: int = opposition.CANDIDATES, blocked=lambda u: None) -> Pinch | None:
     """The first of the model's contacts (``opposition.contact_commands``) at which the finger,
     flexing from rest onto the still thumb, comes within (0, reach_mm] mm of it (``close_onto``)
-    with the closest points on both pads (:func:`on_pad`); None when none of the n does.
-    ``distance(u)`` measures the two distal phalanges at commands u: (distance mm, T_hand_link (mm)
-    of the thumb's and of the finger's, the closest point on each, hand frame, mm)."""
+    with the closest points on both pads (:func:`on_pad`) and nothing else in the way; None when
+    none of the n does. ``distance(u)`` measures the two distal phalanges at commands u: (distance
+    mm, T_hand_link (mm) of the thumb's and of the finger's, the closest point on each, hand frame,
+    mm); ``blocked(u)`` says why the pinch at u is not clean (the thumb's tip meeting the finger's
+    middle phalanx), or None."""
     p = hand.params
     k = chain(finger).servo
     tried: list[str] = []
@@ -162,21 +175,34 @@ def first_pinch(hand, finger: str, distance, reach_mm: float = REACH_MM,
         if not (on_pad(p, Ta, THUMB_CHAIN.digit, pa) and on_pad(p, Tb, finger, pb)):
             tried.append(f"{where}: {d:.3f} mm apart, not pad to pad")
             continue
+        why = blocked(u)
+        if why is not None:
+            tried.append(f"{where}: {d:.3f} mm apart pad to pad, but {why}")
+            continue
         return Pinch(finger, u, float(d), np.asarray(pa, float), np.asarray(pb, float), tuple(tried))
     return None
 
 
 def printed_pinch(hand, finger: str, reach_mm: float = REACH_MM, n: int = opposition.CANDIDATES) -> Pinch | None:
-    """:func:`first_pinch` on the printed tips (right-hand frames): what ``cad.grasp.solid_contact``
-    finds on the solids."""
+    """:func:`first_pinch` on the printed tips (right-hand frames), the thumb's tip kept off the
+    finger's middle phalanx (:meth:`PrintedTip.middle_of`): what ``cad.grasp.solid_contact`` finds
+    on the solids."""
     p = hand.params
-    thumb, tip = PrintedTip.of(p, THUMB_CHAIN.digit), PrintedTip.of(p, finger)
-    a_name, b_name = _distal(THUMB_CHAIN.digit), _distal(finger)
+    thumb, tip, middle = PrintedTip.of(p, THUMB_CHAIN.digit), PrintedTip.of(p, finger), PrintedTip.middle_of(p, finger)
+    a_name, b_name, m_name = _distal(THUMB_CHAIN.digit), _distal(finger), digit_links(finger)[-2].name
+
+    def poses(u):
+        return LF.link_transforms(p, hand.forward(u, compensated=True), mirrored=False)
 
     def distance(u):
-        T = LF.link_transforms(p, hand.forward(u, compensated=True), mirrored=False)
+        T = poses(u)
         Ta, Tb = F.to_mm(T[a_name]), F.to_mm(T[b_name])
         d, pa, pb = tips_distance(thumb, Ta, tip, Tb)
         return d, Ta, Tb, pa, pb
 
-    return first_pinch(hand, finger, distance, reach_mm, n)
+    def blocked(u):
+        T = poses(u)
+        d, _, _ = tips_distance(thumb, F.to_mm(T[a_name]), middle, F.to_mm(T[m_name]))
+        return None if d > 0.0 else f"the thumb's tip meets the {finger}'s middle phalanx"
+
+    return first_pinch(hand, finger, distance, reach_mm, n, blocked)

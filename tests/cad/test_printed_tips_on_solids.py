@@ -19,7 +19,7 @@ from phantom_cad.kinematics import opposition
 from phantom_cad.kinematics.topology import chain
 from phantom_cad.kinematics.printed_tips import SPACING_MM, PrintedTip, printed_pinch, tips_distance
 
-from tests.support.hands import HANDS, rim_hand
+from tests.support.hands import HANDS, rim_hand, under_ring_hand
 
 pytest.importorskip("build123d")
 
@@ -68,3 +68,37 @@ def test_a_thumb_whose_tip_end_meets_the_index_misses_on_both():
         d, _, _ = tips_distance(PrintedTip.of(p, "thumb"), F.to_mm(R["thumb_distal"]), PrintedTip.of(p, f),
                                 F.to_mm(R[b]))
         assert abs(d - d_occ) <= SPACING_MM, (f, d, d_occ)
+
+
+@pytest.mark.slow
+def test_a_thumb_reaching_under_the_ring_is_passed_over_on_both():
+    """The population's 213 x 75 mm hand: at the ring contact the printed tips pass over for the
+    middle phalanx, the thumb's and the ring's solids reach within the pinch's reach pad to pad
+    while the thumb's distal phalanx overlaps the ring's middle one (OpenCascade's boolean); both
+    then find the ring pinch at the same later contact."""
+    from phantom_cad.cad import measure
+    from phantom_cad.kinematics.power_grasp import close_onto
+
+    h = under_ring_hand()
+    p = h.params
+    shapes = {n: part(p, n).build() for n in ("thumb_distal", "ring_distal", "ring_middle")}
+    c, s = _agree(h, shapes, "ring")
+    passed = [u for u in opposition.contact_commands(h, "ring")]
+    k = chain("ring").servo
+    # the contact the printed tips passed over for the middle phalanx: the one before the found
+    i = next(i for i, u in enumerate(passed) if np.array_equal(np.delete(u, k), np.delete(c.u, k)))
+    u_end = passed[i - 1]
+
+    def measure_at(f):
+        u = u_end.copy()
+        u[k] = f * u_end[k]
+        T = assembly.pose_transforms(p, h.forward(u, compensated=True))
+        a, b = placed(shapes["thumb_distal"], T["thumb_distal"]), placed(shapes["ring_distal"], T["ring_distal"])
+        return a.distance_to(b), T
+
+    found = close_onto(measure_at, grasp.REACH_MM)
+    assert found is not None
+    _, (_, T) = found
+    overlap = measure.intersection_volume(placed(shapes["thumb_distal"], T["thumb_distal"]),
+                                          placed(shapes["ring_middle"], T["ring_middle"]))
+    assert overlap > 0.0

@@ -103,3 +103,21 @@ def rim_hand():
     doc = copy.deepcopy(size(Person(170.4, 76.8, "right", "rim"), search=False).document)
     doc["palm"]["thumb_cmc_offset_mm"], doc["palm"]["thumb_cmc_axis_deg"] = RIM_PLACEMENT
     return make_hand(parse(doc))
+
+
+#: the CMC placement the search found for the population's 213 x 75 mm hand (L213-w50-B75 of
+#: bench/population.py): heel length (mm), CMC offset (mm), CMC axis (deg)
+UNDER_RING_PLACEMENT = (49.4, [-45.8287, -81.6744, -28.9025], [-16.6641, 20.484, -53.679])
+
+
+def under_ring_hand():
+    """The 213 x 75 mm hand ``size`` writes at :data:`UNDER_RING_PLACEMENT`, where the thumb's tip
+    reaches under the ring's middle phalanx at the first ring contact: a Hand."""
+    from phantom_cad import make_hand
+    from phantom_cad.params import parse
+    from phantom_cad.sizing import Person, build_document
+
+    doc = build_document(Person(213.0, 75.0))
+    heel, offset, axis = UNDER_RING_PLACEMENT
+    doc["palm"].update(heel_length_mm=heel, thumb_cmc_offset_mm=offset, thumb_cmc_axis_deg=axis)
+    return make_hand(parse(doc))
