@@ -123,7 +123,9 @@ def test_inertials_equal_the_urdf(pkg, model):
         mujoco.mju_quat2Mat(R, m.body_iquat[bid])
         R = R.reshape(3, 3)
         I_mj = R @ np.diag(m.body_inertia[bid]) @ R.T
-        assert m.body_mass[bid] == pytest.approx(link.inertial.mass, rel=1e-9), link.name
+        # MuJoCo's XML keeps 6 significant digits: the slicer's masses have no more, an unsliced
+        # export's (volume x density x infill) do
+        assert m.body_mass[bid] == pytest.approx(link.inertial.mass, rel=5e-6), link.name
         assert np.allclose(m.body_ipos[bid], link.inertial.origin[:3, 3], atol=1e-12), link.name
         # MuJoCo writes the principal moments with 6 significant digits
         assert np.allclose(I_mj, I_urdf, rtol=1e-5, atol=1e-5 * np.abs(I_urdf).max()), link.name
