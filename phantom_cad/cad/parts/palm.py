@@ -587,9 +587,7 @@ class Palm(ServoMount, Part):
             # where it passes the thenar's cuts or a side face less than a flank away (a drive
             # leaving the palm's side at a slant), it runs into them by a slot
             tools += channel_slots(exit_, u, float(np.linalg.norm(tangent - exit_)), t.tendon_hole / 2.0,
-                                   [self.thenar_gap], mm(FLANK))
-            tools += channel_slots(exit_, u, float(np.linalg.norm(tangent - exit_)), t.tendon_hole / 2.0,
-                                   [self.outside_gap], mm(FLANK))
+                                   [self.thenar_gap, self.outside_gap], mm(FLANK))
             # the drive's coupler (crimp stop and loop): a bore from the socket face to a clearance
             # past where it is at full travel (couplers.couplers); opened likewise to the side
             # where it runs by an outer face under a flank (the slot, narrower than the bore by
